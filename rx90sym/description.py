@@ -1,0 +1,238 @@
+"""Frozen description of a serial robot (Khalil-Kleinfinger table, limits, transmission).
+
+The description is data; its CasADi functions are built on first use and cached on the
+instance (like Pinocchio's Model, the description never changes once made).
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field, replace
+from functools import cached_property
+from typing import Any, Iterable, Sequence
+
+import casadi as ca
+import numpy as np
+
+from .compiled import BatchFunction
+from .geometry import forward_kinematics_function
+from .newton_euler import inverse_dynamics_expression
+from .parameters import link_parameter_names
+from .spring import Spring, spring_torque_function
+
+GRAVITY = 9.81  # m/s^2, along -z0
+
+
+@dataclass(frozen=True, eq=False)
+class Limits:
+    """Joint limits, Khalil angles, SI units; arrays of shape (n,). Unknown limits are inf."""
+
+    q_min: np.ndarray
+    q_max: np.ndarray
+    qd_max: np.ndarray
+    qdd_max: np.ndarray
+    tau_max: np.ndarray
+
+    @staticmethod
+    def unbounded(n: int) -> "Limits":
+        inf = np.full(n, np.inf)
+        return Limits(-inf, inf.copy(), inf.copy(), inf.copy(), inf.copy())
+
+
+@dataclass(frozen=True)
+class Coupling:
+    """Coupling of two joints driven through one transmission (eqs. 16-18), 0-based indices.
+
+    coulomb_sign: "paper" (sign(qd_b) in row a, sign(qd_a) in row b, eqs. 17-18) or "motor"
+    (sign(qd_a + qd_b), the speed of motor b, on both rows).
+    """
+
+    joints: tuple[int, int] = (4, 5)
+    coulomb_sign: str = "paper"
+
+
+@dataclass(frozen=True, eq=False)
+class Robot:
+    """A serial robot described by a Khalil-Kleinfinger table.
+
+    Geometry: T(j-1, j) = Rot(x, alpha_j) Trans(x, d_j) Rot(z, theta_j) Trans(z, r_j);
+    sigma_j = 0 revolute (q_j = theta_j - theta offset), 1 prismatic. Lengths in m, angles in rad.
+    """
+
+    name: str
+    sigma: tuple[int, ...]
+    alpha: tuple[float, ...]
+    d: tuple[float, ...]
+    theta: tuple[float, ...]
+    r: tuple[float, ...]
+    limits: Limits
+    d_labels: tuple[str, ...] = ()
+    r_labels: tuple[str, ...] = ()
+    staubli_offsets: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    gear_ratios: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    Rq: np.ndarray = field(default_factory=lambda: np.zeros((0, 0)))
+    Rt: np.ndarray = field(default_factory=lambda: np.zeros((0, 0)))
+    spring: Spring | None = None
+    coupling: Coupling | None = None
+    offsets: bool = False
+    gravity: float = GRAVITY
+    description: str = ""
+    source: str = ""
+
+    def __post_init__(self) -> None:
+        n = len(self.sigma)
+        for fname in ("alpha", "d", "theta", "r"):
+            if len(getattr(self, fname)) != n:
+                raise ValueError(f"robot {self.name!r}: {fname} has {len(getattr(self, fname))} "
+                                 f"entries, expected {n}")
+        defaults = {
+            "d_labels": tuple(f"D{j + 1}" for j in range(n)),
+            "r_labels": tuple(f"RL{j + 1}" for j in range(n)),
+            "staubli_offsets": np.zeros(n),
+            "gear_ratios": np.ones(n),
+            "Rq": np.eye(n),
+            "Rt": np.eye(n),
+        }
+        for key, value in defaults.items():
+            current = getattr(self, key)
+            if len(current) == 0:
+                current = value
+            if isinstance(current, np.ndarray):
+                current = np.array(current, dtype=float)
+                current.setflags(write=False)
+            object.__setattr__(self, key, current)
+        if self.coupling is not None and max(self.coupling.joints) >= n:
+            raise ValueError(f"robot {self.name!r}: coupling joints {self.coupling.joints} "
+                             f"outside 1..{n}")
+
+    # ----------------------------------------------------------------- description
+    @property
+    def n(self) -> int:
+        """Number of joints."""
+        return len(self.sigma)
+
+    @cached_property
+    def parameter_names(self) -> tuple[str, ...]:
+        """Standard parameters: 13 per link (eq. 4), then coupling friction, then offsets."""
+        names = link_parameter_names(self.n)
+        if self.coupling is not None:
+            b = self.coupling.joints[1] + 1
+            names += [f"FVM{b}", f"FSM{b}"]
+        if self.offsets:
+            names += [f"OFF{j}" for j in range(1, self.n + 1)]
+        return tuple(names)
+
+    def parameter_index(self, names: Iterable[str]) -> list[int]:
+        """Column of each named standard parameter (refuses unknown names)."""
+        lookup = {p: i for i, p in enumerate(self.parameter_names)}
+        out = []
+        for p in names:
+            if p not in lookup:
+                raise KeyError(f"robot {self.name!r} has no parameter {p!r}")
+            out.append(lookup[p])
+        return out
+
+    def parameter_vector(self, values: dict[str, float], strict: bool = True) -> np.ndarray:
+        """Vector chi from a name -> value dict (missing names are 0 unless strict)."""
+        unknown = set(values) - set(self.parameter_names)
+        if unknown:
+            raise KeyError(f"robot {self.name!r} has no parameter(s) {sorted(unknown)}")
+        if strict:
+            missing = [p for p in self.parameter_names if p not in values]
+            if missing:
+                raise KeyError(f"parameter(s) missing for robot {self.name!r}: {missing[:5]}...")
+        return np.array([float(values.get(p, 0.0)) for p in self.parameter_names])
+
+    def with_options(self, **changes: Any) -> "Robot":
+        """A copy with some fields changed (e.g. offsets=True); caches are not carried over."""
+        return replace(self, **changes)
+
+    # ----------------------------------------------------------------- conventions
+    def to_khalil(self, q_staubli: Any) -> np.ndarray:
+        """Joint positions from the Staubli (CS8) convention to Khalil angles, (N, n) or (n,)."""
+        return np.asarray(q_staubli, dtype=float) - self.staubli_offsets
+
+    def to_staubli(self, q: Any) -> np.ndarray:
+        """Joint positions from Khalil angles to the Staubli (CS8) convention."""
+        return np.asarray(q, dtype=float) + self.staubli_offsets
+
+    # ----------------------------------------------------------------- symbolic model
+    @cached_property
+    def _symbols(self) -> tuple[ca.SX, ca.SX, ca.SX, ca.SX]:
+        n = self.n
+        return (ca.SX.sym("q", n), ca.SX.sym("qd", n), ca.SX.sym("qdd", n),
+                ca.SX.sym("chi", len(self.parameter_names)))
+
+    @cached_property
+    def _tau_expression(self) -> ca.SX:
+        q, qd, qdd, chi = self._symbols
+        return inverse_dynamics_expression(self, q, qd, qdd, chi)
+
+    @cached_property
+    def inverse_dynamics(self) -> ca.Function:
+        """casadi.Function (q, qd, qdd, chi) -> tau (n,) [N m], spring excluded (eq. 1)."""
+        q, qd, qdd, chi = self._symbols
+        return ca.Function("inverse_dynamics", [q, qd, qdd, chi], [self._tau_expression],
+                           ["q", "qd", "qdd", "chi"], ["tau"])
+
+    @cached_property
+    def regressor(self) -> ca.Function:
+        """casadi.Function (q, qd, qdd) -> Phi (n x len(parameter_names)), Gamma = Phi chi (eq. 2)."""
+        q, qd, qdd, chi = self._symbols
+        phi = ca.jacobian(self._tau_expression, chi)
+        return ca.Function("regressor", [q, qd, qdd], [phi], ["q", "qd", "qdd"], ["Phi"])
+
+    @cached_property
+    def spring_torque(self) -> ca.Function:
+        """casadi.Function (q) -> torque exerted by the spring on each joint (n,) [N m]."""
+        return spring_torque_function(self)
+
+    @cached_property
+    def forward_kinematics(self) -> ca.Function:
+        """casadi.Function (q) -> (T0n 4x4, origins 3 x n of frames 1..n in frame 0 [m])."""
+        return forward_kinematics_function(self)
+
+    # ----------------------------------------------------------------- compiled batches
+    @cached_property
+    def _regressor_batch(self) -> BatchFunction:
+        return BatchFunction(self.regressor, name=f"{self.name}_regressor")
+
+    def regressor_batch(self, Q: Any, QD: Any, QDD: Any) -> np.ndarray:
+        """Phi on N samples at once, compiled: arrays (N, n) -> ndarray (N, n, n_params)."""
+        return self._regressor_batch(Q, QD, QDD)
+
+    @cached_property
+    def _spring_batch(self) -> BatchFunction:
+        return BatchFunction(self.spring_torque, name=f"{self.name}_spring", compile=False)
+
+    def spring_torque_batch(self, Q: Any) -> np.ndarray:
+        """Spring torque on N samples: (N, n) -> (N, n) [N m]."""
+        return self._spring_batch(Q)
+
+    def frame_origins(self, q: Any) -> np.ndarray:
+        """Origins of frames 1..n in frame 0 for one configuration: (n,) -> (n, 3) [m]."""
+        return np.array(self.forward_kinematics(np.asarray(q, float))[1]).T
+
+    def export_c(self, directory: str, functions: Sequence[str] = ("inverse_dynamics", "regressor")) -> list[str]:
+        """Write self-contained C source of the named functions (for a controller); returns paths."""
+        from .compiled import export_c
+
+        return export_c([getattr(self, f) for f in functions], directory, prefix=self.name)
+
+
+def robot_from_table(rows: Sequence[Sequence[float]], name: str = "robot", **options: Any) -> Robot:
+    """Robot from rows (sigma, alpha, d, theta, r) [-, rad, m, rad, m]: no limits, no coupling,
+    no spring unless given in ``options`` (any Robot field)."""
+    rows = [tuple(r) for r in rows]
+    for i, row in enumerate(rows, 1):
+        if len(row) != 5:
+            raise ValueError(f"table row {i}: expected (sigma, alpha, d, theta, r), got {len(row)} values")
+        if row[0] not in (0, 1):
+            raise ValueError(f"table row {i}: sigma must be 0 (revolute) or 1 (prismatic), got {row[0]!r}")
+    n = len(rows)
+    if n == 0:
+        raise ValueError("table has no rows")
+    cols = list(zip(*rows))
+    options.setdefault("limits", Limits.unbounded(n))
+    return Robot(name=name, sigma=tuple(int(s) for s in cols[0]),
+                 alpha=tuple(float(x) for x in cols[1]), d=tuple(float(x) for x in cols[2]),
+                 theta=tuple(float(x) for x in cols[3]), r=tuple(float(x) for x in cols[4]),
+                 **options)

@@ -1,0 +1,30 @@
+"""Names and layout of the dynamic parameters (eq. 4)."""
+from __future__ import annotations
+
+# eq. 4: standard parameters of link j, in this order.
+LINK_PARAMETERS: tuple[str, ...] = (
+    "XX", "XY", "XZ", "YY", "YZ", "ZZ", "MX", "MY", "MZ", "M", "IA", "FS", "FV",
+)
+INERTIAL: tuple[str, ...] = LINK_PARAMETERS[:10]
+# Payload parameters, frame n about its origin: they add to link n's first ten parameters.
+PAYLOAD_NAMES: tuple[str, ...] = tuple(f"{p}c" for p in INERTIAL)
+
+
+def link_parameter_names(n: int) -> list[str]:
+    """Standard parameter names of links 1..n (13 per link, eq. 3-4)."""
+    return [f"{p}{j}" for j in range(1, n + 1) for p in LINK_PARAMETERS]
+
+
+def link_index(n_params_per_link: int = 13) -> dict[str, int]:
+    """Position of each parameter kind inside one link's block."""
+    return {p: i for i, p in enumerate(LINK_PARAMETERS[:n_params_per_link])}
+
+
+def split_name(name: str) -> tuple[str, int]:
+    """'XX2' -> ('XX', 2); 'FVM6' -> ('FVM', 6); 'OFF3' -> ('OFF', 3)."""
+    i = len(name)
+    while i > 0 and name[i - 1].isdigit():
+        i -= 1
+    if i == len(name) or i == 0:
+        raise ValueError(f"parameter name {name!r} has no kind or no link number")
+    return name[:i], int(name[i:])
