@@ -65,9 +65,9 @@ class BaseParameters:
     def _batch(self) -> BatchFunction:
         return BatchFunction(self.regressor, name=f"{self.robot.name}_base_regressor")
 
-    def regressor_batch(self, Q: Any, QD: Any, QDD: Any) -> np.ndarray:
-        """Phi_b on N samples, compiled: arrays (N, n) -> (N, n, nb)."""
-        return self._batch(Q, QD, QDD)
+    def regressor_batch(self, Q: Any, QD: Any, QDD: Any, out: np.ndarray | None = None) -> np.ndarray:
+        """Phi_b on N samples, compiled: arrays (N, n) -> (N, n, nb); ``out`` filled in place if given."""
+        return self._batch(Q, QD, QDD, out=out)
 
     def table(self) -> str:
         """Table 2 and eq. 19 of the paper, for this robot."""

@@ -79,7 +79,8 @@ def _dense_row_major(f: ca.Function, name: str) -> ca.Function:
     args = [ca.SX.sym(f.name_in(k), f.size1_in(k) * f.size2_in(k)) for k in range(f.n_in())]
     shaped = [ca.reshape(a, f.size1_in(k), f.size2_in(k)) for k, a in enumerate(args)]
     out = f.call(shaped)[0]
-    return ca.Function(name, args, [ca.densify(out.T)])
+    # Common subexpression elimination: ~15 % fewer operations on the regressor.
+    return ca.Function(name, args, [ca.cse(ca.densify(out.T))])
 
 
 class BatchFunction:
@@ -131,7 +132,9 @@ class BatchFunction:
                        ctypes.POINTER(ctypes.c_longlong), ctypes.c_void_p, ctypes.c_longlong]
         return lib
 
-    def __call__(self, *inputs: Any) -> np.ndarray:
+    def __call__(self, *inputs: Any, out: np.ndarray | None = None) -> np.ndarray:
+        """Evaluate on N samples; ``out`` (N, rows, cols) float64 C-contiguous is filled in place
+        when given (saves the page faults of a fresh large array on repeated calls)."""
         if len(inputs) != len(self.in_sizes):
             raise ValueError(f"{self.name}: expected {len(self.in_sizes)} input arrays, got {len(inputs)}")
         arrays = []
@@ -147,13 +150,18 @@ class BatchFunction:
                 raise ValueError(f"{self.name}: inputs have different numbers of samples ({N} and {a.shape[0]})")
             arrays.append(a)
         rows, cols = self.out_shape
-        out = np.empty((N, rows, cols))
+        if out is None:
+            out = np.empty((N, rows, cols))
+        elif out.shape != (N, rows, cols) or out.dtype != np.float64 or not out.flags.c_contiguous:
+            raise ValueError(f"{self.name}: out must be a C-contiguous float64 array of shape "
+                             f"{(N, rows, cols)}")
         if N == 0:
             return out
         if self._lib is None:
             mapped = self.f.map(N, "serial")
             res = mapped(*[a.T for a in arrays])
-            return np.array(res).T.reshape(N, rows, cols)
+            out[...] = np.array(res).T.reshape(N, rows, cols)
+            return out
         ptrs = (ctypes.c_void_p * len(arrays))(*[a.ctypes.data for a in arrays])
         sizes = (ctypes.c_longlong * len(arrays))(*self.in_sizes)
         flag = getattr(self._lib, f"{self.name}_batch")(N, ptrs, sizes, out.ctypes.data, rows * cols)

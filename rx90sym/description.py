@@ -195,9 +195,11 @@ class Robot:
     def _regressor_batch(self) -> BatchFunction:
         return BatchFunction(self.regressor, name=f"{self.name}_regressor")
 
-    def regressor_batch(self, Q: Any, QD: Any, QDD: Any) -> np.ndarray:
-        """Phi on N samples at once, compiled: arrays (N, n) -> ndarray (N, n, n_params)."""
-        return self._regressor_batch(Q, QD, QDD)
+    def regressor_batch(self, Q: Any, QD: Any, QDD: Any, out: np.ndarray | None = None) -> np.ndarray:
+        """Phi on N samples at once, compiled: arrays (N, n) -> ndarray (N, n, n_params).
+
+        out: optional preallocated (N, n, n_params) array filled in place."""
+        return self._regressor_batch(Q, QD, QDD, out=out)
 
     @cached_property
     def _spring_batch(self) -> BatchFunction:

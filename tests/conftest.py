@@ -1,0 +1,66 @@
+"""Shared fixtures: robots and random physically consistent parameters."""
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import rx90sym
+
+SHARED = Path(__file__).resolve().parents[1].parent / "shared"
+
+
+def random_body(rng: np.random.Generator) -> np.ndarray:
+    """XX XY XZ YY YZ ZZ MX MY MZ M of a random consistent body about its frame origin."""
+    m = rng.uniform(0.5, 20.0)
+    c = rng.uniform(-0.3, 0.3, 3)
+    A = rng.normal(size=(3, 3))
+    R, _ = np.linalg.qr(A)
+    # Principal moments from random positive second moments: always satisfy the triangle rule.
+    s = rng.uniform(0.001, 0.05, 3) * m
+    Ic = R @ np.diag([s[1] + s[2], s[0] + s[2], s[0] + s[1]]) @ R.T
+    I = Ic + m * (c @ c * np.eye(3) - np.outer(c, c))
+    return np.array([I[0, 0], I[0, 1], I[0, 2], I[1, 1], I[1, 2], I[2, 2], *(m * c), m])
+
+
+def random_chi(robot, rng: np.random.Generator, actuation: bool = True) -> np.ndarray:
+    """Random standard parameter vector: consistent bodies, positive IA, FS, FV, extras."""
+    chi = np.zeros(len(robot.parameter_names))
+    for j in range(robot.n):
+        chi[13 * j:13 * j + 10] = random_body(rng)
+        if actuation:
+            chi[13 * j + 10:13 * j + 13] = rng.uniform(0.05, 3.0, 3)
+    if actuation:
+        chi[13 * robot.n:] = rng.uniform(0.1, 2.0, len(chi) - 13 * robot.n)
+    return chi
+
+
+def random_states(robot, rng: np.random.Generator, N: int):
+    return (rng.uniform(-np.pi, np.pi, (N, robot.n)), rng.normal(0, 2, (N, robot.n)),
+            rng.normal(0, 5, (N, robot.n)))
+
+
+RANDOM_TABLE = [  # prismatic joints, non-zero d, r and generic alpha
+    (0, 0.0, 0.0, 0.0, 0.0),
+    (1, -np.pi / 2, 0.2, 0.3, 0.1),
+    (0, 0.7, 0.4, 0.2, -0.3),
+    (1, np.pi / 2, 0.1, -0.5, 0.2),
+    (0, -0.4, 0.3, 0.1, 0.25),
+    (0, 1.1, 0.15, 0.0, 0.05),
+]
+
+
+@pytest.fixture(scope="session")
+def rx90():
+    return rx90sym.load_robot("rx90")
+
+
+@pytest.fixture(scope="session")
+def tx40():
+    return rx90sym.load_robot("tx40")
+
+
+@pytest.fixture(scope="session")
+def random_robot():
+    return rx90sym.robot_from_table(RANDOM_TABLE, name="random")
