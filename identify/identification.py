@@ -1,0 +1,162 @@
+"""Identification of a robot's base parameters from recordings (paper sections II-B and III).
+
+Wires the pieces: observation matrix (eqs. 6-8) -> (weighted) least squares (eqs. 9-15) ->
+optionally essential parameters or the physically consistent fit, and validation on a motion
+that was not used for fitting.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Any, Sequence
+
+import numpy as np
+
+import rx90sym
+
+from .consistency import ConsistentSolution, consistent_least_squares
+from .observation import Observation, observation_matrix
+from .results import IdentificationResult
+from .least_squares import weighted_least_squares
+
+METHODS = ("ols", "wls", "consistent")
+
+
+@dataclass(frozen=True, eq=False)
+class ConsistentResult(IdentificationResult):
+    """A physically consistent identification: base values beta = K chi of a consistent chi.
+
+    std / rel_std_pct are those of the unconstrained WLS fit (the constraints only shrink the
+    feasible set; they are reported as the data's information on each parameter).
+    standard: the standard parameters chi found (dict name -> value);
+    cost, wls_cost: weighted residual sum of squares of the consistent and of the WLS fit;
+    wls_was_consistent: whether the WLS estimate itself admits a consistent chi (then both costs
+    agree to the solver's accuracy).
+    """
+
+    standard: dict = field(default_factory=dict)
+    cost: float = float("nan")
+    wls_cost: float = float("nan")
+    wls_was_consistent: bool = False
+    solution: ConsistentSolution | None = field(default=None, repr=False)
+
+    @property
+    def cost_increase_pct(self) -> float:
+        """How much the constraints cost in residual, % of the WLS residual sum of squares."""
+        return 100.0 * (self.cost - self.wls_cost) / self.wls_cost
+
+    def to_dict(self) -> dict[str, Any]:
+        d = super().to_dict()
+        d.update({"standard": {k: float(v) for k, v in self.standard.items()},
+                  "cost": self.cost, "wls_cost": self.wls_cost,
+                  "cost_increase_pct": self.cost_increase_pct,
+                  "wls_was_consistent": self.wls_was_consistent})
+        return d
+
+
+def identify(robot: Any, recordings: Sequence[Any], method: str = "wls", base: Any = None,
+             cutoff: float | None = None, decimate_to: float | None = 50.0,
+             min_velocity: float | None = None, spring: bool = True,
+             observation: Observation | None = None, **consistent_options: Any) -> IdentificationResult:
+    """Identify the base parameters of ``robot`` from recordings.
+
+    method: "ols", "wls" (paper: each joint's rows weighted by 1/sigma of its own residual) or
+    "consistent" (WLS data, physically consistent standard parameters through cvxpy; extra
+    keyword arguments go to identify.consistency.consistent_least_squares, e.g. prior,
+    prior_weight, total_mass, mass_bounds, com_boxes, solver).
+    cutoff [Hz], decimate_to [Hz], min_velocity [rad/s], spring: see observation_matrix.
+    observation: an already built observation matrix (the recordings are then not read).
+    """
+    if method not in METHODS:
+        raise ValueError(f"identify: method must be one of {METHODS}, got {method!r}")
+    base = base if base is not None else rx90sym.base_parameters(robot)
+    obs = observation if observation is not None else observation_matrix(
+        robot, recordings, cutoff=cutoff, decimate_to=decimate_to, base=base, spring=spring,
+        min_velocity=min_velocity)
+    result = weighted_least_squares(obs.W, obs.Y, obs.joint, obs.names, weighted=method != "ols")
+    if method != "consistent":
+        return result
+    return consistent_fit(robot, result, base, **consistent_options)
+
+
+def consistent_fit(robot: Any, wls: IdentificationResult, base: Any, **options: Any) -> ConsistentResult:
+    """Physically consistent refit of a (W)LS result on its compressed weighted system."""
+    system = wls.system
+    if system is None:
+        raise ValueError("consistent fit needs a result that still holds its compressed system "
+                         "(not one loaded from JSON)")
+    if tuple(wls.names) != tuple(base.names):
+        raise ValueError("consistent fit needs a result on the full base parameter set")
+    sol = consistent_least_squares(system.R, system.z, base.K, robot.parameter_names,
+                                   rss_outside=system.rss_outside, rows=system.rows, **options)
+    wls_cost = system.rss(wls.values)
+    c = len(wls.names)
+    sigma_rho = float(np.sqrt(sol.cost / max(system.rows - c, 1)))
+    residual_rms = np.array([np.sqrt(js.rss(sol.beta) / js.rows) for js in wls.joint_systems])
+    # Interior-point accuracy: a cost within 1e-6 relative means the constraints were not active.
+    was_consistent = bool(sol.cost <= wls_cost * (1 + 1e-6) + 1e-12)
+    return ConsistentResult(
+        names=wls.names, values=sol.beta, std=wls.std,
+        rel_std_pct=100 * wls.std / np.where(sol.beta == 0, np.nan, np.abs(sol.beta)),
+        sigma_rho=sigma_rho, cond=wls.cond, cond_unweighted=wls.cond_unweighted,
+        residual_rms=residual_rms, weights=wls.weights, rows=wls.rows, method="consistent",
+        covariance=wls.covariance, system=system, joint_systems=wls.joint_systems,
+        standard=dict(zip(robot.parameter_names, sol.chi)), cost=sol.cost, wls_cost=wls_cost,
+        wls_was_consistent=was_consistent, solution=sol)
+
+
+@dataclass(frozen=True, eq=False)
+class Validation:
+    """Torque prediction on a motion not used for fitting (cross-validation, section III-B).
+
+    relative_error_pct: (n,) 100 ||Y_j - W_j beta|| / ||Y_j|| per joint; rms_error: (n,) N m;
+    measured, predicted: (S, n) torques (spring added) at the decimated samples; t: (S,) s.
+    """
+
+    relative_error_pct: np.ndarray
+    rms_error: np.ndarray
+    measured: np.ndarray
+    predicted: np.ndarray
+    t: np.ndarray
+    source: str
+
+    def table(self) -> str:
+        head = "joint  rms error [N m]  relative error [%]"
+        rows = [f"{j + 1:5d}  {e:15.3f}  {p:18.2f}"
+                for j, (e, p) in enumerate(zip(self.rms_error, self.relative_error_pct))]
+        return "\n".join([f"Validation on {self.source}", head, *rows])
+
+    def to_dict(self) -> dict[str, Any]:
+        return {"source": self.source, "relative_error_pct": self.relative_error_pct.tolist(),
+                "rms_error": self.rms_error.tolist()}
+
+
+def predict(robot: Any, result: IdentificationResult, recording: Any, base: Any = None,
+            cutoff: float | None = None, decimate_to: float | None = 50.0,
+            spring: bool = True) -> Validation:
+    """Predicted vs measured torques of ``recording`` with the parameters of ``result``.
+
+    Parameters of the base set missing from ``result`` (essential set) count as 0.
+    """
+    base = base if base is not None else rx90sym.base_parameters(robot)
+    unknown = [nm for nm in result.names if nm not in base.names]
+    if unknown:
+        raise ValueError(f"result has parameters {unknown} that are not base parameters of "
+                         f"{robot.name!r}")
+    beta = np.zeros(base.nb)
+    values = dict(zip(result.names, result.values))
+    for i, nm in enumerate(base.names):
+        beta[i] = values.get(nm, 0.0)
+    from .observation import filtered_motion
+
+    m = filtered_motion(robot, recording, cutoff, decimate_to, spring, base.regressor_batch)
+    predicted = m.Phi @ beta
+    err = m.Y - predicted
+    rms = np.sqrt(np.mean(err**2, axis=0))
+    rel = 100 * np.linalg.norm(err, axis=0) / np.linalg.norm(m.Y, axis=0)
+    t = np.arange(len(m.Y)) / m.rate
+    return Validation(rel, rms, m.Y, predicted, t, m.source)
+
+
+def validate(robot: Any, result: IdentificationResult, recording: Any, **options: Any) -> Validation:
+    """Cross-validation: relative torque error per joint on a recording not used in the fit."""
+    return predict(robot, result, recording, **options)

@@ -1,0 +1,508 @@
+"""Ordinary and weighted least squares on the joint-grouped observation matrix (paper §II-B).
+
+The observation system is ``Y = W·χ + ρ`` (eq. 6) with the rows grouped per joint (eqs. 7–8).
+The big matrix ``W`` (r × c, r ≈ 63,000 for the RX90) is touched exactly once: every joint block
+``[W_i | Y_i]`` is reduced by a Householder QR to a small :class:`CompressedSystem`
+``(R_i, z_i, rss_outside_i)`` with ``‖W_i·x − Y_i‖² = ‖R_i·x − z_i‖² + rss_outside_i`` for every x.
+Everything downstream (per-joint noise, weighting, the solve of eq. 10, σρ of eq. 12, the
+covariance of eq. 13, essential parameters, constrained least squares) works on these
+(c + 1) × (c + 1) pieces.
+
+Units: W row i carries the units of the torque of its joint per unit of each parameter, so
+Y, residuals and ``residual_rms`` are in N·m (N for a prismatic joint); weights in 1/(N·m).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Sequence
+
+import numpy as np
+import scipy.linalg as sla
+
+from identify.results import IdentificationResult
+
+__all__ = [
+    "RANK_RCOND",
+    "NULL_SPACE_SHARE",
+    "DEFAULT_CHUNK_ROWS",
+    "IdentificationError",
+    "CompressedSystem",
+    "compress",
+    "stack_systems",
+    "solve_compressed",
+    "relative_std_pct",
+    "solve_system",
+    "joint_noise_std",
+    "weighted_least_squares",
+]
+
+#: Rank tolerance: a singular value of the column-scaled W (every column scaled to unit norm,
+#: so that the units of the parameters do not matter) below RANK_RCOND × the largest one counts
+#: as zero. 1e-10 is far above rounding (≈ 1e-16·√r) and far below any usable identification
+#: (a scaled condition number of 1e10 already makes eq. 13 meaningless in double precision).
+RANK_RCOND = 1e-10
+
+#: A parameter is named in a rank-deficiency error when the norm of its row in an orthonormal
+#: basis of the null space of the column-scaled W is at least this share (1 = its column is zero,
+#: 0.71 = one of two proportional columns). The row norm does not depend on the basis chosen.
+NULL_SPACE_SHARE = 0.1
+
+#: Rows per QR chunk in :func:`compress`: bounds the working copy to about 15 MB for c = 54.
+DEFAULT_CHUNK_ROWS = 32_768
+
+
+class IdentificationError(ValueError):
+    """The observation matrix cannot identify the parameters (rank deficient).
+
+    Attributes:
+        names: parameters not excited (or excited only in a fixed combination), most
+            concerned first.
+        rank: numerical rank of W.
+    """
+
+    def __init__(self, message: str, names: Sequence[str] = (), rank: int | None = None):
+        super().__init__(message)
+        self.names = tuple(names)
+        self.rank = rank
+
+
+# --------------------------------------------------------------------------- compressed system
+
+
+def _read_only(a: np.ndarray) -> np.ndarray:
+    a = np.array(a, dtype=float, copy=True)
+    a.flags.writeable = False
+    return a
+
+
+@dataclass(frozen=True)
+class CompressedSystem:
+    """QR-compressed least-squares system ``min ‖W·x − y‖²`` (eqs. 9–10).
+
+    Attributes:
+        R: (c, c) upper triangular factor of W (units of W).
+        z: (c,) ``Qᵀ·y`` (units of y).
+        rss_outside: ``‖y‖² − ‖z‖²`` ≥ 0, the part of ‖y‖² no x can fit (units of y²);
+            obtained as the squared last pivot of the QR of ``[W | y]`` (no cancellation).
+        rows: number of equations r of the original system.
+
+    For every x: ``‖W·x − y‖² = ‖R·x − z‖² + rss_outside``.
+    """
+
+    R: np.ndarray
+    z: np.ndarray
+    rss_outside: float
+    rows: int
+
+    def __post_init__(self) -> None:
+        R = _read_only(self.R)
+        z = _read_only(self.z)
+        if R.ndim != 2 or R.shape[0] != R.shape[1]:
+            raise ValueError(f"CompressedSystem.R must be square, got shape {R.shape}")
+        if z.shape != (R.shape[0],):
+            raise ValueError(f"CompressedSystem.z must have shape ({R.shape[0]},), got {z.shape}")
+        if not (np.isfinite(self.rss_outside) and self.rss_outside >= 0.0):
+            raise ValueError(f"CompressedSystem.rss_outside must be finite and >= 0, got {self.rss_outside}")
+        object.__setattr__(self, "R", R)
+        object.__setattr__(self, "z", z)
+        object.__setattr__(self, "rss_outside", float(self.rss_outside))
+        object.__setattr__(self, "rows", int(self.rows))
+
+    @property
+    def columns(self) -> int:
+        """Number of parameters c."""
+        return self.R.shape[1]
+
+    def rss(self, x: np.ndarray) -> float:
+        """Residual sum of squares ``‖W·x − y‖²`` of the original system (units of y²)."""
+        d = self.R @ np.asarray(x, dtype=float) - self.z
+        return float(d @ d) + self.rss_outside
+
+    def augmented(self) -> np.ndarray:
+        """(c+1, c+1) matrix ``[[R, z], [0, √rss_outside]]``, the compressed ``[W | y]``."""
+        c = self.columns
+        a = np.zeros((c + 1, c + 1))
+        a[:c, :c] = self.R
+        a[:c, c] = self.z
+        a[c, c] = np.sqrt(self.rss_outside)
+        return a
+
+    def scaled(self, weight: float) -> "CompressedSystem":
+        """The system of ``weight·W, weight·y`` (a row weight, eq. 8 weighting)."""
+        w = float(weight)
+        return CompressedSystem(w * self.R, w * self.z, w * w * self.rss_outside, self.rows)
+
+    def select(self, columns: Sequence[int]) -> "CompressedSystem":
+        """The system restricted to some columns: ``‖W[:, k]·x − y‖²`` without the raw data.
+
+        Uses ``‖W[:, k]·x − y‖² = ‖R[:, k]·x − z‖² + rss_outside`` and one small QR.
+        """
+        k = np.asarray(columns, dtype=int)
+        if k.ndim != 1 or np.any((k < 0) | (k >= self.columns)) or np.unique(k).size != k.size:
+            raise ValueError(f"select: columns must be distinct indices in 0..{self.columns - 1}, got {k.tolist()}")
+        a = self.augmented()
+        return _from_augmented_rows(np.column_stack([a[:, k], a[:, -1]]), self.rows)
+
+
+def _from_augmented_rows(a: np.ndarray, rows: int) -> CompressedSystem:
+    """QR of a stacked augmented matrix ``[A | b]`` (m, c+1) into a CompressedSystem."""
+    c = a.shape[1] - 1
+    r_aug = _qr_r(a)
+    return _split_augmented(r_aug, c, rows)
+
+
+def _qr_r(a: np.ndarray) -> np.ndarray:
+    """Upper triangular factor of an (m, p) matrix, padded with zero rows to (p, p).
+
+    Calls LAPACK dgeqrf directly (blocked, optimal workspace) and may overwrite ``a``:
+    scipy.linalg.qr(mode="r") would also copy the whole m × p factor through triu.
+    """
+    m, p = a.shape
+    if m == 0:
+        return np.zeros((p, p))
+    a = np.asfortranarray(a, dtype=float)
+    lwork = max(int(sla.lapack.dgeqrf_lwork(m, p)[0]), p, 1)
+    qr, _, _, info = sla.lapack.dgeqrf(a, lwork=lwork, overwrite_a=1)
+    if info != 0:
+        raise RuntimeError(f"LAPACK dgeqrf failed (info = {info})")
+    r = np.triu(qr[: min(m, p)])
+    if r.shape[0] < p:
+        r = np.vstack([r, np.zeros((p - r.shape[0], p))])
+    return r
+
+
+def _split_augmented(r_aug: np.ndarray, c: int, rows: int) -> CompressedSystem:
+    # r_aug = [[R, z], [0, ρ]] with |ρ| = residual norm, so rss_outside = ρ² (computed without
+    # the cancellation of ‖y‖² − ‖z‖²).
+    return CompressedSystem(
+        R=np.triu(r_aug[:c, :c]),
+        z=r_aug[:c, c],
+        rss_outside=float(r_aug[c, c] ** 2),
+        rows=rows,
+    )
+
+
+def _compress_rows(W: np.ndarray, Y: np.ndarray, rows: np.ndarray, chunk_rows: int) -> CompressedSystem:
+    """Compress the equations ``rows`` (sorted int indices) of ``[W | Y]`` in row chunks."""
+    c = W.shape[1]
+    contiguous = rows.size > 0 and rows[-1] - rows[0] + 1 == rows.size
+    factors = []
+    for start in range(0, rows.size, chunk_rows):
+        stop = min(start + chunk_rows, rows.size)
+        sel = slice(rows[start], rows[stop - 1] + 1) if contiguous else rows[start:stop]
+        aug = np.empty((stop - start, c + 1), order="F")
+        aug[:, :c] = W[sel]
+        aug[:, c] = Y[sel]
+        factors.append(_qr_r(aug))
+    if not factors:
+        return _split_augmented(np.zeros((c + 1, c + 1)), c, 0)
+    r_aug = factors[0] if len(factors) == 1 else _qr_r(np.vstack(factors))  # QR of the stacked R's
+    return _split_augmented(r_aug, c, int(rows.size))
+
+
+def compress(W: np.ndarray, Y: np.ndarray, chunk_rows: int = DEFAULT_CHUNK_ROWS) -> CompressedSystem:
+    """Reduce ``min ‖W·x − Y‖²`` to ``(R, z = Qᵀ·Y, rss_outside)`` by an economy QR (eq. 10).
+
+    Args:
+        W: (r, c) observation matrix (eq. 6).
+        Y: (r,) measured torques, N·m.
+        chunk_rows: rows per QR; taller matrices are processed chunk by chunk and the R factors
+            of the chunks stacked and factorised again, so memory stays O(chunk_rows·c).
+
+    Returns:
+        A :class:`CompressedSystem` with ``‖W·x − Y‖² = ‖R·x − z‖² + rss_outside`` for all x.
+    """
+    W, Y = _check_w_y(W, Y)
+    if chunk_rows < 1:
+        raise ValueError(f"chunk_rows must be >= 1, got {chunk_rows}")
+    return _compress_rows(W, Y, np.arange(W.shape[0]), chunk_rows)
+
+
+def stack_systems(systems: Sequence[CompressedSystem], weights: Sequence[float] | None = None) -> CompressedSystem:
+    """Compressed system of the row-stacked (optionally row-weighted) original systems (eq. 7).
+
+    ``‖diag(w)·(W·x − Y)‖² = Σ_i w_i²·(‖R_i·x − z_i‖² + rss_outside_i)``.
+    """
+    if not systems:
+        raise ValueError("stack_systems needs at least one system")
+    c = systems[0].columns
+    if any(s.columns != c for s in systems):
+        raise ValueError(f"stack_systems: systems have different column counts {[s.columns for s in systems]}")
+    w = np.ones(len(systems)) if weights is None else np.asarray(weights, dtype=float)
+    if w.shape != (len(systems),):
+        raise ValueError(f"stack_systems: {len(systems)} systems but weights of shape {w.shape}")
+    stacked = np.vstack([wi * s.augmented() for wi, s in zip(w, systems)])
+    return _from_augmented_rows(stacked, sum(s.rows for s in systems))
+
+
+# --------------------------------------------------------------------------- rank and null space
+
+
+def _column_scaled(R: np.ndarray) -> np.ndarray:
+    """R with every column scaled to unit norm (columns at rounding level set to zero)."""
+    norms = np.linalg.norm(R, axis=0)
+    top = norms.max() if norms.size else 0.0
+    zero = norms <= top * np.finfo(float).eps
+    return np.where(zero, 0.0, R / np.where(zero, 1.0, norms))
+
+
+def _rank_and_null_share(R: np.ndarray, rcond: float) -> tuple[int, np.ndarray]:
+    """Numerical rank of the column-scaled R and each column's share of the null space (0..1)."""
+    _, s, vt = np.linalg.svd(_column_scaled(R))
+    rank = int(np.sum(s > rcond * s[0])) if s.size and s[0] > 0 else 0
+    share = np.linalg.norm(vt[rank:].T, axis=1)
+    return rank, share
+
+
+def _check_rank(system: CompressedSystem, names: Sequence[str], rcond: float) -> None:
+    """Raise IdentificationError naming the non-excited parameters if W is rank deficient."""
+    rank, share = _rank_and_null_share(system.R, rcond)
+    c = system.columns
+    if rank == c:
+        return
+    order = np.argsort(-share, kind="stable")
+    picked = [j for j in order if share[j] >= NULL_SPACE_SHARE] or [int(order[0])]
+    listed = ", ".join(f"{names[j]} ({share[j]:.2f})" for j in picked)
+    raise IdentificationError(
+        f"observation matrix W is rank deficient: rank {rank} < {c} parameters "
+        f"(column-scaled singular values below {rcond:g} x the largest count as zero). "
+        f"Parameters not excited, or excited only in a fixed combination (null-space share): "
+        f"{listed}. Use a richer excitation or remove/regroup these parameters.",
+        names=[names[j] for j in picked],
+        rank=rank,
+    )
+
+
+def _cond(R: np.ndarray) -> float:
+    """2-norm condition number of W from its triangular factor (same singular values)."""
+    s = np.linalg.svd(R, compute_uv=False)
+    return float(s[0] / s[-1]) if s[-1] > 0 else float("inf")
+
+
+# --------------------------------------------------------------------------- solve and statistics
+
+
+def solve_compressed(system: CompressedSystem) -> tuple[np.ndarray, np.ndarray, float]:
+    """Least-squares solution and its statistics from a full-rank compressed system.
+
+    Returns:
+        x: (c,) ``R⁻¹·z`` (eq. 10).
+        covariance: (c, c) ``σρ²·(WᵀW)⁻¹ = σρ²·R⁻¹·R⁻ᵀ`` (eq. 13), WᵀW never formed.
+        sigma_rho: ``√(‖Y − W·x‖² / (r − c))`` (eq. 12), units of Y.
+    """
+    r, c = system.rows, system.columns
+    if r <= c:
+        raise ValueError(f"need more equations than parameters for eq. 12: r = {r}, c = {c}")
+    x = sla.solve_triangular(system.R, system.z, check_finite=False)
+    r_inv = sla.solve_triangular(system.R, np.eye(c), check_finite=False)
+    sigma2 = system.rss(x) / (r - c)  # eq. 12 (rss(x) = rss_outside up to rounding)
+    return x, sigma2 * (r_inv @ r_inv.T), float(np.sqrt(sigma2))
+
+
+def relative_std_pct(values: np.ndarray, std: np.ndarray) -> np.ndarray:
+    """100·σ/|x| (eq. 15); inf where the estimate is exactly 0."""
+    with np.errstate(divide="ignore", invalid="ignore"):
+        rel = 100.0 * std / np.abs(values)
+    return np.where(values == 0.0, np.inf, rel)
+
+
+def solve_system(
+    system: CompressedSystem,
+    names: Sequence[str],
+    *,
+    joint_systems: Sequence[CompressedSystem] = (),
+    weights: np.ndarray | None = None,
+    method: str = "ols",
+    history: tuple = (),
+    rcond: float = RANK_RCOND,
+) -> IdentificationResult:
+    """Solve an (already weighted) compressed system and gather the statistics of eqs. 10–15.
+
+    Args:
+        system: compressed weighted system (the one solved; σρ, cond and covariance refer to it).
+        names: (c,) parameter names.
+        joint_systems: unweighted per-joint compressed systems, for residual RMS per joint
+            (N·m) and cond of the unweighted W; when empty these are NaN.
+        weights: per-joint weights used to build ``system`` (1/(N·m)); ones when None.
+        method: label stored in the result ("ols", "wls", "essential", ...).
+        history: elimination steps (essential parameters).
+        rcond: rank tolerance, see :data:`RANK_RCOND`.
+
+    Raises:
+        IdentificationError: W rank deficient (message names the non-excited parameters).
+    """
+    names = tuple(names)
+    if len(names) != system.columns:
+        raise ValueError(f"{len(names)} names for {system.columns} columns of W")
+    _check_rank(system, names, rcond)
+    x, cov, sigma_rho = solve_compressed(system)
+    std = np.sqrt(np.diag(cov))  # eq. 14
+    n = len(joint_systems)
+    if n:
+        residual_rms = np.array([np.sqrt(s.rss(x) / s.rows) for s in joint_systems])
+        cond_unweighted = _cond(stack_systems(joint_systems).R)
+    else:
+        residual_rms, cond_unweighted = np.full(0, np.nan), float("nan")
+    return IdentificationResult(
+        names=names,
+        values=x,
+        std=std,
+        rel_std_pct=relative_std_pct(x, std),
+        sigma_rho=sigma_rho,
+        cond=_cond(system.R),
+        cond_unweighted=cond_unweighted,
+        residual_rms=residual_rms,
+        weights=np.ones(n) if weights is None else np.asarray(weights, dtype=float),
+        rows=system.rows,
+        method=method,
+        covariance=cov,
+        system=system,
+        joint_systems=tuple(joint_systems),
+        history=tuple(history),
+    )
+
+
+def joint_noise_std(joint_system: CompressedSystem, joint: int = 0, rcond: float = RANK_RCOND) -> float:
+    """Standard deviation of the residual of one joint's own least-squares fit (eq. 8 system).
+
+    The paper weights joint i by the inverse of the standard deviation of the residual of the
+    system (8) of that joint alone. A joint block rarely excites every parameter (the last joint
+    does not see the first link's friction), so the block's own fit uses its numerical rank c_i
+    (column-scaled, tolerance ``rcond``) and the minimum-norm solution:
+    ``σ_i² = ‖Y_i − W_i·x̂_i‖² / (r_i − c_i)``. This is the unbiased estimate of the noise
+    variance of that block whatever its rank, and equals the paper's ``r_i − c`` when the block
+    is full rank.
+
+    Args:
+        joint_system: unweighted compressed system of the joint's rows.
+        joint: joint index, for error messages only.
+
+    Returns:
+        σ_i in N·m.
+    """
+    R, z = joint_system.R, joint_system.z
+    u, s, _ = np.linalg.svd(_column_scaled(R))
+    rank = int(np.sum(s > rcond * s[0])) if s.size and s[0] > 0 else 0
+    dof = joint_system.rows - rank
+    if dof <= 0:
+        raise ValueError(
+            f"joint {joint}: {joint_system.rows} equations for a block of rank {rank}; "
+            f"need more rows than its rank to estimate the residual standard deviation"
+        )
+    outside = u[:, rank:].T @ z  # part of z outside the block's column space
+    return float(np.sqrt((joint_system.rss_outside + outside @ outside) / dof))
+
+
+# --------------------------------------------------------------------------- input checks
+
+
+def _check_w_y(W: np.ndarray, Y: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    W = np.asarray(W, dtype=float)
+    Y = np.asarray(Y, dtype=float)
+    if W.ndim != 2:
+        raise ValueError(f"W must be a 2-D (r, c) array, got shape {W.shape}")
+    if Y.shape != (W.shape[0],):
+        raise ValueError(f"Y must have shape ({W.shape[0]},) to match the rows of W, got {Y.shape}")
+    bad = ~np.isfinite(W)
+    if bad.any():
+        row, col = np.argwhere(bad)[0]
+        raise ValueError(f"W has {int(bad.sum())} non-finite entries; first at row {row}, column {col}")
+    bad_y = np.flatnonzero(~np.isfinite(Y))
+    if bad_y.size:
+        raise ValueError(f"Y has {bad_y.size} non-finite entries; first at row {bad_y[0]}")
+    return W, Y
+
+
+def _check_joint(joint: np.ndarray, rows: int) -> np.ndarray:
+    joint = np.asarray(joint)
+    if joint.shape != (rows,):
+        raise ValueError(f"joint must have shape ({rows},) to match the rows of W, got {joint.shape}")
+    if rows == 0:
+        raise ValueError("W has no rows")
+    if not np.issubdtype(joint.dtype, np.integer):
+        as_int = joint.astype(int)
+        bad = np.flatnonzero(as_int != joint)
+        if bad.size:
+            raise ValueError(f"joint must hold integer joint indices; row {bad[0]} holds {joint[bad[0]]!r}")
+        joint = as_int
+    if joint.min() < 0:
+        row = int(np.argmin(joint))
+        raise ValueError(f"joint indices must be >= 0; row {row} holds {joint[row]}")
+    counts = np.bincount(joint)
+    empty = np.flatnonzero(counts == 0)
+    if empty.size:
+        raise ValueError(f"joint {empty[0]} has no rows (joint indices must cover 0..{counts.size - 1})")
+    return joint
+
+
+def _check_names(names: Sequence[str], c: int) -> tuple[str, ...]:
+    names = tuple(str(n) for n in names)
+    if len(names) != c:
+        raise ValueError(f"{len(names)} names for {c} columns of W")
+    seen: set[str] = set()
+    for j, name in enumerate(names):
+        if name in seen:
+            raise ValueError(f"duplicate parameter name {name!r} at column {j}")
+        seen.add(name)
+    return names
+
+
+# --------------------------------------------------------------------------- entry point
+
+
+def weighted_least_squares(
+    W: np.ndarray,
+    Y: np.ndarray,
+    joint: np.ndarray,
+    names: Sequence[str],
+    weighted: bool = True,
+    *,
+    rcond: float = RANK_RCOND,
+    chunk_rows: int = DEFAULT_CHUNK_ROWS,
+) -> IdentificationResult:
+    """Identify the base parameters by (weighted) least squares (paper §II-B, eqs. 6–15).
+
+    Procedure: compress each joint block once; ordinary LS on the stacked system (rank check,
+    eq. 10); for WLS, weight joint i by ``1/σ_i`` with σ_i from the joint's own block fit
+    (:func:`joint_noise_std`), then solve the weighted stacked system by QR (eq. 10) and compute
+    σρ (eq. 12, on the weighted system), the covariance (eq. 13), σ (eq. 14) and σ % (eq. 15).
+
+    Args:
+        W: (r, c) observation matrix of the base parameters, rows of all joints (eqs. 7–8).
+        Y: (r,) torques, N·m.
+        joint: (r,) joint index 0..n−1 of each row; every joint must have rows.
+        names: (c,) parameter names.
+        weighted: False gives plain OLS (method "ols", weights 1).
+        rcond: rank tolerance, see :data:`RANK_RCOND`.
+        chunk_rows: rows per QR chunk, see :func:`compress`.
+
+    Returns:
+        IdentificationResult with method "wls" or "ols"; ``system`` is the weighted compressed
+        system that was solved, ``joint_systems`` the unweighted per-joint ones.
+
+    Raises:
+        IdentificationError: W rank deficient; the message names the non-excited parameters.
+        ValueError: inconsistent shapes, non-finite data, bad joint indices or names.
+    """
+    W, Y = _check_w_y(W, Y)
+    names = _check_names(names, W.shape[1])
+    joint = _check_joint(joint, W.shape[0])
+    if W.shape[0] <= W.shape[1]:
+        raise ValueError(f"need more equations than parameters: r = {W.shape[0]}, c = {W.shape[1]}")
+    order = np.argsort(joint, kind="stable")
+    bounds = np.cumsum(np.bincount(joint))[:-1]
+    blocks = [
+        _compress_rows(W, Y, rows, chunk_rows) for rows in np.split(order, bounds)
+    ]
+    unweighted = stack_systems(blocks)
+    _check_rank(unweighted, names, rcond)
+    if not weighted:
+        return solve_system(unweighted, names, joint_systems=blocks, method="ols", rcond=rcond)
+    sigma = np.array([joint_noise_std(b, i, rcond) for i, b in enumerate(blocks)])
+    if np.any(sigma <= 0.0):
+        i = int(np.flatnonzero(sigma <= 0.0)[0])
+        raise ValueError(f"joint {i}: its own least-squares residual is zero, so its weight 1/σ is infinite; use weighted=False")
+    weights = 1.0 / sigma
+    system = stack_systems(blocks, weights)
+    return solve_system(system, names, joint_systems=blocks, weights=weights, method="wls", rcond=rcond)
