@@ -4,8 +4,9 @@ Recordings and their checks, derivatives and parallel filtering, the observation
 (eqs. 6-8), (weighted) least squares with statistics (eqs. 9-15), essential parameters,
 physically consistent least squares (LMIs, cvxpy), validation, and payload identification.
 """
-from .consistency import (ConsistencyError, ConsistencyReport, ConsistentSolution,
-                          consistency_report, consistent_least_squares, pseudo_inertia)
+from .consistency import (BodyConsistency, ConsistencyError, ConsistencyReport, ConsistentSolution,
+                          consistency_margin, consistency_report, consistent_least_squares,
+                          pseudo_inertia)
 from .essential import essential_parameters
 from .filtering import Derivatives, choose_cutoff, decimate, decimation_factor, derivatives, lowpass
 from .identification import ConsistentResult, Validation, identify, predict, validate
@@ -16,7 +17,7 @@ from .recordings import (Recording, RecordingError, read_motor_recording, read_r
 from .results import EliminationStep, IdentificationResult
 
 __all__ = [
-    "ConsistencyError", "ConsistencyReport", "ConsistentSolution", "consistency_report",
+    "BodyConsistency", "consistency_margin", "ConsistencyError", "ConsistencyReport", "ConsistentSolution", "consistency_report",
     "consistent_least_squares", "pseudo_inertia", "essential_parameters", "Derivatives",
     "choose_cutoff", "decimate", "decimation_factor", "derivatives", "lowpass",
     "ConsistentResult", "Validation", "identify", "predict", "validate", "CompressedSystem",

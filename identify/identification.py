@@ -13,7 +13,7 @@ import numpy as np
 
 import rx90sym
 
-from .consistency import ConsistentSolution, consistent_least_squares
+from .consistency import ConsistentSolution, consistency_margin, consistent_least_squares
 from .observation import Observation, observation_matrix
 from .results import IdentificationResult
 from .least_squares import weighted_least_squares
@@ -92,8 +92,8 @@ def consistent_fit(robot: Any, wls: IdentificationResult, base: Any, **options: 
     c = len(wls.names)
     sigma_rho = float(np.sqrt(sol.cost / max(system.rows - c, 1)))
     residual_rms = np.array([np.sqrt(js.rss(sol.beta) / js.rows) for js in wls.joint_systems])
-    # Interior-point accuracy: a cost within 1e-6 relative means the constraints were not active.
-    was_consistent = bool(sol.cost <= wls_cost * (1 + 1e-6) + 1e-12)
+    # Exact test: does some consistent chi reproduce the WLS beta? (margin > 0)
+    was_consistent = bool(consistency_margin(wls.values, base.K, robot.parameter_names)[0] > 0)
     return ConsistentResult(
         names=wls.names, values=sol.beta, std=wls.std,
         rel_std_pct=100 * wls.std / np.where(sol.beta == 0, np.nan, np.abs(sol.beta)),

@@ -1,0 +1,377 @@
+"""Identification of a payload's 10 inertial parameters (paper section IV, eqs. 21-29).
+
+The payload (XXc ... Mc, frame n about its origin) adds to link n's inertial parameters, so its
+observation matrix Wc is the ten columns of link n in the standard regressor (eq. 21).
+
+- method 1 (eqs. 21-22): known robot parameters, chi_c = Wc+ (Y_T - W beta);
+- method 2 (eqs. 23-27): re-identify with the load; the payload solves the grouping relations
+  Delta beta = K_c chi_c in the least-squares sense (K_c: the columns of link n's inertial
+  parameters in the symbolic K, so the relations are derived, not typed in);
+- method 3 (eq. 28): same motion empty and loaded, chi_c = Wc+ (Y_T - Y_v);
+- method 4 (eq. 29): global system of empty and loaded motions, which may differ.
+
+Each has a constrained variant (payload pseudo-inertia PSD, mass within a scale's tolerance),
+and PayloadMonitor updates method 4 after every new loaded motion (the paper's conclusion).
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Any, Mapping, Sequence
+
+import cvxpy as cp
+import numpy as np
+
+import rx90sym
+from rx90sym.parameters import INERTIAL, PAYLOAD_NAMES
+
+from .consistency import ConsistencyError, pseudo_inertia
+from .least_squares import (CompressedSystem, compress, joint_noise_std, solve_system,
+                            stack_systems, weighted_least_squares)
+from .observation import filtered_motion, stack_rows
+from .results import IdentificationResult
+
+METHODS = (1, 2, 3, 4)
+# Method 3 assumes the empty and loaded runs follow the same path (the paper measured < 1e-3 rad
+# with 7 kg); beyond this the torque difference also holds the effect of the path difference.
+POSITION_TOLERANCE = 5e-3  # rad
+# A loaded motion must move the wrist: otherwise Wc is (nearly) rank deficient (eq. 22).
+MIN_WRIST_MOTION = 0.05  # rad, range of each of joints 4..6 over all loaded motions together
+
+
+@dataclass(frozen=True, eq=False)
+class PayloadResult:
+    """Payload estimate: names XXc..Mc with values, std (eq. 14), rel_std_pct (eq. 15).
+
+    robot: the identified robot base parameters (methods 2 and 4), else None;
+    a_priori: reference values (CAD) when given; constrained: whether the PSD/mass constraints
+    were imposed; fit: the underlying least-squares result.
+    """
+
+    method: int
+    names: tuple[str, ...]
+    values: np.ndarray
+    std: np.ndarray
+    rel_std_pct: np.ndarray
+    fit: IdentificationResult | None = field(default=None, repr=False)
+    robot: IdentificationResult | None = field(default=None, repr=False)
+    a_priori: dict | None = None
+    constrained: bool = False
+
+    def __getitem__(self, name: str) -> float:
+        return float(self.values[self.names.index(name)])
+
+    def as_dict(self) -> dict[str, float]:
+        return {k: float(v) for k, v in zip(self.names, self.values)}
+
+    def to_dict(self) -> dict[str, Any]:
+        def num(x: float) -> float | None:
+            return float(x) if np.isfinite(x) else None
+
+        return {"method": self.method, "constrained": self.constrained,
+                "payload": [{"name": n, "value": num(v), "std": num(s), "rel_std_pct": num(p)}
+                            for n, v, s, p in zip(self.names, self.values, self.std, self.rel_std_pct)],
+                "a_priori": self.a_priori}
+
+    def table(self) -> str:
+        """Like Tables 4-7: Parameter, A priori, Identified, 2 sigma, sigma_r %."""
+        lines = [f"Payload, method {self.method}{' (constrained)' if self.constrained else ''}",
+                 f"{'Parameter':10s} {'A priori':>10s} {'Identified':>11s} {'2σ':>9s} {'σr %':>9s}"]
+        if self.robot is not None:
+            for n, v, s, p in zip(self.robot.names, self.robot.values, self.robot.std, self.robot.rel_std_pct):
+                if n not in self.names:
+                    lines.append(f"{n:10s} {'':>10s} {v:11.4g} {2 * s:9.3g} {p:9.3f}")
+        for n, v, s, p in zip(self.names, self.values, self.std, self.rel_std_pct):
+            ap = "" if not self.a_priori or n not in self.a_priori else f"{self.a_priori[n]:.4g}"
+            lines.append(f"{n:10s} {ap:>10s} {v:11.4g} {2 * s:9.3g} {p:9.3f}")
+        return "\n".join(lines)
+
+
+def payload_columns(robot: Any) -> list[str]:
+    """Standard names whose regressor columns form Wc: link n's ten inertial parameters."""
+    return [f"{p}{robot.n}" for p in INERTIAL]
+
+
+# --------------------------------------------------------------------------------------------
+# Building the systems
+# --------------------------------------------------------------------------------------------
+def _as_list(recs: Any) -> list:
+    if recs is None:
+        return []
+    return list(recs) if isinstance(recs, (list, tuple)) else [recs]
+
+
+def _check_robot(robot: Any, recs: Sequence[Any], what: str) -> None:
+    for rec in recs:
+        if rec.q.shape[1] != robot.n:
+            raise ValueError(f"{what} recording {rec.source}: {rec.q.shape[1]} joints, robot "
+                             f"{robot.name!r} has {robot.n}")
+        if rec.robot and rec.robot != robot.name:
+            raise ValueError(f"{what} recording {rec.source} is of robot {rec.robot!r}, not {robot.name!r}")
+
+
+def _check_wrist_motion(robot: Any, loaded: Sequence[Any]) -> None:
+    q = np.concatenate([np.asarray(r.q) for r in loaded])
+    wrist = list(range(max(0, robot.n - 3), robot.n))
+    span = q[:, wrist].max(axis=0) - q[:, wrist].min(axis=0)
+    if np.all(span < MIN_WRIST_MOTION):
+        raise ValueError(f"loaded motion(s) {[r.source for r in loaded]}: joints "
+                         f"{[w + 1 for w in wrist]} move by at most {span.max():.3g} rad; the payload "
+                         f"is not excited (need > {MIN_WRIST_MOTION} rad on at least one of them)")
+
+
+def _motions(robot: Any, recs: Sequence[Any], columns: Sequence[int], options: Mapping[str, Any]):
+    def regressor(Q: np.ndarray, QD: np.ndarray, QDD: np.ndarray) -> np.ndarray:
+        return robot.regressor_batch(Q, QD, QDD)[:, :, columns]
+
+    return [filtered_motion(robot, r, options.get("cutoff"), options.get("decimate_to", 50.0),
+                            options.get("spring", True), regressor) for r in recs]
+
+
+def _rows(motions: Sequence[Any], Y: Sequence[np.ndarray] | None = None):
+    return stack_rows([m.Phi for m in motions], Y if Y is not None else [m.Y for m in motions])
+
+
+def _robot_vector(robot: Any, base: Any, robot_params: Any) -> np.ndarray:
+    """Base parameter values from an IdentificationResult, a dict of base or standard names."""
+    if robot_params is None:
+        raise ValueError("method 1 needs the robot's parameters (robot_params): an identification "
+                         "result, or a dict of base or standard parameter values")
+    values = robot_params.as_dict() if hasattr(robot_params, "as_dict") else dict(robot_params)
+    if set(values) <= set(robot.parameter_names) and not set(values) <= set(base.names):
+        return base.K @ robot.parameter_vector(values, strict=False)
+    unknown = set(values) - set(base.names)
+    if unknown:
+        raise ValueError(f"robot_params: {sorted(unknown)[:5]} are not base parameters of {robot.name!r}")
+    # Parameters of the base set left out (e.g. an essential set) count as 0.
+    return np.array([values.get(n, 0.0) for n in base.names])
+
+
+# --------------------------------------------------------------------------------------------
+# The methods
+# --------------------------------------------------------------------------------------------
+def payload(robot: Any, method: int, empty: Sequence[Any] = (), loaded: Sequence[Any] = (),
+            robot_params: Any = None, base: Any = None, a_priori: Mapping[str, float] | str | None = None,
+            constrained: bool = False, mass: float | None = None, mass_tol: float = 0.05,
+            position_tol: float = POSITION_TOLERANCE, **options: Any) -> PayloadResult:
+    """Identify the payload by method 1, 2, 3 or 4 of section IV.
+
+    empty / loaded: recordings without / with the payload; robot_params: the robot's base (or
+    standard) parameters for method 1; a_priori: CAD values (dict or bundled payload name) to
+    print beside the estimates; constrained: impose the payload pseudo-inertia PSD and, when
+    ``mass`` [kg] is given (weighed), |Mc - mass| <= mass_tol [kg]; position_tol [rad]: method 3
+    refuses runs whose positions differ by more; options: cutoff, decimate_to, spring.
+    """
+    if method not in METHODS:
+        raise ValueError(f"payload: method must be 1, 2, 3 or 4, got {method!r}")
+    empty, loaded = _as_list(empty), _as_list(loaded)
+    if not loaded:
+        raise ValueError("payload: no loaded recording given")
+    if method in (2, 3, 4) and not empty:
+        raise ValueError(f"payload method {method} needs at least one empty (unloaded) recording")
+    _check_robot(robot, empty, "empty")
+    _check_robot(robot, loaded, "loaded")
+    _check_wrist_motion(robot, loaded)
+    if isinstance(a_priori, str):
+        a_priori = rx90sym.load_payload(a_priori)
+    base = base if base is not None else rx90sym.base_parameters(robot)
+    if constrained and method == 2:
+        raise ValueError("payload method 2 has no constrained variant here: constrain method 4, "
+                         "which solves the same relations on the data")
+    solve = {1: _method_1, 2: _method_2, 3: _method_3, 4: _method_4}[method]
+    fit, robot_fit = solve(robot, base, empty, loaded, robot_params=robot_params,
+                           position_tol=position_tol, options=options)
+    values, std, rel = _payload_part(fit)
+    if constrained:
+        values = _constrained(fit, mass, mass_tol)
+        rel = 100 * std / np.abs(values)
+    return PayloadResult(method, PAYLOAD_NAMES, values, std, rel, fit, robot_fit,
+                         dict(a_priori) if a_priori else None, constrained)
+
+
+def _payload_part(fit: IdentificationResult) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    idx = [fit.names.index(n) for n in PAYLOAD_NAMES]
+    return fit.values[idx], fit.std[idx], fit.rel_std_pct[idx]
+
+
+def _method_1(robot, base, empty, loaded, robot_params, options, **_):
+    beta = _robot_vector(robot, base, robot_params)
+    cols = list(base.independent) + robot.parameter_index(payload_columns(robot))
+    motions = _motions(robot, loaded, cols, options)
+    nb = base.nb
+    # eq. 22: the robot's known part is moved to the left-hand side.
+    Y = [m.Y - m.Phi[:, :, :nb] @ beta for m in motions]
+    W, Yr, joint, _ = stack_rows([m.Phi[:, :, nb:] for m in motions], Y)
+    return weighted_least_squares(W, Yr, joint, PAYLOAD_NAMES), None
+
+
+def _method_3(robot, base, empty, loaded, position_tol, options, **_):
+    if len(empty) != len(loaded):
+        raise ValueError(f"payload method 3 pairs each loaded motion with the same motion run empty: "
+                         f"got {len(empty)} empty and {len(loaded)} loaded recordings")
+    for e, l in zip(empty, loaded):
+        if e.q.shape != l.q.shape:
+            raise ValueError(f"payload method 3: {e.source} has {e.q.shape[0]} samples and "
+                             f"{l.source} has {l.q.shape[0]}; method 3 needs the same motion twice")
+        gap = float(np.max(np.abs(np.asarray(e.q) - np.asarray(l.q))))
+        if gap > position_tol:
+            raise ValueError(f"payload method 3: positions of {e.source} and {l.source} differ by up "
+                             f"to {gap:.3g} rad (> {position_tol:g} rad): not the same motion; use "
+                             f"method 4")
+    cols = robot.parameter_index(payload_columns(robot))
+    m_l = _motions(robot, loaded, cols, options)
+    m_e = _motions(robot, empty, cols, options)
+    # eq. 28: the empty run's torques replace W chi.
+    W, Y, joint, _ = stack_rows([m.Phi for m in m_l], [a.Y - b.Y for a, b in zip(m_l, m_e)])
+    return weighted_least_squares(W, Y, joint, PAYLOAD_NAMES), None
+
+
+def _global_rows(robot, base, empty, loaded, options):
+    """Rows of eq. 29: [W_v 0; W_T W_c] and [Y_v; Y_T], grouped per joint."""
+    cols = list(base.independent) + robot.parameter_index(payload_columns(robot))
+    nb = base.nb
+    m_e = _motions(robot, empty, cols, options)
+    m_l = _motions(robot, loaded, cols, options)
+    blocks = [np.concatenate([m.Phi[:, :, :nb], np.zeros_like(m.Phi[:, :, nb:])], axis=2) for m in m_e]
+    blocks += [m.Phi for m in m_l]
+    return stack_rows(blocks, [m.Y for m in m_e + m_l])
+
+
+def _method_4(robot, base, empty, loaded, options, **_):
+    W, Y, joint, _ = _global_rows(robot, base, empty, loaded, options)
+    names = tuple(base.names) + PAYLOAD_NAMES
+    fit = weighted_least_squares(W, Y, joint, names)
+    return fit, _subset(fit, base.names)
+
+
+def _subset(fit: IdentificationResult, names: Sequence[str]) -> IdentificationResult:
+    idx = [fit.names.index(n) for n in names]
+    cov = fit.covariance[np.ix_(idx, idx)] if fit.covariance is not None else None
+    return IdentificationResult(tuple(names), fit.values[idx], fit.std[idx], fit.rel_std_pct[idx],
+                                fit.sigma_rho, fit.cond, fit.cond_unweighted, fit.residual_rms,
+                                fit.weights, fit.rows, fit.method, cov)
+
+
+def grouping_relations(robot: Any, base: Any) -> np.ndarray:
+    """K_c (nb x 10): how the payload enters the base parameters, Delta beta = K_c chi_c (eqs. 24-27).
+
+    Read off the symbolic K: the payload adds to link n's ten inertial parameters."""
+    return base.K[:, robot.parameter_index(payload_columns(robot))]
+
+
+def _method_2(robot, base, empty, loaded, options, **_):
+    kw = {k: options[k] for k in ("cutoff", "decimate_to", "spring") if k in options}
+    from .identification import identify
+
+    fit_v = identify(robot, empty, method="wls", base=base, **kw)
+    fit_t = identify(robot, loaded, method="wls", base=base, **kw)
+    delta = fit_t.values - fit_v.values                    # eq. 23
+    cov = fit_t.covariance + fit_v.covariance
+    Kc = grouping_relations(robot, base)
+    rows = np.flatnonzero(np.any(Kc != 0, axis=1))         # only relations that hold the payload
+    # Generalised LS on eqs. 24-27: each relation weighted by the precision of its Delta beta,
+    # so that, e.g., Mc leans on the well identified MX2R rather than on ZZ1R.
+    C = cov[np.ix_(rows, rows)]
+    L = np.linalg.cholesky(C)
+    A = np.linalg.solve(L, Kc[rows])
+    b = np.linalg.solve(L, delta[rows])
+    system = compress(A, b)
+    sol = solve_system(system, PAYLOAD_NAMES, method="payload-2")
+    # The covariance of Delta beta is known (not estimated from this small system): eq. 13 with
+    # sigma_rho = 1 for whitened relations.
+    Rinv = np.linalg.inv(system.R)
+    covc = Rinv @ Rinv.T
+    std = np.sqrt(np.diag(covc))
+    fit = IdentificationResult(PAYLOAD_NAMES, sol.values, std, 100 * std / np.abs(sol.values),
+                               sol.sigma_rho, sol.cond, sol.cond_unweighted, np.zeros(0), np.zeros(0),
+                               len(rows), "payload-2", covc)
+    return fit, fit_t
+
+
+def _constrained(fit: IdentificationResult, mass: float | None, mass_tol: float) -> np.ndarray:
+    """Refit with the payload's pseudo-inertia PSD and the weighed mass (cvxpy, Clarabel)."""
+    system = fit.system
+    if system is None:
+        raise ValueError("constrained payload needs the compressed system of the fit")
+    x = cp.Variable(len(fit.names))
+    idx = [fit.names.index(n) for n in PAYLOAD_NAMES]
+    scale = max(float(np.linalg.norm(system.z)), 1e-12)
+    objective = cp.Minimize(cp.sum_squares(system.R @ x - system.z) / scale**2)
+    cons = [pseudo_inertia(x[idx]) >> 0]
+    if mass is not None:
+        if mass <= 0 or mass_tol < 0:
+            raise ValueError(f"constrained payload: mass must be > 0 and mass_tol >= 0, got {mass}, {mass_tol}")
+        cons += [cp.abs(x[idx[-1]] - mass) <= mass_tol]
+    prob = cp.Problem(objective, cons)
+    try:
+        prob.solve(solver="CLARABEL")
+    except cp.error.SolverError as exc:
+        raise ConsistencyError(f"constrained payload: solver failed ({exc})", status="solver_error",
+                               solver="CLARABEL") from None
+    if prob.status != cp.OPTIMAL:
+        raise ConsistencyError(f"constrained payload: solver status {prob.status}", status=str(prob.status),
+                               solver="CLARABEL")
+    values = np.asarray(x.value)[idx]
+    # The cone is met to the solver's accuracy; project the tiny negative eigenvalue, if any, away.
+    if np.linalg.eigvalsh(pseudo_inertia(values)).min() < -1e-9:
+        raise ConsistencyError("constrained payload: solution fails the external PSD check",
+                               status="inaccurate", solver="CLARABEL")
+    return values
+
+
+# --------------------------------------------------------------------------------------------
+# Monitoring (paper's conclusion)
+# --------------------------------------------------------------------------------------------
+@dataclass(frozen=True)
+class MonitorStep:
+    """One update: the loaded motion added and the payload estimate after it."""
+
+    source: str
+    values: np.ndarray
+    std: np.ndarray
+    robot_values: np.ndarray
+
+
+class PayloadMonitor:
+    """Payload (and robot) estimate updated after every loaded motion (method 4, recursively).
+
+    The empty motions fix the joint weights and the first block of eq. 29; each update adds the
+    loaded motion's rows to the QR-compressed system (constant size: the cost of an update does
+    not grow with the history) and re-solves. ``history`` holds every estimate.
+    """
+
+    def __init__(self, robot: Any, empty: Sequence[Any], base: Any = None, **options: Any) -> None:
+        empty = _as_list(empty)
+        if not empty:
+            raise ValueError("PayloadMonitor needs at least one empty recording")
+        _check_robot(robot, empty, "empty")
+        self.robot = robot
+        self.base = base if base is not None else rx90sym.base_parameters(robot)
+        self.options = options
+        self.names = tuple(self.base.names) + PAYLOAD_NAMES
+        cols = list(self.base.independent) + robot.parameter_index(payload_columns(robot))
+        self._cols = cols
+        nb = self.base.nb
+        m_e = _motions(robot, empty, cols, options)
+        blocks = [np.concatenate([m.Phi[:, :, :nb], np.zeros_like(m.Phi[:, :, nb:])], axis=2) for m in m_e]
+        W, Y, joint, _ = stack_rows(blocks, [m.Y for m in m_e])
+        empty_fit = weighted_least_squares(W[:, :nb], Y, joint, self.base.names)
+        self.weights = empty_fit.weights
+        self._systems = [compress(W[joint == j], Y[joint == j]) for j in range(robot.n)]
+        self.empty_fit = empty_fit
+        self.history: list[MonitorStep] = []
+
+    def update(self, loaded: Any) -> PayloadResult:
+        """Add one loaded motion and return the new payload estimate."""
+        _check_robot(self.robot, [loaded], "loaded")
+        _check_wrist_motion(self.robot, [loaded])
+        m = _motions(self.robot, [loaded], self._cols, self.options)
+        W, Y, joint, _ = _rows(m)
+        new = [compress(W[joint == j], Y[joint == j]) for j in range(self.robot.n)]
+        self._systems = [stack_systems([a, b]) for a, b in zip(self._systems, new)]
+        system = stack_systems(self._systems, self.weights)
+        fit = solve_system(system, self.names, joint_systems=self._systems, weights=self.weights,
+                           method="monitor")
+        values, std, rel = _payload_part(fit)
+        nb = self.base.nb
+        self.history.append(MonitorStep(loaded.source, values, std, fit.values[:nb]))
+        return PayloadResult(4, PAYLOAD_NAMES, values, std, rel, fit, _subset(fit, self.base.names))
