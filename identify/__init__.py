@@ -12,6 +12,7 @@ from .filtering import Derivatives, choose_cutoff, decimate, decimation_factor, 
 from .identification import ConsistentResult, Validation, identify, predict, validate
 from .least_squares import CompressedSystem, IdentificationError, compress, weighted_least_squares
 from .observation import Observation, observation_matrix
+from .payload import PayloadMonitor, PayloadResult, grouping_relations, payload
 from .recordings import (Recording, RecordingError, read_motor_recording, read_recording,
                          recording_from_arrays, split, write_recording)
 from .results import EliminationStep, IdentificationResult
@@ -24,5 +25,5 @@ __all__ = [
     "IdentificationError", "compress", "weighted_least_squares", "Observation",
     "observation_matrix", "Recording", "RecordingError", "read_motor_recording",
     "read_recording", "recording_from_arrays", "split", "write_recording", "EliminationStep",
-    "IdentificationResult",
+    "IdentificationResult", "PayloadMonitor", "PayloadResult", "grouping_relations", "payload",
 ]

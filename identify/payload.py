@@ -22,7 +22,7 @@ import cvxpy as cp
 import numpy as np
 
 import rx90sym
-from rx90sym.parameters import INERTIAL, PAYLOAD_NAMES
+from rx90sym.parameters import PAYLOAD_NAMES
 
 from .consistency import ConsistencyError, pseudo_inertia
 from .least_squares import (CompressedSystem, compress, joint_noise_std, solve_system,
@@ -32,8 +32,10 @@ from .results import IdentificationResult
 
 METHODS = (1, 2, 3, 4)
 # Method 3 assumes the empty and loaded runs follow the same path (the paper measured < 1e-3 rad
-# with 7 kg); beyond this the torque difference also holds the effect of the path difference.
-POSITION_TOLERANCE = 5e-3  # rad
+# with 7 kg on the CS8). The twin's 10 Hz servo loop without payload feed-forward drifts up to
+# ~0.012 rad with 7 kg; past 0.02 rad the path difference alone changes the RX90's gravity torques
+# by a few N m, the size of a light payload's effect.
+POSITION_TOLERANCE = 0.02  # rad
 # A loaded motion must move the wrist: otherwise Wc is (nearly) rank deficient (eq. 22).
 MIN_WRIST_MOTION = 0.05  # rad, range of each of joints 4..6 over all loaded motions together
 
@@ -86,11 +88,6 @@ class PayloadResult:
         return "\n".join(lines)
 
 
-def payload_columns(robot: Any) -> list[str]:
-    """Standard names whose regressor columns form Wc: link n's ten inertial parameters."""
-    return [f"{p}{robot.n}" for p in INERTIAL]
-
-
 # --------------------------------------------------------------------------------------------
 # Building the systems
 # --------------------------------------------------------------------------------------------
@@ -127,8 +124,10 @@ def _motions(robot: Any, recs: Sequence[Any], columns: Sequence[int], options: M
                             options.get("spring", True), regressor) for r in recs]
 
 
-def _rows(motions: Sequence[Any], Y: Sequence[np.ndarray] | None = None):
-    return stack_rows([m.Phi for m in motions], Y if Y is not None else [m.Y for m in motions])
+def _rows(blocks: Sequence[np.ndarray], Y: Sequence[np.ndarray], motions: Sequence[Any],
+          options: Mapping[str, Any]):
+    """Rows grouped per joint; a joint's rows near rest are dropped when options has min_velocity."""
+    return stack_rows(blocks, Y, options.get("min_velocity"), [m.dq for m in motions])
 
 
 def _robot_vector(robot: Any, base: Any, robot_params: Any) -> np.ndarray:
@@ -159,7 +158,8 @@ def payload(robot: Any, method: int, empty: Sequence[Any] = (), loaded: Sequence
     standard) parameters for method 1; a_priori: CAD values (dict or bundled payload name) to
     print beside the estimates; constrained: impose the payload pseudo-inertia PSD and, when
     ``mass`` [kg] is given (weighed), |Mc - mass| <= mass_tol [kg]; position_tol [rad]: method 3
-    refuses runs whose positions differ by more; options: cutoff, decimate_to, spring.
+    refuses runs whose positions differ by more; options: cutoff, decimate_to, spring,
+    min_velocity (see identify.observation_matrix).
     """
     if method not in METHODS:
         raise ValueError(f"payload: method must be 1, 2, 3 or 4, got {method!r}")
@@ -195,12 +195,12 @@ def _payload_part(fit: IdentificationResult) -> tuple[np.ndarray, np.ndarray, np
 
 def _method_1(robot, base, empty, loaded, robot_params, options, **_):
     beta = _robot_vector(robot, base, robot_params)
-    cols = list(base.independent) + robot.parameter_index(payload_columns(robot))
+    cols = list(base.independent) + list(rx90sym.payload_regressor_columns(robot))
     motions = _motions(robot, loaded, cols, options)
     nb = base.nb
     # eq. 22: the robot's known part is moved to the left-hand side.
     Y = [m.Y - m.Phi[:, :, :nb] @ beta for m in motions]
-    W, Yr, joint, _ = stack_rows([m.Phi[:, :, nb:] for m in motions], Y)
+    W, Yr, joint, _ = _rows([m.Phi[:, :, nb:] for m in motions], Y, motions, options)
     return weighted_least_squares(W, Yr, joint, PAYLOAD_NAMES), None
 
 
@@ -217,23 +217,23 @@ def _method_3(robot, base, empty, loaded, position_tol, options, **_):
             raise ValueError(f"payload method 3: positions of {e.source} and {l.source} differ by up "
                              f"to {gap:.3g} rad (> {position_tol:g} rad): not the same motion; use "
                              f"method 4")
-    cols = robot.parameter_index(payload_columns(robot))
+    cols = list(rx90sym.payload_regressor_columns(robot))
     m_l = _motions(robot, loaded, cols, options)
     m_e = _motions(robot, empty, cols, options)
     # eq. 28: the empty run's torques replace W chi.
-    W, Y, joint, _ = stack_rows([m.Phi for m in m_l], [a.Y - b.Y for a, b in zip(m_l, m_e)])
+    W, Y, joint, _ = _rows([m.Phi for m in m_l], [a.Y - b.Y for a, b in zip(m_l, m_e)], m_l, options)
     return weighted_least_squares(W, Y, joint, PAYLOAD_NAMES), None
 
 
 def _global_rows(robot, base, empty, loaded, options):
     """Rows of eq. 29: [W_v 0; W_T W_c] and [Y_v; Y_T], grouped per joint."""
-    cols = list(base.independent) + robot.parameter_index(payload_columns(robot))
+    cols = list(base.independent) + list(rx90sym.payload_regressor_columns(robot))
     nb = base.nb
     m_e = _motions(robot, empty, cols, options)
     m_l = _motions(robot, loaded, cols, options)
     blocks = [np.concatenate([m.Phi[:, :, :nb], np.zeros_like(m.Phi[:, :, nb:])], axis=2) for m in m_e]
     blocks += [m.Phi for m in m_l]
-    return stack_rows(blocks, [m.Y for m in m_e + m_l])
+    return _rows(blocks, [m.Y for m in m_e + m_l], m_e + m_l, options)
 
 
 def _method_4(robot, base, empty, loaded, options, **_):
@@ -255,11 +255,11 @@ def grouping_relations(robot: Any, base: Any) -> np.ndarray:
     """K_c (nb x 10): how the payload enters the base parameters, Delta beta = K_c chi_c (eqs. 24-27).
 
     Read off the symbolic K: the payload adds to link n's ten inertial parameters."""
-    return base.K[:, robot.parameter_index(payload_columns(robot))]
+    return base.K[:, list(rx90sym.payload_regressor_columns(robot))]
 
 
 def _method_2(robot, base, empty, loaded, options, **_):
-    kw = {k: options[k] for k in ("cutoff", "decimate_to", "spring") if k in options}
+    kw = {k: options[k] for k in ("cutoff", "decimate_to", "spring", "min_velocity") if k in options}
     from .identification import identify
 
     fit_v = identify(robot, empty, method="wls", base=base, **kw)
@@ -348,12 +348,12 @@ class PayloadMonitor:
         self.base = base if base is not None else rx90sym.base_parameters(robot)
         self.options = options
         self.names = tuple(self.base.names) + PAYLOAD_NAMES
-        cols = list(self.base.independent) + robot.parameter_index(payload_columns(robot))
+        cols = list(self.base.independent) + list(rx90sym.payload_regressor_columns(robot))
         self._cols = cols
         nb = self.base.nb
         m_e = _motions(robot, empty, cols, options)
         blocks = [np.concatenate([m.Phi[:, :, :nb], np.zeros_like(m.Phi[:, :, nb:])], axis=2) for m in m_e]
-        W, Y, joint, _ = stack_rows(blocks, [m.Y for m in m_e])
+        W, Y, joint, _ = _rows(blocks, [m.Y for m in m_e], m_e, options)
         empty_fit = weighted_least_squares(W[:, :nb], Y, joint, self.base.names)
         self.weights = empty_fit.weights
         self._systems = [compress(W[joint == j], Y[joint == j]) for j in range(robot.n)]
@@ -365,7 +365,7 @@ class PayloadMonitor:
         _check_robot(self.robot, [loaded], "loaded")
         _check_wrist_motion(self.robot, [loaded])
         m = _motions(self.robot, [loaded], self._cols, self.options)
-        W, Y, joint, _ = _rows(m)
+        W, Y, joint, _ = _rows([x.Phi for x in m], [x.Y for x in m], m, self.options)
         new = [compress(W[joint == j], Y[joint == j]) for j in range(self.robot.n)]
         self._systems = [stack_systems([a, b]) for a, b in zip(self._systems, new)]
         system = stack_systems(self._systems, self.weights)

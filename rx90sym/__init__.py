@@ -8,9 +8,13 @@ from .description import Coupling, Limits, Robot, robot_from_table
 from .parameters import LINK_PARAMETERS, PAYLOAD_NAMES
 from .robot_file import RobotFileError, bundled_robots, load_robot
 from .spring import Spring
+from .payloads import add_payload, bundled_payloads, load_payload, payload_regressor_columns
+from . import twin
+from .twin import default_parameters
 
 __all__ = [
     "BaseParameters", "base_parameters",
     "Coupling", "Limits", "Robot", "robot_from_table", "LINK_PARAMETERS", "PAYLOAD_NAMES",
-    "RobotFileError", "bundled_robots", "load_robot", "Spring",
+    "RobotFileError", "bundled_robots", "load_robot", "Spring", "bundled_payloads",
+    "load_payload", "twin", "add_payload", "payload_regressor_columns", "default_parameters",
 ]

@@ -64,3 +64,38 @@ def tx40():
 @pytest.fixture(scope="session")
 def random_robot():
     return rx90sym.robot_from_table(RANDOM_TABLE, name="random")
+
+
+# --------------------------------------------------------------------------- twin recordings
+# Hand-made motions (multisines) recorded on the twin with the realistic noise profile; shared
+# by the identification and payload tests (simulating costs ~1 s per 20 s motion).
+EMPTY_SEEDS = (0, 1, 2, 3)
+
+
+@pytest.fixture(scope="session")
+def rx90_base(rx90):
+    return rx90sym.base_parameters(rx90)
+
+
+@pytest.fixture(scope="session")
+def rx90_truth(rx90, rx90_base):
+    chi = rx90.parameter_vector(rx90sym.twin.default_parameters(rx90))
+    return dict(zip(rx90_base.names, rx90_base.beta(chi)))
+
+
+@pytest.fixture(scope="session")
+def twin_empty(rx90):
+    from motions import multisine
+
+    return [rx90sym.twin.simulate(rx90, multisine(rx90, s), duration=20.0, noise="realistic", seed=s)
+            for s in EMPTY_SEEDS]
+
+
+@pytest.fixture(scope="session")
+def twin_loaded(rx90):
+    """Loaded runs of the first two empty motions, per payload of Tables 4 and 5."""
+    from motions import multisine
+
+    return {name: [rx90sym.twin.simulate(rx90, multisine(rx90, s), duration=20.0, payload=name,
+                                         noise="realistic", seed=100 + s) for s in EMPTY_SEEDS[:2]]
+            for name in ("tables_4", "tables_5")}
