@@ -61,6 +61,42 @@ def _c_compiler() -> str | None:
     return os.environ.get("CC") or shutil.which("cc") or shutil.which("gcc")
 
 
+def shared_library(source: str, name: str, flags: Sequence[str] = ("-O2",)) -> Path:
+    """Compile C source into a shared library in the cache (keyed by source, flags, compiler).
+
+    Raises RuntimeError when there is no compiler or it fails."""
+    cc = _c_compiler()
+    if cc is None:
+        raise RuntimeError("no C compiler found (set CC)")
+    flags = ["-shared", "-fPIC", *flags]
+    key = hashlib.sha256((source + " ".join(flags) + cc).encode()).hexdigest()[:20]
+    lib_path = cache_dir() / f"{name}_{key}.so"
+    if not lib_path.exists():
+        with tempfile.TemporaryDirectory(dir=cache_dir()) as tmp:
+            c_path = Path(tmp) / f"{name}.c"
+            c_path.write_text(source)
+            tmp_lib = Path(tmp) / "lib.so"
+            proc = subprocess.run([cc, *flags, str(c_path), "-o", str(tmp_lib), "-lm"],
+                                  capture_output=True, text=True, timeout=600)
+            if proc.returncode != 0:
+                raise RuntimeError(f"{cc} failed: {proc.stderr.strip()[:500]}")
+            os.replace(tmp_lib, lib_path)  # atomic: concurrent builders never see half a file
+    return lib_path
+
+
+def compiled_function(f: ca.Function) -> ca.Function:
+    """``f`` as generated C loaded with casadi.external (cached), or ``f`` itself with a warning
+    when no C compiler can build it (CasADi's VM gives the same numbers, slower)."""
+    cg = ca.CodeGenerator(f"{f.name()}.c", {"with_header": False})
+    cg.add(f)
+    try:
+        return ca.external(f.name(), str(shared_library(cg.dump(), f.name())))
+    except (OSError, RuntimeError, subprocess.SubprocessError) as exc:
+        warnings.warn(f"{f.name()}: C compilation unavailable ({exc}); using CasADi's VM",
+                      RuntimeWarning, stacklevel=2)
+        return f
+
+
 def _has_openmp(cc: str) -> bool:
     """Whether the compiler accepts -fopenmp (gcc does; plain clang on macOS may not)."""
     with tempfile.TemporaryDirectory() as tmp:
@@ -112,19 +148,8 @@ class BatchFunction:
         cg = ca.CodeGenerator(f"{self.name}.c", {"with_header": False, "casadi_int": "long long int"})
         cg.add(self.f)
         source = cg.dump() + _LOOP.format(name=self.name, n_in=self.f.n_in())
-        flags = ["-O3", "-shared", "-fPIC"] + (["-fopenmp"] if _has_openmp(cc) else [])
-        key = hashlib.sha256((source + " ".join(flags) + cc).encode()).hexdigest()[:20]
-        lib_path = cache_dir() / f"{self.name}_{key}.so"
-        if not lib_path.exists():
-            with tempfile.TemporaryDirectory(dir=cache_dir()) as tmp:
-                c_path = Path(tmp) / f"{self.name}.c"
-                c_path.write_text(source)
-                tmp_lib = Path(tmp) / "lib.so"
-                proc = subprocess.run([cc, *flags, str(c_path), "-o", str(tmp_lib), "-lm"],
-                                      capture_output=True, text=True, timeout=600)
-                if proc.returncode != 0:
-                    raise RuntimeError(f"{cc} failed: {proc.stderr.strip()[:500]}")
-                os.replace(tmp_lib, lib_path)  # atomic: concurrent builders never see half a file
+        flags = ["-O3"] + (["-fopenmp"] if _has_openmp(cc) else [])
+        lib_path = shared_library(source, self.name, flags)
         lib = ctypes.CDLL(str(lib_path))
         fn = getattr(lib, f"{self.name}_batch")
         fn.restype = ctypes.c_int

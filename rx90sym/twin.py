@@ -20,14 +20,8 @@ cached on disk (``rx90sym.compiled.cache_dir()``); without a C compiler CasADi's
 """
 from __future__ import annotations
 
-import hashlib
 import json
-import os
-import shutil
-import subprocess
-import tempfile
 import time
-import warnings
 from dataclasses import asdict, dataclass
 from functools import lru_cache
 from pathlib import Path
@@ -37,7 +31,7 @@ import casadi as ca
 import numpy as np
 from scipy.interpolate import CubicHermiteSpline
 
-from .compiled import cache_dir
+from .compiled import compiled_function
 from .payloads import Payload, add_payload, as_payload
 from .recording import Recording
 
@@ -390,36 +384,7 @@ def _closed_loop_function(robot: Any, harmonics: int, steps: int) -> ca.Function
     layout = _Layout(robot.n, len(robot.parameter_names), harmonics)
     step = _servo_step(robot, layout)
     run = step.mapaccum(f"{robot.name}_twin_loop", steps)
-    return _compiled(run)
-
-
-def _compiled(f: ca.Function) -> ca.Function:
-    """f as generated C loaded with casadi.external (cached by source hash), or f itself."""
-    cc = os.environ.get("CC") or shutil.which("cc") or shutil.which("gcc")
-    if cc is None:
-        warnings.warn(f"{f.name()}: no C compiler (set CC); the twin runs in CasADi's VM (slow)",
-                      RuntimeWarning, stacklevel=3)
-        return f
-    name = f.name()
-    cg = ca.CodeGenerator(f"{name}.c", {"with_header": False})
-    cg.add(f)
-    source = cg.dump()
-    flags = ["-O2", "-shared", "-fPIC"]
-    key = hashlib.sha256((source + " ".join(flags) + cc).encode()).hexdigest()[:20]
-    lib = cache_dir() / f"{name}_{key}.so"
-    if not lib.exists():
-        with tempfile.TemporaryDirectory(dir=cache_dir()) as tmp:
-            src = Path(tmp) / f"{name}.c"
-            src.write_text(source)
-            out = Path(tmp) / "lib.so"
-            proc = subprocess.run([cc, *flags, str(src), "-o", str(out), "-lm"],
-                                  capture_output=True, text=True, timeout=600)
-            if proc.returncode != 0:
-                warnings.warn(f"{name}: C compilation failed ({proc.stderr.strip()[:300]}); "
-                              f"using CasADi's VM", RuntimeWarning, stacklevel=3)
-                return f
-            os.replace(out, lib)  # atomic: a concurrent builder never loads half a file
-    return ca.external(name, str(lib))
+    return compiled_function(run)
 
 
 # --------------------------------------------------------------------------- closed loop
