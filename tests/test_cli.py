@@ -1,0 +1,161 @@
+"""The rx90 command as a user runs it (subprocess): outputs, JSON schema, report, error paths."""
+from __future__ import annotations
+
+import base64
+import json
+import subprocess
+import sys
+from html.parser import HTMLParser
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import rx90sym
+
+from conftest import SHARED
+from motions import multisine
+
+RX90 = str(Path(sys.executable).parent / "rx90")
+SUBCOMMANDS = ("model", "excite", "simulate", "convert", "identify", "payload", "demo")
+
+
+def run(*args: str, cwd: Path | None = None) -> subprocess.CompletedProcess:
+    return subprocess.run([RX90, *args], capture_output=True, text=True, cwd=cwd, timeout=900)
+
+
+def write_trajectory(path: Path, robot, seed: int, duration: float = 12.0) -> None:
+    t = np.arange(0, duration, 1 / 250)
+    q, qd, qdd = multisine(robot, seed, duration)(t)
+    header = ",".join(["t"] + [f"{k}{j}" for k in ("q", "dq", "ddq") for j in range(1, 7)])
+    np.savetxt(path, np.c_[t, robot.to_staubli(q), qd, qdd], delimiter=",", header=header, comments="")
+
+
+class _Figures(HTMLParser):
+    def __init__(self) -> None:
+        super().__init__()
+        self.figures: dict[str, bytes] = {}
+        self._current: str | None = None
+
+    def handle_starttag(self, tag, attrs):
+        attrs = dict(attrs)
+        if tag == "figure":
+            self._current = attrs.get("id")
+        if tag == "img" and self._current and attrs.get("src", "").startswith("data:image/png;base64,"):
+            self.figures[self._current] = base64.b64decode(attrs["src"].split(",", 1)[1])
+
+
+def figures_of(path: Path) -> dict[str, bytes]:
+    parser = _Figures()
+    parser.feed(path.read_text())
+    return parser.figures
+
+
+@pytest.fixture(scope="module")
+def workdir(tmp_path_factory):
+    d = tmp_path_factory.mktemp("cli")
+    robot = rx90sym.load_robot("rx90")
+    write_trajectory(d / "traj.csv", robot, 1)
+    write_trajectory(d / "other.csv", robot, 2)
+    for args in (("traj.csv", "--out", "empty.csv", "--seed", "1"),
+                 ("traj.csv", "--payload", "tables_5", "--out", "loaded.csv", "--seed", "2"),
+                 ("other.csv", "--out", "validation.csv", "--seed", "3")):
+        proc = run("simulate", *args, cwd=d)
+        assert proc.returncode == 0, proc.stderr
+    return d
+
+
+def test_help_on_every_subcommand():
+    assert run("--help").returncode == 0
+    for cmd in SUBCOMMANDS:
+        proc = run(cmd, "--help")
+        assert proc.returncode == 0 and "usage: rx90 " + cmd in proc.stdout
+
+
+def test_model_prints_the_table_and_writes_json(tmp_path):
+    proc = run("model", "--base", "--json", str(tmp_path / "m.json"))
+    assert proc.returncode == 0, proc.stderr
+    assert "ZZ1R = ZZ1 + IA1 + YY2 + YY3 + D3**2*(M3 + M4 + M5 + M6)" in proc.stdout
+    data = json.loads((tmp_path / "m.json").read_text())
+    assert data["robot"] == "rx90" and len(data["base"]["names"]) == 54
+
+
+def test_identify_writes_json_and_report(workdir):
+    proc = run("identify", "empty.csv", "--essential", "--validate", "validation.csv",
+               "--json", "id.json", "--report", "id.html", cwd=workdir)
+    assert proc.returncode == 0, proc.stderr
+    data = json.loads((workdir / "id.json").read_text())
+    assert {"robot", "method", "parameters", "essential", "sigma_rho", "cond", "residual_rms",
+            "validation"} <= set(data)
+    assert {"name", "value", "std", "rel_std_pct"} <= set(data["parameters"][0])
+    assert len(data["parameters"]) == 54 and "MX2R" in data["essential"]
+    assert len(data["residual_rms"]) == 6 and len(data["validation"]["relative_error_pct"]) == 6
+    figs = figures_of(workdir / "id.html")
+    for fig in ("fig-parameters", "fig-torques", "fig-residuals", "fig-validation", "fig-trajectory"):
+        assert figs.get(fig, b"")[:8] == b"\x89PNG\r\n\x1a\n", fig
+
+
+def test_payload_method_3_and_1(workdir):
+    proc = run("payload", "--method", "3", "--empty", "empty.csv", "--loaded", "loaded.csv",
+               "--a-priori", "tables_5", "--json", "p3.json", cwd=workdir)
+    assert proc.returncode == 0, proc.stderr
+    data = json.loads((workdir / "p3.json").read_text())
+    mc = {p["name"]: p["value"] for p in data["payload"]}["Mc"]
+    assert data["method"] == 3 and abs(mc - 7.025) < 0.1
+    assert run("identify", "empty.csv", "--json", "robot.json", cwd=workdir).returncode == 0
+    proc = run("payload", "--method", "1", "--loaded", "loaded.csv", "--robot-params", "robot.json",
+               "--constrained", "--mass", "7.025", "--mass-tol", "0.05", cwd=workdir)
+    assert proc.returncode == 0, proc.stderr
+    assert "Mc" in proc.stdout
+
+
+@pytest.mark.skipif(not (SHARED / "data/tx40/pos_read_data.csv").exists(), reason="no TX40 data")
+def test_convert_the_tx40_files_then_identify(tmp_path):
+    tx = SHARED / "data/tx40"
+    proc = run("convert", "--robot", "tx40", "--motor-positions", str(tx / "pos_read_data.csv"),
+               "--motor-torques", str(tx / "curr_data.csv"), "--period", "0.0002",
+               "--out", str(tmp_path / "tx40.csv"))
+    assert proc.returncode == 0, proc.stderr
+    proc = run("identify", str(tmp_path / "tx40.csv"), "--robot", "tx40", "--offsets",
+               "--json", str(tmp_path / "tx.json"))
+    assert proc.returncode == 0, proc.stderr
+    assert len(json.loads((tmp_path / "tx.json").read_text())["parameters"]) == 60
+
+
+@pytest.mark.parametrize("args, needle", [
+    (("identify", "missing.csv", "--json", "out.json"), "missing.csv"),
+    (("identify", "corrupt.csv", "--json", "out.json"), "corrupt.csv"),
+    (("identify", "empty.csv", "--robot", "rx91", "--json", "out.json"), "unknown robot 'rx91'"),
+    (("identify", "empty.csv", "--method", "consistent", "--essential", "--json", "out.json"), "conflicting options"),
+    (("payload", "--method", "3", "--loaded", "loaded.csv", "--mass", "7", "--json", "out.json"), "conflicting options"),
+    (("payload", "--method", "3", "--empty", "validation.csv", "--loaded", "loaded.csv", "--json", "out.json"), "same motion"),
+    (("simulate", "corrupt.csv", "--out", "out.json"), "corrupt.csv"),
+    (("model", "--robot", "nowhere/robot.toml"), "robot"),
+])
+def test_bad_input_exits_2_with_one_line_and_no_output(workdir, args, needle):
+    (workdir / "corrupt.csv").write_text("t,q1,q2\n0,1\nx,y,z\n")
+    proc = run(*args, cwd=workdir)
+    assert proc.returncode == 2, (proc.stdout, proc.stderr)
+    lines = proc.stderr.strip().splitlines()
+    assert len(lines) == 1 and needle in lines[0], proc.stderr
+    assert not (workdir / "out.json").exists()
+    assert not list(workdir.glob(".out.json*"))
+
+
+@pytest.mark.slow
+def test_excite_small(tmp_path):
+    proc = run("excite", "--duration", "6", "--harmonics", "2", "--starts", "1", "--time-budget", "60",
+               "--out", str(tmp_path / "t.csv"), "--json", str(tmp_path / "t.json"))
+    assert proc.returncode == 0, proc.stderr
+    data = json.loads((tmp_path / "t.json").read_text())
+    assert {"cond", "duration", "harmonics", "limits_usage"} <= set(data)
+    header = (tmp_path / "t.csv").read_text().splitlines()[0]
+    assert header.startswith("t,q1") and "ddq6" in header
+
+
+@pytest.mark.slow
+def test_demo_quick(tmp_path):
+    proc = run("demo", "--quick", "--out", str(tmp_path / "demo"))
+    assert proc.returncode == 0, proc.stderr[-2000:]
+    assert "Report:" in proc.stdout and (tmp_path / "demo" / "report.html").exists()
+    assert "fig-parameters" in figures_of(tmp_path / "demo" / "report.html")
