@@ -9,11 +9,12 @@ import argparse
 import json
 import os
 import sys
-import tempfile
 from pathlib import Path
 from typing import Any, Sequence
 
 import numpy as np
+
+from rx90sym.files import write_json
 
 PROG = "rx90"
 
@@ -23,22 +24,6 @@ class UsageError(ValueError):
 
 
 # ------------------------------------------------------------------------------------------ io
-def write_json(path: str | os.PathLike, content: Any) -> Path:
-    """Atomic JSON write (temporary file in the same folder, then rename)."""
-    path = Path(path)
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", dir=str(path.parent or "."))
-    try:
-        with os.fdopen(fd, "w") as fh:
-            json.dump(content, fh, indent=1, allow_nan=False)
-            fh.write("\n")
-        os.replace(tmp, path)
-    except BaseException:
-        if os.path.exists(tmp):
-            os.unlink(tmp)
-        raise
-    return path
-
-
 def _check_output(path: str | None) -> None:
     """Refuse an output path whose folder does not exist before doing any work."""
     if path is not None and not Path(path).resolve().parent.is_dir():

@@ -46,6 +46,7 @@ from typing import Any, Sequence
 
 import numpy as np
 
+from rx90sym.files import atomic_write
 from rx90sym.recording import Recording, RecordingError, _frozen_array  # noqa: F401 (re-exported)
 
 __all__ = [
@@ -513,29 +514,6 @@ def read_recording(path: str | os.PathLike[str], robot: Any, convention: str | N
     return _read_npz(p, robot, convention)
 
 
-def _atomic_write(path: Path, write: Any, binary: bool) -> None:
-    """Write through a temporary file in the same directory, then ``os.replace``.
-
-    Same directory so the rename stays on one file system (atomic); on any error the temporary
-    file is removed and an existing ``path`` is left untouched.
-    """
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
-    try:
-        # mkstemp creates the file private (0600); give the result ordinary data-file permissions.
-        os.chmod(tmp, (path.stat().st_mode & 0o777) if path.exists() else 0o644)
-        with os.fdopen(fd, "wb" if binary else "w", encoding=None if binary else "utf-8", newline=None if binary else "\n") as fh:
-            write(fh)
-            fh.flush()
-            os.fsync(fh.fileno())
-        os.replace(tmp, path)
-    except BaseException:
-        try:
-            os.unlink(tmp)
-        except FileNotFoundError:
-            pass
-        raise
-
-
 def _file_arrays(rec: Recording, robot: Any, convention: str) -> np.ndarray:
     """Angles in the file's convention (conversion at the file boundary, once)."""
     return np.asarray(robot.to_staubli(rec.q), dtype=float) if convention == "staubli" else np.asarray(rec.q)
@@ -575,7 +553,7 @@ def write_recording(
                                   "convention": np.array(conv), "robot": np.array(robot.name)}
         if rec.dq is not None:
             arrays["dq"] = rec.dq
-        _atomic_write(p, lambda fh: np.savez(fh, **arrays), binary=True)
+        atomic_write(p, lambda fh: np.savez(fh, **arrays), binary=True)
         return
     n = robot.n
     names = ["t", *[f"q{j + 1}" for j in range(n)], *[f"tau{j + 1}" for j in range(n)]]
@@ -590,7 +568,7 @@ def write_recording(
         fh.write(header)
         np.savetxt(fh, table, fmt="%.17g", delimiter=",")  # %.17g: float64 round-trips exactly
 
-    _atomic_write(p, write_csv, binary=False)
+    atomic_write(p, write_csv, binary=False)
 
 
 def read_motor_recording(

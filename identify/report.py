@@ -5,12 +5,13 @@ import base64
 import html
 import io
 import os
-import tempfile
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Sequence
 
 import numpy as np
+
+from rx90sym.files import atomic_write
 
 
 @dataclass(frozen=True)
@@ -116,17 +117,7 @@ def render(title: str, sections: Sequence[Section]) -> str:
 def write_report(path: str | os.PathLike, title: str, sections: Sequence[Section]) -> Path:
     """Write the report atomically (temporary file, then rename): never a half-written file."""
     text = render(title, sections)
-    path = Path(path)
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", dir=path.parent or ".")
-    try:
-        with os.fdopen(fd, "w", encoding="utf-8") as fh:
-            fh.write(text)
-        os.replace(tmp, path)
-    except BaseException:
-        if os.path.exists(tmp):
-            os.unlink(tmp)
-        raise
-    return path
+    return atomic_write(path, lambda handle: handle.write(text))
 
 
 def identification_sections(robot: Any, result: Any, recordings: Sequence[Any],

@@ -1,0 +1,240 @@
+"""Limits an excitation trajectory must hold at every sample, symbolic (for IPOPT) and numeric.
+
+Joint positions, velocities and accelerations are linear in the coefficients, so on the
+optimisation grid they are linear constraints (:func:`kinematic_constraints`, with the floor).
+Motor torques come from the inverse dynamic model with the nominal parameters minus the spring
+torque (:func:`torque_constraints`), Cartesian heights from the forward geometric model: both
+nonlinear. On the optimisation grid every limit is tightened by a margin (the trajectory also moves
+between grid points, see :func:`kinematic_grid_rate`); :func:`check_limits` then verifies the true
+limits, without margin, on an independent fine grid (1 kHz by default), which is what decides
+feasibility; :func:`violation_times` tells the optimiser where to add constraints when it fails.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Any
+
+import casadi as ca
+import numpy as np
+
+from .model import ExcitationModel
+
+_KINDS = ("position", "velocity", "acceleration", "torque")
+
+
+@dataclass(frozen=True)
+class Margins:
+    """How much of each limit the optimiser keeps in reserve on its grid.
+
+    position, velocity, acceleration, torque: fractions of the limit (of the half range for
+    positions, about its centre); height: metres above the floor.
+    """
+
+    position: float = 0.02
+    velocity: float = 0.02
+    acceleration: float = 0.02
+    torque: float = 0.05
+    height: float = 0.01
+
+    def __post_init__(self) -> None:
+        for name in ("position", "velocity", "acceleration", "torque"):
+            value = getattr(self, name)
+            if not 0.0 <= value < 1.0:
+                raise ValueError(f"margins: {name} must be a fraction in [0, 1), got {value}")
+        if self.height < 0.0:
+            raise ValueError(f"margins: height must be >= 0 m, got {self.height}")
+
+
+@dataclass(frozen=True, eq=False)
+class LimitReport:
+    """Limit usage per joint on a grid: max |x| / x_max (positions: excursion / half range about
+    the centre of the range), 1.0 = at the limit; nan where the limit is unknown (inf)."""
+
+    rate: float
+    position: np.ndarray
+    velocity: np.ndarray
+    acceleration: np.ndarray
+    torque: np.ndarray
+    min_height: float | None = None
+    z_min: float | None = None
+    violations: tuple[str, ...] = field(default=())
+
+    @property
+    def feasible(self) -> bool:
+        """True when every limit holds at every sample of the grid."""
+        return not self.violations
+
+    def to_dict(self) -> dict[str, Any]:
+        """JSON-ready summary (NaN written as None)."""
+        def clean(a: np.ndarray) -> list[float | None]:
+            return [None if not np.isfinite(v) else round(float(v), 6) for v in a]
+
+        out: dict[str, Any] = {"checked_at_hz": self.rate, "feasible": self.feasible}
+        out.update({kind: clean(getattr(self, kind)) for kind in _KINDS})
+        if self.min_height is not None:
+            out["min_height_m"] = round(float(self.min_height), 6)
+            out["z_min_m"] = self.z_min
+        out["violations"] = list(self.violations)
+        return out
+
+
+# --------------------------------------------------------------------------- bounds with margins
+def position_bounds(model: ExcitationModel, margin: float) -> tuple[np.ndarray, np.ndarray]:
+    """[lower, upper] position bounds (n,) [rad], the range shrunk by ``margin`` about its centre."""
+    lim = model.limits
+    centre, half = 0.5 * (lim.q_max + lim.q_min), 0.5 * (lim.q_max - lim.q_min)
+    with np.errstate(invalid="ignore"):
+        lo = np.where(np.isfinite(half), centre - (1.0 - margin) * half, -np.inf)
+        hi = np.where(np.isfinite(half), centre + (1.0 - margin) * half, np.inf)
+    return lo, hi
+
+
+def range_centre(model: ExcitationModel) -> np.ndarray:
+    """Centre of each joint range [rad] (0 where the range is unbounded)."""
+    lim = model.limits
+    centre = 0.5 * (lim.q_max + lim.q_min)
+    return np.where(np.isfinite(centre), centre, 0.0)
+
+
+def kinematic_grid_rate(max_frequency_hz: float, margins: Margins) -> float:
+    """Grid rate [Hz] at which the margins cover what a band-limited motion can do between samples.
+
+    For a trigonometric polynomial x of highest angular frequency W, Bernstein's inequality gives
+    |x''| <= W^2 max|x|; at a maximum x' = 0, so the nearest sample (at most h/2 away) is below the
+    maximum by at most W^2 h^2 / 8 max|x|. Velocities and accelerations therefore hold everywhere
+    when W^2 h^2 / 8 <= margin; positions (an offset plus such a polynomial, whose amplitude is at
+    most the full range, twice the half range the margin refers to) when W^2 h^2 / 4 <= margin.
+    Exact for the Fourier form; for via points and for torques the fine-grid check decides.
+    Returns 0 when a margin is 0 (no rate suffices: the caller uses its own grid).
+    """
+    w = 2.0 * np.pi * max_frequency_hz
+    h = min(np.sqrt(4.0 * margins.position), np.sqrt(8.0 * margins.velocity),
+            np.sqrt(8.0 * margins.acceleration)) / w
+    return 1.0 / h if h > 0.0 else 0.0
+
+
+# --------------------------------------------------------------------------- symbolic (IPOPT)
+class _Rows:
+    """Accumulates constraint rows (g, lbg, ubg); rows with an infinite limit are left out
+    rather than given infinite bounds."""
+
+    def __init__(self) -> None:
+        self.parts: list[ca.MX] = []
+        self.lows: list[np.ndarray] = []
+        self.highs: list[np.ndarray] = []
+
+    def add(self, expr: ca.MX, lo: np.ndarray, hi: np.ndarray) -> None:
+        keep = np.flatnonzero(np.isfinite(lo) | np.isfinite(hi))
+        if keep.size == 0 or expr.shape[1] == 0:
+            return
+        self.parts.append(ca.vec(expr[keep.tolist(), :]))  # column-major: joint fastest
+        self.lows.append(np.tile(lo[keep], expr.shape[1]))
+        self.highs.append(np.tile(hi[keep], expr.shape[1]))
+
+    def result(self) -> tuple[ca.MX, np.ndarray, np.ndarray]:
+        if not self.parts:
+            return ca.MX(0, 1), np.zeros(0), np.zeros(0)
+        return ca.vertcat(*self.parts), np.concatenate(self.lows), np.concatenate(self.highs)
+
+
+def kinematic_constraints(model: ExcitationModel, q: ca.MX, qd: ca.MX, qdd: ca.MX,
+                          margins: Margins) -> tuple[ca.MX, np.ndarray, np.ndarray]:
+    """(g, lbg, ubg) on MX samples (n x N): position, velocity and acceleration limits with
+    margins (linear in the coefficients), and the floor (forward kinematics) when the model has
+    one: a floor is usually active, so it is imposed from the start."""
+    lim = model.limits
+    rows = _Rows()
+    lo, hi = position_bounds(model, margins.position)
+    rows.add(q, lo, hi)
+    for expr, bound, m in ((qd, lim.qd_max, margins.velocity), (qdd, lim.qdd_max, margins.acceleration)):
+        rows.add(expr, -(1.0 - m) * bound, (1.0 - m) * bound)
+    if model.heights is not None and model.z_min is not None and q.shape[1] > 0:
+        z = model.heights.map(q.shape[1], "serial")(q)
+        k = z.shape[0]
+        rows.add(z, np.full(k, model.z_min + margins.height), np.full(k, np.inf))
+    return rows.result()
+
+
+def torque_constraints(model: ExcitationModel, q: ca.MX, qd: ca.MX, qdd: ca.MX,
+                       margins: Margins) -> tuple[ca.MX, np.ndarray, np.ndarray]:
+    """(g, lbg, ubg) on MX samples (n x N): motor torque limits with margin (inverse dynamics
+    with the nominal parameters, minus the spring)."""
+    lim = model.limits
+    rows = _Rows()
+    if model.torque is not None and np.any(np.isfinite(lim.tau_max)) and q.shape[1] > 0:
+        tau = model.torque.map(q.shape[1], "serial")(q, qd, qdd)
+        rows.add(tau, -(1.0 - margins.torque) * lim.tau_max, (1.0 - margins.torque) * lim.tau_max)
+    return rows.result()
+
+
+# --------------------------------------------------------------------------- numeric (verification)
+def evaluate_torque(model: ExcitationModel, q: np.ndarray, qd: np.ndarray, qdd: np.ndarray) -> np.ndarray:
+    """Motor torques (N, n) [N m] on samples (N, n); zeros when the model has none."""
+    if model.torque is None:
+        return np.zeros_like(q)
+    return np.asarray(model.torque.map(q.shape[0], "serial")(q.T, qd.T, qdd.T)).T
+
+
+def evaluate_heights(model: ExcitationModel, q: np.ndarray) -> np.ndarray | None:
+    """Heights (N, k) [m] of the points that must stay above the floor, or None."""
+    if model.heights is None:
+        return None
+    return np.asarray(model.heights.map(q.shape[0], "serial")(q.T)).T
+
+
+def check_limits(model: ExcitationModel, q: np.ndarray, qd: np.ndarray, qdd: np.ndarray,
+                 rate: float, rtol: float = 1e-9) -> LimitReport:
+    """Verify every limit, without margin, on samples (N, n) taken at ``rate`` [Hz]."""
+    lim = model.limits
+    centre = 0.5 * (lim.q_max + lim.q_min)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        up = (q - centre) / (lim.q_max - centre)
+        down = (centre - q) / (centre - lim.q_min)
+        usage = {
+            "position": _usage(np.maximum(up, down), lim.q_max - lim.q_min),
+            "velocity": _usage(np.abs(qd) / lim.qd_max, lim.qd_max),
+            "acceleration": _usage(np.abs(qdd) / lim.qdd_max, lim.qdd_max),
+            "torque": (_usage(np.abs(evaluate_torque(model, q, qd, qdd)) / lim.tau_max, lim.tau_max)
+                       if model.torque is not None else np.full(q.shape[1], np.nan)),
+        }
+    violations = []
+    for kind, values in usage.items():
+        for j in np.flatnonzero(values > 1.0 + rtol):
+            violations.append(f"{kind} limit of joint {j + 1} exceeded: {values[j]:.4f} x limit")
+    min_height = None
+    if model.heights is not None and model.z_min is not None:
+        min_height = float(np.min(evaluate_heights(model, q)))
+        if min_height < model.z_min - 1e-12:
+            violations.append(f"Cartesian point at z = {min_height:.4f} m below the floor "
+                              f"z_min = {model.z_min} m")
+    return LimitReport(rate, usage["position"], usage["velocity"], usage["acceleration"],
+                       usage["torque"], min_height, model.z_min, tuple(violations))
+
+
+def _usage(ratio: np.ndarray, limit: np.ndarray) -> np.ndarray:
+    """max over samples of ratio per joint, nan where the limit is unknown."""
+    out = np.max(ratio, axis=0) if ratio.shape[0] else np.zeros(ratio.shape[1])
+    return np.where(np.isfinite(limit), out, np.nan)
+
+
+def violation_times(model: ExcitationModel, t: np.ndarray, q: np.ndarray, qd: np.ndarray,
+                    qdd: np.ndarray, limit: int = 32) -> np.ndarray:
+    """Times [s] of the worst sample of each run of samples that exceed a limit (no margin);
+    at most ``limit`` of them, worst first. Used to add constraint points where a solve failed."""
+    lim = model.limits
+    centre = 0.5 * (lim.q_max + lim.q_min)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        ratios = [np.maximum((q - centre) / (lim.q_max - centre), (centre - q) / (centre - lim.q_min)),
+                  np.abs(qd) / lim.qd_max, np.abs(qdd) / lim.qdd_max]
+        if model.torque is not None:
+            ratios.append(np.abs(evaluate_torque(model, q, qd, qdd)) / lim.tau_max)
+    excess = np.max(np.nan_to_num(np.hstack(ratios), nan=0.0), axis=1) - 1.0
+    if model.heights is not None and model.z_min is not None:
+        excess = np.maximum(excess, model.z_min - np.min(evaluate_heights(model, q), axis=1))
+    bad = excess > 0.0
+    if not np.any(bad):
+        return np.zeros(0)
+    edges = np.flatnonzero(np.diff(np.concatenate([[0], bad.astype(int), [0]])))
+    peaks = [start + int(np.argmax(excess[start:stop])) for start, stop in zip(edges[::2], edges[1::2])]
+    peaks.sort(key=lambda i: -excess[i])
+    return np.sort(t[peaks[:limit]])
