@@ -63,7 +63,7 @@ class FourierSeries:
 
     def describe(self) -> dict[str, Any]:
         """JSON-ready description of the parameterisation."""
-        return {"form": self.kind, "duration_s": self.duration, "harmonics": self.harmonics,
+        return {"form": self.kind, "duration": self.duration, "harmonics": self.harmonics,
                 "base_frequency_rad_s": self.base_frequency}
 
     # ----------------------------------------------------------------- linear maps

@@ -133,7 +133,7 @@ class Trajectory:
         out["cond_rate_hz"] = self.cond_rate
         if self.parameter_names is not None:
             out["base_parameters"] = len(self.parameter_names)
-        out["limit_usage"] = self.usage.to_dict()
+        out["limits_usage"] = self.usage.to_dict()
         info = {k: v for k, v in vars(self.info).items()}
         out["optimiser"] = {k: (None if isinstance(v, float) and not np.isfinite(v) else v)
                             for k, v in info.items()}

@@ -61,7 +61,7 @@ class ViaPointSpline:
 
     def describe(self) -> dict[str, Any]:
         """JSON-ready description of the parameterisation."""
-        return {"form": self.kind, "duration_s": self.duration, "times_s": list(self.times),
+        return {"form": self.kind, "duration": self.duration, "times_s": list(self.times),
                 "closed": self.closed, "interpolation": "quintic spline, qd = qdd = 0 at both ends"}
 
     def basis(self, t: Any) -> tuple[np.ndarray, np.ndarray, np.ndarray]:

@@ -27,6 +27,7 @@ from rx90sym.parameters import PAYLOAD_NAMES
 from .consistency import ConsistencyError, pseudo_inertia
 from .least_squares import (CompressedSystem, compress, joint_noise_std, solve_system,
                             stack_systems, weighted_least_squares)
+from .filtering import choose_cutoff
 from .observation import filtered_motion, stack_rows
 from .results import IdentificationResult
 
@@ -218,8 +219,11 @@ def _method_3(robot, base, empty, loaded, position_tol, options, **_):
                              f"to {gap:.3g} rad (> {position_tol:g} rad): not the same motion; use "
                              f"method 4")
     cols = list(rx90sym.payload_regressor_columns(robot))
-    m_l = _motions(robot, loaded, cols, options)
-    m_e = _motions(robot, empty, cols, options)
+    # One cut-off for both runs of a pair, so that the same samples are kept and compared.
+    cutoff = options.get("cutoff") or max(choose_cutoff(np.asarray(r.q), r.rate) for r in loaded)
+    same = {**options, "cutoff": cutoff}
+    m_l = _motions(robot, loaded, cols, same)
+    m_e = _motions(robot, empty, cols, same)
     # eq. 28: the empty run's torques replace W chi.
     W, Y, joint, _ = _rows([m.Phi for m in m_l], [a.Y - b.Y for a, b in zip(m_l, m_e)], m_l, options)
     return weighted_least_squares(W, Y, joint, PAYLOAD_NAMES), None

@@ -350,8 +350,8 @@ def test_save_json_summary(tmp_path):
     assert content["form"] == "fourier" and content["harmonics"] == 3
     assert np.array(content["coefficients"]["a_rad_s"]).shape == (2, 3)
     assert content["cond"] == pytest.approx(traj.cond)
-    assert len(content["limit_usage"]["velocity"]) == 2
-    assert content["limit_usage"]["feasible"] is True
+    assert len(content["limits_usage"]["velocity"]) == 2
+    assert content["limits_usage"]["feasible"] is True
 
 
 def test_no_partial_file_on_error(tmp_path, monkeypatch):
