@@ -28,6 +28,10 @@ test-quick: $(STAMP)
 
 bench: $(STAMP)
 	$(PY) benchmarks/bench_model.py
+	$(PY) benchmarks/bench_identify.py
+	$(PY) benchmarks/bench_consistency.py
+	$(PY) benchmarks/bench_excitation.py
+	$(PY) benchmarks/compare_excitation.py
 
 clean:
 	rm -rf $(VENV) demo-output build *.egg-info

@@ -152,13 +152,14 @@ def cmd_identify(args: argparse.Namespace) -> int:
     robot = _robot_with_spring(args)
     recs = [read_recording(p, robot, convention=args.convention) for p in args.recordings]
     val_rec = read_recording(args.validate, robot, convention=args.convention) if args.validate else None
-    res = identify(robot, recs, method=args.method)
+    filt = {"cutoff": args.cutoff, "decimate_to": args.decimate_to}
+    res = identify(robot, recs, method=args.method, min_velocity=args.min_velocity, **filt)
     print(res.table())
     ess = essential_parameters(res) if args.essential else None
     if ess is not None:
         print()
         print(ess.table())
-    val = validate(robot, ess or res, val_rec) if val_rec is not None else None
+    val = validate(robot, ess or res, val_rec, **filt) if val_rec is not None else None
     if val is not None:
         print()
         print(val.table())
@@ -169,7 +170,7 @@ def cmd_identify(args: argparse.Namespace) -> int:
         write_json(args.json, out)
     if args.report:
         sections = identification_sections(robot, res, recs, validation=val, essential=ess,
-                                           fit_prediction=predict(robot, res, recs[0]))
+                                           fit_prediction=predict(robot, res, recs[0], **filt))
         write_report(args.report, f"Identification of {robot.name}", sections)
     return 0
 
@@ -273,6 +274,9 @@ def build_parser() -> argparse.ArgumentParser:
     sp.add_argument("--offsets", action="store_true", help="add per-joint torque offsets OFF1..OFFn")
     sp.add_argument("--method", choices=("ols", "wls", "consistent"), default="wls")
     sp.add_argument("--essential", action="store_true", help="also compute the essential parameters")
+    sp.add_argument("--cutoff", type=float, help="Butterworth cut-off for q [Hz] (default: chosen from the data)")
+    sp.add_argument("--decimate-to", type=float, default=50.0, help="rate after parallel filtering [Hz] (default 50)")
+    sp.add_argument("--min-velocity", type=float, help="drop a joint's rows where |qd| is below this [rad/s]")
     sp.add_argument("--validate", help="recording used for cross-validation only")
     sp.add_argument("--json", help="results as JSON")
     sp.add_argument("--report", help="self-contained HTML report")
