@@ -16,14 +16,7 @@ import time
 
 import numpy as np
 
-
-def best_of(fn, repeat: int = 3) -> float:
-    times = []
-    for _ in range(repeat):
-        t0 = time.perf_counter()
-        fn()
-        times.append(time.perf_counter() - t0)
-    return min(times)
+from timing import time_it
 
 
 def main() -> None:
@@ -44,7 +37,7 @@ def main() -> None:
     rand = excitation.random_trajectory(robot, 20.0, 5, seed=args.seed, chi_nominal=chi, base=bp)
     t_random = time.perf_counter() - t0
     t, q, qd, qdd = rand.sample(250.0)
-    t_cond = best_of(lambda: excitation.condition_number(bp.regressor, t, q, qd, qdd))
+    t_cond = time_it(lambda: excitation.condition_number(bp.regressor, t, q, qd, qdd))
 
     t0 = time.perf_counter()
     traj = excitation.optimise(robot, 20.0, 5, seed=args.seed, starts=args.starts, chi_nominal=chi,

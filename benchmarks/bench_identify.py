@@ -28,6 +28,8 @@ from typing import Callable, Sequence  # noqa: E402
 
 import numpy as np  # noqa: E402
 
+from timing import time_it  # noqa: E402,F401 (re-exported for the other scripts)
+
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # run from a checkout
 
 from identify.essential import essential_parameters  # noqa: E402
@@ -58,18 +60,6 @@ class Row:
     target: float | None = None
     reference: str | None = None
     reference_seconds: float | None = None
-
-
-def time_it(fn: Callable[[], object], repeat: int = 5, warmup: bool = True) -> float:
-    """Best wall time (s) of ``repeat`` calls of ``fn()``, after one untimed call if ``warmup``."""
-    if warmup:
-        fn()
-    best = np.inf
-    for _ in range(max(1, repeat)):
-        start = time.perf_counter()
-        fn()
-        best = min(best, time.perf_counter() - start)
-    return float(best)
 
 
 def _fmt(v: float | None, spec: str) -> str:

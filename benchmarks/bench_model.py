@@ -11,14 +11,7 @@ import time
 
 import numpy as np
 
-
-def best_of(fn, repeat: int = 5) -> float:
-    times = []
-    for _ in range(repeat):
-        t0 = time.perf_counter()
-        fn()
-        times.append(time.perf_counter() - t0)
-    return min(times)
+from timing import time_it
 
 
 def main() -> None:
@@ -41,10 +34,10 @@ def main() -> None:
     t0 = time.perf_counter()
     robot.regressor_batch(Q[:2], QD[:2], QDD[:2])  # compile (or load from the cache)
     t_compile = time.perf_counter() - t0
-    t_compiled_alloc = best_of(lambda: robot.regressor_batch(Q, QD, QDD))
+    t_compiled_alloc = time_it(lambda: robot.regressor_batch(Q, QD, QDD))
     buffer = np.empty((N, 6, len(robot.parameter_names)))
-    t_compiled = best_of(lambda: robot.regressor_batch(Q, QD, QDD, out=buffer))
-    t_base_batch = best_of(lambda: bp.regressor_batch(Q, QD, QDD))
+    t_compiled = time_it(lambda: robot.regressor_batch(Q, QD, QDD, out=buffer))
+    t_base_batch = time_it(lambda: bp.regressor_batch(Q, QD, QDD))
 
     model = pinocchio_model(robot, np.ones(len(robot.parameter_names)))
     data = model.createData()
@@ -54,7 +47,7 @@ def main() -> None:
         for i in range(N):
             out[i] = pin.computeJointTorqueRegressor(model, data, Q[i], QD[i], QDD[i])
 
-    t_pin = best_of(pin_loop, repeat=3)
+    t_pin = time_it(pin_loop, repeat=3)
     rows = [
         ("build model + regressor (RX90)", t_model, "< 1 s", ""),
         ("base parameters, symbolic (RX90)", t_base, "", ""),

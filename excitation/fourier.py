@@ -24,9 +24,11 @@ from typing import Any
 import numpy as np
 from scipy.linalg import block_diag, null_space
 
+from .form import LinearForm
+
 
 @dataclass(frozen=True)
-class FourierSeries:
+class FourierSeries(LinearForm):
     """A periodic finite Fourier series of ``harmonics`` harmonics over ``duration`` seconds."""
 
     duration: float
@@ -106,15 +108,6 @@ class FourierSeries:
         return z
 
     # ----------------------------------------------------------------- evaluation
-    def evaluate(self, coefficients: Any, t: Any) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """(q, qd, qdd), each (N, n), at times t [s] for coefficients C (2L+1, n)."""
-        c = np.asarray(coefficients, dtype=float)
-        if c.ndim != 2 or c.shape[0] != self.n_coefficients:
-            raise ValueError(f"Fourier coefficients: expected shape ({self.n_coefficients}, n), "
-                             f"got {c.shape}")
-        bq, bd, bdd = self.basis(t)
-        return bq @ c, bd @ c, bdd @ c
-
     def split(self, coefficients: Any) -> dict[str, np.ndarray]:
         """Coefficients as named blocks: q0 (n,) [rad], a and b (n, L) [rad/s]."""
         c = np.asarray(coefficients, dtype=float)

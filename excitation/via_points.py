@@ -18,10 +18,11 @@ from typing import Any
 import numpy as np
 from scipy.interpolate import make_interp_spline
 
+from .form import LinearForm
 
 
 @dataclass(frozen=True)
-class ViaPointSpline:
+class ViaPointSpline(LinearForm):
     """Quintic spline through via points at ``times`` [s] (strictly increasing, first 0)."""
 
     times: tuple[float, ...]
@@ -93,12 +94,3 @@ class ViaPointSpline:
     def random_free(self, rng: np.random.Generator, n: int) -> np.ndarray:
         """Random motion part of the free coefficients: N(0, 1) displacements [rad]."""
         return rng.standard_normal((self.rest_basis().shape[1], n))
-
-    def evaluate(self, coefficients: Any, t: Any) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """(q, qd, qdd), each (N, n), at times t [s] for via positions P (K, n) [rad]."""
-        p = np.asarray(coefficients, dtype=float)
-        if p.ndim != 2 or p.shape[0] != self.n_coefficients:
-            raise ValueError(f"via points: expected positions of shape ({self.n_coefficients}, n), "
-                             f"got {p.shape}")
-        bq, bd, bdd = self.basis(t)
-        return bq @ p, bd @ p, bdd @ p

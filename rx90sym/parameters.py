@@ -1,6 +1,9 @@
 """Names and layout of the dynamic parameters (eq. 4)."""
 from __future__ import annotations
 
+import math
+from typing import Any, Mapping, Sequence
+
 # eq. 4: standard parameters of link j, in this order.
 LINK_PARAMETERS: tuple[str, ...] = (
     "XX", "XY", "XZ", "YY", "YZ", "ZZ", "MX", "MY", "MZ", "M", "IA", "FS", "FV",
@@ -28,3 +31,24 @@ def split_name(name: str) -> tuple[str, int]:
     if i == len(name) or i == 0:
         raise ValueError(f"parameter name {name!r} has no kind or no link number")
     return name[:i], int(name[i:])
+
+
+def checked_values(table: Any, names: Sequence[str], where: str, what: str = "parameter") -> dict[str, float]:
+    """``table`` as {name: float} for exactly ``names``: all present, none unknown, all finite.
+
+    Errors name the source (``where``) and the offending field."""
+    if not isinstance(table, Mapping):
+        raise ValueError(f"{where}: expected a mapping of {what} names to numbers, got {type(table).__name__}")
+    missing = [p for p in names if p not in table]
+    if missing:
+        raise ValueError(f"{where}: missing {what}(s) {missing[:6]}")
+    unknown = sorted(set(table) - set(names))
+    if unknown:
+        raise ValueError(f"{where}: unknown {what}(s) {unknown[:6]} (expected {list(names)[:10]}...)")
+    out = {}
+    for p in names:
+        v = table[p]
+        if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v):
+            raise ValueError(f"{where}: {what} {p!r} must be a finite number, got {v!r}")
+        out[p] = float(v)
+    return out

@@ -7,13 +7,12 @@ columns Wc of the observation matrix are link n's ten inertial columns).
 from __future__ import annotations
 
 import json
-import math
 from pathlib import Path
 from typing import Any, Mapping
 
 import numpy as np
 
-from .parameters import INERTIAL, PAYLOAD_NAMES
+from .parameters import INERTIAL, PAYLOAD_NAMES, checked_values
 
 PAYLOADS_FILE = Path(__file__).parent / "data" / "payloads.json"
 
@@ -50,21 +49,7 @@ def load_payload(name_or_path: str | Path) -> dict[str, float]:
 def validate_payload(table: Any, where: str = "payload") -> dict[str, float]:
     """The ten payload parameters of ``table`` as floats, checked (all present, none unknown,
     finite, mass >= 0); ``where`` names the source in error messages."""
-    if not isinstance(table, Mapping):
-        raise ValueError(f"{where}: expected a mapping of the payload parameters "
-                         f"{list(PAYLOAD_NAMES)}, got {type(table).__name__}")
-    missing = [p for p in PAYLOAD_NAMES if p not in table]
-    if missing:
-        raise ValueError(f"{where}: missing field(s) {missing}")
-    unknown = sorted(set(table) - set(PAYLOAD_NAMES))
-    if unknown:
-        raise ValueError(f"{where}: unknown field(s) {unknown} (expected {list(PAYLOAD_NAMES)})")
-    out = {}
-    for p in PAYLOAD_NAMES:
-        v = table[p]
-        if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v):
-            raise ValueError(f"{where}: field {p!r} must be a finite number, got {v!r}")
-        out[p] = float(v)
+    out = checked_values(table, PAYLOAD_NAMES, where, "field")
     if out["Mc"] < 0:
         raise ValueError(f"{where}: field 'Mc' (mass) must be >= 0, got {out['Mc']}")
     return out

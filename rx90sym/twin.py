@@ -32,6 +32,7 @@ import numpy as np
 from scipy.interpolate import CubicHermiteSpline
 
 from .compiled import compiled_function
+from .parameters import checked_values
 from .payloads import Payload, add_payload, as_payload
 from .recording import Recording
 
@@ -73,20 +74,7 @@ def default_parameters(robot: Any, path: str | Path | None = None) -> dict[str, 
 def _checked_parameters(robot: Any, table: Any, where: str) -> dict[str, float]:
     if not isinstance(table, dict):
         raise ValueError(f"{where}: field 'parameters' must map names to numbers")
-    names = robot.parameter_names
-    missing = [p for p in names if p not in table]
-    if missing:
-        raise ValueError(f"{where}: missing parameter(s) {missing[:6]} for robot {robot.name!r}")
-    unknown = sorted(set(table) - set(names))
-    if unknown:
-        raise ValueError(f"{where}: unknown parameter(s) {unknown[:6]} for robot {robot.name!r}")
-    out = {}
-    for p in names:
-        v = table[p]
-        if isinstance(v, bool) or not isinstance(v, (int, float)) or not np.isfinite(v):
-            raise ValueError(f"{where}: parameter {p!r} must be a finite number, got {v!r}")
-        out[p] = float(v)
-    return out
+    return checked_values(table, robot.parameter_names, f"{where} (robot {robot.name!r})")
 
 
 def parameter_vector(robot: Any, params: Mapping[str, float] | Any | None) -> np.ndarray:
