@@ -24,6 +24,11 @@ class UsageError(ValueError):
 
 
 # ------------------------------------------------------------------------------------------ io
+def progress(message: str) -> None:
+    """One progress line on stderr (stdout keeps the tables)."""
+    print(f"[{PROG}] {message}", file=sys.stderr, flush=True)
+
+
 def _check_output(path: str | None) -> None:
     """Refuse an output path whose folder does not exist before doing any work."""
     if path is not None and not Path(path).resolve().parent.is_dir():
@@ -109,6 +114,7 @@ def cmd_simulate(args: argparse.Namespace) -> int:
     robot = _robot(args)
     _check_output(args.out)
     trajectory = read_trajectory(args.trajectory, robot)
+    progress(f"simulating {trajectory[0][-1] - trajectory[0][0]:.1f} s ({args.noise})")
     rec = rx90sym.twin.simulate(robot, trajectory, payload=args.payload, noise=args.noise, seed=args.seed)
     write_recording(args.out, rec, robot, convention="staubli")
     print(f"simulated {len(rec.t)} samples at {rec.rate:g} Hz -> {args.out}")
@@ -120,6 +126,7 @@ def cmd_convert(args: argparse.Namespace) -> int:
 
     robot = _robot(args)
     _check_output(args.out)
+    progress("reading the motor-side files")
     rec = read_motor_recording(args.motor_positions, args.motor_torques, robot, period=args.period)
     write_recording(args.out, rec, robot, convention="staubli")
     print(f"converted {len(rec.t)} samples at {rec.rate:g} Hz -> {args.out}")
@@ -150,9 +157,11 @@ def cmd_identify(args: argparse.Namespace) -> int:
     for out in (args.json, args.report):
         _check_output(out)
     robot = _robot_with_spring(args)
+    progress(f"reading {len(args.recordings)} recording(s)")
     recs = [read_recording(p, robot, convention=args.convention) for p in args.recordings]
     val_rec = read_recording(args.validate, robot, convention=args.convention) if args.validate else None
     filt = {"cutoff": args.cutoff, "decimate_to": args.decimate_to}
+    progress(f"identifying ({args.method}) on {sum(len(r.t) for r in recs)} samples")
     res = identify(robot, recs, method=args.method, min_velocity=args.min_velocity, **filt)
     print(res.table())
     ess = essential_parameters(res) if args.essential else None
@@ -206,6 +215,7 @@ def cmd_payload(args: argparse.Namespace) -> int:
     empty = [read_recording(p, robot, convention=args.convention) for p in args.empty]
     loaded = [read_recording(p, robot, convention=args.convention) for p in args.loaded]
     params = _robot_params(args.robot_params) if args.robot_params else None
+    progress(f"identifying the payload (method {args.method})")
     res = payload(robot, args.method, empty=empty, loaded=loaded, robot_params=params,
                   a_priori=args.a_priori, constrained=args.constrained, mass=args.mass,
                   mass_tol=args.mass_tol if args.mass_tol is not None else 0.05)

@@ -137,7 +137,10 @@ def test_bad_input_exits_2_with_one_line_and_no_output(workdir, args, needle):
     proc = run(*args, cwd=workdir)
     assert proc.returncode == 2, (proc.stdout, proc.stderr)
     lines = proc.stderr.strip().splitlines()
-    assert len(lines) == 1 and needle in lines[0], proc.stderr
+    errors = [line for line in lines if ": error: " in line]
+    # One line names the problem (progress lines, if any, come before it).
+    assert len(errors) == 1 and lines[-1] == errors[0] and needle in errors[0], proc.stderr
+    assert all(line.startswith("[rx90]") for line in lines[:-1]), proc.stderr
     assert not (workdir / "out.json").exists()
     assert not list(workdir.glob(".out.json*"))
 
