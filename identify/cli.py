@@ -313,8 +313,14 @@ def build_parser() -> argparse.ArgumentParser:
 def main(argv: Sequence[str] | None = None) -> int:
     parser = build_parser()
     args = parser.parse_args(argv)
+    from .consistency import ConsistencyError
+
     try:
         return int(args.func(args) or 0)
+    except ConsistencyError as exc:
+        # A solver that failed is not the user's input: reported, exit 1, nothing written.
+        print(f"{PROG} {args.command}: solver failed: {str(exc).splitlines()[0]}", file=sys.stderr)
+        return 1
     except (ValueError, KeyError, FileNotFoundError, IsADirectoryError, PermissionError) as exc:
         msg = str(exc).strip().splitlines()[0] if str(exc).strip() else type(exc).__name__
         if isinstance(exc, KeyError):
