@@ -201,3 +201,12 @@ def test_tx40_transmission_matches_its_readme(tx40):
     Rt = np.diag(N)
     Rt[4, 5] = N[5]
     assert np.array_equal(tx40.Rq, Rq) and np.array_equal(tx40.Rt, Rt)
+
+
+def test_without_a_c_compiler_the_batch_falls_back_to_casadi_vm(rx90, monkeypatch):
+    monkeypatch.setenv("CC", "/nonexistent/cc")
+    with pytest.warns(RuntimeWarning, match="C compilation unavailable"):
+        f = BatchFunction(rx90.regressor, name="no_compiler_check")
+    assert f.backend == "casadi-vm"
+    Q, QD, QDD = random_states(rx90, np.random.default_rng(9), 7)
+    assert np.allclose(f(Q, QD, QDD), rx90.regressor_batch(Q, QD, QDD), rtol=1e-13, atol=1e-12)
