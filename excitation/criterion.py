@@ -39,6 +39,8 @@ from typing import Any, Callable, Sequence
 import casadi as ca
 import numpy as np
 
+from rx90sym.compiled import map_samples
+
 CRITERIA = ("cond", "logdet")
 
 
@@ -59,11 +61,7 @@ def observation_matrix(base_regressor: Any, q: Any, qd: Any, qdd: Any) -> np.nda
 def regressor_samples(base_regressor: Any, q: np.ndarray, qd: np.ndarray, qdd: np.ndarray) -> np.ndarray:
     """Phi_b at every sample: (N, n, nb)."""
     if isinstance(base_regressor, ca.Function):
-        n_samples, n = q.shape
-        nb = base_regressor.size2_out(0)
-        mapped = base_regressor.map(n_samples, "serial")
-        out = np.asarray(mapped(q.T, qd.T, qdd.T))  # (n, nb N): [Phi_1 Phi_2 ...]
-        return out.reshape(n, n_samples, nb).transpose(1, 0, 2)
+        return map_samples(base_regressor, q, qd, qdd)
     return np.asarray(base_regressor(q, qd, qdd), dtype=float)
 
 

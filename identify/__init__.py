@@ -9,7 +9,7 @@ from .consistency import (BodyConsistency, ConsistencyError, ConsistencyReport, 
                           pseudo_inertia)
 from .essential import essential_parameters
 from .filtering import Derivatives, choose_cutoff, decimate, decimation_factor, derivatives, lowpass
-from .identification import ConsistentResult, Validation, identify, predict, validate
+from .identification import ConsistentResult, Validation, consistent_fit, identify, predict, validate
 from .least_squares import CompressedSystem, IdentificationError, compress, weighted_least_squares
 from .observation import Observation, observation_matrix
 from .payload import PayloadMonitor, PayloadResult, grouping_relations, payload
@@ -21,7 +21,7 @@ __all__ = [
     "BodyConsistency", "consistency_margin", "ConsistencyError", "ConsistencyReport", "ConsistentSolution", "consistency_report",
     "consistent_least_squares", "pseudo_inertia", "essential_parameters", "Derivatives",
     "choose_cutoff", "decimate", "decimation_factor", "derivatives", "lowpass",
-    "ConsistentResult", "Validation", "identify", "predict", "validate", "CompressedSystem",
+    "ConsistentResult", "Validation", "consistent_fit", "identify", "predict", "validate", "CompressedSystem",
     "IdentificationError", "compress", "weighted_least_squares", "Observation",
     "observation_matrix", "Recording", "RecordingError", "read_motor_recording",
     "read_recording", "recording_from_arrays", "split", "write_recording", "EliminationStep",

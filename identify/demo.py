@@ -25,7 +25,7 @@ def run_demo(out: str | Path = "demo-output", quick: bool = False) -> int:
     import excitation
     import rx90sym
 
-    from . import (essential_parameters, identify, predict, read_motor_recording, split,
+    from . import (consistent_fit, essential_parameters, identify, predict, read_motor_recording, split,
                    validate, write_recording)
     from .payload import payload
     from .report import Section, identification_sections, parameter_figure, write_report
@@ -66,7 +66,7 @@ def run_demo(out: str | Path = "demo-output", quick: bool = False) -> int:
     rest = {"min_velocity": 0.1}
     res = identify(robot, [recs["empty"]], method="wls", base=bp, **rest)
     ess = essential_parameters(res)
-    con = identify(robot, [recs["empty"]], method="consistent", base=bp, **rest)
+    con = consistent_fit(robot, res, bp)  # on the WLS fit's compressed system: no second pass
     val = validate(robot, res, recs["validation"], base=bp)
     errors = {n: abs(v - truth[n]) / abs(truth[n]) for n, v in zip(res.names, res.values)
               if abs(truth[n]) > 1e-3}

@@ -18,6 +18,8 @@ from dataclasses import dataclass
 from typing import Sequence
 
 import numpy as np
+
+from rx90sym.recording import frozen_array
 import scipy.linalg as sla
 
 from identify.results import IdentificationResult
@@ -70,12 +72,6 @@ class IdentificationError(ValueError):
 # --------------------------------------------------------------------------- compressed system
 
 
-def _read_only(a: np.ndarray) -> np.ndarray:
-    a = np.array(a, dtype=float, copy=True)
-    a.flags.writeable = False
-    return a
-
-
 @dataclass(frozen=True)
 class CompressedSystem:
     """QR-compressed least-squares system ``min ‖W·x − y‖²`` (eqs. 9–10).
@@ -96,8 +92,8 @@ class CompressedSystem:
     rows: int
 
     def __post_init__(self) -> None:
-        R = _read_only(self.R)
-        z = _read_only(self.z)
+        R = frozen_array(self.R)
+        z = frozen_array(self.z)
         if R.ndim != 2 or R.shape[0] != R.shape[1]:
             raise ValueError(f"CompressedSystem.R must be square, got shape {R.shape}")
         if z.shape != (R.shape[0],):

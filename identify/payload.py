@@ -29,7 +29,7 @@ from .least_squares import (CompressedSystem, compress, joint_noise_std, solve_s
                             stack_systems, weighted_least_squares)
 from .filtering import choose_cutoff
 from .observation import filtered_motion, stack_rows
-from .results import IdentificationResult
+from .results import IdentificationResult, json_number
 
 METHODS = (1, 2, 3, 4)
 # Method 3 assumes the empty and loaded runs follow the same path (the paper measured < 1e-3 rad
@@ -67,11 +67,8 @@ class PayloadResult:
         return {k: float(v) for k, v in zip(self.names, self.values)}
 
     def to_dict(self) -> dict[str, Any]:
-        def num(x: float) -> float | None:
-            return float(x) if np.isfinite(x) else None
-
         return {"method": self.method, "constrained": self.constrained,
-                "payload": [{"name": n, "value": num(v), "std": num(s), "rel_std_pct": num(p)}
+                "payload": [{"name": n, "value": json_number(v), "std": json_number(s), "rel_std_pct": json_number(p)}
                             for n, v, s, p in zip(self.names, self.values, self.std, self.rel_std_pct)],
                 "a_priori": self.a_priori}
 

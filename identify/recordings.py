@@ -47,7 +47,7 @@ from typing import Any, Sequence
 import numpy as np
 
 from rx90sym.files import atomic_write
-from rx90sym.recording import Recording, RecordingError, _frozen_array  # noqa: F401 (re-exported)
+from rx90sym.recording import Recording, RecordingError  # noqa: F401 (re-exported)
 
 __all__ = [
     "Recording",

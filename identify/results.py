@@ -10,6 +10,8 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from rx90sym.recording import frozen_array
+
 if TYPE_CHECKING:  # runtime import would be circular (least_squares builds results)
     from identify.least_squares import CompressedSystem
 
@@ -17,14 +19,13 @@ __all__ = ["EliminationStep", "IdentificationResult"]
 
 
 def _frozen_array(a: Any, name: str, shape: tuple[int, ...] | None = None) -> np.ndarray:
-    out = np.array(a, dtype=float, copy=True)
+    out = frozen_array(a)
     if shape is not None and out.shape != shape:
         raise ValueError(f"IdentificationResult.{name} must have shape {shape}, got {out.shape}")
-    out.flags.writeable = False
     return out
 
 
-def _json_number(v: float) -> float | None:
+def json_number(v: float) -> float | None:
     """JSON has no inf/NaN: they become null."""
     v = float(v)
     return v if math.isfinite(v) else None
@@ -57,8 +58,8 @@ class EliminationStep:
     def to_dict(self) -> dict[str, Any]:
         return {
             "removed": self.removed,
-            "sigma_pe": _json_number(self.sigma_pe),
-            "ratio": _json_number(self.ratio),
+            "sigma_pe": json_number(self.sigma_pe),
+            "ratio": json_number(self.ratio),
             "parameters_left": self.parameters_left,
             "accepted": self.accepted,
         }
@@ -161,14 +162,14 @@ class IdentificationResult:
         return {
             "method": self.method,
             "parameters": [
-                {"name": n, "value": _json_number(v), "std": _json_number(s), "rel_std_pct": _json_number(p)}
+                {"name": n, "value": json_number(v), "std": json_number(s), "rel_std_pct": json_number(p)}
                 for n, v, s, p in zip(self.names, self.values, self.std, self.rel_std_pct)
             ],
-            "sigma_rho": _json_number(self.sigma_rho),
-            "cond": _json_number(self.cond),
-            "cond_unweighted": _json_number(self.cond_unweighted),
-            "residual_rms": [_json_number(v) for v in self.residual_rms],
-            "weights": [_json_number(v) for v in self.weights],
+            "sigma_rho": json_number(self.sigma_rho),
+            "cond": json_number(self.cond),
+            "cond_unweighted": json_number(self.cond_unweighted),
+            "residual_rms": [json_number(v) for v in self.residual_rms],
+            "weights": [json_number(v) for v in self.weights],
             "rows": self.rows,
             "history": [step.to_dict() for step in self.history],
         }

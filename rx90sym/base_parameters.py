@@ -19,7 +19,7 @@ import casadi as ca
 import numpy as np
 import scipy.linalg as sla
 
-from .compiled import BatchFunction
+from .compiled import BatchFunction, map_samples
 from .parameters import LINK_PARAMETERS, split_name
 from .regrouping import general_grouping
 
@@ -97,11 +97,8 @@ def random_states(n: int, samples: int, seed: int) -> tuple[np.ndarray, np.ndarr
 
 def stacked_regressor(robot: Any, samples: int, seed: int) -> np.ndarray:
     """Phi stacked over random samples: (samples * n, n_params)."""
-    Q, QD, QDD = random_states(robot.n, samples, seed)
-    f = robot.regressor.map(samples)
-    # map() concatenates the samples' n x n_params blocks horizontally.
-    blocks = np.array(f(Q.T, QD.T, QDD.T)).reshape(robot.n, samples, -1)
-    return blocks.transpose(1, 0, 2).reshape(samples * robot.n, -1)
+    blocks = map_samples(robot.regressor, *random_states(robot.n, samples, seed))
+    return blocks.reshape(samples * robot.n, -1)
 
 
 def _column_norms(W: np.ndarray, tol: float) -> np.ndarray:

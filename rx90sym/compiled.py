@@ -97,6 +97,15 @@ def compiled_function(f: ca.Function) -> ca.Function:
         return f
 
 
+def map_samples(f: ca.Function, *inputs: np.ndarray) -> np.ndarray:
+    """A one-output function on N samples through CasADi's VM (no compilation):
+    inputs (N, size_k) -> (N, rows, cols). For repeated or large evaluations use BatchFunction."""
+    N = np.shape(inputs[0])[0]
+    out = np.asarray(f.map(N, "serial")(*[np.asarray(x, dtype=float).T for x in inputs]))
+    # map() concatenates the samples' rows x cols blocks horizontally.
+    return out.reshape(f.size1_out(0), N, f.size2_out(0)).transpose(1, 0, 2)
+
+
 def _has_openmp(cc: str) -> bool:
     """Whether the compiler accepts -fopenmp (gcc does; plain clang on macOS may not)."""
     with tempfile.TemporaryDirectory() as tmp:

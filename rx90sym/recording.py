@@ -23,7 +23,7 @@ class RecordingError(ValueError):
 # --------------------------------------------------------------------------------------------
 
 
-def _frozen_array(x: Any) -> np.ndarray:
+def frozen_array(x: Any) -> np.ndarray:
     """Read-only float64 copy of ``x`` (a Recording must not change under its owner's feet)."""
     a = np.array(x, dtype=float, copy=True)
     a.setflags(write=False)
@@ -56,9 +56,9 @@ class Recording:
     meta: dict = field(default_factory=dict, repr=False)
 
     def __post_init__(self) -> None:
-        t = _frozen_array(self.t)
-        q = _frozen_array(self.q)
-        tau = _frozen_array(self.tau)
+        t = frozen_array(self.t)
+        q = frozen_array(self.q)
+        tau = frozen_array(self.tau)
         if t.ndim != 1 or t.size < 1:
             raise RecordingError(f"{self.source}: t must be a non-empty 1-D array, got shape {t.shape}")
         n_samples = t.size
@@ -70,7 +70,7 @@ class Recording:
         object.__setattr__(self, "q", q)
         object.__setattr__(self, "tau", tau)
         if self.dq is not None:
-            dq = _frozen_array(self.dq)
+            dq = frozen_array(self.dq)
             if dq.shape != q.shape:
                 raise RecordingError(f"{self.source}: dq must have shape {q.shape}, got {dq.shape}")
             object.__setattr__(self, "dq", dq)
