@@ -20,8 +20,12 @@ $(STAMP): pyproject.toml
 demo: $(STAMP)
 	$(VENV)/bin/rx90 demo --out demo-output
 
+# PYTEST_STATUS_FILE: where to write pytest's own exit status (make only says 2); .ci/run uses it.
 test: $(STAMP)
-	$(PY) -m pytest -q
+	$(PY) -m pytest -q; rc=$$?; \
+	if [ -n "$(PYTEST_STATUS_FILE)" ]; then echo $$rc > "$(PYTEST_STATUS_FILE)"; fi; \
+	if [ $$rc -eq 5 ]; then echo "error: pytest collected no tests (exit 5)" >&2; fi; \
+	exit $$rc
 
 test-quick: $(STAMP)
 	$(PY) -m pytest -q -m "not slow"

@@ -17,7 +17,8 @@ def group_of(name: str) -> str:
     return "inertial, links 1-3" if link <= 3 else "inertial, wrist 4-6"
 
 
-def compare(seed: int = 0, duration: float = 20.0, harmonics: int = 5, starts: int = 1) -> dict:
+def compare(seed: int = 0, duration: float = 20.0, harmonics: int = 5, starts: int = 1,
+            criterion: str = "cond") -> dict:
     import excitation
     import identify
     import rx90sym
@@ -26,7 +27,7 @@ def compare(seed: int = 0, duration: float = 20.0, harmonics: int = 5, starts: i
     bp = rx90sym.base_parameters(robot)
     chi = robot.parameter_vector(rx90sym.default_parameters(robot))
     opt = excitation.optimise(robot, duration, harmonics, seed=seed, chi_nominal=chi, base=bp,
-                              starts=starts, progress=False)
+                              starts=starts, criterion=criterion, progress=False)
     rnd = excitation.random_trajectory(robot, duration, harmonics, seed=seed + 1, chi_nominal=chi, base=bp)
     out = {}
     for label, traj in (("optimised", opt), ("random", rnd)):

@@ -1,44 +1,158 @@
 """Robot-level entry points: fetch regressor, dynamics and limits from an rx90sym Robot, then call
-the generic functions (optimiser.optimise_model, random_trajectory.random_feasible)."""
+the generic functions (multistart.optimise_model, random_trajectory.random_feasible)."""
 from __future__ import annotations
 
+import dataclasses
 from typing import Any, Sequence, TextIO
 
+import numpy as np
+
+import rx90sym
+
+from .collision import Box, CollisionModel, arm_capsules, without_pairs_touching_at
+from .complement import prior_information
 from .fourier import FourierSeries
-from .model import model_from_robot
-from .optimiser import OptimiserOptions, optimise_model
+from .model import ExcitationModel, model_from_robot
+from .multistart import optimise_model
+from .objective import DEFAULT_CRITERION, FALLBACK_CRITERION, Objective, reference_magnitudes
+from .optimiser import OptimiserOptions
+from .payload_design import payload_model, payload_objective
 from .random_trajectory import random_feasible
 from .trajectory import Trajectory
 from .via_points import ViaPointSpline
 
+NOISE_FRACTION = 0.01  # default expected torque noise: 1 % of each joint's torque limit
 
-def optimise(robot: Any, duration: float = 20.0, harmonics: int = 5, seed: int = 0, *,
-             chi_nominal: Any = None, starts: int = 4, time_budget: float = 300.0,
+
+def default_noise(limits: Any) -> np.ndarray:
+    """Expected torque noise per joint [N m] when none is given: NOISE_FRACTION of the torque
+    limit (1 where the limit is unknown). Only the ratios between joints matter to the criteria,
+    except when a prior information matrix is added."""
+    tau = np.asarray(limits.tau_max, dtype=float)
+    return np.where(np.isfinite(tau), NOISE_FRACTION * tau, 1.0)
+
+
+def make_objective(model: ExcitationModel, criterion: str = "cond", *, nominal_base: Any = None,
+                   noise_std: Any = None, select: Sequence[str] | None = None,
+                   prior: np.ndarray | None = None, rate: float = 250.0) -> Objective:
+    """The Objective of ``criterion`` for a model: reference magnitudes from the nominal base
+    parameters ``nominal_base`` (nb,) (needed by "cond-nominal" and "sigma"), noise_std (n,) [N m]
+    (default :func:`default_noise`), select: base parameter names "sigma" judges (None: all),
+    prior (nb, nb): information already gathered (see complement.py)."""
+    names = model.names or tuple(f"p{i + 1}" for i in range(model.n_base))
+    reference = None if nominal_base is None else reference_magnitudes(nominal_base, names)
+    selection = None
+    if select is not None:
+        unknown = [s for s in select if s not in names]
+        if unknown:
+            raise ValueError(f"criterion: unknown base parameter(s) {', '.join(unknown)}; "
+                             f"known: {', '.join(names)}")
+        selection = tuple(names.index(s) for s in select)
+    noise = default_noise(model.limits) if noise_std is None else np.asarray(noise_std, dtype=float)
+    if criterion == "cond" and noise_std is None and prior is None:
+        noise = None  # the raw cond(W): the historical criterion, unweighted
+    return Objective(criterion, noise, reference, selection, prior, rate)
+
+
+def optimise(robot: rx90sym.Robot, duration: float = 20.0, harmonics: int = 5, seed: int = 0, *,
+             chi_nominal: Any = None, starts: int = 4, time_budget: float | None = None,
              z_min: float | None = None, tool_point: Sequence[float] = (0.0, 0.0, 0.0),
              via_points: int | None = None, base: Any = None,
-             options: OptimiserOptions | None = None,
+             options: OptimiserOptions | None = None, criterion: str | None = None,
+             noise_std: Any = None, select: Sequence[str] | None = None,
+             complement: Sequence[tuple[np.ndarray, ...]] = (), client: Any = None,
+             collision: CollisionModel | None = None,
              progress: bool | TextIO = True) -> Trajectory:
-    """Optimal excitation trajectory for ``robot`` (an rx90sym.Robot).
+    """Optimal excitation trajectory for ``robot``.
 
     duration [s], harmonics: Fourier series with base frequency 2 pi / duration. via_points: if
     given, optimise that many equally spaced via points (quintic spline) instead.
-    chi_nominal: standard parameters for the torque limits, "default" for the robot's bundled
-    nominal set, None to skip torque limits.
+    chi_nominal: standard parameters for the torque limits (and the reference magnitudes of the
+    criteria), "default" for the robot's bundled nominal set, None to skip torque limits.
     z_min [m]: floor height for the wrist centre and ``tool_point`` [m, last frame] (None: no
-    Cartesian limit). starts, seed, time_budget [s]: multi-start settings. base: precomputed
-    ``rx90sym.base_parameters(robot)``. See OptimiserOptions for grids, margins and criterion.
+    Cartesian limit). starts, seed: multi-start settings (same seed, same result); time_budget
+    [s]: optional wall-clock budget. base: precomputed ``rx90sym.base_parameters(robot)``.
+    criterion, noise_std, select: see :func:`make_objective`; criterion None: DEFAULT_CRITERION
+    with nominal parameters, else FALLBACK_CRITERION (the criterion in ``options`` is replaced). complement: motions (t, q, qd, qdd) already recorded, whose information the new
+    trajectory adds to (sequential design, complement.py). client: a dask.distributed.Client for
+    the starts. collision: capsules and obstacle boxes to keep apart (see collision.py and
+    :func:`collision_model`). See OptimiserOptions.
     """
-    model = model_from_robot(robot, chi_nominal, base, z_min, tool_point)
+    base = base if base is not None else rx90sym.base_parameters(robot)
+    model = dataclasses.replace(model_from_robot(robot, chi_nominal, base, z_min, tool_point),
+                                collision=collision)
+    options = options or OptimiserOptions()
+    if criterion is None:
+        criterion = DEFAULT_CRITERION if chi_nominal is not None else FALLBACK_CRITERION
+    nominal = None
+    if chi_nominal is not None:
+        chi = (robot.parameter_vector(rx90sym.default_parameters(robot))
+               if isinstance(chi_nominal, str) else chi_nominal)
+        nominal = base.beta(chi)
+    objective = make_objective(model, criterion, nominal_base=nominal, noise_std=noise_std,
+                               select=select, rate=options.cond_rate)
+    if complement:
+        if objective.noise_std is None:  # raw cond: the old and new rows still need one scale
+            objective = dataclasses.replace(objective, noise_std=default_noise(model.limits))
+        objective = dataclasses.replace(objective, prior=prior_information(base.regressor, complement, objective))
+    options = dataclasses.replace(options, criterion=objective)
     form = (FourierSeries(duration, harmonics) if via_points is None
             else ViaPointSpline.uniform(duration, via_points))
     return optimise_model(model, form, seed=seed, starts=starts, time_budget=time_budget,
-                          options=options, progress=progress)
+                          options=options, progress=progress, client=client)
 
 
-def random_trajectory(robot: Any, duration: float = 20.0, harmonics: int = 5, seed: int = 0, *,
+def random_trajectory(robot: rx90sym.Robot, duration: float = 20.0, harmonics: int = 5, seed: int = 0, *,
                       chi_nominal: Any = None, z_min: float | None = None,
                       tool_point: Sequence[float] = (0.0, 0.0, 0.0), base: Any = None,
-                      options: OptimiserOptions | None = None) -> Trajectory:
+                      options: OptimiserOptions | None = None,
+                      collision: CollisionModel | None = None) -> Trajectory:
     """Random feasible Fourier trajectory (the comparison baseline), scaled until limits hold."""
-    model = model_from_robot(robot, chi_nominal, base, z_min, tool_point)
+    model = dataclasses.replace(model_from_robot(robot, chi_nominal, base, z_min, tool_point),
+                                collision=collision)
     return random_feasible(model, FourierSeries(duration, harmonics), seed, options)
+
+
+def collision_model(robot: rx90sym.Robot, obstacles: Sequence[Box | str] = (), self_collision: bool = True,
+                    radii: Sequence[float] | None = None,
+                    tool_point: Sequence[float] = (0.0, 0.0, 0.1)) -> CollisionModel:
+    """Link capsules of ``robot`` (radii [m], default collision.DEFAULT_RADII) kept apart and out
+    of the obstacle boxes (Box or 'xmin,ymin,zmin,xmax,ymax,zmax' [m], frame 0)."""
+    boxes = tuple(b if isinstance(b, Box) else Box.parse(b) for b in obstacles)
+    capsules = arm_capsules(robot, tool_point, radii=radii)
+    if self_collision:
+        lim = robot.limits
+        centre = np.where(np.isfinite(lim.q_min + lim.q_max), 0.5 * (lim.q_min + lim.q_max), 0.0)
+        # Default capsules between frame origins do not describe an arm with offsets (a UR's
+        # wrist, a Panda): dropping only the pairs touching at the centre still left every motion
+        # in contact on the UR10e. Self-collision is then not checked (reported by `ignored`).
+        every = radii is None
+        capsules = without_pairs_touching_at(capsules, centre, every=every)
+        self_collision = not (every and capsules.ignored)
+    return CollisionModel(capsules, boxes, self_collision)
+
+
+def optimise_payload(robot: rx90sym.Robot, duration: float = 10.0, via_points: int | None = 10,
+                     harmonics: int = 3, seed: int = 0, *, chi_nominal: Any = None,
+                     payload: Any = "tables_4", noise_std: Any = None, starts: int = 4,
+                     time_budget: float | None = None, z_min: float | None = None, base: Any = None,
+                     options: OptimiserOptions | None = None, client: Any = None,
+                     collision: CollisionModel | None = None,
+                     progress: bool | TextIO = True) -> Trajectory:
+    """A short motion for the ten payload parameters (criterion "sigma" on Wc, eq. 21).
+
+    via_points (default 10, the paper's conclusion) or, with via_points None, a Fourier series of
+    ``harmonics``. payload: a typical payload (name, path or mapping of XXc..Mc) for the reference
+    magnitudes and the torque limits. See payload_design.py and :func:`optimise`.
+    """
+    base = base if base is not None else rx90sym.base_parameters(robot)
+    model = dataclasses.replace(payload_model(robot, base, chi_nominal, payload, z_min), collision=collision)
+    noise = default_noise(model.limits) if noise_std is None else np.asarray(noise_std, dtype=float)
+    # Short, fast motions press on the torque limits: imposed from the start (20 Hz grid), since
+    # the lazy repairs of optimiser.py failed on the RX90 at 10 s.
+    options = options or OptimiserOptions(torque_rate=20.0)
+    options = dataclasses.replace(options, criterion=payload_objective(payload, noise, options.cond_rate))
+    form = (FourierSeries(duration, harmonics) if via_points is None
+            else ViaPointSpline.uniform(duration, via_points))
+    return optimise_model(model, form, seed=seed, starts=starts, time_budget=time_budget,
+                          options=options, progress=progress, client=client)

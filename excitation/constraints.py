@@ -20,6 +20,8 @@ import numpy as np
 from .model import ExcitationModel
 
 _KINDS = ("position", "velocity", "acceleration", "torque")
+TORQUE_UNCHECKED = ("not checked: no nominal parameters were given, so the motor torques of this "
+                    "motion are unknown (give them: rx90 excite --params FILE)")
 
 
 @dataclass(frozen=True)
@@ -27,7 +29,8 @@ class Margins:
     """How much of each limit the optimiser keeps in reserve on its grid.
 
     position, velocity, acceleration, torque: fractions of the limit (of the half range for
-    positions, about its centre); height: metres above the floor.
+    positions, about its centre); height: metres above the floor; clearance: metres between link
+    capsules and from obstacle boxes (the links move centimetres between grid points).
     """
 
     position: float = 0.02
@@ -35,14 +38,16 @@ class Margins:
     acceleration: float = 0.02
     torque: float = 0.05
     height: float = 0.01
+    clearance: float = 0.03
 
     def __post_init__(self) -> None:
         for name in ("position", "velocity", "acceleration", "torque"):
             value = getattr(self, name)
             if not 0.0 <= value < 1.0:
                 raise ValueError(f"margins: {name} must be a fraction in [0, 1), got {value}")
-        if self.height < 0.0:
-            raise ValueError(f"margins: height must be >= 0 m, got {self.height}")
+        for name in ("height", "clearance"):
+            if getattr(self, name) < 0.0:
+                raise ValueError(f"margins: {name} must be >= 0 m, got {getattr(self, name)}")
 
 
 @dataclass(frozen=True, eq=False)
@@ -58,6 +63,8 @@ class LimitReport:
     min_height: float | None = None
     z_min: float | None = None
     violations: tuple[str, ...] = field(default=())
+    torque_note: str = ""  # why torques were not checked (no nominal parameters), "" when they were
+    min_clearance: float | None = None  # [m] smallest capsule clearance (collision model), or None
 
     @property
     def feasible(self) -> bool:
@@ -71,6 +78,10 @@ class LimitReport:
 
         out: dict[str, Any] = {"checked_at_hz": self.rate, "feasible": self.feasible}
         out.update({kind: clean(getattr(self, kind)) for kind in _KINDS})
+        if self.torque_note:
+            out["torque"] = self.torque_note
+        if self.min_clearance is not None:  # inf when nothing is checked (e.g. --no-self-collision)
+            out["min_clearance_m"] = clean(np.array([self.min_clearance]))[0]
         if self.min_height is not None:
             out["min_height_m"] = round(float(self.min_height), 6)
             out["z_min_m"] = self.z_min
@@ -158,12 +169,18 @@ def kinematic_constraints(model: ExcitationModel, q: ca.MX, qd: ca.MX, qdd: ca.M
 def torque_constraints(model: ExcitationModel, q: ca.MX, qd: ca.MX, qdd: ca.MX,
                        margins: Margins) -> tuple[ca.MX, np.ndarray, np.ndarray]:
     """(g, lbg, ubg) on MX samples (n x N): motor torque limits with margin (inverse dynamics
-    with the nominal parameters, minus the spring)."""
+    with the nominal parameters, minus the spring) and, when the model has a collision model,
+    capsule clearances >= margins.clearance [m] (the constraints imposed lazily)."""
     lim = model.limits
     rows = _Rows()
     if model.torque is not None and np.any(np.isfinite(lim.tau_max)) and q.shape[1] > 0:
         tau = model.torque.map(q.shape[1], "serial")(q, qd, qdd)
         rows.add(tau, -(1.0 - margins.torque) * lim.tau_max, (1.0 - margins.torque) * lim.tau_max)
+    clearance = None if model.collision is None else model.collision.clearance
+    if clearance is not None and q.shape[1] > 0:  # imposed lazily too: rarely active
+        c = clearance.map(q.shape[1], "serial")(q)
+        k = c.shape[0]
+        rows.add(c, np.full(k, margins.clearance), np.full(k, np.inf))
     return rows.result()
 
 
@@ -207,8 +224,15 @@ def check_limits(model: ExcitationModel, q: np.ndarray, qd: np.ndarray, qdd: np.
         if min_height < model.z_min - 1e-12:
             violations.append(f"Cartesian point at z = {min_height:.4f} m below the floor "
                               f"z_min = {model.z_min} m")
+    min_clearance = None
+    if model.collision is not None:
+        min_clearance = float(np.min(model.collision.exact(q)))
+        if min_clearance < -1e-12:
+            violations.append(f"collision: link capsules {-min_clearance:.4f} m into each other or "
+                              f"into an obstacle box")
+    note = "" if model.torque is not None else TORQUE_UNCHECKED
     return LimitReport(rate, usage["position"], usage["velocity"], usage["acceleration"],
-                       usage["torque"], min_height, model.z_min, tuple(violations))
+                       usage["torque"], min_height, model.z_min, tuple(violations), note, min_clearance)
 
 
 def _usage(ratio: np.ndarray, limit: np.ndarray) -> np.ndarray:
@@ -231,6 +255,8 @@ def violation_times(model: ExcitationModel, t: np.ndarray, q: np.ndarray, qd: np
     excess = np.max(np.nan_to_num(np.hstack(ratios), nan=0.0), axis=1) - 1.0
     if model.heights is not None and model.z_min is not None:
         excess = np.maximum(excess, model.z_min - np.min(evaluate_heights(model, q), axis=1))
+    if model.collision is not None:
+        excess = np.maximum(excess, -model.collision.exact(q))
     bad = excess > 0.0
     if not np.any(bad):
         return np.zeros(0)

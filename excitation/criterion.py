@@ -22,9 +22,8 @@ The optimiser runs a continuation in p (default 4 then 16): small p is smoother 
 start quickly, large p is tighter. The log-determinant (D-optimality) in its scale-free form
 f_0(G) = log(tr(G)/nb) - log det(G)/nb = log(arithmetic / geometric mean of the eigenvalues),
 the p -> 0 end of the same family, is available as a first stage (p = 0); on the RX90 it did not
-improve the final cond and cost 60 % more time, so it is not in the default schedule. Plain
-D-optimality (-log det G / nb, which also rewards large motions) is the alternative criterion
-"logdet".
+improve the final cond and cost 60 % more time, so it is not in the default schedule. The other
+criteria (scaled cond, D-optimality, predicted relative sigma) are in objective.py.
 
 Friction: Coulomb columns hold sign(qd); their derivative is zero and their jumps make the criterion
 piecewise, so during optimisation each FS column is replaced by tanh(v / eps) where v is the matching
@@ -34,15 +33,12 @@ uses the true sign on the fine grid.
 from __future__ import annotations
 
 import warnings
-from typing import Any, Callable, Sequence
+from typing import Any, Sequence
 
 import casadi as ca
 import numpy as np
 
 from rx90sym.compiled import map_samples
-
-CRITERIA = ("cond", "logdet")
-
 
 # --------------------------------------------------------------------------- numeric (reporting)
 def observation_matrix(base_regressor: Any, q: Any, qd: Any, qdd: Any) -> np.ndarray:
@@ -111,14 +107,14 @@ def smooth_friction_regressor(regressor: ca.Function, names: Sequence[str] | Non
             good.append((fs, fv))
         else:
             warnings.warn(f"smooth friction: column {names[fs]} is not sign({names[fv]}); kept exact")
-    sym = _symbols_like(regressor)
+    sym = symbols_like(regressor)
     phi = regressor(*sym)
     for fs, fv in good:
         phi[:, fs] = ca.tanh(phi[:, fv] / eps)
     return ca.Function(f"{regressor.name()}_smooth", list(sym), [phi], ["q", "qd", "qdd"], ["Phi"])
 
 
-def _symbols_like(f: ca.Function) -> list[Any]:
+def symbols_like(f: ca.Function) -> list[Any]:
     """SX input symbols when f can be evaluated on SX (fast virtual machine), else MX."""
     try:
         return f.sx_in()
@@ -129,7 +125,7 @@ def _symbols_like(f: ca.Function) -> list[Any]:
 # --------------------------------------------------------------------------- symbolic criteria
 def gram_expression(regressor: ca.Function, q: ca.MX, qd: ca.MX, qdd: ca.MX) -> ca.MX:
     """G = W^T W / N (nb x nb) for MX samples (n x N): per-sample information matrix."""
-    sym = _symbols_like(regressor)
+    sym = symbols_like(regressor)
     phi_t = ca.Function("phi_t", list(sym), [regressor(*sym).T])
     n_samples = q.shape[1]
     wt = phi_t.map(n_samples, "serial")(q, qd, qdd)  # (nb, n N) = W^T
@@ -155,27 +151,3 @@ def log_am_gm(g: Any) -> Any:
     nb = g.shape[0]
     g_hat = g * (nb / ca.trace(g))  # normalise first so det cannot overflow
     return -ca.log(ca.det(g_hat)) / nb
-
-
-def neg_log_det(g: Any) -> Any:
-    """-log det(G) / nb: D-optimality (rewards large, balanced excitation)."""
-    nb = g.shape[0]
-    scale = ca.trace(g) / nb
-    return -ca.log(ca.det(g / scale)) / nb - ca.log(scale)
-
-
-def criterion_expression(g: Any, name: str, p: int = 0) -> Any:
-    """Criterion to minimise: "cond" (f_p, or f_0 when p == 0) or "logdet" (-log det G / nb)."""
-    if name == "logdet":
-        return neg_log_det(g)
-    if name != "cond":
-        raise ValueError(f"criterion must be one of {CRITERIA}, got {name!r}")
-    return log_am_gm(g) if p == 0 else log_cond_surrogate(g, p)
-
-
-def criterion_function(regressor: ca.Function, samples: Callable[[ca.MX], tuple[ca.MX, ca.MX, ca.MX]],
-                       n_free: int, name: str = "cond", p: int = 16) -> ca.Function:
-    """casadi.Function x -> criterion, with samples(x) giving (q, qd, qdd) as (n x N) MX."""
-    x = ca.MX.sym("x", n_free)
-    g = gram_expression(regressor, *samples(x))
-    return ca.Function("criterion", [x], [criterion_expression(g, name, p)])

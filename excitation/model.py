@@ -7,10 +7,13 @@ works for any model, including toy ones in tests. :func:`model_from_robot` is th
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import Any, Sequence
+from typing import TYPE_CHECKING, Any, Sequence
 
 import casadi as ca
 import numpy as np
+
+if TYPE_CHECKING:  # for annotations only
+    import rx90sym
 
 
 @dataclass(frozen=True, eq=False)
@@ -71,6 +74,7 @@ class ExcitationModel:
     torque: casadi.Function (q, qd, qdd) -> motor torque (n,) [N m], or None (no torque limits).
     heights: casadi.Function (q) -> (k,) heights [m] of points that must stay above z_min, or None.
     staubli_offsets: q_staubli = q_khalil + staubli_offsets [rad], for exports.
+    collision: a collision.CollisionModel (self-collision of link capsules, obstacle boxes), or None.
     """
 
     regressor: ca.Function
@@ -81,6 +85,7 @@ class ExcitationModel:
     z_min: float | None = None
     staubli_offsets: np.ndarray = field(default_factory=lambda: np.zeros(0))
     name: str = "robot"
+    collision: Any = None  # excitation.collision.CollisionModel: capsules and obstacle boxes
 
     def __post_init__(self) -> None:
         n = self.limits.n
@@ -109,7 +114,7 @@ class ExcitationModel:
         return self.regressor.size2_out(0)
 
 
-def model_from_robot(robot: Any, chi_nominal: Any = None, base: Any = None,
+def model_from_robot(robot: rx90sym.Robot, chi_nominal: Any = None, base: Any = None,
                      z_min: float | None = None,
                      tool_point: Sequence[float] = (0.0, 0.0, 0.0)) -> ExcitationModel:
     """ExcitationModel of an ``rx90sym.Robot``.

@@ -16,20 +16,19 @@ compete; if none is feasible the request is an error.
 """
 from __future__ import annotations
 
-import sys
 import time
 from dataclasses import dataclass, field
-from typing import Any, TextIO
+from typing import Any, Callable, Sequence
 
 import casadi as ca
 import numpy as np
 
 from .constraints import (Margins, check_limits, kinematic_constraints, kinematic_grid_rate,
                           position_bounds, range_centre, torque_constraints, violation_times)
-from .criterion import (CRITERIA, condition_number, criterion_expression, gram_expression,
-                        observation_matrix, smooth_friction_regressor)
+from .criterion import symbols_like, gram_expression, regressor_samples, smooth_friction_regressor
+from .objective import Objective, numeric_information
 from .model import ExcitationModel
-from .trajectory import Form, SolveInfo, Trajectory, sample_times
+from .trajectory import Form, sample_times
 
 MAX_COND = 1e6  # above this W is numerically rank deficient: the trajectory identifies nothing
 _GOOD_STATUS = ("Solve_Succeeded", "Solved_To_Acceptable_Level", "Maximum_Iterations_Exceeded",
@@ -40,7 +39,8 @@ _GOOD_STATUS = ("Solve_Succeeded", "Solved_To_Acceptable_Level", "Maximum_Iterat
 class OptimiserOptions:
     """Settings of :func:`optimise_model` (defaults chosen for the RX90, 20 s, 5 harmonics).
 
-    criterion: "cond" (surrogate schedule below) or "logdet" (D-optimality).
+    criterion: a name of objective.OBJECTIVES or an :class:`Objective` (with the noise, reference
+        magnitudes, selection and prior information it needs); "cond" is the raw cond(W).
     grid_rate [Hz]: optimisation grid for the criterion (must exceed twice the highest harmonic).
         The smooth terms need little (the trapezoid rule is spectrally accurate on a periodic
         trajectory); the Coulomb columns set the rate: 20 Hz with sign_eps = 0.1 rad/s gave
@@ -69,7 +69,7 @@ class OptimiserOptions:
     ipopt: extra IPOPT options as (name, value) pairs, e.g. (("linear_solver", "ma27"),).
     """
 
-    criterion: str = "cond"
+    criterion: str | Objective = "cond"
     grid_rate: float = 20.0
     constraint_rate: float | None = None
     torque_rate: float | None = None
@@ -88,8 +88,8 @@ class OptimiserOptions:
     ipopt: tuple[tuple[str, Any], ...] = ()
 
     def __post_init__(self) -> None:
-        if self.criterion not in CRITERIA:
-            raise ValueError(f"options: criterion must be one of {CRITERIA}, got {self.criterion!r}")
+        if isinstance(self.criterion, str):
+            object.__setattr__(self, "criterion", Objective(self.criterion, rate=self.cond_rate))
         for name in ("grid_rate", "verify_rate", "cond_rate", "max_frequency", "sign_eps", "tol"):
             value = getattr(self, name)
             if not np.isfinite(value) or value <= 0.0:
@@ -117,9 +117,10 @@ class OptimiserOptions:
     @property
     def stages(self) -> tuple[tuple[str, int], ...]:
         """(criterion, p) of each IPOPT stage."""
-        if self.criterion == "logdet":
-            return (("logdet", 0),)
-        return tuple(("cond", int(p)) for p in self.p_schedule)
+        name = self.criterion.name
+        if not name.startswith("cond"):
+            return ((name, 0),)
+        return tuple((name, int(p)) for p in self.p_schedule)
 
 
 # --------------------------------------------------------------------------- request checks
@@ -140,6 +141,10 @@ def check_request(model: ExcitationModel, form: Form, options: OptimiserOptions)
     if n_grid * model.n < model.n_base or n_grid < 4:
         raise ValueError(f"excitation request: {n_grid} grid samples x {model.n} joints cannot "
                          f"determine {model.n_base} base parameters: raise grid_rate or duration")
+    if model.collision is not None and model.collision.exact(range_centre(model)[None, :])[0] < 0.0:
+        raise ValueError("excitation request: the link capsules touch (each other or an obstacle box) "
+                         "at the centre of the joint ranges: smaller radii, move the box, or no "
+                         "self-collision check")
     if model.heights is not None:
         z = np.asarray(model.heights(range_centre(model))).ravel()
         if np.any(z < model.z_min):
@@ -174,7 +179,7 @@ class _Deadline(ca.Callback):
         return ca.Sparsity.scalar() if ca.nlpsol_out(i) == "f" else ca.Sparsity.dense(size, 1)
 
     def eval(self, arg: Any) -> list[int]:
-        return [1 if time.perf_counter() > self.deadline else 0]
+        return [1 if time.time() > self.deadline else 0]
 
 
 class _Problem:
@@ -196,8 +201,10 @@ class _Problem:
             return tuple(ca.mtimes(ca.DM(b @ self.rest), z).T for b in form.basis(times))
 
         self.grid = sample_times(form.duration, options.grid_rate)
-        regressor = smooth_friction_regressor(model.regressor, model.names, options.sign_eps)
-        gram = gram_expression(regressor, *samples(self.grid))
+        objective = options.criterion
+        regressor = _row_weighted(smooth_friction_regressor(model.regressor, model.names, options.sign_eps),
+                                  objective.row_weights(model.n))
+        info = objective.information(gram_expression(regressor, *samples(self.grid)), form.duration)
         g_kin, lo_kin, hi_kin = kinematic_constraints(model, *samples(self.kinematic_times), options.margins)
         g_dyn, lo_dyn, hi_dyn = torque_constraints(model, *samples(self.torque_times), options.margins)
         g = ca.vertcat(g_kin, g_dyn)
@@ -209,9 +216,9 @@ class _Problem:
                  "ipopt.print_level": 0, "ipopt.sb": "yes", "print_time": False,
                  "error_on_fail": False, "iteration_callback": self.deadline}
         ipopt.update({f"ipopt.{key}": value for key, value in options.ipopt})
-        objectives = [criterion_expression(gram, c, p) for c, p in options.stages]
+        objectives = [objective.expression(info, p) for _, p in options.stages]
         self.stage_values = ca.Function("stages", [x], objectives)
-        self.solvers = [ca.nlpsol(f"excitation_{c}{p}", "ipopt", {"x": x, "f": f, "g": g}, ipopt)
+        self.solvers = [ca.nlpsol(f"excitation_{c.replace('-', '_')}{p}", "ipopt", {"x": x, "f": f, "g": g}, ipopt)
                         for (c, p), f in zip(options.stages, objectives)]
 
     def with_extra_times(self, times: np.ndarray) -> "_Problem":
@@ -223,7 +230,8 @@ class _Problem:
                         np.union1d(torque, times))
 
     def solve(self, x0: np.ndarray, stage: int, deadline: float) -> tuple[np.ndarray, int, str]:
-        """One IPOPT stage from x0; returns (x, iterations, status)."""
+        """One IPOPT stage from x0 (stopped at the epoch time ``deadline``); returns (x,
+        iterations, status)."""
         self.deadline.deadline = deadline
         solver = self.solvers[stage]
         sol = solver(x0=x0, lbg=self.lbg, ubg=self.ubg)
@@ -273,77 +281,73 @@ def kinematic_room(model: ExcitationModel, form: Form, motion: np.ndarray, q_ref
     return np.where(np.isfinite(s), s, 1.0)
 
 
-# --------------------------------------------------------------------------- main loop
-def optimise_model(model: ExcitationModel, form: Form, *, seed: int = 0, starts: int = 4,
-                   time_budget: float = 300.0, options: OptimiserOptions | None = None,
-                   progress: bool | TextIO = True) -> Trajectory:
-    """Optimal excitation trajectory for a generic model; the best verified start is returned.
+# --------------------------------------------------------------------------- one start
+@dataclass(frozen=True, eq=False)
+class StartResult:
+    """What one start gave. index: 1-based start number (its random draw is
+    default_rng([seed, index]), so it does not depend on which process runs it or in what order).
+    score: the criterion on the cond_rate samples (nan when infeasible or rank deficient);
+    skipped: why the start did not run ("" when it ran)."""
 
-    seed: random starts come from np.random.default_rng(seed), so a seed gives the same result
-    (as long as the time budget does not cut a solve short). time_budget [s]: wall-clock budget
-    over all starts (the first start always runs, stopped at the deadline). progress: True for a
-    line per start on stderr, False for silence, or a text stream.
-    Raises ValueError for requests that cannot be met (see :func:`check_request`) and when no start
-    holds every limit on the fine grid.
+    index: int
+    coefficients: np.ndarray | None = None
+    iterations: int = 0
+    status: str = ""
+    report: Any = None
+    cond: float = float("nan")
+    score: float = float("nan")
+    surrogate_cond: float = float("nan")
+    time_s: float = 0.0
+    failure: str = ""
+    skipped: str = ""
+
+
+def start_rng(seed: int, index: int) -> np.random.Generator:
+    """The random generator of start ``index`` of a multi-start with ``seed``."""
+    return np.random.default_rng([int(seed), int(index)])
+
+
+def run_starts(model: ExcitationModel, form: Form, options: OptimiserOptions, seed: int,
+               indices: Sequence[int], deadline: float | None = None,
+               on_result: Callable[[StartResult], None] | None = None) -> list[StartResult]:
+    """Run the given starts one after the other with one NLP (built once); pure apart from time.
+
+    deadline: epoch time [s] (time.time()) after which solves stop and later starts are skipped
+    (reported as such); None: no deadline (the default: results do not depend on the machine).
+    on_result: called with each StartResult as soon as it is known (progress lines).
     """
-    options = options or OptimiserOptions()
-    if starts < 1:
-        raise ValueError(f"starts must be >= 1, got {starts}")
-    if not time_budget > 0.0:
-        raise ValueError(f"time_budget must be > 0 s, got {time_budget}")
     check_request(model, form, options)
-    stream = sys.stderr if progress is True else (progress or None)
-    t_start = time.perf_counter()
-    deadline = t_start + float(time_budget)
-    rng = np.random.default_rng(seed)
     grid = sample_times(form.duration, options.constraint_grid_rate(form.max_frequency_hz))
     torque = sample_times(form.duration, options.torque_rate) if options.torque_rate else np.zeros(0)
     problem = _Problem(model, form, options, grid, torque)
-
-    best: tuple[float, Trajectory] | None = None
-    feasible_count = total_iterations = runs = 0
-    last_failure = ""
-    for k in range(1, starts + 1):
-        if k > 1 and time.perf_counter() >= deadline:
-            break
-        runs += 1
+    limit = float("inf") if deadline is None else float(deadline)
+    out = []
+    for k in indices:
+        if time.time() >= limit:
+            out.append(StartResult(int(k), skipped="time budget spent before it began"))
+            if on_result is not None:
+                on_result(out[-1])
+            continue
         t0 = time.perf_counter()
-        z0 = initial_free(model, form, rng, options.start_fraction, grid, options.margins)
-        x, iterations, status, report = _solve_start(problem, z0.flatten(order="F"), deadline)
-        total_iterations += iterations
+        z0 = initial_free(model, form, start_rng(seed, k), options.start_fraction, grid, options.margins)
+        x, iterations, status, report = _solve_start(problem, z0.flatten(order="F"), limit)
         coefficients = problem.coefficients(x)
-        score = cond = float("nan")
+        score = cond = surrogate = float("nan")
+        failure = ""
         if report.feasible:
-            feasible_count += 1
             cond, score = _score(model, form, coefficients, options)
             if not cond <= MAX_COND:  # within limits, but some base parameter is not excited
-                last_failure = f"the best motion within the limits leaves W rank deficient (cond {cond:.3g})"
+                failure = f"the best motion within the limits leaves W rank deficient (cond {cond:.3g})"
                 score = float("nan")
+            elif options.stages[-1][1] > 0:
+                surrogate = float(np.exp(0.5 * float(problem.stage_values(x)[-1])))
         else:
-            last_failure = "; ".join(report.violations[:3])
-        if stream is not None:
-            print(f"[excitation] start {k}/{starts}: {iterations:4d} iterations, "
-                  f"cond {cond:9.3f}, feasible {'yes' if report.feasible else 'no '}, "
-                  f"{time.perf_counter() - t0:6.1f} s, {status}", file=stream, flush=True)
-        if report.feasible and np.isfinite(score) and (best is None or score < best[0]):
-            surrogate = float(np.exp(0.5 * float(problem.stage_values(x)[-1]))) \
-                if options.criterion == "cond" and options.stages[-1][1] > 0 else float("nan")
-            info = SolveInfo("ipopt multi-start", int(seed), iterations=iterations, status=status,
-                             surrogate_cond=surrogate, grid_rate_hz=options.grid_rate)
-            best = (score, Trajectory(form, coefficients, cond, options.criterion,
-                                      model.staubli_offsets, report, info, options.cond_rate,
-                                      model.names))
-    if best is None:
-        raise ValueError(f"excitation: no start out of {runs} holds every limit on the "
-                         f"{options.verify_rate:g} Hz check and excites every base parameter "
-                         f"({last_failure}); the limits may be impossible to meet (e.g. torque "
-                         f"limits below the static load or friction)")
-    traj = best[1]
-    info = SolveInfo(traj.info.method, traj.info.seed, runs, feasible_count, traj.info.iterations,
-                     total_iterations, time.perf_counter() - t_start, traj.info.status,
-                     traj.info.surrogate_cond, traj.info.grid_rate_hz)
-    return Trajectory(traj.form, traj.coefficients, traj.cond, traj.criterion, traj.staubli_offsets,
-                      traj.usage, info, traj.cond_rate, traj.parameter_names)
+            failure = "; ".join(report.violations[:3])
+        out.append(StartResult(int(k), coefficients, iterations, status, report, cond, score, surrogate,
+                               time.perf_counter() - t0, failure))
+        if on_result is not None:
+            on_result(out[-1])
+    return out
 
 
 def _solve_start(problem: _Problem, x0: np.ndarray, deadline: float
@@ -358,15 +362,19 @@ def _solve_start(problem: _Problem, x0: np.ndarray, deadline: float
             x = x_new  # a failed stage (e.g. restoration failure) keeps the previous iterate
     report = _verify(model, form, problem.coefficients(x), options.verify_rate)
     repairs = 0
-    while not report.feasible and repairs < options.repairs and time.perf_counter() < deadline:
+    while not report.feasible and repairs < options.repairs and time.time() < deadline:
         repairs += 1
         t_fine, q, qd, qdd = _fine_samples(form, problem.coefficients(x), options.verify_rate)
         problem = problem.with_extra_times(violation_times(model, t_fine, q, qd, qdd))
         x_new, it, status = problem.solve(x, len(problem.solvers) - 1, deadline)
         iterations += it
-        if np.all(np.isfinite(x_new)):
-            x = x_new
-            report = _verify(model, form, problem.coefficients(x), options.verify_rate)
+        if status not in _GOOD_STATUS or not np.all(np.isfinite(x_new)):
+            # A failed repair is not a result (IPOPT's restoration can end on a shrunken motion that
+            # holds the limits but excites nothing: cond 3e4 on a 10 s RX90 start): the start stays
+            # infeasible and is reported as such.
+            break
+        x = x_new
+        report = _verify(model, form, problem.coefficients(x), options.verify_rate)
     if repairs:
         status = f"{status}, {repairs} repair{'s' if repairs > 1 else ''}"
     return x, iterations, status, report
@@ -385,13 +393,23 @@ def _verify(model: ExcitationModel, form: Form, coefficients: np.ndarray, rate: 
 
 def _score(model: ExcitationModel, form: Form, coefficients: np.ndarray,
            options: OptimiserOptions) -> tuple[float, float]:
-    """(cond, score to minimise) on the cond_rate samples, true sign."""
+    """(cond of the raw W, criterion value to minimise) on the cond_rate samples, true sign."""
     t = sample_times(form.duration, options.cond_rate)
     q, qd, qdd = form.evaluate(coefficients, t)
-    if options.criterion == "cond":
-        cond = condition_number(model.regressor, t, q, qd, qdd)
-        return cond, cond
-    w = observation_matrix(model.regressor, q, qd, qdd)
+    phi = regressor_samples(model.regressor, q, qd, qdd)
+    w = np.concatenate([phi[:, j, :] for j in range(phi.shape[1])], axis=0)
     sv = np.linalg.svd(w, compute_uv=False)
     cond = float(sv[0] / sv[-1]) if sv[-1] > 0 else float("inf")
-    return cond, -2.0 * float(np.sum(np.log(sv / np.sqrt(t.size)))) / sv.size
+    objective = options.criterion
+    if objective.name == "cond" and objective.prior is None and objective.noise_std is None:
+        return cond, cond
+    return cond, objective.value(numeric_information(phi, objective, form.duration))
+
+
+def _row_weighted(regressor: ca.Function, weights: np.ndarray) -> ca.Function:
+    """diag(weights) Phi_b: rows divided by the expected noise of their joint."""
+    if np.all(weights == 1.0):
+        return regressor
+    sym = symbols_like(regressor)
+    phi = ca.mtimes(ca.diag(ca.DM(weights)), regressor(*sym))
+    return ca.Function(f"{regressor.name()}_weighted", list(sym), [phi], ["q", "qd", "qdd"], ["Phi"])

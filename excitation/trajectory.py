@@ -32,6 +32,9 @@ class SolveInfo:
     status: str = ""            # IPOPT return status of the kept start's last stage
     surrogate_cond: float = float("nan")  # exp(f_p / 2) on the optimisation grid
     grid_rate_hz: float = float("nan")
+    best_start: int = 0         # number of the kept start (1-based)
+    skipped_starts: tuple[int, ...] = ()  # starts not run (time budget)
+    criterion_value: float = float("nan")  # the criterion of the kept start (see objective.py)
 
 
 @dataclass(frozen=True, eq=False)
@@ -134,7 +137,7 @@ class Trajectory:
         if self.parameter_names is not None:
             out["base_parameters"] = len(self.parameter_names)
         out["limits_usage"] = self.usage.to_dict()
-        info = {k: v for k, v in vars(self.info).items()}
+        info = {k: (list(v) if isinstance(v, tuple) else v) for k, v in vars(self.info).items()}
         out["optimiser"] = {k: (None if isinstance(v, float) and not np.isfinite(v) else v)
                             for k, v in info.items()}
         return out

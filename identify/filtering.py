@@ -21,6 +21,8 @@ from dataclasses import dataclass
 import numpy as np
 from scipy import signal
 
+from rx90sym.messages import plain
+
 __all__ = [
     "Derivatives",
     "lowpass",
@@ -29,6 +31,8 @@ __all__ = [
     "derivatives",
     "decimate",
     "decimation_factor",
+    "decimation_plan",
+    "DecimationPlan",
     "EDGE_PERIODS",
 ]
 
@@ -74,9 +78,9 @@ def lowpass(x: np.ndarray, rate: float, cutoff: float, order: int = 4) -> np.nda
     """
     rate = _check_rate(rate)
     if not (0.0 < cutoff < rate / 2.0):
-        raise ValueError(f"cutoff must lie in (0, {rate / 2:g}) Hz (Nyquist), got {cutoff!r}")
+        raise ValueError(f"cutoff must lie in (0, {rate / 2:g}) Hz (Nyquist), got {plain(cutoff)}")
     if int(order) != order or order < 1:
-        raise ValueError(f"order must be a positive integer, got {order!r}")
+        raise ValueError(f"order must be a positive integer, got {plain(order)}")
     a = _as_samples(x, "x", min_rows=2)
     # Second-order sections: numerically safe even when cutoff << rate (e.g. 20 Hz at 5 kHz).
     sos = signal.butter(int(order), cutoff, btype="low", fs=rate, output="sos")
@@ -103,7 +107,8 @@ def _band_spectrum(a: np.ndarray, rate: float, seconds: float, per_octave: int) 
     return np.asarray(centres), np.asarray(values)
 
 
-def _crossover(x: np.ndarray, rate: float, seconds: float, per_octave: int, snr_min: float) -> float | None:
+def _crossover(x: np.ndarray, rate: float, seconds: float, per_octave: int, snr_min: float,
+               floor_ratio: float = 4.0) -> float | None:
     """Frequency (Hz) where the acceleration spectrum of ``x`` turns from signal to noise.
 
     ``a`` is the raw (unfiltered) second central difference of ``x``. Its spectrum falls
@@ -117,7 +122,10 @@ def _crossover(x: np.ndarray, rate: float, seconds: float, per_octave: int, snr_
     # Position spectrum seen through the exact gain of the second difference, |2·rate·sin(πf/rate)|⁴.
     s_pos = s_acc / (2.0 * rate * np.sin(np.pi * f / rate)) ** 4
     peak = int(np.argmax(s_pos))  # the motion's main frequency: positions are dominated by it
-    cross = peak + int(np.argmin(s_acc[peak:]))
+    # The knee, not the minimum: a flat noise floor (servo, ripple) has its minimum anywhere along
+    # it, so the first band within floor_ratio of the lowest level is the stable choice.
+    floor = float(np.min(s_acc[peak:]))
+    cross = peak + int(np.flatnonzero(s_acc[peak:] <= floor_ratio * floor)[0])
     if s_pos[peak] < snr_min * s_pos[cross]:
         return None
     return float(f[cross])
@@ -160,9 +168,14 @@ def choose_cutoff(
        1/segment Hz), averaged in 1/6-octave bands;
     3. the motion's main frequency ``f_peak`` is the peak of the position spectrum (the
        acceleration spectrum divided by the gain of the second difference);
-    4. ``f_j`` is the frequency of the lowest acceleration spectrum above ``f_peak``: below it the
-       motion's acceleration dominates (the spectrum falls), above it the noise does (the spectrum
-       rises as f⁴ for white position noise, or stays flat for coloured noise and vibrations).
+    4. ``f_j`` is the knee of the acceleration spectrum above ``f_peak``: the first band whose level
+       is within 4× of the lowest level above ``f_peak``. Below it the motion's acceleration
+       dominates (the spectrum falls); above it the noise does (the spectrum rises as f⁴ for white
+       position noise, or stays flat for coloured noise, servo noise and vibrations). The knee, not
+       the minimum itself: on a flat floor the minimum lands anywhere along it (the first design
+       gave 3.36 Hz on one 250 Hz twin recording and 50 Hz on another of the same robot, 42.7 Hz
+       and 101.5 Hz on the two parts of the TX40 record); the knee gives 2.1–2.4 Hz over five twin
+       seeds and 19.0 / 20.1 Hz on the TX40's first 6 s / last 3 s.
        Cutting at ``f_j`` keeps the motion's acceleration and rejects the noise that
        differentiation amplifies. Joints that do not move (peak less than ``snr_min`` = 100
        times the crossover level in the position spectrum) are skipped.
@@ -291,6 +304,7 @@ def decimation_factor(rate: float, target_rate: float) -> int:
 
     Raises:
         ValueError: when ``rate / target_rate`` is below 1 or not an integer (within 1e-9).
+            :func:`decimation_plan` takes the nearest achievable rate instead.
     """
     rate = _check_rate(rate)
     target = _check_rate(target_rate)
@@ -304,6 +318,40 @@ def decimation_factor(rate: float, target_rate: float) -> int:
             f"choose a target rate that divides the sampling rate (e.g. {rate / max(1, math.floor(ratio)):g} Hz)"
         )
     return int(k)
+
+
+@dataclass(frozen=True)
+class DecimationPlan:
+    """How a recording is down-sampled: factor, achieved rate (Hz) and a note when it differs from the target."""
+
+    factor: int
+    rate: float
+    note: str = ""
+
+
+def decimation_plan(rate: float, target_rate: float | None) -> DecimationPlan:
+    """The integer factor that brings ``rate`` nearest to ``target_rate`` (both Hz).
+
+    A clock off by 0.005 % or jittered time stamps give ratios such as 4.99998: the factor is then
+    the nearest integer and the achieved rate ``rate / factor`` is reported in ``note`` when it
+    differs from the target by more than 1e-9 relative. ``target_rate`` None or 0 turns decimation
+    off (factor 1). A target above the sampling rate is an error.
+    """
+    rate = _check_rate(rate)
+    if target_rate is None or target_rate == 0:
+        return DecimationPlan(1, rate)
+    target = _check_rate(target_rate)
+    ratio = rate / target
+    if ratio < 1.0 - 1e-6:
+        raise ValueError(f"target rate {target:g} Hz is above the sampling rate {rate:g} Hz: cannot decimate "
+                         f"(give a lower rate, or 0 for no decimation)")
+    k = max(1, int(round(ratio)))
+    achieved = rate / k
+    note = ""
+    if abs(ratio - k) > 1e-9 * max(1.0, ratio):
+        note = (f"rate {rate:.6g} Hz / target {target:g} Hz = {ratio:.6g} is not an integer: "
+                f"decimating by {k} to {achieved:.6g} Hz")
+    return DecimationPlan(k, achieved, note)
 
 
 def _stages(factor: int) -> list[int]:
@@ -338,7 +386,7 @@ def decimate(x: np.ndarray, factor: int, ftype: str = "iir") -> np.ndarray:
         (ceil(N / factor), ...) array.
     """
     if int(factor) != factor or factor < 1:
-        raise ValueError(f"factor must be an integer >= 1, got {factor!r}")
+        raise ValueError(f"factor must be an integer >= 1, got {plain(factor)}")
     if ftype not in ("iir", "fir"):
         raise ValueError(f"ftype must be 'iir' or 'fir', got {ftype!r}")
     y = np.array(_as_samples(x, "x"), dtype=float, copy=True)

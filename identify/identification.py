@@ -1,8 +1,8 @@
 """Identification of a robot's base parameters from recordings (paper sections II-B and III).
 
 Wires the pieces: observation matrix (eqs. 6-8) -> (weighted) least squares (eqs. 9-15) ->
-optionally essential parameters or the physically consistent fit, and validation on a motion
-that was not used for fitting.
+optionally essential parameters or the physically consistent fit. Validation on a motion that
+was not used for fitting: identify.validation (re-exported here).
 """
 from __future__ import annotations
 
@@ -17,6 +17,7 @@ from .consistency import ConsistentSolution, consistency_margin, consistent_leas
 from .observation import Observation, observation_matrix
 from .results import IdentificationResult
 from .least_squares import weighted_least_squares
+from .validation import Validation, predict, validate  # noqa: F401 (re-exported)
 
 METHODS = ("ols", "wls", "consistent")
 
@@ -53,17 +54,19 @@ class ConsistentResult(IdentificationResult):
         return d
 
 
-def identify(robot: Any, recordings: Sequence[Any], method: str = "wls", base: Any = None,
+def identify(robot: rx90sym.Robot, recordings: Sequence[Any], method: str = "wls", base: Any = None,
              cutoff: float | None = None, decimate_to: float | None = 50.0,
              min_velocity: float | None = None, spring: bool = True,
-             observation: Observation | None = None, **consistent_options: Any) -> IdentificationResult:
+             observation: Observation | None = None, rest: str = "drop", delay: float = 0.0,
+             **consistent_options: Any) -> IdentificationResult:
     """Identify the base parameters of ``robot`` from recordings.
 
     method: "ols", "wls" (paper: each joint's rows weighted by 1/sigma of its own residual) or
     "consistent" (WLS data, physically consistent standard parameters through cvxpy; extra
     keyword arguments go to identify.consistency.consistent_least_squares, e.g. prior,
     prior_weight, total_mass, mass_bounds, com_boxes, solver).
-    cutoff [Hz], decimate_to [Hz], min_velocity [rad/s], spring: see observation_matrix.
+    cutoff [Hz], decimate_to [Hz], min_velocity [rad/s], rest ("drop" | "zero-coulomb"),
+    delay [s], spring: see observation_matrix.
     observation: an already built observation matrix (the recordings are then not read).
     """
     if method not in METHODS:
@@ -71,14 +74,14 @@ def identify(robot: Any, recordings: Sequence[Any], method: str = "wls", base: A
     base = base if base is not None else rx90sym.base_parameters(robot)
     obs = observation if observation is not None else observation_matrix(
         robot, recordings, cutoff=cutoff, decimate_to=decimate_to, base=base, spring=spring,
-        min_velocity=min_velocity)
+        min_velocity=min_velocity, rest=rest, delay=delay)
     result = weighted_least_squares(obs.W, obs.Y, obs.joint, obs.names, weighted=method != "ols")
     if method != "consistent":
         return result
     return consistent_fit(robot, result, base, **consistent_options)
 
 
-def consistent_fit(robot: Any, wls: IdentificationResult, base: Any, **options: Any) -> ConsistentResult:
+def consistent_fit(robot: rx90sym.Robot, wls: IdentificationResult, base: Any, **options: Any) -> ConsistentResult:
     """Physically consistent refit of a (W)LS result on its compressed weighted system."""
     system = wls.system
     if system is None:
@@ -102,61 +105,3 @@ def consistent_fit(robot: Any, wls: IdentificationResult, base: Any, **options: 
         covariance=wls.covariance, system=system, joint_systems=wls.joint_systems,
         standard=dict(zip(robot.parameter_names, sol.chi)), cost=sol.cost, wls_cost=wls_cost,
         wls_was_consistent=was_consistent, solution=sol)
-
-
-@dataclass(frozen=True, eq=False)
-class Validation:
-    """Torque prediction on a motion not used for fitting (cross-validation, section III-B).
-
-    relative_error_pct: (n,) 100 ||Y_j - W_j beta|| / ||Y_j|| per joint; rms_error: (n,) N m;
-    measured, predicted: (S, n) torques (spring added) at the decimated samples; t: (S,) s.
-    """
-
-    relative_error_pct: np.ndarray
-    rms_error: np.ndarray
-    measured: np.ndarray
-    predicted: np.ndarray
-    t: np.ndarray
-    source: str
-
-    def table(self) -> str:
-        head = "joint  rms error [N m]  relative error [%]"
-        rows = [f"{j + 1:5d}  {e:15.3f}  {p:18.2f}"
-                for j, (e, p) in enumerate(zip(self.rms_error, self.relative_error_pct))]
-        return "\n".join([f"Validation on {self.source}", head, *rows])
-
-    def to_dict(self) -> dict[str, Any]:
-        return {"source": self.source, "relative_error_pct": self.relative_error_pct.tolist(),
-                "rms_error": self.rms_error.tolist()}
-
-
-def predict(robot: Any, result: IdentificationResult, recording: Any, base: Any = None,
-            cutoff: float | None = None, decimate_to: float | None = 50.0,
-            spring: bool = True) -> Validation:
-    """Predicted vs measured torques of ``recording`` with the parameters of ``result``.
-
-    Parameters of the base set missing from ``result`` (essential set) count as 0.
-    """
-    base = base if base is not None else rx90sym.base_parameters(robot)
-    unknown = [nm for nm in result.names if nm not in base.names]
-    if unknown:
-        raise ValueError(f"result has parameters {unknown} that are not base parameters of "
-                         f"{robot.name!r}")
-    beta = np.zeros(base.nb)
-    values = dict(zip(result.names, result.values))
-    for i, nm in enumerate(base.names):
-        beta[i] = values.get(nm, 0.0)
-    from .observation import filtered_motion
-
-    m = filtered_motion(robot, recording, cutoff, decimate_to, spring, base.regressor_batch)
-    predicted = m.Phi @ beta
-    err = m.Y - predicted
-    rms = np.sqrt(np.mean(err**2, axis=0))
-    rel = 100 * np.linalg.norm(err, axis=0) / np.linalg.norm(m.Y, axis=0)
-    t = np.arange(len(m.Y)) / m.rate
-    return Validation(rel, rms, m.Y, predicted, t, m.source)
-
-
-def validate(robot: Any, result: IdentificationResult, recording: Any, **options: Any) -> Validation:
-    """Cross-validation: relative torque error per joint on a recording not used in the fit."""
-    return predict(robot, result, recording, **options)

@@ -14,15 +14,16 @@ Y, residuals and ``residual_rms`` are in N·m (N for a prismatic joint); weights
 
 from __future__ import annotations
 
-from dataclasses import dataclass
 from typing import Sequence
 
 import numpy as np
 
-from rx90sym.recording import frozen_array
 import scipy.linalg as sla
 
+from identify.compression import (DEFAULT_CHUNK_ROWS, CompressedSystem, check_system, compress, compress_rows,
+                                  stack_systems)
 from identify.results import IdentificationResult
+from rx90sym.messages import plain
 
 __all__ = [
     "RANK_RCOND",
@@ -50,9 +51,6 @@ RANK_RCOND = 1e-10
 #: 0.71 = one of two proportional columns). The row norm does not depend on the basis chosen.
 NULL_SPACE_SHARE = 0.1
 
-#: Rows per QR chunk in :func:`compress`: bounds the working copy to about 15 MB for c = 54.
-DEFAULT_CHUNK_ROWS = 32_768
-
 
 class IdentificationError(ValueError):
     """The observation matrix cannot identify the parameters (rank deficient).
@@ -67,172 +65,6 @@ class IdentificationError(ValueError):
         super().__init__(message)
         self.names = tuple(names)
         self.rank = rank
-
-
-# --------------------------------------------------------------------------- compressed system
-
-
-@dataclass(frozen=True)
-class CompressedSystem:
-    """QR-compressed least-squares system ``min ‖W·x − y‖²`` (eqs. 9–10).
-
-    Attributes:
-        R: (c, c) upper triangular factor of W (units of W).
-        z: (c,) ``Qᵀ·y`` (units of y).
-        rss_outside: ``‖y‖² − ‖z‖²`` ≥ 0, the part of ‖y‖² no x can fit (units of y²);
-            obtained as the squared last pivot of the QR of ``[W | y]`` (no cancellation).
-        rows: number of equations r of the original system.
-
-    For every x: ``‖W·x − y‖² = ‖R·x − z‖² + rss_outside``.
-    """
-
-    R: np.ndarray
-    z: np.ndarray
-    rss_outside: float
-    rows: int
-
-    def __post_init__(self) -> None:
-        R = frozen_array(self.R)
-        z = frozen_array(self.z)
-        if R.ndim != 2 or R.shape[0] != R.shape[1]:
-            raise ValueError(f"CompressedSystem.R must be square, got shape {R.shape}")
-        if z.shape != (R.shape[0],):
-            raise ValueError(f"CompressedSystem.z must have shape ({R.shape[0]},), got {z.shape}")
-        if not (np.isfinite(self.rss_outside) and self.rss_outside >= 0.0):
-            raise ValueError(f"CompressedSystem.rss_outside must be finite and >= 0, got {self.rss_outside}")
-        object.__setattr__(self, "R", R)
-        object.__setattr__(self, "z", z)
-        object.__setattr__(self, "rss_outside", float(self.rss_outside))
-        object.__setattr__(self, "rows", int(self.rows))
-
-    @property
-    def columns(self) -> int:
-        """Number of parameters c."""
-        return self.R.shape[1]
-
-    def rss(self, x: np.ndarray) -> float:
-        """Residual sum of squares ``‖W·x − y‖²`` of the original system (units of y²)."""
-        d = self.R @ np.asarray(x, dtype=float) - self.z
-        return float(d @ d) + self.rss_outside
-
-    def augmented(self) -> np.ndarray:
-        """(c+1, c+1) matrix ``[[R, z], [0, √rss_outside]]``, the compressed ``[W | y]``."""
-        c = self.columns
-        a = np.zeros((c + 1, c + 1))
-        a[:c, :c] = self.R
-        a[:c, c] = self.z
-        a[c, c] = np.sqrt(self.rss_outside)
-        return a
-
-    def scaled(self, weight: float) -> "CompressedSystem":
-        """The system of ``weight·W, weight·y`` (a row weight, eq. 8 weighting)."""
-        w = float(weight)
-        return CompressedSystem(w * self.R, w * self.z, w * w * self.rss_outside, self.rows)
-
-    def select(self, columns: Sequence[int]) -> "CompressedSystem":
-        """The system restricted to some columns: ``‖W[:, k]·x − y‖²`` without the raw data.
-
-        Uses ``‖W[:, k]·x − y‖² = ‖R[:, k]·x − z‖² + rss_outside`` and one small QR.
-        """
-        k = np.asarray(columns, dtype=int)
-        if k.ndim != 1 or np.any((k < 0) | (k >= self.columns)) or np.unique(k).size != k.size:
-            raise ValueError(f"select: columns must be distinct indices in 0..{self.columns - 1}, got {k.tolist()}")
-        a = self.augmented()
-        return _from_augmented_rows(np.column_stack([a[:, k], a[:, -1]]), self.rows)
-
-
-def _from_augmented_rows(a: np.ndarray, rows: int) -> CompressedSystem:
-    """QR of a stacked augmented matrix ``[A | b]`` (m, c+1) into a CompressedSystem."""
-    c = a.shape[1] - 1
-    r_aug = _qr_r(a)
-    return _split_augmented(r_aug, c, rows)
-
-
-def _qr_r(a: np.ndarray) -> np.ndarray:
-    """Upper triangular factor of an (m, p) matrix, padded with zero rows to (p, p).
-
-    Calls LAPACK dgeqrf directly (blocked, optimal workspace) and may overwrite ``a``:
-    scipy.linalg.qr(mode="r") would also copy the whole m × p factor through triu.
-    """
-    m, p = a.shape
-    if m == 0:
-        return np.zeros((p, p))
-    a = np.asfortranarray(a, dtype=float)
-    lwork = max(int(sla.lapack.dgeqrf_lwork(m, p)[0]), p, 1)
-    qr, _, _, info = sla.lapack.dgeqrf(a, lwork=lwork, overwrite_a=1)
-    if info != 0:
-        raise RuntimeError(f"LAPACK dgeqrf failed (info = {info})")
-    r = np.triu(qr[: min(m, p)])
-    if r.shape[0] < p:
-        r = np.vstack([r, np.zeros((p - r.shape[0], p))])
-    return r
-
-
-def _split_augmented(r_aug: np.ndarray, c: int, rows: int) -> CompressedSystem:
-    # r_aug = [[R, z], [0, ρ]] with |ρ| = residual norm, so rss_outside = ρ² (computed without
-    # the cancellation of ‖y‖² − ‖z‖²).
-    return CompressedSystem(
-        R=np.triu(r_aug[:c, :c]),
-        z=r_aug[:c, c],
-        rss_outside=float(r_aug[c, c] ** 2),
-        rows=rows,
-    )
-
-
-def _compress_rows(W: np.ndarray, Y: np.ndarray, rows: np.ndarray, chunk_rows: int) -> CompressedSystem:
-    """Compress the equations ``rows`` (sorted int indices) of ``[W | Y]`` in row chunks."""
-    c = W.shape[1]
-    contiguous = rows.size > 0 and rows[-1] - rows[0] + 1 == rows.size
-    factors = []
-    for start in range(0, rows.size, chunk_rows):
-        stop = min(start + chunk_rows, rows.size)
-        sel = slice(rows[start], rows[stop - 1] + 1) if contiguous else rows[start:stop]
-        aug = np.empty((stop - start, c + 1), order="F")
-        aug[:, :c] = W[sel]
-        aug[:, c] = Y[sel]
-        factors.append(_qr_r(aug))
-    if not factors:
-        return _split_augmented(np.zeros((c + 1, c + 1)), c, 0)
-    r_aug = factors[0] if len(factors) == 1 else _qr_r(np.vstack(factors))  # QR of the stacked R's
-    return _split_augmented(r_aug, c, int(rows.size))
-
-
-def compress(W: np.ndarray, Y: np.ndarray, chunk_rows: int = DEFAULT_CHUNK_ROWS) -> CompressedSystem:
-    """Reduce ``min ‖W·x − Y‖²`` to ``(R, z = Qᵀ·Y, rss_outside)`` by an economy QR (eq. 10).
-
-    Args:
-        W: (r, c) observation matrix (eq. 6).
-        Y: (r,) measured torques, N·m.
-        chunk_rows: rows per QR; taller matrices are processed chunk by chunk and the R factors
-            of the chunks stacked and factorised again, so memory stays O(chunk_rows·c).
-
-    Returns:
-        A :class:`CompressedSystem` with ``‖W·x − Y‖² = ‖R·x − z‖² + rss_outside`` for all x.
-    """
-    W, Y = _check_w_y(W, Y)
-    if chunk_rows < 1:
-        raise ValueError(f"chunk_rows must be >= 1, got {chunk_rows}")
-    return _compress_rows(W, Y, np.arange(W.shape[0]), chunk_rows)
-
-
-def stack_systems(systems: Sequence[CompressedSystem], weights: Sequence[float] | None = None) -> CompressedSystem:
-    """Compressed system of the row-stacked (optionally row-weighted) original systems (eq. 7).
-
-    ``‖diag(w)·(W·x − Y)‖² = Σ_i w_i²·(‖R_i·x − z_i‖² + rss_outside_i)``.
-    """
-    if not systems:
-        raise ValueError("stack_systems needs at least one system")
-    c = systems[0].columns
-    if any(s.columns != c for s in systems):
-        raise ValueError(f"stack_systems: systems have different column counts {[s.columns for s in systems]}")
-    w = np.ones(len(systems)) if weights is None else np.asarray(weights, dtype=float)
-    if w.shape != (len(systems),):
-        raise ValueError(f"stack_systems: {len(systems)} systems but weights of shape {w.shape}")
-    stacked = np.vstack([wi * s.augmented() for wi, s in zip(w, systems)])
-    return _from_augmented_rows(stacked, sum(s.rows for s in systems))
-
-
-# --------------------------------------------------------------------------- rank and null space
 
 
 def _column_scaled(R: np.ndarray) -> np.ndarray:
@@ -393,23 +225,6 @@ def joint_noise_std(joint_system: CompressedSystem, joint: int = 0, rcond: float
 # --------------------------------------------------------------------------- input checks
 
 
-def _check_w_y(W: np.ndarray, Y: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    W = np.asarray(W, dtype=float)
-    Y = np.asarray(Y, dtype=float)
-    if W.ndim != 2:
-        raise ValueError(f"W must be a 2-D (r, c) array, got shape {W.shape}")
-    if Y.shape != (W.shape[0],):
-        raise ValueError(f"Y must have shape ({W.shape[0]},) to match the rows of W, got {Y.shape}")
-    bad = ~np.isfinite(W)
-    if bad.any():
-        row, col = np.argwhere(bad)[0]
-        raise ValueError(f"W has {int(bad.sum())} non-finite entries; first at row {row}, column {col}")
-    bad_y = np.flatnonzero(~np.isfinite(Y))
-    if bad_y.size:
-        raise ValueError(f"Y has {bad_y.size} non-finite entries; first at row {bad_y[0]}")
-    return W, Y
-
-
 def _check_joint(joint: np.ndarray, rows: int) -> np.ndarray:
     joint = np.asarray(joint)
     if joint.shape != (rows,):
@@ -420,7 +235,7 @@ def _check_joint(joint: np.ndarray, rows: int) -> np.ndarray:
         as_int = joint.astype(int)
         bad = np.flatnonzero(as_int != joint)
         if bad.size:
-            raise ValueError(f"joint must hold integer joint indices; row {bad[0]} holds {joint[bad[0]]!r}")
+            raise ValueError(f"joint must hold integer joint indices; row {bad[0]} holds {plain(joint[bad[0]])}")
         joint = as_int
     if joint.min() < 0:
         row = int(np.argmin(joint))
@@ -481,7 +296,7 @@ def weighted_least_squares(
         IdentificationError: W rank deficient; the message names the non-excited parameters.
         ValueError: inconsistent shapes, non-finite data, bad joint indices or names.
     """
-    W, Y = _check_w_y(W, Y)
+    W, Y = check_system(W, Y)
     names = _check_names(names, W.shape[1])
     joint = _check_joint(joint, W.shape[0])
     if W.shape[0] <= W.shape[1]:
@@ -489,7 +304,7 @@ def weighted_least_squares(
     order = np.argsort(joint, kind="stable")
     bounds = np.cumsum(np.bincount(joint))[:-1]
     blocks = [
-        _compress_rows(W, Y, rows, chunk_rows) for rows in np.split(order, bounds)
+        compress_rows(W, Y, rows, chunk_rows) for rows in np.split(order, bounds)
     ]
     unweighted = stack_systems(blocks)
     _check_rank(unweighted, names, rcond)

@@ -3,17 +3,70 @@
 Per recording: q filtered and differentiated (eq. 20), the regressor evaluated on every kept
 sample, Y = measured torque + spring torque (axis 2, section II-C), then Y and every column of W
 decimated by the same zero-phase filter (parallel filtering), and rows grouped per joint (eq. 7).
+
+Rest phases: a joint whose speed is below ``min_velocity`` (rad/s) is at rest; the sign of its
+Coulomb term is then the sign of noise. ``rest="drop"`` leaves those rows out of the fit,
+``rest="zero-coulomb"`` keeps them with the Coulomb entries set to 0 (see :func:`coulomb_terms`).
+The speed is the recorded one when the recording has it (``Recording.dq``), else the filtered
+derivative; it decides the mask only, W keeps the filtered derivatives.
 """
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Any, Callable, Sequence
 
 import numpy as np
 
 import rx90sym
 
-from .filtering import decimate, decimation_factor, derivatives
+from .filtering import choose_cutoff, decimate, decimation_plan, derivatives
+
+__all__ = ["DECIMATION_PASSBAND", "automatic_cutoff", "DEFAULT_MIN_VELOCITY", "DEFAULT_REST", "REST_POLICIES", "CoulombTerm", "FilteredMotion", "Observation",
+           "coulomb_terms", "filtered_motion", "observation_matrix", "stack_rows"]
+
+#: Rest threshold of the CLI, rad/s (measured on the TX40 and the twin: docs/real-data-identification.md).
+DEFAULT_MIN_VELOCITY = 0.05
+#: How the fit treats rest samples, and the default (measured on the TX40: docs/real-data-identification.md).
+REST_POLICIES = ("drop", "zero-coulomb")
+DEFAULT_REST = "zero-coulomb"
+
+
+@dataclass(frozen=True)
+class CoulombTerm:
+    """One Coulomb entry of the regressor: parameter ``name`` (column ``column``) in joint ``row``'s
+    equation, whose sign is that of the speed ``driver @ qd`` (a joint, or a motor for FSM terms)."""
+
+    name: str
+    column: int
+    row: int
+    driver: tuple[float, ...]
+
+
+def coulomb_terms(robot: rx90sym.Robot, names: Sequence[str]) -> tuple[CoulombTerm, ...]:
+    """The Coulomb entries among the parameter columns ``names`` (standard or base names).
+
+    FSj (and FSPj, FSNj of an asymmetric joint) acts on row j with the sign of q̇j; the coupling's FSMb acts on rows a and b with the sign
+    of the motor speed q̇a + q̇b (``coulomb_sign = "motor"``) or of q̇b in row a and q̇a in row b
+    (``"paper"``, eqs. 17-18).
+    """
+    n = robot.n
+    unit = np.eye(n)
+    out = []
+    for c, name in enumerate(names):
+        try:
+            kind, j = rx90sym.parameters.split_name(name)
+        except ValueError:
+            continue
+        if kind in ("FS", "FSP", "FSN") and 1 <= j <= n:
+            out.append(CoulombTerm(name, c, j - 1, tuple(unit[j - 1])))
+        elif kind == "FSM" and robot.coupling is not None and j == robot.coupling.joints[1] + 1:
+            a, b = robot.coupling.joints
+            if robot.coupling.coulomb_sign == "motor":
+                drivers = {a: unit[a] + unit[b], b: unit[a] + unit[b]}
+            else:
+                drivers = {a: unit[b], b: unit[a]}
+            out += [CoulombTerm(name, c, row, tuple(w)) for row, w in drivers.items()]
+    return tuple(out)
 
 
 @dataclass(frozen=True, eq=False)
@@ -22,8 +75,9 @@ class Observation:
 
     W: (r, c) observation matrix for the parameters ``names``; Y: (r,) torques [N m] with the
     spring added; joint: (r,) joint index (0-based) of each row; samples: (r,) index of each row's
-    sample in the concatenated, decimated motion; qd: (S, n) joint velocities of those samples;
-    cutoffs: per recording cut-off [Hz]; rate: rate after decimation [Hz]; sources: recordings.
+    sample in the concatenated, decimated motion; cutoffs: per recording cut-off [Hz]; rates: per
+    recording rate after decimation [Hz]; rate: the first of them; notes: decimation notes;
+    min_velocity [rad/s] and rest: the rest policy used (None: no rest mask).
     """
 
     W: np.ndarray
@@ -36,6 +90,10 @@ class Observation:
     rate: float
     sources: tuple[str, ...]
     n_samples: int
+    notes: tuple[str, ...] = ()
+    min_velocity: float | None = None
+    rest: str = "drop"
+    moving_fraction: np.ndarray | None = None
 
     @property
     def rows(self) -> int:
@@ -47,64 +105,143 @@ class Observation:
                 f"after decimation to {self.rate:g} Hz")
         lines = [head] + [f"  {s}: rate {r:g} Hz, cut-off {c:.3g} Hz"
                           for s, r, c in zip(self.sources, self.rates, self.cutoffs)]
-        return "\n".join(lines)
+        if self.min_velocity is not None:
+            frac = " ".join(f"{100 * f:.0f}%" for f in self.moving_fraction)
+            lines.append(f"  rest below {self.min_velocity:g} rad/s ({self.rest}); moving per joint: {frac}")
+        return "\n".join(lines + [f"  note: {n}" for n in self.notes if n])
 
 
 @dataclass(frozen=True, eq=False)
 class FilteredMotion:
-    """Samples of one recording after derivation and parallel filtering (time on axis 0)."""
+    """Samples of one recording after derivation and parallel filtering (time on axis 0).
 
+    t: (S,) true time of each kept sample [s]; moving: (S, n) whether each joint moves (all True
+    without a threshold); usable: (S, n) whether joint i's row has every Coulomb driver moving
+    (the rows ``rest="drop"`` keeps); factor: decimation factor; kept: slice of the original
+    samples before decimation; extra: (K, n) spring torque at the kept samples before decimation
+    (what Y adds to the measured torque), for re-building Y from shifted torques.
+    """
+
+    t: np.ndarray
     q: np.ndarray
     dq: np.ndarray
     ddq: np.ndarray
     Y: np.ndarray        # measured torque + spring, (S, n)
-    Phi: np.ndarray      # standard regressor, (S, n, n_params), filtered like Y
+    Phi: np.ndarray      # regressor, (S, n, c), filtered like Y
     cutoff: float
     rate: float
     source: str
+    moving: np.ndarray
+    usable: np.ndarray
+    factor: int = 1
+    kept: slice = field(default_factory=lambda: slice(None))
+    extra: np.ndarray | float = 0.0
+    note: str = ""
 
 
-def filtered_motion(robot: Any, rec: Any, cutoff: float | None = None,
+#: Pass band of the parallel decimation filter, as a fraction of the decimated rate (0.8 of its Nyquist).
+DECIMATION_PASSBAND = 0.4
+
+
+def automatic_cutoff(recordings: Sequence[Any], decimate_to: float | None = None) -> float:
+    """The cut-off [Hz] chosen on ``recordings``: the largest :func:`identify.choose_cutoff` over them,
+    and, when decimating, at least the pass band of the parallel filter (0.4 × ``decimate_to``):
+    Y keeps its content up to there, so W must too (parallel filtering filters both alike)."""
+    cuts = []
+    for rec in recordings:
+        rate = 1.0 / float(np.median(np.diff(np.asarray(rec.t, dtype=float))))
+        floor = max(2.0, DECIMATION_PASSBAND * decimate_to) if decimate_to else 2.0
+        cuts.append(choose_cutoff(np.asarray(rec.q, dtype=float), rate, min_cutoff=floor))
+    return float(max(cuts))
+
+
+def shifted_torques(rec: Any, delay: float) -> np.ndarray:
+    """Torques of ``rec`` advanced by ``delay`` seconds: τ(t + delay), linear interpolation
+    (torques that lag the positions by ``delay`` are put back in step); ends held."""
+    tau = np.asarray(rec.torques, dtype=float)
+    if not delay:
+        return tau
+    t = np.asarray(rec.t, dtype=float)
+    return np.column_stack([np.interp(t + delay, t, tau[:, j]) for j in range(tau.shape[1])])
+
+
+def filtered_motion(robot: rx90sym.Robot, rec: Any, cutoff: float | None = None,
                     decimate_to: float | None = None, spring: bool = True,
-                    regressor_batch: Callable[..., np.ndarray] | None = None) -> FilteredMotion:
+                    regressor_batch: Callable[..., np.ndarray] | None = None,
+                    names: Sequence[str] | None = None, min_velocity: float | None = None,
+                    rest: str = "drop", delay: float = 0.0) -> FilteredMotion:
     """Derivatives, regressor and torques of one recording, decimated together.
 
     regressor_batch: (Q, QD, QDD) -> (S, n, c) giving the columns wanted (default: all the
     standard columns, robot.regressor_batch); selecting before filtering saves the work of
-    filtering columns nobody uses."""
+    filtering columns nobody uses. names: the c column names (default: the robot's standard
+    parameters), needed to find the Coulomb columns. min_velocity [rad/s]: rest threshold;
+    rest: "drop" (rows kept as they are, ``usable`` tells which to drop) or "zero-coulomb"
+    (Coulomb entries set to 0 where their driver rests, before the parallel filter).
+    delay [s]: torques lag positions by this much (compensated by :func:`shifted_torques`).
+    """
+    if rest not in REST_POLICIES:
+        raise ValueError(f"rest must be one of {REST_POLICIES}, got {rest!r}")
+    if min_velocity is not None and not (min_velocity >= 0.0 and np.isfinite(min_velocity)):
+        raise ValueError(f"min_velocity must be a non-negative speed in rad/s, got {min_velocity!r}")
     if rec.q.shape[1] != robot.n:
         raise ValueError(f"{rec.source}: recording has {rec.q.shape[1]} joints, robot "
                          f"{robot.name!r} has {robot.n}")
     if rec.robot and rec.robot != robot.name:
         raise ValueError(f"{rec.source}: recording is of robot {rec.robot!r}, not {robot.name!r}")
+    if cutoff is None:
+        cutoff = automatic_cutoff([rec], decimate_to)
     d = derivatives(rec.t, rec.q, cutoff=cutoff)
-    tau = np.asarray(rec.tau)[d.kept]
-    Y = tau + (robot.spring_torque_batch(d.q)[:, :, 0] if spring else 0.0)
+    tau = shifted_torques(rec, delay)[d.kept]
+    extra = robot.spring_torque_batch(d.q)[:, :, 0] if spring else 0.0
+    Y = tau + extra
     Phi = (regressor_batch or robot.regressor_batch)(d.q, d.dq, d.ddq)
-    rate = d.rate
-    q, dq, ddq = d.q, d.dq, d.ddq
-    if decimate_to is not None:
-        k = decimation_factor(d.rate, decimate_to)
-        if k > 1:
-            # Parallel filtering: the same zero-phase filter on Y and on every column of W.
-            Y, Phi = decimate(Y, k), decimate(Phi, k)
-            q, dq, ddq = q[::k], dq[::k], ddq[::k]
-            rate = d.rate / k
-    return FilteredMotion(q, dq, ddq, Y, Phi, d.cutoff, rate, rec.source)
+    n = robot.n
+    moving = np.ones(d.dq.shape, dtype=bool)
+    usable = moving.copy()
+    if min_velocity is not None:
+        # Recorded speeds decide the mask only (they are not filtered like q, so W does not use them).
+        speed = np.asarray(rec.dq, dtype=float)[d.kept] if getattr(rec, "dq", None) is not None else d.dq
+        moving = np.abs(speed) >= min_velocity
+        terms = coulomb_terms(robot, names if names is not None else robot.parameter_names)
+        Phi = np.array(Phi, copy=True)
+        for term in terms:
+            driver_moving = np.abs(speed @ np.asarray(term.driver)) >= min_velocity
+            usable[:, term.row] &= driver_moving
+            if rest == "zero-coulomb":
+                Phi[~driver_moving, term.row, term.column] = 0.0
+        usable &= moving
+    plan = decimation_plan(d.rate, decimate_to)
+    k = plan.factor
+    q, dq, ddq, t = d.q, d.dq, d.ddq, d.t
+    if k > 1:
+        # Parallel filtering: the same zero-phase filter on Y and on every column of W.
+        Y, Phi = decimate(Y, k), decimate(Phi, k)
+        q, dq, ddq, t = q[::k], dq[::k], ddq[::k], t[::k]
+        moving, usable = moving[::k], usable[::k]
+    assert moving.shape[1] == n
+    if not Phi.flags.owndata:  # a view of a reused workspace: the next recording overwrites it
+        Phi = Phi.copy()
+    return FilteredMotion(t, q, dq, ddq, Y, Phi, d.cutoff, plan.rate, rec.source, moving, usable,
+                          k, d.kept, extra, plan.note)
 
 
 def stack_rows(blocks: Sequence[np.ndarray], Ys: Sequence[np.ndarray], min_velocity: float | None = None,
-               dqs: Sequence[np.ndarray] | None = None) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+               dqs: Sequence[np.ndarray] | None = None, masks: Sequence[np.ndarray] | None = None,
+               ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """Rows grouped per joint (eqs. 7-8): W = [W_1; ...; W_n], each W_i the joint-i rows of every
     sample of every motion. blocks: per motion (S, n, c); Ys: per motion (S, n).
 
-    min_velocity [rad/s]: drop joint i's rows where |qd_i| is below it (friction sign unknown).
+    masks: per motion (S, n) rows to keep (e.g. ``FilteredMotion.usable``); otherwise
+    min_velocity [rad/s] with dqs drops joint i's rows where |qd_i| is below it.
     """
     Phi = np.concatenate(blocks, axis=0)
     Y = np.concatenate(Ys, axis=0)
     S, n, c = Phi.shape
     keep = np.ones((S, n), dtype=bool)
-    if min_velocity is not None:
+    if masks is not None:
+        keep = np.concatenate(masks, axis=0)
+    elif min_velocity is not None:
         keep = np.abs(np.concatenate(dqs, axis=0)) >= min_velocity
     W_rows, Y_rows, joints, samples = [], [], [], []
     for i in range(n):
@@ -117,39 +254,56 @@ def stack_rows(blocks: Sequence[np.ndarray], Ys: Sequence[np.ndarray], min_veloc
             np.concatenate(samples))
 
 
-def observation_matrix(robot: Any, recordings: Sequence[Any], cutoff: float | None = None,
+def column_regressor(robot: rx90sym.Robot, base: Any = None, columns: Sequence[str] | None = None,
+                     ) -> tuple[tuple[str, ...], Callable[..., np.ndarray]]:
+    """(names, regressor_batch) of the columns of W: the base parameters of ``robot`` (or ``base``),
+    or the standard parameters ``columns``."""
+    # One reused buffer for the full-rate regressor of every recording (no fresh (N, n, c) array each).
+    if columns is not None:
+        idx = robot.parameter_index(columns)
+        workspace = robot.regressor_workspace()
+
+        def regressor(Q: np.ndarray, QD: np.ndarray, QDD: np.ndarray) -> np.ndarray:
+            return workspace.evaluate(Q, QD, QDD)[:, :, idx]
+        return tuple(columns), regressor
+    base = base if base is not None else rx90sym.base_parameters(robot)
+    if hasattr(base, "regressor_workspace"):
+        return tuple(base.names), base.regressor_workspace().evaluate
+    return tuple(base.names), base.regressor_batch
+
+
+def observation_matrix(robot: rx90sym.Robot, recordings: Sequence[Any], cutoff: float | None = None,
                        decimate_to: float | None = 50.0, base: Any = None,
                        columns: Sequence[str] | None = None, spring: bool = True,
-                       min_velocity: float | None = None) -> Observation:
+                       min_velocity: float | None = None, rest: str = "drop",
+                       delay: float = 0.0) -> Observation:
     """Observation matrix W and torque vector Y (eqs. 6-8) from one or many recordings.
 
-    cutoff [Hz]: Butterworth cut-off for q (None: chosen from each recording, reported);
-    decimate_to [Hz]: rate after parallel filtering (None: no decimation);
+    cutoff [Hz]: Butterworth cut-off for q (None: :func:`automatic_cutoff` on all the recordings,
+    used for all, reported); decimate_to [Hz]: rate after parallel filtering (None or 0: no decimation; a rate
+    that does not divide the sampling rate decimates to the nearest achievable one, with a note);
     base: BaseParameters giving the columns (default: symbolic base parameters of ``robot``);
     columns: standard parameter names instead of the base parameters (e.g. a payload's);
     spring: add the spring torque to the measured torque (Y2 = Gamma_motor2 + Gamma_s);
-    min_velocity [rad/s]: drop each joint's rows where that joint is nearly at rest.
+    min_velocity [rad/s], rest: rest threshold and policy (see the module docstring);
+    delay [s]: torque lag compensated on every recording.
     """
     if isinstance(recordings, (str, bytes)) or not isinstance(recordings, Sequence):
         recordings = [recordings]
     if not recordings:
         raise ValueError("observation_matrix: no recordings given")
-    if columns is not None:
-        idx = robot.parameter_index(columns)
-        names = tuple(columns)
-
-        def regressor(Q: np.ndarray, QD: np.ndarray, QDD: np.ndarray) -> np.ndarray:
-            return robot.regressor_batch(Q, QD, QDD)[:, :, idx]
-    else:
-        base = base if base is not None else rx90sym.base_parameters(robot)
-        names = tuple(base.names)
-        regressor = base.regressor_batch
-    motions = [filtered_motion(robot, rec, cutoff, decimate_to, spring, regressor) for rec in recordings]
-    W, Y, joint, samples = stack_rows([m.Phi for m in motions], [m.Y for m in motions],
-                                      min_velocity, [m.dq for m in motions])
+    names, regressor = column_regressor(robot, base, columns)
+    cutoff = cutoff if cutoff is not None else automatic_cutoff(recordings, decimate_to)
+    motions = [filtered_motion(robot, rec, cutoff, decimate_to, spring, regressor, names, min_velocity,
+                               rest, delay) for rec in recordings]  # one filtering for every recording
+    keep = [m.usable for m in motions] if (min_velocity is not None and rest == "drop") else None
+    W, Y, joint, samples = stack_rows([m.Phi for m in motions], [m.Y for m in motions], masks=keep)
     rates = tuple(m.rate for m in motions)
-    if len(set(rates)) > 1:
-        raise ValueError(f"recordings have different rates after decimation: {rates}; "
-                         f"give decimate_to")
+    if max(rates) > min(rates) * (1 + 1e-3):
+        raise ValueError(f"recordings have different rates after decimation: "
+                         f"{', '.join(f'{r:g}' for r in rates)} Hz; give decimate_to")
+    moving = np.concatenate([m.moving for m in motions])
     return Observation(W, Y, joint, names, samples, tuple(m.cutoff for m in motions), rates,
-                       rates[0], tuple(m.source for m in motions), sum(len(m.Y) for m in motions))
+                       rates[0], tuple(m.source for m in motions), sum(len(m.Y) for m in motions),
+                       tuple(m.note for m in motions), min_velocity, rest,
+                       moving.mean(axis=0) if min_velocity is not None else None)

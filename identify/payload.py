@@ -25,18 +25,13 @@ import rx90sym
 from rx90sym.parameters import PAYLOAD_NAMES
 
 from .consistency import ConsistencyError, pseudo_inertia
-from .least_squares import (CompressedSystem, compress, joint_noise_std, solve_system,
-                            stack_systems, weighted_least_squares)
+from .least_squares import compress, solve_system, stack_systems, weighted_least_squares
 from .filtering import choose_cutoff
 from .observation import filtered_motion, stack_rows
+from .pairing import POSITION_TOLERANCE, PairedRuns, pair_runs
 from .results import IdentificationResult, json_number
 
 METHODS = (1, 2, 3, 4)
-# Method 3 assumes the empty and loaded runs follow the same path (the paper measured < 1e-3 rad
-# with 7 kg on the CS8). The twin's 10 Hz servo loop without payload feed-forward drifts up to
-# ~0.012 rad with 7 kg; past 0.02 rad the path difference alone changes the RX90's gravity torques
-# by a few N m, the size of a light payload's effect.
-POSITION_TOLERANCE = 0.02  # rad
 # A loaded motion must move the wrist: otherwise Wc is (nearly) rank deficient (eq. 22).
 MIN_WRIST_MOTION = 0.05  # rad, range of each of joints 4..6 over all loaded motions together
 
@@ -47,7 +42,8 @@ class PayloadResult:
 
     robot: the identified robot base parameters (methods 2 and 4), else None;
     a_priori: reference values (CAD) when given; constrained: whether the PSD/mass constraints
-    were imposed; fit: the underlying least-squares result.
+    were imposed; fit: the underlying least-squares result; pairs: method 3's paired runs (lag,
+    position gap).
     """
 
     method: int
@@ -59,6 +55,7 @@ class PayloadResult:
     robot: IdentificationResult | None = field(default=None, repr=False)
     a_priori: dict | None = None
     constrained: bool = False
+    pairs: tuple[PairedRuns, ...] = field(default=(), repr=False)
 
     def __getitem__(self, name: str) -> float:
         return float(self.values[self.names.index(name)])
@@ -70,7 +67,12 @@ class PayloadResult:
         return {"method": self.method, "constrained": self.constrained,
                 "payload": [{"name": n, "value": json_number(v), "std": json_number(s), "rel_std_pct": json_number(p)}
                             for n, v, s, p in zip(self.names, self.values, self.std, self.rel_std_pct)],
-                "a_priori": self.a_priori}
+                "a_priori": self.a_priori,
+                # The robot's base parameters identified with the payload (methods 2 and 4).
+                "robot": None if self.robot is None else self.robot.to_dict(),
+                "pairing": [{"empty": p.empty.source, "loaded": p.loaded.source, "lag_s": p.lag,
+                             "position_gap_rad": p.gap, "position_gap_joint": p.gap_joint,
+                             "common_samples": p.empty.n_samples} for p in self.pairs]}
 
     def table(self) -> str:
         """Like Tables 4-7: Parameter, A priori, Identified, 2 sigma, sigma_r %."""
@@ -83,6 +85,7 @@ class PayloadResult:
         for n, v, s, p in zip(self.names, self.values, self.std, self.rel_std_pct):
             ap = "" if not self.a_priori or n not in self.a_priori else f"{self.a_priori[n]:.4g}"
             lines.append(f"{n:10s} {ap:>10s} {v:11.4g} {2 * s:9.3g} {p:9.3f}")
+        lines += [p.summary() for p in self.pairs]
         return "\n".join(lines)
 
 
@@ -95,7 +98,7 @@ def _as_list(recs: Any) -> list:
     return list(recs) if isinstance(recs, (list, tuple)) else [recs]
 
 
-def _check_robot(robot: Any, recs: Sequence[Any], what: str) -> None:
+def _check_robot(robot: rx90sym.Robot, recs: Sequence[Any], what: str) -> None:
     for rec in recs:
         if rec.q.shape[1] != robot.n:
             raise ValueError(f"{what} recording {rec.source}: {rec.q.shape[1]} joints, robot "
@@ -104,7 +107,7 @@ def _check_robot(robot: Any, recs: Sequence[Any], what: str) -> None:
             raise ValueError(f"{what} recording {rec.source} is of robot {rec.robot!r}, not {robot.name!r}")
 
 
-def _check_wrist_motion(robot: Any, loaded: Sequence[Any]) -> None:
+def _check_wrist_motion(robot: rx90sym.Robot, loaded: Sequence[Any]) -> None:
     q = np.concatenate([np.asarray(r.q) for r in loaded])
     wrist = list(range(max(0, robot.n - 3), robot.n))
     span = q[:, wrist].max(axis=0) - q[:, wrist].min(axis=0)
@@ -114,12 +117,13 @@ def _check_wrist_motion(robot: Any, loaded: Sequence[Any]) -> None:
                          f"is not excited (need > {MIN_WRIST_MOTION} rad on at least one of them)")
 
 
-def _motions(robot: Any, recs: Sequence[Any], columns: Sequence[int], options: Mapping[str, Any]):
+def _motions(robot: rx90sym.Robot, recs: Sequence[Any], columns: Sequence[int], options: Mapping[str, Any]):
     def regressor(Q: np.ndarray, QD: np.ndarray, QDD: np.ndarray) -> np.ndarray:
         return robot.regressor_batch(Q, QD, QDD)[:, :, columns]
 
     return [filtered_motion(robot, r, options.get("cutoff"), options.get("decimate_to", 50.0),
-                            options.get("spring", True), regressor) for r in recs]
+                            options.get("spring", True), regressor, delay=options.get("delay", 0.0))
+            for r in recs]
 
 
 def _rows(blocks: Sequence[np.ndarray], Y: Sequence[np.ndarray], motions: Sequence[Any],
@@ -128,7 +132,7 @@ def _rows(blocks: Sequence[np.ndarray], Y: Sequence[np.ndarray], motions: Sequen
     return stack_rows(blocks, Y, options.get("min_velocity"), [m.dq for m in motions])
 
 
-def _robot_vector(robot: Any, base: Any, robot_params: Any) -> np.ndarray:
+def _robot_vector(robot: rx90sym.Robot, base: Any, robot_params: Any) -> np.ndarray:
     """Base parameter values from an IdentificationResult, a dict of base or standard names."""
     if robot_params is None:
         raise ValueError("method 1 needs the robot's parameters (robot_params): an identification "
@@ -146,7 +150,7 @@ def _robot_vector(robot: Any, base: Any, robot_params: Any) -> np.ndarray:
 # --------------------------------------------------------------------------------------------
 # The methods
 # --------------------------------------------------------------------------------------------
-def payload(robot: Any, method: int, empty: Sequence[Any] = (), loaded: Sequence[Any] = (),
+def payload(robot: rx90sym.Robot, method: int, empty: Sequence[Any] = (), loaded: Sequence[Any] = (),
             robot_params: Any = None, base: Any = None, a_priori: Mapping[str, float] | str | None = None,
             constrained: bool = False, mass: float | None = None, mass_tol: float = 0.05,
             position_tol: float = POSITION_TOLERANCE, **options: Any) -> PayloadResult:
@@ -156,8 +160,10 @@ def payload(robot: Any, method: int, empty: Sequence[Any] = (), loaded: Sequence
     standard) parameters for method 1; a_priori: CAD values (dict or bundled payload name) to
     print beside the estimates; constrained: impose the payload pseudo-inertia PSD and, when
     ``mass`` [kg] is given (weighed), |Mc - mass| <= mass_tol [kg]; position_tol [rad]: method 3
-    refuses runs whose positions differ by more; options: cutoff, decimate_to, spring,
-    min_velocity (see identify.observation_matrix).
+    pairs each empty run with its loaded run in time (identify.pairing: lag, common part) and
+    refuses pairs whose positions still differ by more; options: cutoff, decimate_to, spring,
+    min_velocity, delay (see identify.observation_matrix; an identification's are
+    ``FitModel.filtering()``).
     """
     if method not in METHODS:
         raise ValueError(f"payload: method must be 1, 2, 3 or 4, got {method!r}")
@@ -175,15 +181,34 @@ def payload(robot: Any, method: int, empty: Sequence[Any] = (), loaded: Sequence
     if constrained and method == 2:
         raise ValueError("payload method 2 has no constrained variant here: constrain method 4, "
                          "which solves the same relations on the data")
+    if method == 1 and empty:
+        raise ValueError("payload method 1 uses the robot's known parameters and no empty recordings; "
+                         "give robot_params and leave empty out")
+    if method != 1 and robot_params is not None:
+        raise ValueError(f"payload method {method} identifies the robot's parameters itself; "
+                         "robot_params is for method 1 only")
+    pairs: list[PairedRuns] = []
+    if method == 3:
+        empty, loaded, pairs = _paired(empty, loaded, position_tol)
     solve = {1: _method_1, 2: _method_2, 3: _method_3, 4: _method_4}[method]
-    fit, robot_fit = solve(robot, base, empty, loaded, robot_params=robot_params,
-                           position_tol=position_tol, options=options)
+    fit, robot_fit = solve(robot, base, empty, loaded, robot_params=robot_params, options=options)
     values, std, rel = _payload_part(fit)
     if constrained:
         values = _constrained(fit, mass, mass_tol)
         rel = 100 * std / np.abs(values)
+    if robot.urdf is not None:
+        values, std, rel = _in_tip_frame(robot, fit, values, std)
     return PayloadResult(method, PAYLOAD_NAMES, values, std, rel, fit, robot_fit,
-                         dict(a_priori) if a_priori else None, constrained)
+                         dict(a_priori) if a_priori else None, constrained, tuple(pairs))
+
+
+def _in_tip_frame(robot: rx90sym.Robot, fit: IdentificationResult, values: np.ndarray, std: np.ndarray
+                  ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Frame-n estimates in the payload frame of a URDF robot (its tip link)."""
+    idx = [fit.names.index(n) for n in PAYLOAD_NAMES]
+    cov = fit.covariance[np.ix_(idx, idx)] if fit.covariance is not None else np.diag(std ** 2)
+    values, std = rx90sym.urdf.payload_in_tip_frame(robot, values, cov)
+    return values, std, 100 * std / np.abs(values)
 
 
 def _payload_part(fit: IdentificationResult) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -202,19 +227,16 @@ def _method_1(robot, base, empty, loaded, robot_params, options, **_):
     return weighted_least_squares(W, Yr, joint, PAYLOAD_NAMES), None
 
 
-def _method_3(robot, base, empty, loaded, position_tol, options, **_):
+def _paired(empty, loaded, position_tol):
+    """Method 3: each loaded run on the time grid of the same motion run empty (lag, common part)."""
     if len(empty) != len(loaded):
         raise ValueError(f"payload method 3 pairs each loaded motion with the same motion run empty: "
                          f"got {len(empty)} empty and {len(loaded)} loaded recordings")
-    for e, l in zip(empty, loaded):
-        if e.q.shape != l.q.shape:
-            raise ValueError(f"payload method 3: {e.source} has {e.q.shape[0]} samples and "
-                             f"{l.source} has {l.q.shape[0]}; method 3 needs the same motion twice")
-        gap = float(np.max(np.abs(np.asarray(e.q) - np.asarray(l.q))))
-        if gap > position_tol:
-            raise ValueError(f"payload method 3: positions of {e.source} and {l.source} differ by up "
-                             f"to {gap:.3g} rad (> {position_tol:g} rad): not the same motion; use "
-                             f"method 4")
+    pairs = [pair_runs(e, l, position_tol) for e, l in zip(empty, loaded)]
+    return [p.empty for p in pairs], [p.loaded for p in pairs], pairs
+
+
+def _method_3(robot, base, empty, loaded, options, **_):
     cols = list(rx90sym.payload_regressor_columns(robot))
     # One cut-off for both runs of a pair, so that the same samples are kept and compared.
     cutoff = options.get("cutoff") or max(choose_cutoff(np.asarray(r.q), r.rate) for r in loaded)
@@ -252,7 +274,7 @@ def _subset(fit: IdentificationResult, names: Sequence[str]) -> IdentificationRe
                                 fit.weights, fit.rows, fit.method, cov)
 
 
-def grouping_relations(robot: Any, base: Any) -> np.ndarray:
+def grouping_relations(robot: rx90sym.Robot, base: Any) -> np.ndarray:
     """K_c (nb x 10): how the payload enters the base parameters, Delta beta = K_c chi_c (eqs. 24-27).
 
     Read off the symbolic K: the payload adds to link n's ten inertial parameters."""
@@ -340,7 +362,7 @@ class PayloadMonitor:
     not grow with the history) and re-solves. ``history`` holds every estimate.
     """
 
-    def __init__(self, robot: Any, empty: Sequence[Any], base: Any = None, **options: Any) -> None:
+    def __init__(self, robot: rx90sym.Robot, empty: Sequence[Any], base: Any = None, **options: Any) -> None:
         empty = _as_list(empty)
         if not empty:
             raise ValueError("PayloadMonitor needs at least one empty recording")
@@ -373,6 +395,8 @@ class PayloadMonitor:
         fit = solve_system(system, self.names, joint_systems=self._systems, weights=self.weights,
                            method="monitor")
         values, std, rel = _payload_part(fit)
+        if self.robot.urdf is not None:
+            values, std, rel = _in_tip_frame(self.robot, fit, values, std)
         nb = self.base.nb
         self.history.append(MonitorStep(loaded.source, values, std, fit.values[:nb]))
         return PayloadResult(4, PAYLOAD_NAMES, values, std, rel, fit, _subset(fit, self.base.names))

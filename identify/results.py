@@ -6,14 +6,13 @@ import json
 import math
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 import numpy as np
 
 from rx90sym.recording import frozen_array
 
-if TYPE_CHECKING:  # runtime import would be circular (least_squares builds results)
-    from identify.least_squares import CompressedSystem
+from identify.compression import CompressedSystem
 
 __all__ = ["EliminationStep", "IdentificationResult"]
 
@@ -111,8 +110,8 @@ class IdentificationResult:
     rows: int
     method: str
     covariance: np.ndarray | None = field(default=None, repr=False)
-    system: "CompressedSystem | None" = field(default=None, repr=False)
-    joint_systems: tuple["CompressedSystem", ...] = field(default=(), repr=False)
+    system: CompressedSystem | None = field(default=None, repr=False)
+    joint_systems: tuple[CompressedSystem, ...] = field(default=(), repr=False)
     history: tuple[EliminationStep, ...] = ()
 
     def __post_init__(self) -> None:

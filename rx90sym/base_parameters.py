@@ -11,17 +11,20 @@ are independent of the preceding columns, so both give the same names and the sa
 """
 from __future__ import annotations
 
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, replace
 from functools import cached_property
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import casadi as ca
 import numpy as np
 import scipy.linalg as sla
 
-from .compiled import BatchFunction, map_samples
+from .compiled import BatchFunction, BatchWorkspace, map_samples
 from .parameters import LINK_PARAMETERS, split_name
 from .regrouping import general_grouping
+
+if TYPE_CHECKING:  # for annotations only
+    from .description import Robot
 
 # Columns are normalised before the rank decisions; a column whose distance to the span of the
 # preceding ones is below this fraction of its norm is dependent. Random samples make genuine
@@ -33,7 +36,7 @@ RANK_TOL = 1e-9
 class BaseParameters:
     """Base parameters of a robot: beta = K chi, Phi chi = Phi_b beta (eq. 2 on the base set)."""
 
-    robot: Any
+    robot: Robot
     method: str
     names: tuple[str, ...]
     K: np.ndarray                        # (nb, n_params), numeric for the robot's geometry
@@ -69,12 +72,16 @@ class BaseParameters:
         """Phi_b on N samples, compiled: arrays (N, n) -> (N, n, nb); ``out`` filled in place if given."""
         return self._batch(Q, QD, QDD, out=out)
 
+    def regressor_workspace(self, chunk: int = 2048) -> BatchWorkspace:
+        """A reused buffer for Phi_b on many samples (see :class:`rx90sym.compiled.BatchWorkspace`)."""
+        return BatchWorkspace(self._batch, chunk)
+
     def table(self) -> str:
         """Table 2 and eq. 19 of the paper, for this robot."""
         return format_table(self)
 
 
-def base_parameters(robot: Any, method: str = "symbolic", samples: int = 60, seed: int = 0) -> BaseParameters:
+def base_parameters(robot: Robot, method: str = "symbolic", samples: int = 60, seed: int = 0) -> BaseParameters:
     """Base parameters of ``robot`` by ``method`` "symbolic" (regrouping rules) or "numeric" (QR).
 
     samples/seed: random states for the numeric rank decisions (both methods use them: the
@@ -95,7 +102,7 @@ def random_states(n: int, samples: int, seed: int) -> tuple[np.ndarray, np.ndarr
             rng.normal(0, 3.0, (samples, n)))
 
 
-def stacked_regressor(robot: Any, samples: int, seed: int) -> np.ndarray:
+def stacked_regressor(robot: Robot, samples: int, seed: int) -> np.ndarray:
     """Phi stacked over random samples: (samples * n, n_params)."""
     blocks = map_samples(robot.regressor, *random_states(robot.n, samples, seed))
     return blocks.reshape(samples * robot.n, -1)
@@ -137,7 +144,7 @@ def grouping_matrix(W: np.ndarray, base: list[int]) -> np.ndarray:
 
 
 # --------------------------------------------------------------------------- numeric method
-def _numeric(robot: Any, samples: int, seed: int) -> BaseParameters:
+def _numeric(robot: Robot, samples: int, seed: int) -> BaseParameters:
     W = stacked_regressor(robot, samples, seed)
     rank = numeric_rank(W)
     base = first_independent(W)
@@ -161,7 +168,7 @@ def _numeric_expression(row: np.ndarray, names: tuple[str, ...]) -> str:
 
 
 # --------------------------------------------------------------------------- symbolic method
-def _symbolic(robot: Any, samples: int, seed: int) -> BaseParameters:
+def _symbolic(robot: Robot, samples: int, seed: int) -> BaseParameters:
     g = general_grouping(robot)
     names_std = robot.parameter_names
     kept = [i for i, v in enumerate(g.values) if not ca.SX(v).is_zero()]
@@ -192,7 +199,7 @@ def _symbolic(robot: Any, samples: int, seed: int) -> BaseParameters:
         beta.append(ca.simplify(expr))
     K_sx = ca.jacobian(ca.vertcat(*beta), g.chi)
     K_fun = ca.Function("K", [g.geometry], [K_sx], ["geometry"], ["K"])
-    K = np.array(K_fun(np.array(g.geometry_values))) if g.geometry.numel() else np.array(ca.DM(K_sx))
+    K = K_fun(np.array(g.geometry_values)).full() if g.geometry.numel() else ca.DM(K_sx).full()
     K[np.abs(K) < 1e-14] = 0.0
     geo_names = tuple(g.geometry[i].name() for i in range(g.geometry.numel()))
     names = tuple(_base_name(names_std[b], K[i], b) for i, b in enumerate(base))
@@ -201,7 +208,7 @@ def _symbolic(robot: Any, samples: int, seed: int) -> BaseParameters:
                           g.geometry_values)
 
 
-def _perturbed_geometry(robot: Any, seed: int) -> Any:
+def _perturbed_geometry(robot: Robot, seed: int) -> Any:
     rng = np.random.default_rng(seed + 12345)
     d = tuple(0.0 if x == 0 else float(rng.uniform(0.1, 1.0)) for x in robot.d)
     r = tuple(0.0 if x == 0 else float(rng.uniform(0.1, 1.0)) for x in robot.r)

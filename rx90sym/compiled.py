@@ -15,7 +15,7 @@ import subprocess
 import tempfile
 import warnings
 from pathlib import Path
-from typing import Any, Sequence
+from typing import Any, Iterator, Sequence
 
 import casadi as ca
 import numpy as np
@@ -35,7 +35,9 @@ int {name}_batch(long long N, const double** inputs, const long long* in_sizes,
     casadi_int* iw = (casadi_int*) malloc(sizeof(casadi_int) * (sz_iw + 1));
     casadi_real* w = (casadi_real*) malloc(sizeof(casadi_real) * (sz_w + 1));
     if (!arg || !res || !iw || !w) failed = 1;
-    #pragma omp for schedule(static)
+    /* Dynamic blocks: on a loaded machine a descheduled thread holds back only its current
+       block, not a fixed half of the samples (static halves ran 2x slower than one thread). */
+    #pragma omp for schedule(dynamic, 128)
     for (long long i = 0; i < N; ++i) {{
       if (failed) continue;
       for (int k = 0; k < {n_in}; ++k) arg[k] = inputs[k] + i * in_sizes[k];
@@ -101,7 +103,7 @@ def map_samples(f: ca.Function, *inputs: np.ndarray) -> np.ndarray:
     """A one-output function on N samples through CasADi's VM (no compilation):
     inputs (N, size_k) -> (N, rows, cols). For repeated or large evaluations use BatchFunction."""
     N = np.shape(inputs[0])[0]
-    out = np.asarray(f.map(N, "serial")(*[np.asarray(x, dtype=float).T for x in inputs]))
+    out = f.map(N, "serial")(*[np.asarray(x, dtype=float).T for x in inputs]).full()
     # map() concatenates the samples' rows x cols blocks horizontally.
     return out.reshape(f.size1_out(0), N, f.size2_out(0)).transpose(1, 0, 2)
 
@@ -194,7 +196,7 @@ class BatchFunction:
         if self._lib is None:
             mapped = self.f.map(N, "serial")
             res = mapped(*[a.T for a in arrays])
-            out[...] = np.array(res).T.reshape(N, rows, cols)
+            out[...] = res.full().T.reshape(N, rows, cols)  # DM -> ndarray explicitly (casadi 3.8)
             return out
         ptrs = (ctypes.c_void_p * len(arrays))(*[a.ctypes.data for a in arrays])
         sizes = (ctypes.c_longlong * len(arrays))(*self.in_sizes)
@@ -202,6 +204,43 @@ class BatchFunction:
         if flag != 0:
             raise RuntimeError(f"{self.name}: compiled evaluation failed (code {flag})")
         return out
+
+
+class BatchWorkspace:
+    """A reused output buffer for a :class:`BatchFunction`, as Pinocchio's ``Data`` for its model.
+
+    A fresh (N, rows, cols) array per call costs its page faults (a 40 MB regressor batch: about
+    as long as the evaluation itself on two cores); a workspace pays them once and then reuses
+    the memory. ``evaluate`` returns a view valid until the next call on the same workspace;
+    ``chunks`` streams the samples through a small block of ``chunk`` samples that stays in
+    cache. One workspace per thread: it is not shared safely between threads.
+    """
+
+    def __init__(self, batch: BatchFunction, chunk: int = 2048) -> None:
+        if chunk < 1:
+            raise ValueError(f"chunk must be >= 1, got {chunk}")
+        self.batch = batch
+        self.chunk = int(chunk)
+        self._buffer = np.empty((0,) + batch.out_shape)
+
+    def _view(self, N: int) -> np.ndarray:
+        if self._buffer.shape[0] < N:
+            self._buffer = np.empty((N,) + self.batch.out_shape)
+        return self._buffer[:N]
+
+    def evaluate(self, *inputs: Any) -> np.ndarray:
+        """All N samples into the reused buffer: a (N, rows, cols) view, overwritten by the next call."""
+        N = np.shape(inputs[0])[0]
+        return self.batch(*inputs, out=self._view(N))
+
+    def chunks(self, *inputs: Any) -> Iterator[tuple[int, np.ndarray]]:
+        """Blocks of at most ``chunk`` samples: yields (first sample index, (m, rows, cols) view);
+        each view is overwritten by the next block."""
+        N = np.shape(inputs[0])[0]
+        arrays = [np.asarray(x, dtype=float) for x in inputs]
+        for start in range(0, N, self.chunk):
+            stop = min(start + self.chunk, N)
+            yield start, self.batch(*[a[start:stop] for a in arrays], out=self._view(stop - start))
 
 
 def export_c(functions: Sequence[ca.Function], directory: str, prefix: str = "robot") -> list[str]:

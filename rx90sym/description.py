@@ -12,13 +12,25 @@ from typing import Any, Iterable, Sequence
 import casadi as ca
 import numpy as np
 
-from .compiled import BatchFunction
+from .compiled import BatchFunction, BatchWorkspace
 from .geometry import forward_kinematics_function
+from .messages import plain
 from .newton_euler import inverse_dynamics_expression
 from .parameters import link_parameter_names
 from .spring import Spring, spring_torque_function
 
 GRAVITY = 9.81  # m/s^2, along -z0
+
+
+def gravity_vector(gravity: Any) -> np.ndarray:
+    """Gravity acceleration in frame 0 [m/s^2]: a number g means (0, 0, -g) (vertical z0), a
+    3-vector is taken as is (a tilted or rotated base, e.g. a URDF root that is not frame 0)."""
+    g = np.asarray(gravity, dtype=float)
+    if g.ndim == 0:
+        return np.array([0.0, 0.0, -float(g)])
+    if g.shape != (3,) or not np.all(np.isfinite(g)):
+        raise ValueError(f"gravity must be a number or a finite 3-vector, got {gravity!r}")
+    return g.copy()
 
 
 @dataclass(frozen=True, eq=False)
@@ -55,6 +67,8 @@ class Robot:
 
     Geometry: T(j-1, j) = Rot(x, alpha_j) Trans(x, d_j) Rot(z, theta_j) Trans(z, r_j);
     sigma_j = 0 revolute (q_j = theta_j - theta offset), 1 prismatic. Lengths in m, angles in rad.
+    gravity: a number g [m/s^2] (gravity along -z0) or the gravity vector in frame 0.
+    urdf: for a robot imported from a URDF, its chain (rx90sym.urdf.UrdfChain), else None.
     """
 
     name: str
@@ -73,9 +87,16 @@ class Robot:
     spring: Spring | None = None
     coupling: Coupling | None = None
     offsets: bool = False
-    gravity: float = GRAVITY
+    asymmetric_coulomb: tuple[int, ...] = ()
+    gravity: float | tuple[float, float, float] = GRAVITY  # g along -z0, or the vector in frame 0
     description: str = ""
     source: str = ""
+    urdf: Any = None
+
+    @property
+    def gravity_vector(self) -> np.ndarray:
+        """Gravity acceleration in frame 0 [m/s^2], shape (3,)."""
+        return gravity_vector(self.gravity)
 
     def __post_init__(self) -> None:
         n = len(self.sigma)
@@ -102,6 +123,17 @@ class Robot:
         if self.coupling is not None and max(self.coupling.joints) >= n:
             raise ValueError(f"robot {self.name!r}: coupling joints {self.coupling.joints} "
                              f"outside 1..{n}")
+        asym = tuple(sorted({int(j) for j in self.asymmetric_coulomb}))
+        if any(not 0 <= j < n for j in asym):
+            raise ValueError(f"robot {self.name!r}: asymmetric Coulomb joints "
+                             f"{[j + 1 for j in asym]} outside 1..{n}")
+        if asym and self.offsets:
+            raise ValueError(
+                f"robot {self.name!r}: asymmetric Coulomb friction (FSP/FSN) on joint(s) "
+                f"{', '.join(str(j + 1) for j in asym)} and torque offsets OFF1..OFF{n} together: on moving "
+                f"samples FSPj·[q̇j>0] − FSNj·[q̇j<0] and OFFj are collinear (one parameterisation per "
+                f"joint); choose either the offsets or the asymmetric Coulomb form")
+        object.__setattr__(self, "asymmetric_coulomb", asym)
 
     # ----------------------------------------------------------------- description
     @property
@@ -111,11 +143,15 @@ class Robot:
 
     @cached_property
     def parameter_names(self) -> tuple[str, ...]:
-        """Standard parameters: 13 per link (eq. 4), then coupling friction, then offsets."""
+        """Standard parameters: 13 per link (eq. 4), then coupling friction, asymmetric Coulomb
+        friction (FSPj, FSNj per asymmetric joint), then offsets."""
         names = link_parameter_names(self.n)
         if self.coupling is not None:
             b = self.coupling.joints[1] + 1
             names += [f"FVM{b}", f"FSM{b}"]
+        for j in self.asymmetric_coulomb:
+            # FSj's column is then 0 (not a base parameter): FS+ and FS- replace it.
+            names += [f"FSP{j + 1}", f"FSN{j + 1}"]
         if self.offsets:
             names += [f"OFF{j}" for j in range(1, self.n + 1)]
         return tuple(names)
@@ -146,13 +182,21 @@ class Robot:
         return replace(self, **changes)
 
     # ----------------------------------------------------------------- conventions
+    @property
+    def controller_offsets(self) -> np.ndarray:
+        """Controller joint offsets [rad]: q_controller = q_model + offsets (field staubli_offsets)."""
+        return self.staubli_offsets
+
     def to_khalil(self, q_staubli: Any) -> np.ndarray:
-        """Joint positions from the Staubli (CS8) convention to Khalil angles, (N, n) or (n,)."""
+        """Joint positions from the controller's convention to model (Khalil) angles, (N, n) or (n,)."""
         return np.asarray(q_staubli, dtype=float) - self.staubli_offsets
 
     def to_staubli(self, q: Any) -> np.ndarray:
-        """Joint positions from Khalil angles to the Staubli (CS8) convention."""
+        """Joint positions from model (Khalil) angles to the controller's convention."""
         return np.asarray(q, dtype=float) + self.staubli_offsets
+
+    to_model = to_khalil          # neutral names: controller angles <-> model angles
+    to_controller = to_staubli
 
     # ----------------------------------------------------------------- symbolic model
     @cached_property
@@ -168,14 +212,19 @@ class Robot:
 
     @cached_property
     def inverse_dynamics(self) -> ca.Function:
-        """casadi.Function (q, qd, qdd, chi) -> tau (n,) [N m], spring excluded (eq. 1)."""
+        """The inverse dynamic model as a ``casadi.Function`` (q, qd, qdd, chi) -> tau [N m],
+        spring excluded (eq. 1). Called with numbers it returns a ``casadi.DM`` column (n, 1):
+        ``np.array(robot.inverse_dynamics(q, qd, qdd, chi).full()).ravel()`` gives an ndarray (n,);
+        called with SX/MX it returns the symbolic expression."""
         q, qd, qdd, chi = self._symbols
         return ca.Function("inverse_dynamics", [q, qd, qdd, chi], [self._tau_expression],
                            ["q", "qd", "qdd", "chi"], ["tau"])
 
     @cached_property
     def regressor(self) -> ca.Function:
-        """casadi.Function (q, qd, qdd) -> Phi (n x len(parameter_names)), Gamma = Phi chi (eq. 2)."""
+        """The regressor as a ``casadi.Function`` (q, qd, qdd) -> Phi (n x len(parameter_names)),
+        Gamma = Phi chi (eq. 2). Called with numbers it returns a ``casadi.DM``; use
+        ``.full()`` for an ndarray, or :meth:`regressor_batch` for many samples."""
         q, qd, qdd, chi = self._symbols
         phi = ca.jacobian(self._tau_expression, chi)
         return ca.Function("regressor", [q, qd, qdd], [phi], ["q", "qd", "qdd"], ["Phi"])
@@ -201,6 +250,11 @@ class Robot:
         out: optional preallocated (N, n, n_params) array filled in place."""
         return self._regressor_batch(Q, QD, QDD, out=out)
 
+    def regressor_workspace(self, chunk: int = 2048) -> BatchWorkspace:
+        """A reused buffer for Phi on many samples (``.evaluate`` or streamed ``.chunks``):
+        repeated evaluations without a fresh (N, n, n_params) array each time."""
+        return BatchWorkspace(self._regressor_batch, chunk)
+
     @cached_property
     def _spring_batch(self) -> BatchFunction:
         return BatchFunction(self.spring_torque, name=f"{self.name}_spring", compile=False)
@@ -211,7 +265,7 @@ class Robot:
 
     def frame_origins(self, q: Any) -> np.ndarray:
         """Origins of frames 1..n in frame 0 for one configuration: (n,) -> (n, 3) [m]."""
-        return np.array(self.forward_kinematics(np.asarray(q, float))[1]).T
+        return self.forward_kinematics(np.asarray(q, float))[1].full().T
 
     def export_c(self, directory: str, functions: Sequence[str] = ("inverse_dynamics", "regressor")) -> list[str]:
         """Write self-contained C source of the named functions (for a controller); returns paths."""
@@ -228,7 +282,7 @@ def robot_from_table(rows: Sequence[Sequence[float]], name: str = "robot", **opt
         if len(row) != 5:
             raise ValueError(f"table row {i}: expected (sigma, alpha, d, theta, r), got {len(row)} values")
         if row[0] not in (0, 1):
-            raise ValueError(f"table row {i}: sigma must be 0 (revolute) or 1 (prismatic), got {row[0]!r}")
+            raise ValueError(f"table row {i}: sigma must be 0 (revolute) or 1 (prismatic), got {plain(row[0])}")
     n = len(rows)
     if n == 0:
         raise ValueError("table has no rows")

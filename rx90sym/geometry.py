@@ -2,9 +2,12 @@
 from __future__ import annotations
 
 import math
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import casadi as ca
+
+if TYPE_CHECKING:  # for annotations only
+    from .description import Robot
 
 
 def exact_trig(angle: Any) -> tuple[Any, Any]:
@@ -47,7 +50,7 @@ def joint_transform(alpha: Any, d: Any, theta: Any, r: Any) -> tuple[ca.SX, ca.S
     return R, P
 
 
-def joint_variables(robot: Any, q: ca.SX) -> list[tuple[Any, Any]]:
+def joint_variables(robot: Robot, q: ca.SX) -> list[tuple[Any, Any]]:
     """(theta_j, r_j) of each joint for joint positions q (revolute: theta, prismatic: r)."""
     out = []
     for j in range(robot.n):
@@ -58,7 +61,7 @@ def joint_variables(robot: Any, q: ca.SX) -> list[tuple[Any, Any]]:
     return out
 
 
-def frame_transforms(robot: Any, q: ca.SX) -> list[tuple[ca.SX, ca.SX]]:
+def frame_transforms(robot: Robot, q: ca.SX) -> list[tuple[ca.SX, ca.SX]]:
     """(R_j, P_j) of frame j in frame j-1 for j = 1..n."""
     return [
         joint_transform(robot.alpha[j], robot.d[j], th, rr)
@@ -66,7 +69,7 @@ def frame_transforms(robot: Any, q: ca.SX) -> list[tuple[ca.SX, ca.SX]]:
     ]
 
 
-def forward_kinematics_function(robot: Any) -> ca.Function:
+def forward_kinematics_function(robot: Robot) -> ca.Function:
     """casadi.Function (q) -> (T0n 4x4, origins 3 x n of frames 1..n in frame 0)."""
     q = ca.SX.sym("q", robot.n)
     R = ca.SX.eye(3)

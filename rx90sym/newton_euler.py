@@ -6,12 +6,15 @@ the origin of its own frame, which keeps the model linear in the standard parame
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Any, Sequence
+from typing import TYPE_CHECKING, Any, Sequence
 
 import casadi as ca
 
 from .geometry import frame_transforms
 from .parameters import LINK_PARAMETERS
+
+if TYPE_CHECKING:  # for annotations only
+    from .description import Robot
 
 
 @dataclass(frozen=True)
@@ -30,17 +33,18 @@ def body_from_vector(p: Any) -> Body:
     return Body(ca.SX(J), ca.SX(ca.vertcat(MX, MY, MZ)), M)
 
 
-def rigid_body_torques(robot: Any, q: ca.SX, qd: ca.SX, qdd: ca.SX, bodies: Sequence[Body],
-                       gravity: float) -> ca.SX:
+def rigid_body_torques(robot: Robot, q: ca.SX, qd: ca.SX, qdd: ca.SX, bodies: Sequence[Body],
+                       gravity: Sequence[float]) -> ca.SX:
     """Joint torques of the rigid-body chain (no friction, rotor inertia or coupling).
 
-    Gravity acts along -z0 and is introduced as a base acceleration of +g z0.
+    gravity: the gravity acceleration in frame 0 (3-vector, e.g. (0, 0, -g)); it is introduced
+    as the base acceleration -gravity.
     """
     n = robot.n
     z = ca.SX([0, 0, 1])
     w = ca.SX.zeros(3, 1)
     wd = ca.SX.zeros(3, 1)
-    vd = ca.SX([0, 0, gravity])
+    vd = ca.SX([0.0 - float(x) for x in gravity])  # 0.0 - 0.0 is +0: structural zeros stay
     U_prev = ca.SX.zeros(3, 3)
     transforms = frame_transforms(robot, q)
     forces, moments = [], []
@@ -76,12 +80,14 @@ def rigid_body_torques(robot: Any, q: ca.SX, qd: ca.SX, qdd: ca.SX, bodies: Sequ
     return ca.vertcat(*reversed(tau))
 
 
-def actuation_torques(robot: Any, qd: ca.SX, qdd: ca.SX, chi: ca.SX) -> ca.SX:
-    """Rotor inertia, friction (eq. 5), the wrist coupling (eqs. 16-18) and torque offsets."""
+def actuation_torques(robot: Robot, qd: ca.SX, qdd: ca.SX, chi: ca.SX) -> ca.SX:
+    """Rotor inertia, friction (eq. 5; asymmetric Coulomb on robot.asymmetric_coulomb), the wrist
+    coupling (eqs. 16-18) and torque offsets."""
     n = robot.n
     k = len(LINK_PARAMETERS)
     IA, FS, FV = (LINK_PARAMETERS.index(p) for p in ("IA", "FS", "FV"))
-    tau = [chi[k * j + IA] * qdd[j] + chi[k * j + FS] * ca.sign(qd[j]) + chi[k * j + FV] * qd[j]
+    tau = [chi[k * j + IA] * qdd[j] + chi[k * j + FV] * qd[j]
+           + (0 if j in robot.asymmetric_coulomb else chi[k * j + FS] * ca.sign(qd[j]))
            for j in range(n)]
     extra = k * n
     if robot.coupling is not None:
@@ -96,20 +102,25 @@ def actuation_torques(robot: Any, qd: ca.SX, qdd: ca.SX, chi: ca.SX) -> ca.SX:
         tau[a] = tau[a] + ia_b * qdd[b] + fvm * qd[b] + fsm * sign_a   # eq. 17
         tau[b] = tau[b] + ia_b * qdd[a] + fvm * qd[a] + fsm * sign_b   # eq. 18
         extra += 2
+    for j in robot.asymmetric_coulomb:
+        # FSPj·[qd > 0] − FSNj·[qd < 0], both >= 0; 0 at rest.
+        s = ca.sign(qd[j])
+        tau[j] = tau[j] + chi[extra] * (s + s * s) / 2 + chi[extra + 1] * (s - s * s) / 2
+        extra += 2
     if robot.offsets:
         tau = [tau[j] + chi[extra + j] for j in range(n)]
     return ca.vertcat(*tau)
 
 
-def inverse_dynamics_expression(robot: Any, q: ca.SX, qd: ca.SX, qdd: ca.SX, chi: ca.SX) -> ca.SX:
+def inverse_dynamics_expression(robot: Robot, q: ca.SX, qd: ca.SX, qdd: ca.SX, chi: ca.SX) -> ca.SX:
     """Gamma = ID(q, qd, qdd; chi) (eq. 1), spring excluded."""
     k = len(LINK_PARAMETERS)
     bodies = [body_from_vector(chi[k * j:k * j + 10]) for j in range(robot.n)]
-    return rigid_body_torques(robot, q, qd, qdd, bodies, robot.gravity) + actuation_torques(
+    return rigid_body_torques(robot, q, qd, qdd, bodies, robot.gravity_vector) + actuation_torques(
         robot, qd, qdd, chi)
 
 
-def regressor_expression(robot: Any, q: ca.SX, qd: ca.SX, qdd: ca.SX, chi: ca.SX) -> ca.SX:
+def regressor_expression(robot: Robot, q: ca.SX, qd: ca.SX, qdd: ca.SX, chi: ca.SX) -> ca.SX:
     """Phi with Gamma = Phi chi (eq. 2): the model is linear in chi, so its Jacobian is exact."""
     tau = inverse_dynamics_expression(robot, q, qd, qdd, chi)
     return ca.jacobian(tau, chi)

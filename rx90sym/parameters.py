@@ -4,6 +4,8 @@ from __future__ import annotations
 import math
 from typing import Any, Mapping, Sequence
 
+from .messages import plain
+
 # eq. 4: standard parameters of link j, in this order.
 LINK_PARAMETERS: tuple[str, ...] = (
     "XX", "XY", "XZ", "YY", "YZ", "ZZ", "MX", "MY", "MZ", "M", "IA", "FS", "FV",
@@ -49,6 +51,6 @@ def checked_values(table: Any, names: Sequence[str], where: str, what: str = "pa
     for p in names:
         v = table[p]
         if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v):
-            raise ValueError(f"{where}: {what} {p!r} must be a finite number, got {v!r}")
+            raise ValueError(f"{where}: {what} {p!r} must be a finite number, got {plain(v)}")
         out[p] = float(v)
     return out

@@ -8,11 +8,15 @@ from __future__ import annotations
 
 import json
 from pathlib import Path
-from typing import Any, Mapping
+from typing import TYPE_CHECKING, Any, Mapping
 
 import numpy as np
 
 from .parameters import INERTIAL, PAYLOAD_NAMES, checked_values
+from .urdf import payload_matrix
+
+if TYPE_CHECKING:  # for annotations only
+    from .description import Robot
 
 PAYLOADS_FILE = Path(__file__).parent / "data" / "payloads.json"
 
@@ -62,20 +66,22 @@ def as_payload(payload: str | Path | Payload) -> dict[str, float]:
     return load_payload(payload)
 
 
-def payload_regressor_columns(robot: Any) -> np.ndarray:
+def payload_regressor_columns(robot: Robot) -> np.ndarray:
     """Columns of the standard regressor that form Wc (eq. 21): link n's XX..M, in
     PAYLOAD_NAMES order, so that W chi + Wc chi_c = W (chi + chi_c placed on link n)."""
     return np.array(robot.parameter_index([f"{p}{robot.n}" for p in INERTIAL]))
 
 
-def add_payload(robot: Any, chi: Any, payload: str | Path | Payload) -> np.ndarray:
-    """Standard parameter vector of the robot carrying ``payload`` (merged into link n) [SI]."""
+def add_payload(robot: Robot, chi: Any, payload: str | Path | Payload) -> np.ndarray:
+    """Standard parameter vector of the robot carrying ``payload`` (merged into link n) [SI].
+
+    The payload is given in frame n, or in the tip link frame for a robot loaded from a URDF."""
     chi = np.array(chi, dtype=float)
     if chi.shape != (len(robot.parameter_names),):
         raise ValueError(f"chi: expected {len(robot.parameter_names)} standard parameters of robot "
                          f"{robot.name!r}, got shape {chi.shape}")
     values = as_payload(payload)
-    chi[payload_regressor_columns(robot)] += np.array([values[p] for p in PAYLOAD_NAMES])
+    chi[payload_regressor_columns(robot)] += payload_matrix(robot) @ np.array([values[p] for p in PAYLOAD_NAMES])
     return chi
 
 

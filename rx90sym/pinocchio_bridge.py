@@ -4,12 +4,15 @@ Pinocchio is only imported here, lazily, so the symbolic model does not depend o
 """
 from __future__ import annotations
 
-from typing import Any, Sequence
+from typing import TYPE_CHECKING, Any, Sequence
 
 import numpy as np
 
 from .geometry import exact_trig
 from .parameters import LINK_PARAMETERS
+
+if TYPE_CHECKING:  # for annotations only
+    from .description import Robot
 
 # Pinocchio's dynamic parameters per body: m, mx, my, mz, Ixx, Ixy, Iyy, Ixz, Iyz, Izz (about
 # the joint frame origin), matching our XX XY XZ YY YZ ZZ MX MY MZ M through this order.
@@ -28,17 +31,17 @@ def _placement(alpha: float, d: float, theta: float, r: float) -> Any:
     return pin.SE3(R, p)
 
 
-def pinocchio_model(robot: Any, chi: Sequence[float] | None = None) -> Any:
+def pinocchio_model(robot: Robot, chi: Sequence[float] | None = None) -> Any:
     """pinocchio.Model of the robot's rigid-body chain, with link inertias from chi if given.
 
     Joint j is a revolute (RZ) or prismatic (PZ) joint placed at Rot(x, alpha) Trans(x, d)
     Rot(z, theta) Trans(z, r): Rot(z, q) and Trans(z, r) commute, so the KK transform at q is
-    placement * joint motion. Gravity is -9.81 z0.
+    placement * joint motion. Gravity is robot.gravity_vector (in frame 0).
     """
     import pinocchio as pin
 
     model = pin.Model()
-    model.gravity.linear[:] = [0.0, 0.0, -robot.gravity]
+    model.gravity.linear[:] = robot.gravity_vector
     parent = 0
     for j in range(robot.n):
         joint = pin.JointModelRZ() if robot.sigma[j] == 0 else pin.JointModelPZ()
@@ -50,14 +53,14 @@ def pinocchio_model(robot: Any, chi: Sequence[float] | None = None) -> Any:
     return model
 
 
-def link_dynamic_parameters(robot: Any, chi: Sequence[float], link: int) -> np.ndarray:
+def link_dynamic_parameters(robot: Robot, chi: Sequence[float], link: int) -> np.ndarray:
     """Pinocchio's 10 dynamic parameters of link ``link`` (0-based) from the standard chi."""
     k = len(LINK_PARAMETERS)
     block = {p: float(chi[k * link + i]) for i, p in enumerate(LINK_PARAMETERS)}
     return np.array([block[p] for p in PINOCCHIO_ORDER])
 
 
-def set_inertias(model: Any, robot: Any, chi: Sequence[float]) -> None:
+def set_inertias(model: Any, robot: Robot, chi: Sequence[float]) -> None:
     """Write every link's inertia from chi into a Pinocchio model."""
     import pinocchio as pin
 
@@ -65,7 +68,7 @@ def set_inertias(model: Any, robot: Any, chi: Sequence[float]) -> None:
         model.inertias[j + 1] = pin.Inertia.FromDynamicParameters(link_dynamic_parameters(robot, chi, j))
 
 
-def pinocchio_columns(robot: Any) -> np.ndarray:
+def pinocchio_columns(robot: Robot) -> np.ndarray:
     """Index of each Pinocchio regressor column in robot.parameter_names (shape 10 n)."""
     names = list(robot.parameter_names)
     return np.array([names.index(f"{p}{j + 1}") for j in range(robot.n) for p in PINOCCHIO_ORDER])

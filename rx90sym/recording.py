@@ -37,11 +37,16 @@ class Recording:
     Attributes:
         t: (N,) time, s.
         q: (N, n) joint positions, rad, Khalil angles.
-        tau: (N, n) joint torques, N·m, joint side (spring not added).
+        tau: (N, n) joint torques, N·m, joint side (spring not added), or None for a recording
+            of motor currents that has not been through drive gains yet.
         dq: (N, n) joint velocities, rad/s, or None when not recorded.
         source: file name the data came from, or ``"<memory>"``.
         robot: name of the robot the data belong to.
         meta: provenance (e.g. the simulated robot's true parameters and noise profile).
+        current: (N, n) motor currents, A, one column per motor, or None. Joint torques follow
+            from drive gains (``tau = Rt·diag(k)·current``); until then ``tau`` is None.
+        aux: auxiliary columns kept from a log (``x:NAME`` in a column map, e.g. a target
+            current), name -> (N,) array; never used as torque.
 
     Only shapes are checked here; the data checks (finite values, regular time, radians, ...)
     are done by the readers and :func:`recording_from_arrays`.
@@ -49,31 +54,64 @@ class Recording:
 
     t: np.ndarray
     q: np.ndarray
-    tau: np.ndarray
+    tau: np.ndarray | None
     dq: np.ndarray | None = None
     source: str = _MEMORY
     robot: str = ""
     meta: dict = field(default_factory=dict, repr=False)
+    current: np.ndarray | None = None
+    aux: dict = field(default_factory=dict, repr=False)
 
     def __post_init__(self) -> None:
         t = frozen_array(self.t)
         q = frozen_array(self.q)
-        tau = frozen_array(self.tau)
         if t.ndim != 1 or t.size < 1:
             raise RecordingError(f"{self.source}: t must be a non-empty 1-D array, got shape {t.shape}")
         n_samples = t.size
         if q.ndim != 2 or q.shape[0] != n_samples or q.shape[1] < 1:
             raise RecordingError(f"{self.source}: q must have shape ({n_samples}, n), got {q.shape}")
-        if tau.shape != q.shape:
-            raise RecordingError(f"{self.source}: tau must have shape {q.shape}, got {tau.shape}")
         object.__setattr__(self, "t", t)
         object.__setattr__(self, "q", q)
-        object.__setattr__(self, "tau", tau)
-        if self.dq is not None:
-            dq = frozen_array(self.dq)
-            if dq.shape != q.shape:
-                raise RecordingError(f"{self.source}: dq must have shape {q.shape}, got {dq.shape}")
-            object.__setattr__(self, "dq", dq)
+        if self.tau is None and self.current is None:
+            raise RecordingError(f"{self.source}: a recording needs joint torques (tau) or motor currents")
+        for name in ("tau", "dq", "current"):
+            value = getattr(self, name)
+            if value is None:
+                continue
+            a = frozen_array(value)
+            if a.shape != q.shape:
+                raise RecordingError(f"{self.source}: {name} must have shape {q.shape}, got {a.shape}")
+            object.__setattr__(self, name, a)
+        aux = {}
+        for key, value in dict(self.aux).items():
+            a = frozen_array(value)
+            if a.shape != t.shape:
+                raise RecordingError(f"{self.source}: auxiliary column {key} must have shape {t.shape}, got {a.shape}")
+            aux[str(key)] = a
+        object.__setattr__(self, "aux", aux)
+
+    @property
+    def torques(self) -> np.ndarray:
+        """Joint torques (N, n), N·m; a current recording without drive gains is refused.
+
+        Raises:
+            RecordingError: the recording holds motor currents only, naming how to give gains.
+        """
+        if self.tau is None:
+            raise RecordingError(
+                f"{self.source}: the recording holds motor currents, not joint torques; give drive gains "
+                "(--gains K1,...,Kn in N·m/A on the joint side, or --gains GAINS.json from 'rx90 gains')")
+        return self.tau
+
+    def select(self, rows: Any, source: str | None = None) -> "Recording":
+        """The samples ``rows`` (a slice, indices or a boolean mask) of every per-sample array."""
+        def cut(a: np.ndarray | None) -> np.ndarray | None:
+            return None if a is None else a[rows]
+
+        return Recording(t=self.t[rows], q=self.q[rows], tau=cut(self.tau), dq=cut(self.dq),
+                         source=self.source if source is None else source, robot=self.robot,
+                         meta=dict(self.meta), current=cut(self.current),
+                         aux={k: v[rows] for k, v in self.aux.items()})
 
     @property
     def n_samples(self) -> int:
@@ -87,10 +125,10 @@ class Recording:
 
     @property
     def rate(self) -> float:
-        """Sampling rate, Hz (from the median time step; nan for a single sample)."""
+        """Sampling rate, Hz: 1 / mean time step (nan for a single sample)."""
         if self.t.size < 2:
             return math.nan
-        return float(1.0 / np.median(np.diff(self.t)))
+        return float((self.t.size - 1) / (self.t[-1] - self.t[0]))
 
     @property
     def duration(self) -> float:
@@ -100,5 +138,6 @@ class Recording:
     def __repr__(self) -> str:
         return (
             f"Recording(robot={self.robot!r}, source={self.source!r}, samples={self.n_samples}, "
-            f"joints={self.n_joints}, rate={self.rate:.6g} Hz, dq={'yes' if self.dq is not None else 'no'})"
+            f"joints={self.n_joints}, rate={self.rate:.6g} Hz, dq={'yes' if self.dq is not None else 'no'}, "
+            f"{'torques' if self.tau is not None else 'currents'})"
         )

@@ -20,12 +20,12 @@ cached on disk (``rx90sym.compiled.cache_dir()``); without a C compiler CasADi's
 """
 from __future__ import annotations
 
-import json
 import time
+import warnings
 from dataclasses import asdict, dataclass
 from functools import lru_cache
 from pathlib import Path
-from typing import Any, Callable, Mapping
+from typing import TYPE_CHECKING, Any, Callable, Mapping
 
 import casadi as ca
 import numpy as np
@@ -36,48 +36,40 @@ from .parameters import checked_values
 from .payloads import Payload, add_payload, as_payload
 from .recording import Recording
 
-DATA_DIR = Path(__file__).parent / "data"
-DEFAULT_PARAMETER_FILES = {"rx90": DATA_DIR / "rx90_true_params.json"}
+if TYPE_CHECKING:  # for annotations only
+    from .description import Robot
+
 # Output samples per compiled call of the closed loop: long enough that Python's per-call cost
 # is negligible, short enough that a 1 s padding at the end costs little.
 CHUNK_SAMPLES = 250
 
 
 # --------------------------------------------------------------------------- true parameters
-def default_parameters(robot: Any, path: str | Path | None = None) -> dict[str, float]:
+def default_parameters(robot: Robot, path: str | Path | None = None) -> dict[str, float]:
     """True standard parameters of the twin, name -> value [SI].
 
-    Without ``path``: the set shipped for the robot (rx90: physically consistent, reproduces
-    Table 3; made by scripts/make_rx90_params.py). With ``path``: a JSON file
-    ``{"robot": name, "parameters": {name: value}}`` (or the flat mapping) for this robot.
+    Without ``path``: the robot's nominal parameters (rx90sym.nominal_parameters: its URDF
+    inertials, or for the bundled RX90 file the twin's physically consistent set reproducing
+    Table 3, made by scripts/make_rx90_params.py); a robot with none is refused. With ``path``:
+    a JSON parameter file (see rx90sym.nominal.read_parameter_file).
     """
-    if path is None:
-        if robot.name not in DEFAULT_PARAMETER_FILES:
-            raise ValueError(f"no default parameters for robot {robot.name!r} (bundled: "
-                             f"{sorted(DEFAULT_PARAMETER_FILES)}); pass a parameter file")
-        path = DEFAULT_PARAMETER_FILES[robot.name]
-    path = Path(path)
-    try:
-        data = json.loads(path.read_text(encoding="utf-8"))
-    except OSError as exc:
-        raise ValueError(f"{path}: cannot read parameter file ({exc})") from None
-    except json.JSONDecodeError as exc:
-        raise ValueError(f"{path}: not valid JSON ({exc})") from None
-    if not isinstance(data, dict):
-        raise ValueError(f"{path}: expected a JSON object")
-    if "robot" in data and data["robot"] != robot.name:
-        raise ValueError(f"{path}: field 'robot' is {data['robot']!r}, not {robot.name!r}")
-    table = data.get("parameters", data)
-    return _checked_parameters(robot, table, str(path))
+    from .nominal import nominal_parameters
+
+    values = nominal_parameters(robot, path)
+    if values is None:
+        raise ValueError(f"no default parameters for robot {robot.name!r} ({robot.source or 'built in code'}): "
+                         f"only the bundled RX90 file and URDF robots have nominal ones; pass a parameter file "
+                         f"(JSON name -> value, or the JSON of 'rx90 identify --method consistent')")
+    return values
 
 
-def _checked_parameters(robot: Any, table: Any, where: str) -> dict[str, float]:
+def _checked_parameters(robot: Robot, table: Any, where: str) -> dict[str, float]:
     if not isinstance(table, dict):
         raise ValueError(f"{where}: field 'parameters' must map names to numbers")
     return checked_values(table, robot.parameter_names, f"{where} (robot {robot.name!r})")
 
 
-def parameter_vector(robot: Any, params: Mapping[str, float] | Any | None) -> np.ndarray:
+def parameter_vector(robot: Robot, params: Mapping[str, float] | Any | None) -> np.ndarray:
     """chi (n_params,) from None (the default set), a name -> value mapping or a vector."""
     if params is None:
         return robot.parameter_vector(default_parameters(robot))
@@ -105,8 +97,16 @@ class NoiseProfile:
     feedforward_error: the controller's feed-forward model is (1 - this) * the true parameters
         of the robot with its payload (a CS8 is told the tool's load).
     servo_rate_hz: controller and RK4 integration rate (rounded up to a multiple of the rate).
-    ripple: motor torque ripple, amplitude of each harmonic as a fraction of the joint's rated
-        torque (robot.limits.tau_max); ripple_harmonics: orders in the motor angle.
+    ripple: motor torque ripple, amplitude of each harmonic as a fraction of the joint's torque
+        scale: its rated torque robot.limits.tau_max, or where the robot file gives none, the peak
+        |torque| of the motion with the true parameters; ripple_harmonics: orders in the motor
+        angle (motor angle = Rq q).
+    ripple_gear: gear ratio assumed for the ripple's motor angle when the robot gives none (all
+        gear ratios 1: a file without [transmission]), with a warning. Without it the ripple of
+        6 and 12 cycles per motor turn would sit at 6 and 12 cycles per joint turn, inside the
+        identification band, and bias the fit (RX90 without gears: 40/54 base parameters within
+        3 sigma instead of 52-54/54, benchmarks/spring_and_ripple.py);
+        with it the ripple has the same torque amplitude and the frequencies of a geared arm.
     stribeck: extra static friction at zero speed as a fraction of FS_j,
         stribeck * FS_j * exp(-(qd / stribeck_velocity)^2) * sign(qd) [N m].
     coulomb_smoothing: the plant's Coulomb friction is FS tanh(qd / this) [rad/s] (a finite
@@ -124,6 +124,7 @@ class NoiseProfile:
     servo_rate_hz: float = 4000.0
     ripple: float = 0.0
     ripple_harmonics: tuple[int, ...] = (6, 12)
+    ripple_gear: float = 50.0
     stribeck: float = 0.0
     stribeck_velocity: float = 0.05
     coulomb_smoothing: float = 0.002
@@ -164,7 +165,7 @@ def _profile(noise: str | NoiseProfile) -> NoiseProfile:
 Trajectory = Any  # .sample(rate) -> (t, q, qd, qdd), a tuple of arrays, or a callable t -> (q, qd, qdd)
 
 
-def reference(robot: Any, trajectory: Trajectory, rate: float, oversample: int = 1,
+def reference(robot: Robot, trajectory: Trajectory, rate: float, oversample: int = 1,
               duration: float | None = None) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """Reference (t, q, qd, qdd) on the grid t0 + k / (rate * oversample) [s, rad, rad/s, rad/s^2].
 
@@ -218,7 +219,7 @@ def _evaluate_callable(f: Callable, t: np.ndarray, n: int) -> tuple[np.ndarray, 
     return tuple(np.array([r[i] for r in rows]) for i in range(3))
 
 
-def _check_reference(robot: Any, t: np.ndarray, q: np.ndarray, qd: np.ndarray, qdd: np.ndarray) -> None:
+def _check_reference(robot: Robot, t: np.ndarray, q: np.ndarray, qd: np.ndarray, qdd: np.ndarray) -> None:
     if t.ndim != 1 or len(t) < 2:
         raise ValueError(f"trajectory: t must be 1-D with >= 2 samples, got shape {t.shape}")
     for name, a in (("q", q), ("qd", qd), ("qdd", qdd)):
@@ -232,7 +233,7 @@ def _check_reference(robot: Any, t: np.ndarray, q: np.ndarray, qd: np.ndarray, q
 
 
 # --------------------------------------------------------------------------- plant model (SX)
-def coulomb_torques(robot: Any, qd: Any, chi: Any, sign: Callable[[Any], Any]) -> Any:
+def coulomb_torques(robot: Robot, qd: Any, chi: Any, sign: Callable[[Any], Any]) -> Any:
     """Coulomb terms of eq. 5 and eqs. 17-18 with a given sign function (SX) [N m]."""
     fs = robot.parameter_index([f"FS{j}" for j in range(1, robot.n + 1)])
     tau = [chi[fs[j]] * sign(qd[j]) for j in range(robot.n)]
@@ -248,7 +249,7 @@ def coulomb_torques(robot: Any, qd: Any, chi: Any, sign: Callable[[Any], Any]) -
     return ca.vertcat(*tau)
 
 
-def coulomb_mask(robot: Any) -> np.ndarray:
+def coulomb_mask(robot: Robot) -> np.ndarray:
     """1 for every parameter except the Coulomb ones (FSj, FSM): chi * mask has no Coulomb term."""
     mask = np.ones(len(robot.parameter_names))
     for i, p in enumerate(robot.parameter_names):
@@ -257,7 +258,7 @@ def coulomb_mask(robot: Any) -> np.ndarray:
     return mask
 
 
-def mass_and_bias(robot: Any, q: Any, qd: Any, chi: Any, sign: Callable[[Any], Any]) -> tuple[ca.SX, ca.SX]:
+def mass_and_bias(robot: Robot, q: Any, qd: Any, chi: Any, sign: Callable[[Any], Any]) -> tuple[ca.SX, ca.SX]:
     """(M(q), b(q, qd)) with IDM = M qdd + b, Coulomb friction through ``sign`` (SX).
 
     The IDM is affine in qdd, so M = d IDM / d qdd is exact.
@@ -271,7 +272,7 @@ def _tanh_sign(smoothing: Any) -> Callable[[Any], Any]:
     return lambda v: ca.tanh(v / smoothing)
 
 
-def forward_dynamics(robot: Any, smoothing: float = 0.0) -> ca.Function:
+def forward_dynamics(robot: Robot, smoothing: float = 0.0) -> ca.Function:
     """casadi.Function (q, qd, tau, chi) -> qdd [rad/s^2] of the model, solving
     IDM(q, qd, qdd; chi) = tau (tau = everything applied at the joints: motors + spring).
 
@@ -285,7 +286,7 @@ def forward_dynamics(robot: Any, smoothing: float = 0.0) -> ca.Function:
                        ["q", "qd", "tau", "chi"], ["qdd"])
 
 
-def mass_matrix(robot: Any) -> ca.Function:
+def mass_matrix(robot: Robot) -> ca.Function:
     """casadi.Function (q, chi) -> M(q) (n x n) [kg m^2], rotor inertias and coupling included."""
     n = robot.n
     q, qd, qdd = (ca.SX.sym(s, n) for s in ("q", "qd", "qdd"))
@@ -319,7 +320,16 @@ class _Layout:
         return np.concatenate([np.ravel(np.asarray(values[k], dtype=float)) for k in self.sizes()])
 
 
-def _servo_step(robot: Any, layout: _Layout) -> ca.Function:
+def ripple_transmission(robot: Robot, ripple_gear: float) -> tuple[np.ndarray, np.ndarray]:
+    """(Rq, Rt) seen by the motor torque ripple: the robot's, or ``ripple_gear`` times the
+    identity when the robot has no gear ratios (all 1)."""
+    if np.all(np.abs(np.asarray(robot.gear_ratios, dtype=float)) == 1.0):
+        eye = ripple_gear * np.eye(robot.n)
+        return eye, eye.copy()
+    return np.asarray(robot.Rq, dtype=float), np.asarray(robot.Rt, dtype=float)
+
+
+def _servo_step(robot: Robot, layout: _Layout, ripple_gear: float = 1.0) -> ca.Function:
     """One servo period: (x = [q; qd], ref = [q_r; qd_r; qdd_r], p) -> (x_next, tau_cmd, qdd).
 
     tau_cmd = IDM(ref; chi_nom) - spring(q_r) + Kp (q_r - q) + Kd (qd_r - qd), held over the
@@ -343,12 +353,13 @@ def _servo_step(robot: Any, layout: _Layout) -> ca.Function:
     M, bias = mass_and_bias(robot, q, qd, chi, sign)
     fs = chi[robot.parameter_index([f"FS{j}" for j in range(1, n + 1)])]
     stribeck = v["stribeck"] * fs * ca.exp(-(qd / v["stribeck_velocity"]) ** 2) * sign(qd)
-    theta_m = ca.mtimes(ca.DM(robot.Rq), q)
+    Rq_ripple, Rt_ripple = ripple_transmission(robot, ripple_gear)
+    theta_m = ca.mtimes(ca.DM(Rq_ripple), q)
     orders, phases = v["orders"], ca.reshape(v["phases"], layout.harmonics, n)
     ripple_m = ca.SX.zeros(n)
     for h in range(layout.harmonics):
         ripple_m += v["ripple"] * ca.sin(orders[h] * theta_m + phases[h, :].T)
-    ripple = ca.mtimes(ca.DM(robot.Rt), ripple_m)
+    ripple = ca.mtimes(ca.DM(Rt_ripple), ripple_m)
     acc = ca.solve(M, u + spring(q) + ripple - bias - stribeck)
     plant = ca.Function("plant", [q, qd, u, p], [acc])
 
@@ -366,11 +377,11 @@ def _servo_step(robot: Any, layout: _Layout) -> ca.Function:
 
 
 @lru_cache(maxsize=8)
-def _closed_loop_function(robot: Any, harmonics: int, steps: int) -> ca.Function:
+def _closed_loop_function(robot: Robot, harmonics: int, steps: int, ripple_gear: float = 1.0) -> ca.Function:
     """``steps`` servo periods in one call (mapaccum), compiled to C when possible (memoised:
     building and loading it costs ~0.2 s; the shared library is cached on disk)."""
     layout = _Layout(robot.n, len(robot.parameter_names), harmonics)
-    step = _servo_step(robot, layout)
+    step = _servo_step(robot, layout, ripple_gear)
     run = step.mapaccum(f"{robot.name}_twin_loop", steps)
     return compiled_function(run)
 
@@ -393,7 +404,7 @@ class TwinRun:
 
 
 @lru_cache(maxsize=8)
-def _velocity_jacobian(robot: Any) -> ca.Function:
+def _velocity_jacobian(robot: Robot) -> ca.Function:
     """(q, qd, chi, smoothing) -> d qdd / d qd of the free plant [1/s] (memoised per robot)."""
     q, qd = ca.SX.sym("q", robot.n), ca.SX.sym("qd", robot.n)
     chi = ca.SX.sym("chi", len(robot.parameter_names))
@@ -403,7 +414,7 @@ def _velocity_jacobian(robot: Any) -> ca.Function:
     return ca.Function("velocity_jacobian", [q, qd, chi, smoothing], [ca.jacobian(acc, qd), M])
 
 
-def check_step_stability(robot: Any, q0: np.ndarray, chi: np.ndarray, kd: np.ndarray,
+def check_step_stability(robot: Robot, q0: np.ndarray, chi: np.ndarray, kd: np.ndarray,
                          profile: NoiseProfile, step: float) -> float:
     """h * |lambda|max of the velocity dynamics at rest at q0 (friction slope at zero speed,
     viscous friction, derivative gain); raises ValueError above 2.5 (RK4 is stable up to 2.78
@@ -418,7 +429,7 @@ def check_step_stability(robot: Any, q0: np.ndarray, chi: np.ndarray, kd: np.nda
     return value
 
 
-def controller_gains(robot: Any, q0: np.ndarray, chi_nominal: np.ndarray,
+def controller_gains(robot: Robot, q0: np.ndarray, chi_nominal: np.ndarray,
                      profile: NoiseProfile) -> tuple[np.ndarray, np.ndarray]:
     """Kp [N m/rad], Kd [N m s/rad] per joint from the nominal diagonal inertia at q0."""
     J = np.diag(np.array(mass_matrix(robot)(q0, chi_nominal)))
@@ -426,13 +437,21 @@ def controller_gains(robot: Any, q0: np.ndarray, chi_nominal: np.ndarray,
     return J * w**2, 2 * profile.damping * J * w
 
 
-def rated_torques(robot: Any, fallback: np.ndarray) -> np.ndarray:
+def rated_torques(robot: Robot, fallback: np.ndarray) -> np.ndarray:
     """Rated joint torques [N m]: robot.limits.tau_max, or ``fallback`` where unknown."""
     tau_max = np.asarray(robot.limits.tau_max, dtype=float)
     return np.where(np.isfinite(tau_max), tau_max, fallback)
 
 
-def closed_loop(robot: Any, t: np.ndarray, q: np.ndarray, qd: np.ndarray, qdd: np.ndarray,
+def peak_torques(robot: Robot, q: np.ndarray, qd: np.ndarray, qdd: np.ndarray, chi: np.ndarray) -> np.ndarray:
+    """max_t |IDM(q, qd, qdd; chi)| per joint [N m] (the torque scale of a robot without rated
+    torques); 1 N m where a joint needs none."""
+    tau = open_loop(robot, np.arange(len(q), dtype=float), q, qd, qdd, chi).tau
+    peak = np.max(np.abs(tau), axis=0)
+    return np.where(peak > 0, peak, 1.0)
+
+
+def closed_loop(robot: Robot, t: np.ndarray, q: np.ndarray, qd: np.ndarray, qdd: np.ndarray,
                 chi: np.ndarray, chi_nominal: np.ndarray, profile: NoiseProfile,
                 rng: np.random.Generator, oversample: int) -> TwinRun:
     """Run the servo loop on the reference sampled at the servo rate (every ``oversample``-th
@@ -440,8 +459,15 @@ def closed_loop(robot: Any, t: np.ndarray, q: np.ndarray, qd: np.ndarray, qdd: n
     n = robot.n
     layout = _Layout(n, len(robot.parameter_names), len(profile.ripple_harmonics))
     kp, kd = controller_gains(robot, q[0], chi_nominal, profile)
-    gears = np.abs(np.asarray(robot.gear_ratios, dtype=float))
-    rated = rated_torques(robot, fallback=np.full(n, 10.0))
+    gears = np.abs(np.diag(ripple_transmission(robot, profile.ripple_gear)[0]))
+    if profile.ripple > 0 and np.all(np.abs(np.asarray(robot.gear_ratios, dtype=float)) == 1.0):
+        warnings.warn(f"twin: robot {robot.name!r} has no gear ratios; the motor torque ripple "
+                      f"assumes motors geared {profile.ripple_gear:g}:1 (NoiseProfile.ripple_gear)",
+                      stacklevel=3)
+    rated = np.asarray(robot.limits.tau_max, dtype=float)
+    if not np.all(np.isfinite(rated)):
+        ds = slice(None, None, oversample)
+        rated = rated_torques(robot, fallback=peak_torques(robot, q[ds], qd[ds], qdd[ds], chi))
     p = layout.pack({
         "chi": chi, "chi_nom": chi_nominal, "kp": kp, "kd": kd,
         # Stribeck amplitude = profile.stribeck * FS_j (FS_j read from chi inside the plant).
@@ -455,7 +481,7 @@ def closed_loop(robot: Any, t: np.ndarray, q: np.ndarray, qd: np.ndarray, qdd: n
     })
     check_step_stability(robot, q[0], chi, kd, profile, t[1] - t[0])
     steps = CHUNK_SAMPLES * oversample
-    run = _closed_loop_function(robot, layout.harmonics, steps)
+    run = _closed_loop_function(robot, layout.harmonics, steps, float(profile.ripple_gear))
     ref = np.hstack([q, qd, qdd]).T  # (3n, N_fine)
     total = ref.shape[1]
     pad = (-total) % steps
@@ -474,18 +500,18 @@ def closed_loop(robot: Any, t: np.ndarray, q: np.ndarray, qd: np.ndarray, qdd: n
     return TwinRun(t[::oversample], X[:, :n], X[:, n:], QDD, TAU, q[::oversample])
 
 
-def open_loop(robot: Any, t: np.ndarray, q: np.ndarray, qd: np.ndarray, qdd: np.ndarray,
+def open_loop(robot: Robot, t: np.ndarray, q: np.ndarray, qd: np.ndarray, qdd: np.ndarray,
               chi: np.ndarray) -> TwinRun:
     """The robot exactly on the reference: tau = IDM(q, qd, qdd; chi) - spring(q) [N m]."""
     N = len(t)
     f = robot.inverse_dynamics.map(N)
-    tau = np.array(f(q.T, qd.T, qdd.T, np.repeat(chi[:, None], N, axis=1))).T
+    tau = f(q.T, qd.T, qdd.T, np.repeat(chi[:, None], N, axis=1)).full().T
     tau = tau - robot.spring_torque_batch(q).reshape(N, robot.n)
     return TwinRun(t, q, qd, qdd, tau, q)
 
 
 # --------------------------------------------------------------------------- measurement
-def quantise_positions(robot: Any, q: np.ndarray, counts: float) -> np.ndarray:
+def quantise_positions(robot: Robot, q: np.ndarray, counts: float) -> np.ndarray:
     """Joint positions read through motor encoders of ``counts`` per revolution [rad]:
     q_motor = Rq q is rounded to the encoder step, then mapped back (q = Rq^-1 q_motor)."""
     step = 2 * np.pi / counts
@@ -498,10 +524,40 @@ def torque_noise_sigma(tau: np.ndarray, fraction: float) -> np.ndarray:
     return fraction * np.sqrt(np.mean(tau**2, axis=0))
 
 
+@dataclass(frozen=True)
+class CurrentSensor:
+    """The twin records motor currents instead of torques: i = (Rt diag(k))^-1 tau + i0 + noise.
+
+    gains: (n,) drive gains, N·m/A, on the side ``side`` ("motor": tau = Rt diag(k) (i - i0),
+        "joint": tau = diag(k) (i - i0)), as :class:`identify.gains.DriveGains` reads them;
+    offsets: (n,) current offsets i0, A (None: 0);
+    noise: standard deviation of the Gaussian current noise, A (a number or one per motor).
+    """
+
+    gains: tuple[float, ...]
+    side: str = "motor"
+    offsets: tuple[float, ...] | None = None
+    noise: float | tuple[float, ...] = 0.0
+
+    def currents(self, robot: Robot, tau: np.ndarray, rng: np.random.Generator) -> np.ndarray:
+        """Motor currents (N, n), A, that produce the joint torques ``tau`` (N, n), N·m."""
+        k = np.asarray(self.gains, dtype=float).reshape(-1)
+        if k.shape != (robot.n,) or not np.all(np.isfinite(k)) or np.any(k == 0):
+            raise ValueError(f"CurrentSensor: expected {robot.n} finite non-zero gains, got {k.tolist()}")
+        if self.side not in ("motor", "joint"):
+            raise ValueError(f"CurrentSensor: side must be 'motor' or 'joint', got {self.side!r}")
+        gain = np.diag(k) if self.side == "joint" else np.asarray(robot.Rt, dtype=float) @ np.diag(k)
+        i = np.linalg.solve(gain, np.asarray(tau, dtype=float).T).T
+        i0 = np.zeros(robot.n) if self.offsets is None else np.asarray(self.offsets, dtype=float)
+        noise = np.broadcast_to(np.asarray(self.noise, dtype=float), (robot.n,))
+        return i + i0 + rng.normal(size=i.shape) * noise
+
+
 # --------------------------------------------------------------------------- simulate
-def simulate(robot: Any, trajectory: Trajectory, params: Mapping[str, float] | Any | None = None,
+def simulate(robot: Robot, trajectory: Trajectory, params: Mapping[str, float] | Any | None = None,
              payload: str | Path | Payload | None = None, noise: str | NoiseProfile = "realistic",
-             seed: int = 0, rate: float = 250.0, duration: float | None = None) -> Recording:
+             seed: int = 0, rate: float = 250.0, duration: float | None = None,
+             currents: CurrentSensor | None = None) -> Recording:
     """Simulate the robot on a trajectory and record positions and motor torques at ``rate``.
 
     trajectory: object with ``.sample(rate) -> (t, q, qd, qdd)``, a tuple (t, q, qd, qdd) of
@@ -511,6 +567,8 @@ def simulate(robot: Any, trajectory: Trajectory, params: Mapping[str, float] | A
     payload: "tables_4", "tables_5", a JSON path, a mapping of XXc..Mc, or None.
     noise: "ideal", "quantised", "realistic" (see profiles()) or a NoiseProfile.
     seed: seeds every random draw (ripple phases, torque noise): same seed, same recording.
+    currents: record motor currents through these drive gains instead of torques (tau None,
+        the true gains in meta["drive_gains"]).
     Returns a Recording with tau = motor torques, spring not added (tau + spring = IDM).
     """
     start = time.perf_counter()
@@ -545,12 +603,18 @@ def simulate(robot: Any, trajectory: Trajectory, params: Mapping[str, float] | A
         "tracking_error_max": np.max(np.abs(error), axis=0).tolist(),
         "elapsed_s": time.perf_counter() - start,
     }
-    return Recording(t=run.t, q=q_rec, tau=tau, source=f"twin:{profile.name}", robot=robot.name,
-                     meta=meta)
+    if currents is None:
+        return Recording(t=run.t, q=q_rec, tau=tau, source=f"twin:{profile.name}", robot=robot.name,
+                         meta=meta)
+    # A third stream of draws, so that the torque noise of the same seed is unchanged.
+    current_seed = np.random.SeedSequence([seed, 1]).spawn(1)[0]
+    meta["drive_gains"] = asdict(currents)
+    return Recording(t=run.t, q=q_rec, tau=None, source=f"twin:{profile.name}", robot=robot.name,
+                     meta=meta, current=currents.currents(robot, tau, np.random.default_rng(current_seed)))
 
 
 __all__ = [
-    "NoiseProfile", "TwinRun", "closed_loop", "controller_gains", "coulomb_torques",
+    "CurrentSensor", "NoiseProfile", "TwinRun", "closed_loop", "controller_gains", "coulomb_torques",
     "default_parameters", "forward_dynamics", "mass_matrix", "open_loop", "parameter_vector",
     "profiles", "quantise_positions", "reference", "simulate", "torque_noise_sigma",
 ]

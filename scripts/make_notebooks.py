@@ -113,7 +113,8 @@ NOTEBOOKS = {
                  'empty = [rx90sym.twin.simulate(robot, tr, duration=20.0, seed=10 + i) for i, tr in enumerate(trajs)]\n'
                  'loaded = [rx90sym.twin.simulate(robot, tr, duration=20.0, payload="tables_5", seed=20 + i) for i, tr in enumerate(trajs)]\n'
                  'res = identify.identify(robot, empty, base=bp, min_velocity=0.1)'),
-        ("code", 'for m in (1, 2, 3, 4):\n    p = identify.payload(robot, m, empty=empty, loaded=loaded, robot_params=res, '
+        ("code", 'for m in (1, 2, 3, 4):\n    p = identify.payload(robot, m, empty=empty if m != 1 else [], loaded=loaded,\n'
+                 '                         robot_params=res if m == 1 else None, '
                  'a_priori="tables_5", base=bp, min_velocity=0.1)\n    print(p.table() if m == 3 else '
                  'f"method {m}: Mc = {p[\'Mc\']:.3f}, MZc = {p[\'MZc\']:.3f}, XXc = {p[\'XXc\']:.4f}, YYc = {p[\'YYc\']:.4f}")'),
         ("md", "Monitoring: the estimate after each new loaded motion (the paper's conclusion)."),
@@ -125,13 +126,10 @@ NOTEBOOKS = {
                "converted with the gear and coupling matrices; the paper's model plus torque offsets; "
                "validation on the last third of the motion."),
         ("code", COMMON),
-        ("code", 'import os\n# The shared/ folder beside the repository (or $RX90_SHARED).\n'
-                 'candidates = [Path(os.environ.get("RX90_SHARED", "/nonexistent")),\n'
-                 '              *(p / "shared" for p in Path.cwd().resolve().parents),\n'
-                 '              Path(identify.__file__).resolve().parents[2] / "shared"]\n'
-                 'data = next(c / "data" / "tx40" for c in candidates if (c / "data" / "tx40").exists())\nprint(data)'),
+        ("code", '# Shipped with the package (FIGAROH examples, Apache-2.0): see data.readme for the source.\n'
+                 'data = rx90sym.datasets.tx40()\nprint(data.positions.parent)'),
         ("code", 'tx = rx90sym.load_robot("tx40", offsets=True)\n'
-                 'rec = identify.read_motor_recording(data / "pos_read_data.csv", data / "curr_data.csv", tx, period=2e-4)\n'
+                 'rec = identify.read_motor_recording(data.positions, data.torques, tx, period=data.period)\n'
                  'fit, held = identify.split(rec, 2 / 3)\nobs = identify.observation_matrix(tx, [fit], decimate_to=100.0)\nprint(obs.summary())'),
         ("code", 'res = identify.identify(tx, [fit], observation=obs)\nprint(res.table())'),
         ("code", 'val = identify.validate(tx, res, held, decimate_to=100.0)\nprint(val.table())\n'
@@ -146,6 +144,8 @@ def main() -> None:
     for name, cells in NOTEBOOKS.items():
         nb = new_notebook(cells=[new_markdown_cell(src) if kind == "md" else new_code_cell(src)
                                  for kind, src in cells])
+        for k, cell in enumerate(nb.cells):
+            cell.id = f"cell-{k:02d}"  # fixed ids: regenerating gives identical files (no merge noise)
         nb.metadata["kernelspec"] = {"name": "python3", "display_name": "Python 3", "language": "python"}
         nbformat.write(nb, OUT / name)
 

@@ -1,6 +1,7 @@
 """Shared fixtures: robots and random physically consistent parameters."""
 from __future__ import annotations
 
+import importlib.util
 from pathlib import Path
 
 import numpy as np
@@ -9,6 +10,15 @@ import pytest
 import rx90sym
 
 SHARED = Path(__file__).resolve().parents[1].parent / "shared"
+
+
+def benchmark_module(name: str):
+    """The module benchmarks/NAME.py (benchmarks/ is not a package), loaded by path."""
+    path = Path(__file__).resolve().parents[1] / "benchmarks" / f"{name}.py"
+    spec = importlib.util.spec_from_file_location(name, path)
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
 
 
 def random_body(rng: np.random.Generator) -> np.ndarray:

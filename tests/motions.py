@@ -34,3 +34,22 @@ def multisine(robot, seed: int, duration: float = 20.0, fraction: float = 0.6):
         return q, qd, qdd
 
     return traj
+
+
+def stop_and_go(traj, period: float = 4.0):
+    """The motion ``traj`` (callable t -> (q, qd, qdd)) run with rests: its own time advances at the
+    speed sin²(2πt/period) during the first half of every period and stands still during the second
+    (C¹ time warp, so q̈ stays continuous). Half of the samples are at rest."""
+    w = 2 * np.pi / period
+
+    def warped(t):
+        t = np.atleast_1d(np.asarray(t, float))
+        k, tau = np.divmod(t, period)
+        moving = tau < period / 2
+        s = k * period / 4 + np.where(moving, tau / 2 - np.sin(2 * w * tau) / (4 * w), period / 4)
+        g = np.where(moving, np.sin(w * tau) ** 2, 0.0)             # ds/dt
+        dg = np.where(moving, w * np.sin(2 * w * tau), 0.0)          # d²s/dt²
+        q, qd, qdd = traj(s)
+        return q, qd * g[:, None], qdd * g[:, None] ** 2 + qd * dg[:, None]
+
+    return warped

@@ -6,7 +6,7 @@ import pytest
 
 import rx90sym
 
-from conftest import random_chi, random_states
+from conftest import random_states
 
 TABLE_2 = [  # inertial base parameters of Table 2, row by row
     "ZZ1R",

@@ -437,9 +437,9 @@ def test_failed_solve_is_an_error_never_a_result(arm: Arm) -> None:
 
 def _flaky_solve(monkeypatch: pytest.MonkeyPatch, index: int, bad_calls: int) -> list[float]:
     """Make the first ``bad_calls`` solves come back 1e-7 outside the cone on χ[index]."""
-    import identify.consistency as module
+    import identify.consistency.fit as module
 
-    real, margins = module._solve, []
+    real, margins = module.solve_problem, []
 
     def flaky(built, solver, options):
         chi, seconds, iterations = real(built, solver, options)
@@ -449,7 +449,7 @@ def _flaky_solve(monkeypatch: pytest.MonkeyPatch, index: int, bad_calls: int) ->
             chi[index] = -1e-7  # what an interior-point solve stopped just outside looks like
         return chi, seconds, iterations
 
-    monkeypatch.setattr(module, "_solve", flaky)
+    monkeypatch.setattr(module, "solve_problem", flaky)
     return margins
 
 

@@ -15,10 +15,11 @@ import pytest
 
 import excitation
 from excitation.constraints import check_limits
-from excitation.criterion import criterion_function, log_cond_surrogate, smooth_friction_regressor
+from excitation.criterion import log_cond_surrogate, smooth_friction_regressor
 from excitation.fourier import FourierSeries
 from excitation.model import ExcitationModel, JointLimits
-from excitation.optimiser import OptimiserOptions, optimise_model
+from excitation.multistart import optimise_model
+from excitation.optimiser import OptimiserOptions
 from excitation.via_points import ViaPointSpline
 
 L1, G = 0.5, 9.81
@@ -92,7 +93,7 @@ def toy_robot() -> ToyRobot:
                     to_staubli=lambda x: np.asarray(x) + np.array([0.0, np.pi / 2]))
 
 
-TOY_BASE = SimpleNamespace(regressor=toy_regressor(), names=NAMES)
+TOY_BASE = SimpleNamespace(regressor=toy_regressor(), names=NAMES, beta=lambda chi: np.asarray(chi))
 FAST = OptimiserOptions(grid_rate=8.0, verify_rate=400.0, cond_rate=100.0, max_iter=150)
 
 
@@ -194,25 +195,6 @@ def test_surrogate_brackets_true_condition_number():
         assert 2 * np.log(kappa) - 1e-9 <= f <= 2 * np.log(kappa) + 2 / p * np.log(11) + 1e-9
 
 
-def test_criterion_gradient_matches_finite_differences():
-    form = FourierSeries(4.0, 3)
-    rest = form.rest_basis()
-    times = np.arange(40) / 10.0
-    reg = smooth_friction_regressor(toy_regressor(), NAMES, eps=0.2)
-
-    def samples(x):
-        z = ca.reshape(x, rest.shape[1], 2)
-        return tuple(ca.mtimes(ca.DM(b @ rest), z).T for b in form.basis(times))
-
-    x0 = np.random.default_rng(6).standard_normal(rest.shape[1] * 2)
-    for name, p in (("cond", 0), ("cond", 4), ("cond", 16), ("logdet", 0)):
-        f = criterion_function(reg, samples, x0.size, name, p)
-        grad = np.asarray(ca.Function("g", [f.mx_in(0)], [ca.gradient(f(f.mx_in(0)), f.mx_in(0))])(x0)).ravel()
-        h = 1e-6
-        fd = np.array([(float(f(x0 + h * e)) - float(f(x0 - h * e))) / (2 * h) for e in np.eye(x0.size)])
-        np.testing.assert_allclose(grad, fd, rtol=1e-5, atol=1e-6 * np.max(np.abs(fd)))
-
-
 # --------------------------------------------------------------------------- constraints
 def test_check_limits_reports_usage_and_violations():
     model = toy_model()
@@ -266,10 +248,26 @@ def test_progress_line_per_start():
     assert "iterations" in lines[0] and "cond" in lines[0] and "feasible" in lines[0]
 
 
-def test_time_budget_limits_the_starts():
+def test_time_budget_is_optional_and_reports_every_skipped_start():
+    stream = io.StringIO()
     traj = optimise_model(toy_model(), FourierSeries(4.0, 3), seed=0, starts=50, time_budget=1.0,
-                          options=FAST, progress=False)
+                          options=FAST, progress=stream)
     assert 1 <= traj.info.starts < 50 and traj.info.time_s < 5.0
+    skipped = [line for line in stream.getvalue().splitlines() if "skipped" in line]
+    assert len(skipped) == len(traj.info.skipped_starts) == 50 - traj.info.starts
+    assert "time budget" in skipped[0]
+    assert traj.summary()["optimiser"]["skipped_starts"] == list(traj.info.skipped_starts)
+
+
+def test_starts_stop_on_their_count_by_default_and_each_has_its_own_seed():
+    # no time budget: every start runs; start k draws from default_rng([seed, k]), so running
+    # start 3 alone gives start 3 of the full run
+    full = optimise_model(toy_model(), FourierSeries(4.0, 3), seed=4, starts=3, options=FAST, progress=False)
+    assert full.info.starts == 3 and full.info.skipped_starts == ()
+    from excitation.optimiser import run_starts
+
+    alone = run_starts(toy_model(), FourierSeries(4.0, 3), FAST, 4, [full.info.best_start])[0]
+    np.testing.assert_array_equal(alone.coefficients, full.coefficients)
 
 
 def test_via_point_form_optimises():
@@ -391,7 +389,7 @@ def test_rx90_optimised_trajectory_acceptance(tmp_path):
     bp = rx90sym.base_parameters(robot)
     chi = robot.parameter_vector(rx90sym.default_parameters(robot))
     traj = excitation.optimise(robot, 20.0, 5, seed=0, starts=1, chi_nominal=chi, base=bp,
-                               progress=False)
+                               criterion="cond", progress=False)
     assert bp.nb == 54
     t, q, qd, qdd = traj.sample(250.0)
     assert t.size == 5000

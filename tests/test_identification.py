@@ -7,7 +7,6 @@ import pytest
 import identify
 import rx90sym
 
-from conftest import SHARED
 from motions import multisine
 
 TABLE_3 = ["ZZ1R", "FV1", "FS1", "XX2R", "XZ2R", "ZZ2R", "MX2R", "FV2", "FS2", "XX3R", "ZZ3R",
@@ -103,18 +102,19 @@ def test_consistent_fit_stays_consistent_where_ols_does_not(rx90, rx90_base):
     assert report.ok
 
 
-@pytest.mark.skipif(not (SHARED / "data/tx40/pos_read_data.csv").exists(), reason="shared TX40 data absent")
 def test_tx40_real_data_identify_and_validate():
     tx = rx90sym.load_robot("tx40", offsets=True)
-    rec = identify.read_motor_recording(SHARED / "data/tx40/pos_read_data.csv",
-                                        SHARED / "data/tx40/curr_data.csv", tx, period=2e-4)
+    data = rx90sym.datasets.tx40()  # shipped with the package
+    rec = identify.read_motor_recording(data.positions, data.torques, tx, period=data.period)
     fit, held = identify.split(rec, 2 / 3)
-    res = identify.identify(tx, [fit], decimate_to=100.0)
+    obs = identify.observation_matrix(tx, [fit], decimate_to=100.0)
+    res = identify.identify(tx, [fit], observation=obs)
     # Physical sense without ground truth: inertia about axis 1 and gravity moment positive,
     # friction positive and well identified.
     assert res["ZZ1R"] > 0 and res["MX2R"] > 0
     for j in range(1, 7):
         assert res[f"FV{j}"] > 0 and res.rel_std_pct[res.names.index(f"FV{j}")] < 5
-    val = identify.validate(tx, res, held, decimate_to=100.0)
+    # The fit's filtering, and the Coulomb term 0 where a joint rests (half of the held-out part).
+    val = identify.validate(tx, res, held, decimate_to=100.0, cutoff=obs.cutoffs[0], min_velocity=0.05)
     assert np.all(np.isfinite(val.relative_error_pct))
     assert val.relative_error_pct[:3].max() < 30

@@ -136,7 +136,8 @@ def test_spring_from_a_table(tmp_path):
     src = open(rx90sym.robot_file.ROBOTS_DIR / "rx90.toml").read()
     angles = np.linspace(-3, 3, 61)
     (tmp_path / "spring.csv").write_text("angle,torque\n" + "\n".join(f"{x},{-50 * np.sin(x)}" for x in angles))
-    (tmp_path / "mine.toml").write_text(src.replace('# table = "spring.csv"', 'table = "spring.csv"'))
+    # A table replaces the model's constants (giving both is refused).
+    (tmp_path / "mine.toml").write_text(src[:src.index("[spring]")] + '[spring]\njoint = 2\ntable = "spring.csv"\n')
     robot = rx90sym.load_robot(tmp_path / "mine.toml")
     q = np.zeros(6)
     q[1] = 0.5  # on a grid point, linear interpolation is exact
@@ -210,3 +211,18 @@ def test_without_a_c_compiler_the_batch_falls_back_to_casadi_vm(rx90, monkeypatc
     assert f.backend == "casadi-vm"
     Q, QD, QDD = random_states(rx90, np.random.default_rng(9), 7)
     assert np.allclose(f(Q, QD, QDD), rx90.regressor_batch(Q, QD, QDD), rtol=1e-13, atol=1e-12)
+
+
+def test_regressor_workspace_reuses_its_memory_and_streams_the_same_numbers(rx90, rx90_base):
+    Q, QD, QDD = random_states(rx90, np.random.default_rng(11), 700)
+    ws = rx90_base.regressor_workspace(chunk=256)
+    first = ws.evaluate(Q, QD, QDD)
+    expected = rx90_base.regressor_batch(Q, QD, QDD)
+    assert np.array_equal(first, expected)
+    again = ws.evaluate(Q[:500], QD[:500], QDD[:500])  # fewer samples: same memory, no new array
+    assert np.shares_memory(first, again) and np.array_equal(again, expected[:500])
+    blocks = [(start, block.copy()) for start, block in ws.chunks(Q, QD, QDD)]
+    assert [s for s, _ in blocks] == [0, 256, 512]
+    assert np.array_equal(np.concatenate([b for _, b in blocks]), expected)
+    with pytest.raises(ValueError, match="chunk must be >= 1"):
+        rx90.regressor_workspace(chunk=0)

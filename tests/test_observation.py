@@ -29,8 +29,9 @@ def test_true_parameters_reproduce_the_torques_to_the_injected_noise(rx90, rx90_
 
 def test_parallel_filtering_keeps_y_equal_to_w_beta_and_lowers_the_noise(rx90, rx90_base, rx90_truth, quantised):
     beta = np.array([rx90_truth[n] for n in rx90_base.names])
-    full = identify.observation_matrix(rx90, [quantised], base=rx90_base, decimate_to=None)
-    dec = identify.observation_matrix(rx90, [quantised], base=rx90_base, decimate_to=25.0)
+    # One cut-off for both (the automatic one depends on the decimation: automatic_cutoff).
+    full = identify.observation_matrix(rx90, [quantised], base=rx90_base, decimate_to=None, cutoff=10.0)
+    dec = identify.observation_matrix(rx90, [quantised], base=rx90_base, decimate_to=25.0, cutoff=10.0)
     assert dec.rate == pytest.approx(25.0) and dec.rows * 10 <= full.rows + 60
     res_full = np.std(full.Y - full.W @ beta)
     res_dec = np.std(dec.Y - dec.W @ beta)

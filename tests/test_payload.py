@@ -24,7 +24,8 @@ def estimates(rx90, rx90_base, twin_empty, twin_loaded, robot_fit):
     for name in PAYLOADS:
         loaded = twin_loaded[name]
         empty = twin_empty[:2]  # the same two motions, run empty
-        out[name] = {m: payload(rx90, m, empty=empty, loaded=loaded, robot_params=robot_fit,
+        out[name] = {m: payload(rx90, m, empty=empty if m != 1 else [], loaded=loaded,
+                                robot_params=robot_fit if m == 1 else None,
                                 a_priori=name, base=rx90_base, min_velocity=0.1) for m in (1, 2, 3, 4)}
     return out
 
@@ -127,10 +128,11 @@ def test_bad_inputs_are_refused(rx90, rx90_base, twin_empty, twin_loaded):
     tx40 = rx90sym.load_robot("tx40")
     with pytest.raises(ValueError, match="not 'tx40'|of robot"):
         payload(tx40, 3, empty=twin_empty[:1], loaded=loaded[:1])
-    short = identify.Recording(loaded[0].t[:3000], loaded[0].q[:3000], loaded[0].tau[:3000],
-                               source="short.csv", robot="rx90")
-    with pytest.raises(ValueError, match="same motion twice"):
-        payload(rx90, 3, empty=twin_empty[:1], loaded=[short], base=rx90_base)
+    with pytest.raises(ValueError, match="no empty recordings"):
+        payload(rx90, 1, empty=twin_empty[:1], loaded=loaded, robot_params={"ZZ1R": 1.0}, base=rx90_base)
+    for m in (2, 3, 4):
+        with pytest.raises(ValueError, match="robot_params is for method 1"):
+            payload(rx90, m, empty=twin_empty[:1], loaded=loaded[:1], robot_params={"ZZ1R": 1.0}, base=rx90_base)
     with pytest.raises(ValueError, match="differ by up to"):
         payload(rx90, 3, empty=[twin_empty[2]], loaded=[loaded[0]], base=rx90_base)
     still = identify.Recording(loaded[0].t, np.tile(loaded[0].q[:1], (len(loaded[0].t), 1)) +
@@ -140,3 +142,27 @@ def test_bad_inputs_are_refused(rx90, rx90_base, twin_empty, twin_loaded):
         payload(rx90, 4, empty=twin_empty[:1], loaded=[still], base=rx90_base)
     with pytest.raises(ValueError, match="robot_params"):
         payload(rx90, 1, loaded=loaded, base=rx90_base)
+
+
+def test_method_3_pairs_runs_logged_separately(rx90, rx90_base, twin_empty, twin_loaded):
+    """Issue 11 item 5: the loaded run on another clock, cut at both ends: paired, same estimate."""
+    from dataclasses import replace
+
+    empty, loaded = twin_empty[0], twin_loaded["tables_4"][0]
+    whole = payload(rx90, 3, empty=[empty], loaded=[loaded], base=rx90_base)
+    cut = replace(loaded, t=loaded.t + 250.0, source="later.csv").select(slice(137, 4600))
+    res = payload(rx90, 3, empty=[empty], loaded=[cut], base=rx90_base)
+    (pair,) = res.pairs
+    # The loaded run tracks the reference a little later (closed loop): a few hundredths of a sample.
+    assert abs(pair.lag - 250.0) < 0.02 / 250 and pair.gap < 0.02
+    assert abs(res["Mc"] - whole["Mc"]) < 2 * whole.std[-1]
+    entry = res.to_dict()["pairing"][0]
+    assert entry["loaded"] == "later.csv" and entry["lag_s"] == pair.lag
+
+
+def test_robot_estimates_of_methods_2_and_4_are_in_the_json(rx90, estimates):
+    for m in (2, 4):
+        d = estimates["tables_4"][m].to_dict()
+        names = {p["name"] for p in d["robot"]["parameters"]}
+        assert "ZZ1R" in names and all(p["std"] is not None for p in d["robot"]["parameters"])
+    assert estimates["tables_4"][3].to_dict()["robot"] is None

@@ -7,11 +7,14 @@ import io
 import os
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any, Sequence
+from typing import TYPE_CHECKING, Any, Sequence
 
 import numpy as np
 
 from rx90sym.files import atomic_write
+
+if TYPE_CHECKING:  # for annotations only
+    import rx90sym
 
 
 @dataclass(frozen=True)
@@ -47,6 +50,10 @@ def torque_figure(validation: Any, title: str) -> Any:
     for j, ax in enumerate(np.atleast_1d(axes)):
         ax.plot(validation.t, validation.measured[:, j], lw=0.8, label="measured")
         ax.plot(validation.t, validation.predicted[:, j], lw=0.8, label="predicted")
+        moving = getattr(validation, "moving", None)
+        if moving is not None and not moving[:, j].all():
+            ax.fill_between(validation.t, 0, 1, where=~moving[:, j], transform=ax.get_xaxis_transform(),
+                            color="0.85", lw=0, label="at rest")
         ax.set_ylabel(f"Γ{j + 1} [N·m]")
     np.atleast_1d(axes)[0].legend(loc="upper right", fontsize=8)
     np.atleast_1d(axes)[-1].set_xlabel("t [s]")
@@ -120,12 +127,20 @@ def write_report(path: str | os.PathLike, title: str, sections: Sequence[Section
     return atomic_write(path, lambda handle: handle.write(text))
 
 
-def identification_sections(robot: Any, result: Any, recordings: Sequence[Any],
+def identification_sections(robot: rx90sym.Robot, result: Any, recordings: Sequence[Any],
                             validation: Any = None, essential: Any = None,
-                            truth: dict | None = None, fit_prediction: Any = None) -> list[Section]:
-    """The standard sections of an identification run."""
-    sections = [Section("Identified parameters", result.table(), (
-        ("fig-parameters", "Base parameters with 2σ bars", parameter_figure(result, truth)),))]
+                            truth: dict | None = None, fit_prediction: Any = None,
+                            model: Any = None, extra_tables: Sequence[str] = ()) -> list[Section]:
+    """The standard sections of an identification run.
+
+    model: the FitModel (model and filtering recorded in the JSON), shown first; extra_tables:
+    further text blocks of the parameter section (e.g. the bootstrap σ table)."""
+    sections = []
+    if model is not None:
+        sections.append(Section("Model and filtering", "\n".join(
+            f"{k}: {v}" for k, v in model.to_dict().items() if k != "gains")))
+    sections.append(Section("Identified parameters", "\n\n".join([result.table(), *extra_tables]), (
+        ("fig-parameters", "Base parameters with 2σ bars", parameter_figure(result, truth)),)))
     if essential is not None:
         sections.append(Section("Essential parameters", essential.table()))
     if fit_prediction is not None:
@@ -133,7 +148,7 @@ def identification_sections(robot: Any, result: Any, recordings: Sequence[Any],
             ("fig-torques", "Measured and predicted joint torques", torque_figure(fit_prediction, fit_prediction.source)),
             ("fig-residuals", "Residuals per joint", residual_figure(fit_prediction, "Residuals")))))
     if validation is not None:
-        sections.append(Section("Cross-validation", validation.table(), (
+        sections.append(Section("Cross-validation (all samples and while moving)", validation.table(), (
             ("fig-validation", "Torque prediction on the validation motion",
              torque_figure(validation, validation.source)),)))
     if recordings:

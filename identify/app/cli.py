@@ -1,0 +1,54 @@
+"""The ``rx90`` command: model, excite, simulate, convert, identify, payload, demo.
+
+Exit codes: 0 success, 2 bad input (one line on stderr naming the problem), 1 a failure that
+is not the user's (a solver that did not converge is reported, never returned as a result).
+"""
+from __future__ import annotations
+
+import argparse
+import sys
+import warnings
+from typing import Sequence
+
+import rx90sym
+from identify.consistency import ConsistencyError
+
+from .commands import COMMANDS
+from .common import PROG
+
+
+def build_parser() -> argparse.ArgumentParser:
+    p = argparse.ArgumentParser(prog=PROG, description="Dynamic identification of serial robots "
+                                "(Staubli RX90 and its payload) with CasADi.")
+    p.add_argument("--version", action="version", version=f"%(prog)s {rx90sym.__version__}")
+    sub = p.add_subparsers(dest="command", required=True, metavar="COMMAND")
+    for command in COMMANDS:
+        command.register(sub)
+    return p
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    parser = build_parser()
+    args = parser.parse_args(argv)
+
+    def show_warning(message, category, filename, lineno, file=None, line=None) -> None:
+        print(f"[{PROG}] warning: {message}", file=sys.stderr, flush=True)
+
+    try:
+        with warnings.catch_warnings():
+            warnings.showwarning = show_warning  # one plain line, restored on exit
+            return int(args.func(args) or 0)
+    except ConsistencyError as exc:
+        # A solver that failed is not the user's input: reported, exit 1, nothing written.
+        print(f"{PROG} {args.command}: solver failed: {str(exc).splitlines()[0]}", file=sys.stderr)
+        return 1
+    except (ValueError, KeyError, FileNotFoundError, IsADirectoryError, PermissionError) as exc:
+        msg = str(exc).strip().splitlines()[0] if str(exc).strip() else type(exc).__name__
+        if isinstance(exc, KeyError):
+            msg = msg.strip("\"'")
+        print(f"{PROG} {args.command}: error: {msg}", file=sys.stderr)
+        return 2
+
+
+if __name__ == "__main__":
+    sys.exit(main())

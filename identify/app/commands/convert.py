@@ -1,0 +1,115 @@
+"""``rx90 convert``: a controller log (column map) or motor-side files (TX40) to a recording file.
+
+Log form (docs/real-logs.md)::
+
+    rx90 convert LOG.csv --robot R --columns SPEC [--no-header] [--rows FIRST:LAST]
+                 [--from S] [--to S] [--resample HZ] [--gains LIST|FILE] [--convention C] --out REC.csv
+
+Motor form (Stäubli CS8 / TX40 files)::
+
+    rx90 convert --robot tx40 --motor-positions P.csv --motor-torques T.csv --period S --out REC.csv
+"""
+from __future__ import annotations
+
+import argparse
+from typing import Any
+
+from identify.logs import read_log
+from identify.recordings import read_motor_recording, write_recording
+
+from ..common import UsageError, check_output, convention_option, load_robot, progress, robot_option
+
+_LOG_OPTIONS = ("columns", "no_header", "rows", "t_from", "t_to", "resample", "gains")
+_MOTOR_OPTIONS = ("motor_positions", "motor_torques", "period")
+
+
+def register(sub: Any) -> None:
+    text = ("convert a controller log (named columns) or motor-side recordings (TX40 files) to a "
+            "recording file")
+    sp = sub.add_parser("convert", help=text, description=text + "; see docs/real-logs.md")
+    sp.set_defaults(func=run)
+    robot_option(sp)
+    sp.add_argument("log", nargs="?", metavar="LOG.csv", help="controller log (comma separated)")
+    sp.add_argument("--columns", metavar="SPEC",
+                    help="what each column of the log holds, in order: t, q1..qn, qd1..qdn (recorded "
+                         "velocities), tau1..taun, i1..in (motor currents, A), _ (ignored), x:NAME "
+                         "(kept, never a torque); ranges q1..q6 and _*3")
+    sp.add_argument("--no-header", action="store_true", help="the log has no header line")
+    sp.add_argument("--rows", metavar="FIRST:LAST",
+                    help="keep lines FIRST..LAST of the file (1-based line numbers, inclusive)")
+    sp.add_argument("--from", dest="t_from", type=float, metavar="S",
+                    help="keep rows from this time of the log's clock, s")
+    sp.add_argument("--to", dest="t_to", type=float, metavar="S", help="keep rows up to this time, s")
+    sp.add_argument("--resample", type=float, metavar="HZ",
+                    help="put every signal on a uniform grid at HZ (needed for irregular time stamps)")
+    sp.add_argument("--gains", metavar="LIST|FILE",
+                    help="drive gains turning currents into joint torques: K1,...,Kn (N m/A, joint "
+                         "side) or the JSON of rx90 gains; without them the file keeps currents")
+    convention_option(sp)
+    sp.add_argument("--motor-positions", help="motor form: CSV of motor positions [rad]")
+    sp.add_argument("--motor-torques", help="motor form: CSV of motor torques [N m]")
+    sp.add_argument("--period", type=float, help="motor form: sampling period [s]")
+    sp.add_argument("--out", required=True, help="recording file (.csv or .npz)")
+
+
+def _given(args: argparse.Namespace, names: tuple[str, ...]) -> list[str]:
+    flags = {"no_header": "--no-header", "t_from": "--from", "t_to": "--to"}
+    return [flags.get(n, "--" + n.replace("_", "-")) for n in names if getattr(args, n) not in (None, False)]
+
+
+def _rows(text: str | None) -> tuple[int, int] | None:
+    if text is None:
+        return None
+    try:
+        first, last = (int(x) for x in text.split(":"))
+    except ValueError:
+        raise UsageError(f"--rows {text!r}: expected FIRST:LAST (1-based line numbers)") from None
+    return first, last
+
+
+def run(args: argparse.Namespace) -> int:
+    if args.log is None:
+        return _run_motor(args)
+    mixed = _given(args, _MOTOR_OPTIONS)
+    if mixed:
+        raise UsageError(f"{', '.join(mixed)} belong to the motor form, not to a LOG.csv")
+    if args.columns is None:
+        raise UsageError("a LOG.csv needs --columns SPEC (e.g. t,q1..q6,qd1..qd6,i1..i6)")
+    robot = load_robot(args)
+    check_output(args.out)
+    progress(f"reading the log {args.log}")
+    rec = read_log(args.log, robot, args.columns, header=not args.no_header, rows=_rows(args.rows),
+                   t_from=args.t_from, t_to=args.t_to, resample=args.resample, gains=args.gains,
+                   convention=args.convention)
+    write_recording(args.out, rec, robot, convention="controller")
+    log = rec.meta["log"]
+    steps = (f"rate {log['rate_hz']:.6g} Hz (1 / mean step; median step {log['median_step_s']:g} s, "
+             f"{log['irregular_steps']} steps off by more than 1 %)")
+    grid = (f"resampled to {log['resampled_hz']:g} Hz: {log['samples']} samples"
+            if log["resampled_hz"] else "not resampled")
+    what = (f"gains {log['gains']}: joint torques from the currents" if log["gains"] else
+            "torques as logged" if rec.current is None else "no gains: the file keeps currents (give "
+            "--gains to identify with it)")
+    print(f"read lines {log['lines'][0]}..{log['lines'][1]} of {args.log}: {log['rows']} rows, {steps}")
+    print(f"largest step {log['largest_gap_s']:g} s (lines {log['largest_gap_lines'][0]}-"
+          f"{log['largest_gap_lines'][1]}); {grid}; {what}")
+    print(f"converted {rec.n_samples} samples -> {args.out}")
+    return 0
+
+
+def _run_motor(args: argparse.Namespace) -> int:
+    extra = _given(args, _LOG_OPTIONS)
+    if extra:
+        raise UsageError(f"{', '.join(extra)} belong to the log form (give LOG.csv)")
+    missing = [f for f, v in (("--motor-positions", args.motor_positions), ("--motor-torques", args.motor_torques),
+                              ("--period", args.period)) if v is None]
+    if missing:
+        raise UsageError(f"give LOG.csv --columns SPEC, or the motor form ({', '.join(missing)} missing)")
+    robot = load_robot(args)
+    check_output(args.out)
+    progress("reading the motor-side files")
+    rec = read_motor_recording(args.motor_positions, args.motor_torques, robot, period=args.period,
+                               convention=args.convention or "controller")
+    write_recording(args.out, rec, robot, convention="controller")
+    print(f"converted {len(rec.t)} samples at {rec.rate:g} Hz -> {args.out}")
+    return 0

@@ -1,0 +1,93 @@
+"""``rx90 gains``: drive gains from current recordings and a payload of known mass (issue 12)."""
+from __future__ import annotations
+
+import argparse
+from typing import Any
+
+import numpy as np
+
+from rx90sym.files import write_json
+from identify import read_recording
+from identify.drive_gains import FLAG_PCT, GAIN_METHODS, drive_gains
+from identify.gains import read_gains
+from identify.pairing import POSITION_TOLERANCE
+
+from ..common import UsageError, check_output, convention_option, load_robot, progress, robot_option
+
+
+def register(sub: Any) -> None:
+    desc = ("drive gains (N·m/A) from motor-current recordings run empty and with a payload of known "
+            "mass: same-motion (eq. 28: the same trajectory empty and loaded, paired in time) or "
+            "global (eq. 29: any motions; the robot's base parameters and current offsets solved too)")
+    sp = sub.add_parser("gains", help="drive gains from currents and a payload of known mass", description=desc)
+    sp.set_defaults(func=run)
+    robot_option(sp)
+    sp.add_argument("--empty", nargs="+", required=True, help="current recordings without the payload")
+    sp.add_argument("--loaded", nargs="+", required=True, help="current recordings with the payload")
+    sp.add_argument("--mass", type=float, required=True, help="the payload's weighed mass [kg]")
+    sp.add_argument("--mass-std", type=float, default=0.0, help="standard deviation of the weighing [kg] (default 0)")
+    sp.add_argument("--method", choices=GAIN_METHODS, default="same-motion")
+    sp.add_argument("--fix", nargs="+", default=[], metavar="J=VALUE",
+                    help="set gain J from a datasheet instead of identifying it [N·m/A]")
+    sp.add_argument("--side", choices=("motor", "joint"),
+                    help="gains on the motor side (tau = Rt diag(k) i) or the joint side "
+                         "(default: motor for a coupled wrist, else joint)")
+    sp.add_argument("--no-offsets", action="store_true", help="global: no current offsets (default: identified)")
+    sp.add_argument("--flag-pct", type=float, default=FLAG_PCT,
+                    help=f"flag a gain whose relative σ exceeds this [%%] (default {FLAG_PCT:g})")
+    sp.add_argument("--position-tol", type=float, default=POSITION_TOLERANCE,
+                    help=f"same-motion: largest position gap of paired runs [rad] (default {POSITION_TOLERANCE:g})")
+    sp.add_argument("--gains", help="reference gains (K1,...,Kn or a gains JSON) printed beside the result")
+    convention_option(sp)
+    sp.add_argument("--cutoff", type=float, help="Butterworth cut-off for q [Hz] (default: chosen from the data)")
+    sp.add_argument("--decimate-to", type=float, default=50.0, help="rate after parallel filtering [Hz] (default 50)")
+    sp.add_argument("--json", help="the gains as JSON (read by --gains of every command)")
+
+
+def parse_fix(items: list[str], n: int) -> dict[int, float]:
+    """``["1=10.0", ...]`` -> {1: 10.0}; joint numbers 1..n."""
+    out: dict[int, float] = {}
+    for item in items:
+        joint, sep, value = item.partition("=")
+        try:
+            j, v = int(joint), float(value)
+        except ValueError:
+            raise UsageError(f"--fix: expected J=VALUE (e.g. 1=10.0), got {item!r}") from None
+        if not sep or not (1 <= j <= n) or not np.isfinite(v) or v == 0:
+            raise UsageError(f"--fix {item}: joint must be 1..{n} and the gain a finite non-zero number")
+        if j in out:
+            raise UsageError(f"--fix: joint {j} given twice")
+        out[j] = v
+    return out
+
+
+def run(args: argparse.Namespace) -> int:
+    if args.method == "same-motion" and args.no_offsets:
+        raise UsageError("conflicting options: --no-offsets is for --method global (offsets cancel in same-motion)")
+    if args.method == "global" and args.position_tol != POSITION_TOLERANCE:
+        raise UsageError("conflicting options: --position-tol is for --method same-motion (global pairs no runs)")
+    check_output(args.json)
+    robot = load_robot(args)
+    fix = parse_fix(args.fix, robot.n)
+    reference = read_gains(args.gains, robot) if args.gains else None
+    progress(f"reading {len(args.empty)} empty and {len(args.loaded)} loaded recording(s)")
+    empty = [read_recording(p, robot, convention=args.convention) for p in args.empty]
+    loaded = [read_recording(p, robot, convention=args.convention) for p in args.loaded]
+    progress(f"identifying the drive gains ({args.method})")
+    res = drive_gains(robot, empty, loaded, args.mass, method=args.method, fix=fix, mass_std=args.mass_std,
+                      side=args.side, offsets=not args.no_offsets, flag_pct=args.flag_pct,
+                      position_tol=args.position_tol, cutoff=args.cutoff, decimate_to=args.decimate_to)
+    print(res.table())
+    if reference is not None:
+        print(_comparison(res.gains.gains, reference, res.gains.side))
+    if args.json:
+        write_json(args.json, res.to_dict())
+    return 0
+
+
+def _comparison(gains: np.ndarray, reference: Any, side: str) -> str:
+    if reference.side != side:
+        raise UsageError(f"--gains {reference.source}: {reference.side}-side gains, the result is {side}-side")
+    lines = [f"reference gains ({reference.source}): identified / reference"]
+    lines += [f"{j:5d} {r:10.5g} {k / r:8.4f}" for j, (k, r) in enumerate(zip(gains, reference.gains), start=1)]
+    return "\n".join(lines)

@@ -1,0 +1,93 @@
+"""``rx90 payload``: the payload's ten parameters by the paper's methods 1-4 (section IV)."""
+from __future__ import annotations
+
+import argparse
+from typing import Any
+
+from rx90sym.files import write_json
+from identify import read_recording
+from identify.gains import apply_gains, read_gains
+from identify.pairing import POSITION_TOLERANCE
+from identify.payload import payload
+
+from ..common import (UsageError, check_output, convention_option, load_robot, progress, robot_option,
+                      robot_params, spring_notice)
+
+
+METHOD_NEEDS = """what each method needs:
+  1  --loaded and --robot-params (the robot's identified parameters); no --empty
+  2  --empty and --loaded (any motions; the robot is identified twice, the payload solves eqs. 24-27)
+  3  --empty and --loaded, the same trajectory each (paired in time: lag, common part, --position-tol)
+  4  --empty and --loaded (any motions; robot and payload in one system, eq. 29)
+methods 2-4 identify the robot themselves: --robot-params is refused there."""
+
+
+def register(sub: Any) -> None:
+    sp = sub.add_parser("payload", help="identify a payload (paper section IV, methods 1-4)",
+                        description="identify a payload (paper section IV, methods 1-4)", epilog=METHOD_NEEDS,
+                        formatter_class=argparse.RawDescriptionHelpFormatter)
+    sp.set_defaults(func=run)
+    sp.add_argument("--method", type=int, choices=(1, 2, 3, 4), required=True)
+    sp.add_argument("--empty", nargs="*", default=[], help="recordings without the payload")
+    sp.add_argument("--loaded", nargs="+", required=True, help="recordings with the payload")
+    robot_option(sp)
+    convention_option(sp)
+    sp.add_argument("--robot-params", help="JSON of the robot's parameters (rx90 identify --json)")
+    sp.add_argument("--a-priori", help="bundled payload name or JSON file of a priori values")
+    sp.add_argument("--mass", type=float, help="weighed mass [kg] (constrained fit)")
+    sp.add_argument("--mass-tol", type=float, help="tolerance of the weighed mass [kg] (default 0.05)")
+    sp.add_argument("--constrained", action="store_true", help="payload pseudo-inertia PSD (and mass)")
+    sp.add_argument("--filtering-from", metavar="ID.json",
+                    help="reuse the cut-off, decimation and torque delay of an identification (rx90 identify --json)")
+    sp.add_argument("--offsets", action="store_true", help="add per-joint torque offsets OFF1..OFFn")
+    sp.add_argument("--gains", help="drive gains for current recordings: K1,...,Kn [N m/A, joint side] "
+                                    "or the JSON of rx90 gains")
+    sp.add_argument("--position-tol", type=float,
+                    help=f"method 3: largest position gap of a paired run [rad] (default {POSITION_TOLERANCE:g})")
+    sp.add_argument("--json", help="results as JSON")
+
+
+def run(args: argparse.Namespace) -> int:
+    if args.mass_tol is not None and args.mass is None:
+        raise UsageError("conflicting options: --mass-tol needs --mass")
+    if args.mass is not None and not args.constrained:
+        raise UsageError("conflicting options: --mass is used by the constrained fit; add --constrained")
+    if args.method == 1 and not args.robot_params:
+        raise UsageError("method 1 needs --robot-params FILE.json (the robot's identified parameters)")
+    if args.method == 1 and args.empty:
+        raise UsageError("conflicting options: method 1 uses --robot-params, not --empty recordings")
+    if args.method != 1 and args.robot_params:
+        raise UsageError(f"conflicting options: method {args.method} identifies the robot itself; "
+                         "--robot-params is for method 1")
+    if args.method != 3 and args.position_tol is not None:
+        raise UsageError("conflicting options: --position-tol is for method 3 (paired runs)")
+    check_output(args.json)
+    robot = load_robot(args, offsets=args.offsets)
+    spring_notice(robot)
+    gains = read_gains(args.gains, robot) if args.gains else None
+
+    def read(path: str) -> Any:
+        rec = read_recording(path, robot, convention=args.convention)
+        return apply_gains(rec, gains, robot) if gains is not None and rec.current is not None else rec
+
+    empty = [read(p) for p in args.empty]
+    loaded = [read(p) for p in args.loaded]
+    if gains is not None and all(r.current is None for r in empty + loaded):
+        raise UsageError(f"--gains {args.gains}: none of the recordings holds motor currents")
+    params = robot_params(args.robot_params) if args.robot_params else None
+    progress(f"identifying the payload (method {args.method})")
+    filt = {}
+    if args.filtering_from:
+        from .predict import load_identification
+
+        f = load_identification(args.filtering_from)[1].filtering()
+        filt = {k: f[k] for k in ("cutoff", "decimate_to", "delay")}
+    res = payload(robot, args.method, empty=empty, loaded=loaded, robot_params=params, **filt,
+                  a_priori=args.a_priori, constrained=args.constrained, mass=args.mass,
+                  mass_tol=args.mass_tol if args.mass_tol is not None else 0.05,
+                  position_tol=args.position_tol if args.position_tol is not None else POSITION_TOLERANCE)
+    print(res.table())
+    if args.json:
+        spring = robot.spring.describe() if robot.spring is not None else None
+        write_json(args.json, {**res.to_dict(), "spring": spring})
+    return 0

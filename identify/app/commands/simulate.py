@@ -1,0 +1,44 @@
+"""``rx90 simulate``: the twin (closed-loop simulated robot) on a trajectory CSV."""
+from __future__ import annotations
+
+import argparse
+from typing import Any
+
+import rx90sym
+from excitation import read_trajectory
+from identify.recordings import write_recording
+
+from ..common import UsageError, check_output, load_robot, progress, robot_option, spring_notice
+
+
+def register(sub: Any) -> None:
+    sp = sub.add_parser("simulate", help="simulate the robot (twin) on a trajectory",
+                        description="simulate the robot (twin) on a trajectory")
+    sp.set_defaults(func=run)
+    sp.add_argument("trajectory", help="trajectory CSV written by rx90 excite")
+    robot_option(sp)
+    sp.add_argument("--params", help="the twin's true standard parameters: JSON name -> value, or the "
+                    "JSON of 'rx90 identify --method consistent' (default: the robot's nominal "
+                    "parameters; only the bundled RX90 and URDF robots have them)")
+    sp.add_argument("--payload", help="bundled payload name (tables_4, tables_5) or JSON file")
+    sp.add_argument("--noise", choices=("ideal", "realistic"), default="realistic")
+    sp.add_argument("--seed", type=int, default=0)
+    sp.add_argument("--out", required=True, help="recording CSV (controller angles)")
+
+
+def run(args: argparse.Namespace) -> int:
+    robot = load_robot(args)
+    check_output(args.out)
+    params = rx90sym.nominal_parameters(robot, args.params)
+    if params is None:
+        raise UsageError(f"robot {robot.name!r} has no nominal parameters (only the bundled RX90 "
+                         f"and URDF robots do): pass --params FILE")
+    spring_notice(robot)
+    trajectory = read_trajectory(args.trajectory, robot)
+    progress(f"simulating {trajectory[0][-1] - trajectory[0][0]:.1f} s ({args.noise})")
+    rec = rx90sym.twin.simulate(robot, trajectory, params=params, payload=args.payload,
+                                noise=args.noise, seed=args.seed)
+    write_recording(args.out, rec, robot, convention="controller")
+    print(f"simulated {len(rec.t)} samples at {rec.rate:g} Hz -> {args.out}")
+    print(robot.spring.label() if robot.spring is not None else "spring: none")
+    return 0

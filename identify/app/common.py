@@ -1,0 +1,132 @@
+"""What every ``rx90`` command shares: errors, progress lines, output checks, robot loading."""
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+from pathlib import Path
+from typing import Any
+
+
+import rx90sym
+
+PROG = "rx90"
+
+
+class UsageError(ValueError):
+    """Conflicting or missing options."""
+
+
+def progress(message: str) -> None:
+    """One progress line on stderr (stdout keeps the tables)."""
+    print(f"[{PROG}] {message}", file=sys.stderr, flush=True)
+
+
+def check_output(path: str | None) -> None:
+    """Refuse an output path whose folder does not exist before doing any work."""
+    if path is not None and not Path(path).resolve().parent.is_dir():
+        raise UsageError(f"output folder of {path} does not exist")
+
+
+def load_robot(args: argparse.Namespace, offsets: bool = False) -> rx90sym.Robot:
+    return rx90sym.load_robot(args.robot, offsets=offsets, tip=getattr(args, "tip", None))
+
+
+SPRING_MODES = ("default", "none", "identify", "identify-k")
+
+
+def spring_options(sp: argparse.ArgumentParser) -> None:
+    """``--spring``, ``--spring-joint``, ``--spring-orders`` (see docs/robot-files.md)."""
+    sp.add_argument("--spring", default="default",
+                    help="default (the robot file's spring) | none | FILE.csv (angle [rad, model], "
+                         "torque [N m]) | identify (a Fourier series in the joint angle, identified "
+                         "with the other parameters) | identify-k (k only, the robot file's geometry)")
+    sp.add_argument("--spring-joint", type=int, help="joint of the spring for FILE.csv / identify "
+                    "(default: the robot file's [spring] joint)")
+    sp.add_argument("--spring-orders", help="harmonic orders of --spring identify, comma list "
+                    "(default 1,2,3,4; orders the rigid-body model spans are grouped with it)")
+
+
+def spring_notice(robot: rx90sym.Robot) -> None:
+    """Say on stderr when the robot's spring is a placeholder (invented constants)."""
+    if robot.spring is not None and robot.spring.placeholder:
+        progress(f"warning: {robot.spring.label()}; on a real robot use --spring FILE.csv or "
+                 f"--spring identify")
+
+
+def robot_with_spring(args: argparse.Namespace) -> tuple[rx90sym.Robot, Any]:
+    """The robot with the spring the options ask for, and the spring model to identify (a
+    SpringBasis / SpringStiffness) or None. Conflicting options are a UsageError."""
+    from rx90sym.spring import SpringBasis, SpringStiffness, read_spring_table
+
+    robot = load_robot(args, offsets=args.offsets)
+    mode = args.spring if args.spring in SPRING_MODES else "file"
+    if args.spring_joint is not None and mode in ("default", "none"):
+        raise UsageError(f"--spring-joint goes with --spring FILE.csv or identify, not --spring {args.spring}")
+    if args.spring_orders is not None and mode != "identify":
+        raise UsageError("--spring-orders goes with --spring identify")
+    if mode == "none":
+        return robot.with_options(spring=None), None
+    if mode == "default":
+        return robot, None
+    if mode == "identify-k":
+        if robot.spring is None or robot.spring.table is not None:
+            raise UsageError("--spring identify-k needs the spring's geometry (a, b, L0, angle_offset) "
+                             "in the robot file's [spring]; use --spring identify otherwise")
+        if args.spring_joint is not None and args.spring_joint - 1 != robot.spring.joint:
+            raise UsageError(f"--spring-joint {args.spring_joint} differs from the robot file's "
+                             f"spring joint {robot.spring.joint + 1} whose geometry identify-k uses")
+        if robot.spring.placeholder:
+            progress(f"warning: identify-k uses the geometry of {robot.spring.label()}")
+        return robot.with_options(spring=None), SpringStiffness(robot.spring)
+    if args.spring_joint is not None:
+        if not 1 <= args.spring_joint <= robot.n:
+            raise UsageError(f"--spring-joint {args.spring_joint}: robot {robot.name!r} has joints 1..{robot.n}")
+        joint = args.spring_joint - 1
+    elif robot.spring is not None:
+        joint = robot.spring.joint
+    else:
+        raise UsageError(f"robot {robot.name!r} has no [spring]: give --spring-joint J")
+    if mode == "identify":
+        try:
+            orders = (1, 2, 3, 4) if args.spring_orders is None else tuple(
+                int(x) for x in args.spring_orders.split(","))
+            basis = SpringBasis(joint, orders, constant=True)
+        except ValueError as exc:
+            raise UsageError(f"--spring-orders {args.spring_orders!r}: {exc}") from None
+        return robot.with_options(spring=None), basis
+    table = read_spring_table(args.spring)
+    return robot.with_options(spring=rx90sym.Spring(joint=joint, table=table)), None
+
+
+def robot_params(path: str) -> dict[str, float]:
+    try:
+        with open(path) as fh:
+            data = json.load(fh)
+    except (OSError, json.JSONDecodeError) as exc:
+        raise ValueError(f"{path}: cannot read robot parameters ({exc})") from None
+    try:
+        if "parameters" in data and isinstance(data["parameters"], list):
+            return {p["name"]: float(p["value"]) for p in data["parameters"]}
+        if "parameters" in data and isinstance(data["parameters"], dict):
+            return {k: float(v) for k, v in data["parameters"].items()}
+    except (KeyError, TypeError, ValueError) as exc:
+        raise ValueError(f"{path}: malformed parameter entry ({exc})") from None
+    raise ValueError(f"{path}: no 'parameters' list or table (the output of rx90 identify --json)")
+
+
+
+
+def convention_option(sp: argparse.ArgumentParser) -> None:
+    """``--convention``: joint angles of recordings, 'controller' (the controller's, as logged) or
+    'model' (Khalil's); 'staubli' and 'khalil' are their old names."""
+    sp.add_argument("--convention", choices=("controller", "model", "staubli", "khalil"), default=None,
+                    help="joint angles of the files: controller (as logged) or model (Khalil); "
+                         "default: the file's header, else controller")
+
+
+def robot_option(sp: argparse.ArgumentParser) -> None:
+    """``--robot``: a bundled robot name, a robot file or a URDF; ``--tip``: a URDF's end link."""
+    sp.add_argument("--robot", default="rx90", help="bundled robot name, robot file or URDF (default rx90)")
+    sp.add_argument("--tip", help="with a URDF --robot: the link ending the chain from the URDF root "
+                                  "(default: the only leaf link)")

@@ -1,0 +1,84 @@
+"""Delay between the positions and the torques (or currents) of a log.
+
+A controller often logs torques a few milliseconds after the positions they belong to; an
+uncompensated lag of a few ms biases inertia and friction. The lag is estimated as the shift of
+the torques that minimises the residual of a first least-squares fit on the same W (only Y moves):
+a coarse grid of whole steps, then a parabola through the best three points (a fraction of a sample).
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any, Sequence
+
+import numpy as np
+
+import rx90sym
+
+from .filtering import decimate
+from .observation import automatic_cutoff, column_regressor, filtered_motion, shifted_torques, stack_rows
+
+__all__ = ["DelayEstimate", "estimate_delay"]
+
+
+@dataclass(frozen=True, eq=False)
+class DelayEstimate:
+    """delay [s] (> 0: torques lag the positions; compensated by τ(t + delay)); grid [s] and cost
+    (sum over joints of log residual RMS of the fit) of the coarse search; at_bound: the best grid
+    point is at ±max_delay (the true lag may be larger)."""
+
+    delay: float
+    grid: np.ndarray
+    cost: np.ndarray
+    at_bound: bool
+
+    def summary(self) -> str:
+        warn = " (at the search bound: the lag may be larger)" if self.at_bound else ""
+        return f"torque delay {1e3 * self.delay:.3g} ms{warn}"
+
+
+def _cost(W: np.ndarray, Y: np.ndarray, joint: np.ndarray, n: int) -> float:
+    x, *_ = np.linalg.lstsq(W, Y, rcond=None)
+    r = Y - W @ x
+    # Scale-free: each joint's residual RMS counts alike whatever its torque range.
+    return float(sum(np.log(np.sqrt(np.mean(r[joint == j] ** 2)) + 1e-300) for j in range(n)
+                     if np.any(joint == j)))
+
+
+def estimate_delay(robot: rx90sym.Robot, recordings: Sequence[Any], base: Any = None,
+                   cutoff: float | None = None, decimate_to: float | None = 50.0,
+                   spring: bool = True, min_velocity: float | None = None, rest: str = "drop",
+                   max_delay: float = 0.02, steps: int = 41) -> DelayEstimate:
+    """Torque-to-position lag [s] of ``recordings`` (one lag for all), within ±``max_delay`` s.
+
+    The filtering options are those of :func:`identify.observation_matrix`; ``steps`` points on the
+    coarse grid (at least one sampling period apart), refined by a parabola.
+    """
+    if not (max_delay > 0 and np.isfinite(max_delay)):
+        raise ValueError(f"max_delay must be a positive duration in s, got {max_delay!r}")
+    names, regressor = column_regressor(robot, base)
+    cutoff = cutoff if cutoff is not None else automatic_cutoff(recordings, decimate_to)
+    motions = [filtered_motion(robot, rec, cutoff, decimate_to, spring, regressor, names, min_velocity, rest)
+               for rec in recordings]
+    masks = [m.usable for m in motions] if (min_velocity is not None and rest == "drop") else None
+    period = max(float(np.median(np.diff(rec.t))) for rec in recordings)
+    step = max(period, 2 * max_delay / (steps - 1))
+    grid = np.arange(-max_delay, max_delay + step / 2, step)
+
+    def cost(delay: float) -> float:
+        Ys = []
+        for rec, m in zip(recordings, motions):
+            Y = shifted_torques(rec, delay)[m.kept] + m.extra
+            Ys.append(decimate(Y, m.factor) if m.factor > 1 else Y)
+        W, Y, joint, _ = stack_rows([m.Phi for m in motions], Ys, masks=masks)
+        return _cost(W, Y, joint, robot.n)
+
+    costs = np.array([cost(d) for d in grid])
+    k = int(np.argmin(costs))
+    at_bound = k in (0, grid.size - 1)
+    delay = float(grid[k])
+    if not at_bound:
+        c0, c1, c2 = costs[k - 1:k + 2]
+        curvature = c0 - 2 * c1 + c2
+        if curvature > 0:
+            delay += float(np.clip(0.5 * (c0 - c2) / curvature, -1, 1) * step)
+    return DelayEstimate(delay, grid, costs, at_bound)

@@ -1,0 +1,121 @@
+"""The column map of a controller log: what each column holds (see :mod:`identify.logs`).
+
+Names (n = the robot's number of joints): ``t``; ``q1..qn``, ``qd1..qdn``, ``tau1..taun``,
+``i1..in`` (each group all or none; positions required; torques or currents required); ``_``
+(ignored); ``x:NAME`` (auxiliary, kept, never a torque). Shorthands: ``q1..q6`` (one prefix,
+increasing numbers) and ``_*3`` (three ignored columns).
+"""
+from __future__ import annotations
+
+import re
+from dataclasses import dataclass
+from typing import Sequence
+
+import rx90sym
+
+__all__ = ["ColumnMap", "parse_columns"]
+
+_GROUPS = ("q", "qd", "tau", "i")
+_NAME = re.compile(r"^(q|qd|tau|i)(\d+)$")
+_RANGE = re.compile(r"^(.*?)(\d+)\.\.(.*?)(\d+)$")
+_REPEAT = re.compile(r"^_\s*\*\s*(\d+)$")
+
+
+@dataclass(frozen=True)
+class ColumnMap:
+    """What each column of a log holds (0-based column indices).
+
+    Attributes:
+        names: the expanded name of every column, in file order (``_`` for ignored ones).
+        t: column of the time stamps.
+        q, qd, tau, i: columns of joint j's position, velocity, torque, current (empty tuple
+            when the log has none of that kind).
+        aux: auxiliary name -> column.
+    """
+
+    names: tuple[str, ...]
+    t: int
+    q: tuple[int, ...]
+    qd: tuple[int, ...]
+    tau: tuple[int, ...]
+    i: tuple[int, ...]
+    aux: tuple[tuple[str, int], ...]
+
+
+def _expand(token: str) -> list[str]:
+    """``q1..q6`` -> q1, ..., q6; ``_*3`` -> _, _, _; anything else as is."""
+    repeat = _REPEAT.match(token)
+    if repeat:
+        return ["_"] * int(repeat.group(1))
+    rng = _RANGE.match(token)
+    if not rng:
+        return [token]
+    prefix, a, prefix_b, b = rng.group(1), int(rng.group(2)), rng.group(3), int(rng.group(4))
+    if prefix != prefix_b or b < a:
+        raise ValueError(f"column map: range {token!r} must be PREFIXa..PREFIXb with one prefix and "
+                         f"a <= b (e.g. q1..q6)")
+    return [f"{prefix}{k}" for k in range(a, b + 1)]
+
+
+def parse_columns(spec: str | Sequence[str], robot: rx90sym.Robot) -> ColumnMap:
+    """Parse a column map (module docstring) for ``robot``.
+
+    Raises:
+        ValueError: an unknown or repeated name, a joint the robot does not have (``q7`` on a
+            6-joint robot), an incomplete group (``qd1..qd5`` of 6), no ``t``, no positions, or
+            neither torques nor currents.
+    """
+    tokens = [s.strip() for s in spec.split(",")] if isinstance(spec, str) else [str(s).strip() for s in spec]
+    names: list[str] = []
+    for token in tokens:
+        if not token:
+            raise ValueError(f"column map: empty name at position {len(names) + 1} (two commas in a row?)")
+        names.extend(_expand(token))
+    n = int(robot.n)
+    groups: dict[str, dict[int, int]] = {g: {} for g in _GROUPS}
+    aux: dict[str, int] = {}
+    t_col = None
+    for col, name in enumerate(names):
+        where = f"column map: column {col + 1} '{name}'"
+        if name == "_":
+            continue
+        if name == "t":
+            if t_col is not None:
+                raise ValueError(f"{where}: 't' appears twice (columns {t_col + 1} and {col + 1})")
+            t_col = col
+            continue
+        if name.startswith("x:"):
+            key = name[2:].strip()
+            if not key:
+                raise ValueError(f"{where}: an auxiliary column needs a name (x:NAME)")
+            if key in aux:
+                raise ValueError(f"{where}: auxiliary name '{key}' appears twice")
+            aux[key] = col
+            continue
+        m = _NAME.match(name)
+        if not m:
+            raise ValueError(f"{where} is unknown: expected t, q1..q{n}, qd1..qd{n}, tau1..tau{n}, "
+                             f"i1..i{n}, _ or x:NAME")
+        group, joint = m.group(1), int(m.group(2))
+        if not 1 <= joint <= n:
+            raise ValueError(f"{where}: robot '{robot.name}' has {n} joints ({group}1..{group}{n})")
+        if joint in groups[group]:
+            raise ValueError(f"{where} appears twice")
+        groups[group][joint] = col
+    if t_col is None:
+        raise ValueError("column map: no time column 't'")
+    for group, found in groups.items():
+        if found and len(found) != n:
+            missing = next(j for j in range(1, n + 1) if j not in found)
+            raise ValueError(f"column map: '{group}{missing}' is missing ({group}1..{group}{n} come all "
+                             f"together or not at all)")
+    if not groups["q"]:
+        raise ValueError(f"column map: no joint positions (q1..q{n})")
+    if not groups["tau"] and not groups["i"]:
+        raise ValueError(f"column map: neither joint torques (tau1..tau{n}) nor motor currents (i1..i{n})")
+
+    def cols(group: str) -> tuple[int, ...]:
+        return tuple(groups[group][j] for j in range(1, n + 1)) if groups[group] else ()
+
+    return ColumnMap(names=tuple(names), t=t_col, q=cols("q"), qd=cols("qd"), tau=cols("tau"),
+                     i=cols("i"), aux=tuple(aux.items()))

@@ -1,0 +1,122 @@
+"""Torque prediction and cross-validation on a motion not used for fitting (section III-B).
+
+The prediction uses the filtering of the fit (cut-off, decimation: pass the values the fit used)
+and, given a rest threshold, takes the Coulomb term as 0 where its joint (or motor) rests: at rest
+the static friction lies anywhere in [−FS, FS] and the sign of a noisy speed says nothing. The
+errors are reported on all samples and on the samples where each joint moves.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+import rx90sym
+
+from .observation import filtered_motion
+from .results import IdentificationResult, json_number
+
+__all__ = ["Validation", "predict", "validate"]
+
+
+def _rms(err: np.ndarray, mask: np.ndarray) -> np.ndarray:
+    return np.array([np.sqrt(np.mean(err[mask[:, j], j] ** 2)) if mask[:, j].any() else np.nan
+                     for j in range(err.shape[1])])
+
+
+def _relative(err: np.ndarray, y: np.ndarray, mask: np.ndarray) -> np.ndarray:
+    return np.array([100 * np.linalg.norm(err[mask[:, j], j]) / np.linalg.norm(y[mask[:, j], j])
+                     if mask[:, j].any() else np.nan for j in range(err.shape[1])])
+
+
+@dataclass(frozen=True, eq=False)
+class Validation:
+    """Torque prediction on a motion not used for fitting (cross-validation, section III-B).
+
+    relative_error_pct: (n,) 100 ||Y_j - W_j beta|| / ||Y_j|| per joint on all samples; rms_error:
+    (n,) N m; the ``_moving`` pair: the same on the samples where joint j moves (|q̇j| ≥
+    moving_threshold rad/s; equal to the all-sample figures without a threshold);
+    moving_fraction: (n,) share of samples where joint j moves; measured, predicted: (S, n)
+    torques (spring added) at the decimated samples; t: (S,) their true time [s]; moving: (S, n).
+    cutoff [Hz], rate [Hz]: the filtering used.
+    """
+
+    relative_error_pct: np.ndarray
+    rms_error: np.ndarray
+    measured: np.ndarray
+    predicted: np.ndarray
+    t: np.ndarray
+    source: str
+    relative_error_pct_moving: np.ndarray | None = None
+    rms_error_moving: np.ndarray | None = None
+    moving_fraction: np.ndarray | None = None
+    moving_threshold: float | None = None
+    moving: np.ndarray | None = None
+    cutoff: float = float("nan")
+    rate: float = float("nan")
+
+    def table(self) -> str:
+        head = ("joint  rms error [N m]  relative error [%]  rms moving [N m]  relative moving [%]"
+                "  moving [%]")
+        n = len(self.rms_error)
+        rel_m = self.relative_error_pct_moving if self.relative_error_pct_moving is not None else self.relative_error_pct
+        rms_m = self.rms_error_moving if self.rms_error_moving is not None else self.rms_error
+        frac = self.moving_fraction if self.moving_fraction is not None else np.ones(n)
+        rows = [f"{j + 1:5d}  {self.rms_error[j]:15.3f}  {self.relative_error_pct[j]:18.2f}  "
+                f"{rms_m[j]:16.3f}  {rel_m[j]:19.2f}  {100 * frac[j]:10.1f}" for j in range(n)]
+        thr = ("no rest threshold" if self.moving_threshold is None
+               else f"moving: |q̇j| ≥ {self.moving_threshold:g} rad/s")
+        return "\n".join([f"Validation on {self.source} (cut-off {self.cutoff:.4g} Hz, rate {self.rate:.6g} Hz, "
+                          f"{thr})", head, *rows])
+
+    def to_dict(self) -> dict[str, Any]:
+        def listed(a: np.ndarray | None) -> list | None:
+            return None if a is None else [json_number(v) for v in a]
+
+        return {"source": self.source, "relative_error_pct": listed(self.relative_error_pct),
+                "rms_error": listed(self.rms_error),
+                "relative_error_pct_moving": listed(self.relative_error_pct_moving),
+                "rms_error_moving": listed(self.rms_error_moving),
+                "moving_fraction": listed(self.moving_fraction),
+                "moving_threshold": self.moving_threshold,
+                "cutoff_hz": json_number(self.cutoff), "rate_hz": json_number(self.rate)}
+
+
+def base_vector(result: IdentificationResult, base: Any, robot: rx90sym.Robot) -> np.ndarray:
+    """β over ``base.names`` from a result (parameters of the base set missing from it count as 0)."""
+    unknown = [nm for nm in result.names if nm not in base.names]
+    if unknown:
+        raise ValueError(f"result has parameters {unknown} that are not base parameters of "
+                         f"{robot.name!r}")
+    values = dict(zip(result.names, result.values))
+    return np.array([values.get(nm, 0.0) for nm in base.names])
+
+
+def predict(robot: rx90sym.Robot, result: IdentificationResult, recording: Any, base: Any = None,
+            cutoff: float | None = None, decimate_to: float | None = 50.0, spring: bool = True,
+            min_velocity: float | None = None, delay: float = 0.0) -> Validation:
+    """Predicted vs measured torques of ``recording`` with the parameters of ``result``.
+
+    cutoff [Hz], decimate_to [Hz]: give those of the fit (None: chosen on this recording);
+    min_velocity [rad/s]: rest threshold (Coulomb term 0 at rest, errors also while moving);
+    delay [s]: torque lag compensated as in the fit.
+    """
+    base = base if base is not None else rx90sym.base_parameters(robot)
+    beta = base_vector(result, base, robot)
+    m = filtered_motion(robot, recording, cutoff, decimate_to, spring, base.regressor_batch, base.names,
+                        min_velocity, "zero-coulomb", delay)
+    predicted = m.Phi @ beta
+    err = m.Y - predicted
+    every = np.ones_like(m.moving)
+    return Validation(
+        relative_error_pct=_relative(err, m.Y, every), rms_error=_rms(err, every),
+        measured=m.Y, predicted=predicted, t=m.t, source=m.source,
+        relative_error_pct_moving=_relative(err, m.Y, m.moving), rms_error_moving=_rms(err, m.moving),
+        moving_fraction=m.moving.mean(axis=0), moving_threshold=min_velocity, moving=m.moving,
+        cutoff=m.cutoff, rate=m.rate)
+
+
+def validate(robot: rx90sym.Robot, result: IdentificationResult, recording: Any, **options: Any) -> Validation:
+    """Cross-validation: torque error per joint on a recording not used in the fit (see :func:`predict`)."""
+    return predict(robot, result, recording, **options)

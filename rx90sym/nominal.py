@@ -1,0 +1,124 @@
+"""Nominal standard parameters of any robot: from a file, from its URDF, or the twin's set.
+
+``nominal_parameters(robot, source)`` is the one place the toolkit asks "what are this robot's
+parameters, roughly?" (torque limits of an excitation, the twin's true parameters):
+
+1. ``source`` given: a JSON parameter file (see :func:`read_parameter_file`);
+2. a robot loaded from a URDF: its inertials (``rx90sym.urdf_parameters``, when available);
+3. the bundled RX90 robot file (recognised by the file itself, not by the name "rx90"): the
+   twin's physically consistent set (``rx90sym/data/rx90_true_params.json``);
+4. otherwise ``None``: the caller must say so (no silent defaults).
+"""
+from __future__ import annotations
+
+import json
+from pathlib import Path
+from typing import Any, Mapping
+
+from .description import Robot
+from .parameters import checked_values, split_name
+from .robot_file import ROBOTS_DIR
+
+DATA_DIR = Path(__file__).parent / "data"
+# Bundled robot file -> the twin's parameter file. Keyed by the file, so a user's own file named
+# "rx90" does not silently get the twin's parameters.
+TWIN_PARAMETER_FILES: dict[Path, Path] = {
+    (ROBOTS_DIR / "rx90.toml").resolve(): DATA_DIR / "rx90_true_params.json",
+}
+
+
+def _source_path(robot: Robot) -> Path | None:
+    if not robot.source:
+        return None
+    try:
+        return Path(robot.source).resolve()
+    except (OSError, RuntimeError):
+        return None
+
+
+def twin_parameter_file(robot: Robot) -> Path | None:
+    """The twin's parameter file when ``robot`` was loaded from a bundled robot file that has
+    one (the RX90), else None."""
+    path = _source_path(robot)
+    return TWIN_PARAMETER_FILES.get(path) if path is not None else None
+
+
+def nominal_parameters(robot: Robot, source: str | Path | Mapping[str, float] | None = None
+                       ) -> dict[str, float] | None:
+    """Standard parameters name -> value [SI] for ``robot``, or None when none are known.
+
+    source: a JSON parameter file (path) or a name -> value mapping. Without it: the robot's
+    URDF inertials, then the twin's set for the bundled RX90 file only, then None.
+    Raises ValueError naming the file and the field on a malformed source.
+    """
+    if isinstance(source, Mapping):
+        return _complete(robot, dict(source), "parameters")
+    if source is not None:
+        return read_parameter_file(robot, source)
+    if getattr(robot, "urdf", None) is not None:  # a robot imported from a URDF
+        try:  # hook: the URDF reader provides rx90sym.urdf_parameters
+            from . import urdf_parameters
+        except ImportError:
+            urdf_parameters = None
+        if urdf_parameters is not None:
+            return _complete(robot, dict(urdf_parameters(robot)), f"{robot.source} (inertials)")
+    twin_file = twin_parameter_file(robot)
+    if twin_file is not None:
+        return read_parameter_file(robot, twin_file)
+    return None
+
+
+def read_parameter_file(robot: Robot, path: str | Path) -> dict[str, float]:
+    """Standard parameters from a JSON file, checked against ``robot``.
+
+    Accepted layouts: a flat object ``{name: value}``; ``{"robot": name, "parameters":
+    {name: value}}`` (the twin's files); the output of ``rx90 identify --json`` when it holds
+    standard parameters (``"standard": {name: value}``, e.g. ``--method consistent``).
+    Torque offsets OFFj may be absent (0). Values in SI units (kg, m, kg m, kg m^2, N m ...).
+    """
+    path = Path(path)
+    try:
+        data = json.loads(path.read_text(encoding="utf-8"))
+    except OSError as exc:
+        raise ValueError(f"{path}: cannot read parameter file ({exc.strerror or exc})") from None
+    except json.JSONDecodeError as exc:
+        raise ValueError(f"{path}: not valid JSON (line {exc.lineno}, column {exc.colno}: "
+                         f"{exc.msg})") from None
+    if not isinstance(data, dict):
+        raise ValueError(f"{path}: expected a JSON object of parameter names to numbers")
+    if isinstance(data.get("robot"), str) and data["robot"] != robot.name:
+        raise ValueError(f"{path}: field 'robot' is {data['robot']!r}, not {robot.name!r}")
+    if isinstance(data.get("standard"), dict) and data["standard"]:
+        table = data["standard"]
+    elif isinstance(data.get("parameters"), dict):
+        table = data["parameters"]
+    elif isinstance(data.get("parameters"), list):
+        raise ValueError(f"{path}: holds base parameters (an identification's 'parameters' list), "
+                         f"not standard parameters; use the JSON of 'rx90 identify --method "
+                         f"consistent', whose 'standard' table has them")
+    else:
+        table = data
+    return _complete(robot, table, str(path))
+
+
+def _complete(robot: Robot, table: Any, where: str) -> dict[str, float]:
+    """Check ``table`` against robot.parameter_names; offsets OFFj default to 0 and are
+    dropped when the robot has none."""
+    if not isinstance(table, Mapping):
+        raise ValueError(f"{where}: expected a mapping of parameter names to numbers")
+    table = dict(table)
+    names = list(robot.parameter_names)
+    for name in list(table):
+        if _is_offset(name) and name not in names:
+            del table[name]
+    for name in names:
+        if _is_offset(name) and name not in table:
+            table[name] = 0.0
+    return checked_values(table, names, f"{where} (robot {robot.name!r})")
+
+
+def _is_offset(name: str) -> bool:
+    try:
+        return split_name(name)[0] == "OFF"
+    except ValueError:
+        return False

@@ -1,0 +1,233 @@
+"""A URDF file read into plain data: links with their inertials, joints, the kinematic tree.
+
+Only what the dynamic model needs is read (inertials, joint placements, axes, limits,
+dynamics); every error names the file and the element (link or joint) at fault.
+"""
+from __future__ import annotations
+
+import math
+import warnings
+import xml.etree.ElementTree as ET
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from .rigid_body import RigidBody
+
+MOVABLE = ("revolute", "continuous", "prismatic")
+JOINT_TYPES = MOVABLE + ("fixed", "floating", "planar")
+# URDF files write pi/2 with 10-12 digits (1.57079632679): rotation entries this close to 0 or
+# +-1 are made exact, so perpendicular and parallel axes are seen structurally. Files that write
+# 1.5708 (3.7e-6 off) need load_urdf(..., snap=1e-5): a warning says so.
+SNAP = 1e-9
+NEAR_RIGHT_ANGLE = 1e-4
+
+
+class UrdfError(ValueError):
+    """A URDF that cannot be used; the message names the file and the element."""
+
+
+@dataclass(frozen=True, eq=False)
+class UrdfJoint:
+    name: str
+    type: str
+    parent: str
+    child: str
+    R: np.ndarray          # origin rotation (child joint frame in parent link frame)
+    p: np.ndarray          # origin translation [m]
+    axis: np.ndarray       # unit axis in the joint frame
+    lower: float | None
+    upper: float | None
+    effort: float | None
+    velocity: float | None
+    damping: float
+    friction: float
+    mimic: bool
+
+
+@dataclass(frozen=True, eq=False)
+class UrdfTree:
+    path: str
+    name: str
+    text: str
+    links: tuple[str, ...]
+    inertials: dict[str, RigidBody]     # link -> its own body in its frame (absent: no inertial)
+    joints: dict[str, UrdfJoint]
+    parent_joint: dict[str, str]        # child link -> joint
+    root: str
+
+    def children(self, link: str) -> list[UrdfJoint]:
+        return [j for j in self.joints.values() if j.parent == link]
+
+    def path_from_root(self, link: str) -> list[UrdfJoint]:
+        """Joints from the root down to ``link``."""
+        out = []
+        while link in self.parent_joint:
+            j = self.joints[self.parent_joint[link]]
+            out.append(j)
+            link = j.parent
+        return out[::-1]
+
+
+def rpy_matrix(r: float, p: float, y: float, snap: float = SNAP) -> np.ndarray:
+    """URDF fixed-axis roll-pitch-yaw: R = Rz(y) Ry(p) Rx(r), entries within ``snap`` of 0, +-1
+    made exact."""
+    cr, sr, cp, sp, cy, sy = math.cos(r), math.sin(r), math.cos(p), math.sin(p), math.cos(y), math.sin(y)
+    R = np.array([[cy * cp, cy * sp * sr - sy * cr, cy * sp * cr + sy * sr],
+                  [sy * cp, sy * sp * sr + cy * cr, sy * sp * cr - cy * sr],
+                  [-sp, cp * sr, cp * cr]])
+    return snap_rotation(R, snap)
+
+
+def snap_rotation(R: np.ndarray, snap: float = SNAP) -> np.ndarray:
+    """Entries within ``snap`` of 0, +-1 made exact when the result stays a rotation (to 1e-12)."""
+    S = R.copy()
+    for v in (0.0, 1.0, -1.0):
+        S[np.abs(S - v) < snap] = v
+    if np.abs(S.T @ S - np.eye(3)).max() < 1e-12:
+        return S
+    return R
+
+
+def _floats(elem: ET.Element, attr: str, count: int, where: str, default: list[float]) -> list[float]:
+    if elem is None or attr not in elem.attrib:
+        return list(default)
+    try:
+        vals = [float(x) for x in elem.attrib[attr].split()]
+    except ValueError:
+        vals = []
+    if len(vals) != count or not all(math.isfinite(v) for v in vals):
+        raise UrdfError(f"{where}: <{elem.tag} {attr}=\"{elem.attrib[attr]}\"> needs {count} finite number{'s' if count > 1 else ''}")
+    return vals
+
+
+def _number(elem: ET.Element | None, attr: str, where: str) -> float | None:
+    if elem is None or attr not in elem.attrib:
+        return None
+    return _floats(elem, attr, 1, where, [])[0]
+
+
+def _origin(elem: ET.Element, where: str, snap: float = SNAP) -> tuple[np.ndarray, np.ndarray]:
+    o = elem.find("origin")
+    xyz = _floats(o, "xyz", 3, where, [0.0, 0.0, 0.0])
+    rpy = _floats(o, "rpy", 3, where, [0.0, 0.0, 0.0])
+    return rpy_matrix(*rpy, snap=snap), np.array(xyz)
+
+
+def _near_right_angle(R: np.ndarray) -> bool:
+    """Some entry close to, but not exactly, 0 or +-1 (an angle like 1.5708 for pi/2)."""
+    return any(np.any((np.abs(R - v) > 0) & (np.abs(R - v) < NEAR_RIGHT_ANGLE)) for v in (0.0, 1.0, -1.0))
+
+
+def _inertial(link: ET.Element, where: str) -> RigidBody | None:
+    el = link.find("inertial")
+    if el is None:
+        return None
+    where = f"{where} <inertial>"
+    m = _number(el.find("mass"), "value", where)
+    if m is None:
+        raise UrdfError(f"{where}: missing <mass value=...>")
+    iel = el.find("inertia")
+    keys = ("ixx", "ixy", "ixz", "iyy", "iyz", "izz")
+    vals = {k: (_number(iel, k, where) or 0.0) for k in keys}
+    I = np.array([[vals["ixx"], vals["ixy"], vals["ixz"]], [vals["ixy"], vals["iyy"], vals["iyz"]],
+                  [vals["ixz"], vals["iyz"], vals["izz"]]])
+    R, c = _origin(el, where)
+    return RigidBody.from_com(m, c, R, I)
+
+
+def read_urdf(path: str | Path, snap: float = SNAP) -> UrdfTree:
+    """Parse and check a URDF: one root, a tree (no link with two parents, no loop), known links.
+
+    snap: joint origin rotation entries within it of 0, +-1 are made exact (see SNAP)."""
+    path = Path(path)
+    try:
+        text = path.read_text(encoding="utf-8")
+    except OSError as exc:
+        raise UrdfError(f"{path}: cannot read URDF ({exc.strerror or exc})") from None
+    try:
+        root_el = ET.fromstring(text)
+    except ET.ParseError as exc:
+        raise UrdfError(f"{path}: not valid XML ({exc})") from None
+    if root_el.tag != "robot":
+        raise UrdfError(f"{path}: the top element is <{root_el.tag}>, not <robot> (not a URDF)")
+    links: list[str] = []
+    inertials: dict[str, RigidBody] = {}
+    for el in root_el.findall("link"):
+        name = el.attrib.get("name")
+        if not name:
+            raise UrdfError(f"{path}: a <link> has no name")
+        if name in links:
+            raise UrdfError(f"{path}: link {name!r} is defined twice")
+        links.append(name)
+        body = _inertial(el, f"{path}: link {name!r}")
+        if body is not None:
+            inertials[name] = body
+    joints: dict[str, UrdfJoint] = {}
+    parent_joint: dict[str, str] = {}
+    near: list[str] = []
+    for el in root_el.findall("joint"):
+        name = el.attrib.get("name")
+        where = f"{path}: joint {name!r}"
+        if not name:
+            raise UrdfError(f"{path}: a <joint> has no name")
+        if name in joints:
+            raise UrdfError(f"{where} is defined twice")
+        jtype = el.attrib.get("type")
+        if jtype not in JOINT_TYPES:
+            raise UrdfError(f"{where}: unknown type {jtype!r} (expected one of {list(JOINT_TYPES)})")
+        ends = {}
+        for tag in ("parent", "child"):
+            e = el.find(tag)
+            ends[tag] = None if e is None else e.attrib.get("link")
+            if ends[tag] is None:
+                raise UrdfError(f"{where}: missing <{tag} link=...>")
+            if ends[tag] not in links:
+                raise UrdfError(f"{where}: {tag} link {ends[tag]!r} is not a <link> of the file")
+        child = ends["child"]
+        if child in parent_joint:
+            raise UrdfError(f"{where}: link {child!r} is already the child of joint "
+                            f"{parent_joint[child]!r}: the URDF has a loop (a URDF must be a tree)")
+        parent_joint[child] = name
+        R, p = _origin(el, where, snap)
+        if _near_right_angle(R):
+            near.append(name)
+        axis = np.array(_floats(el.find("axis"), "xyz", 3, where, [1.0, 0.0, 0.0]))
+        norm = float(np.linalg.norm(axis))
+        if jtype in MOVABLE and norm < 1e-12:
+            raise UrdfError(f"{where}: <axis> has zero length")
+        axis = axis / norm if norm > 0 else axis
+        limit, dyn = el.find("limit"), el.find("dynamics")
+        joints[name] = UrdfJoint(
+            name, jtype, ends["parent"], child, R, p, axis,
+            _number(limit, "lower", where), _number(limit, "upper", where),
+            _number(limit, "effort", where), _number(limit, "velocity", where),
+            _number(dyn, "damping", where) or 0.0, _number(dyn, "friction", where) or 0.0,
+            el.find("mimic") is not None)
+    if not links:
+        raise UrdfError(f"{path}: no <link>")
+    if near:
+        warnings.warn(f"{path}: the origin of joint(s) {near[:4]} is within {NEAR_RIGHT_ANGLE:g} rad of "
+                      f"a right angle but not at it (e.g. 1.5708 for pi/2): kept as written; pass "
+                      f"snap=1e-5 (or larger) to make such angles exact", stacklevel=3)
+    roots = [l for l in links if l not in parent_joint]
+    if not roots:
+        raise UrdfError(f"{path}: every link has a parent joint: the URDF has a loop (no root link)")
+    if len(roots) > 1:
+        raise UrdfError(f"{path}: several root links {roots[:5]}: the links do not form one tree")
+    # One root and one parent per link; a cycle elsewhere would leave links unreachable.
+    seen, stack = {roots[0]}, [roots[0]]
+    while stack:
+        link = stack.pop()
+        for j in joints.values():
+            if j.parent == link and j.child not in seen:
+                seen.add(j.child)
+                stack.append(j.child)
+    unreachable = [l for l in links if l not in seen]
+    if unreachable:
+        j = parent_joint[unreachable[0]]
+        raise UrdfError(f"{path}: joint {j!r} closes a loop (link {unreachable[0]!r} is not below "
+                        f"the root {roots[0]!r})")
+    return UrdfTree(str(path), root_el.attrib.get("name", path.stem), text, tuple(links),
+                    inertials, joints, parent_joint, roots[0])
