@@ -17,8 +17,8 @@ touch (self-collision); when default capsules already touch at the centre of the
 links) self-collision is not checked, and this is reported (:func:`without_pairs_touching_at`);
 no capsule may enter an obstacle box.
 
-For IPOPT each capsule is covered by ``spheres`` balls on its segment, radius inflated by half the
-spacing so the balls contain the capsule: clearances (m, >= 0 required) are ball-centre distances
+For IPOPT each capsule is covered by balls on its segment (at least ``spheres``, and at most one
+radius r apart), radius sqrt(r^2 + (spacing/2)^2) so that the balls contain the capsule: clearances (m, >= 0 required) are ball-centre distances
 minus the inflated radii, and the box's signed distance minus the inflated radius. They are
 smooth except on measure-zero sets. The optimiser imposes them lazily, like torques (where the
 fine-grid check finds a violation); :func:`capsule_clearances` gives the exact distances for the
@@ -160,15 +160,22 @@ def clearance_function(capsules: CapsuleSet, boxes: Sequence[Box] = (), self_col
     docstring); None when there is nothing to keep apart."""
     if spheres < 2:
         raise ValueError(f"capsules: spheres must be >= 2, got {spheres}")
-    q = ca.SX.sym("q", capsules.segments.size1_in(0))
+    n = capsules.segments.size1_in(0)
+    q = ca.SX.sym("q", n)
     ends = capsules.segments(q)
+    lengths = np.linalg.norm(np.diff(np.asarray(capsules.segments(np.zeros(n))).reshape(3, -1, 2, order="F"),
+                                     axis=2)[:, :, 0], axis=0)
     k = len(capsules.radii)
     balls = []  # (centres list, inflated radius) per capsule
     for i in range(k):
+        # Balls at most one radius apart (half-spacing <= r): the inflated radius
+        # sqrt(r^2 + (spacing/2)^2) then exceeds r by at most 41 %, not 100 % (a small arm's long
+        # base column would otherwise forbid its own range centre).
+        m_i = max(spheres, int(np.ceil(lengths[i] / capsules.radii[i])) + 1)
         a, b = ends[:, 2 * i], ends[:, 2 * i + 1]
-        centres = [a + (b - a) * (m / (spheres - 1)) for m in range(spheres)]
-        spacing = ca.norm_2(b - a) / (spheres - 1)
-        balls.append((centres, capsules.radii[i] + 0.5 * spacing))
+        centres = [a + (b - a) * (m / (m_i - 1)) for m in range(m_i)]
+        spacing = ca.norm_2(b - a) / (m_i - 1)
+        balls.append((centres, ca.sqrt(capsules.radii[i] ** 2 + (0.5 * spacing) ** 2)))
     rows = []
     if self_collision:
         for i, j in capsules.pairs:

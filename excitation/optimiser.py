@@ -141,10 +141,16 @@ def check_request(model: ExcitationModel, form: Form, options: OptimiserOptions)
     if n_grid * model.n < model.n_base or n_grid < 4:
         raise ValueError(f"excitation request: {n_grid} grid samples x {model.n} joints cannot "
                          f"determine {model.n_base} base parameters: raise grid_rate or duration")
-    if model.collision is not None and model.collision.exact(range_centre(model)[None, :])[0] < 0.0:
-        raise ValueError("excitation request: the link capsules touch (each other or an obstacle box) "
-                         "at the centre of the joint ranges: smaller radii, move the box, or no "
-                         "self-collision check")
+    if model.collision is not None and model.collision.clearance is not None:
+        centre = range_centre(model)
+        exact = float(model.collision.exact(centre[None, :])[0])
+        cover = float(np.min(np.asarray(model.collision.clearance(centre))))  # what IPOPT imposes
+        if exact < 0.0 or cover < options.margins.clearance:
+            raise ValueError(
+                f"excitation request: the link capsules touch (each other or an obstacle box) or "
+                f"come within the {options.margins.clearance:g} m clearance margin at the centre of "
+                f"the joint ranges (clearance {exact:.4f} m, {cover:.4f} m with the optimiser's ball "
+                f"cover): smaller radii, move the box, or no self-collision check")
     if model.heights is not None:
         z = np.asarray(model.heights(range_centre(model))).ravel()
         if np.any(z < model.z_min):
