@@ -82,6 +82,11 @@ def _coarse_lag(empty: Recording, loaded: Recording, step: float) -> float:
     return float(lags[k] * step + loaded.t[0] - empty.t[0])
 
 
+# [rad^2] mismatch of a lag with too little overlap: above any real mean squared gap, and finite
+# (an infinite value makes Brent's parabolic step inf - inf).
+_NO_OVERLAP = 1e6
+
+
 def pair_runs(empty: Recording, loaded: Recording, position_tol: float = POSITION_TOLERANCE,
               max_lag: float | None = None) -> PairedRuns:
     """Put a loaded run on the empty run's time grid (eq. 28 needs both at the same instants).
@@ -109,7 +114,7 @@ def pair_runs(empty: Recording, loaded: Recording, position_tol: float = POSITIO
         t = empty.t + lag
         inside = (t >= loaded.t[0]) & (t <= loaded.t[-1])
         if inside.sum() < 0.5 * min(empty.n_samples, loaded.n_samples):
-            return np.inf
+            return _NO_OVERLAP
         return float(np.mean((spline(t[inside]) - empty.q[inside]) ** 2))
 
     # Sub-sample refinement: the position gap is smooth in the lag near its minimum.
