@@ -63,7 +63,7 @@ from .resampling import resample as resample_recording
 from .recordings import JUMP_ATOL, JUMP_SAFETY, TIME_RTOL, RecordingWarning, _normalise_convention
 
 __all__ = ["ColumnMap", "parse_columns", "read_log", "ABSURD", "POSITION_MARGIN", "MAX_GAP_PERIODS",
-           "STILL"]
+           "STILL", "MOVING_SPAN", "VELOCITY_MISMATCH"]
 
 #: A value larger than this in magnitude (any column but time) marks its row as corrupt.
 ABSURD = 1e6
@@ -74,6 +74,12 @@ MAX_GAP_PERIODS = 5.0
 #: A joint whose position spans less than this (rad) in the window does not move (the UR10e logs
 #: print 4 decimals: 1e-4 rad of quantisation).
 STILL = 1e-3
+#: Recorded velocities are compared with the derivative of the positions on joints that move at
+#: least this much (rad) in the window (below, quantisation dominates the derivative).
+MOVING_SPAN = 0.05
+#: Largest RMS difference between a recorded velocity and the derivative of its positions, as a
+#: fraction of the derivative's RMS (measured on the UR10e logs: see docs/real-logs.md).
+VELOCITY_MISMATCH = 0.5
 #: How many bad rows a message names before "and K more".
 _SHOWN = 3
 
@@ -195,6 +201,13 @@ def _parse(lines: _Lines, a: int, b: int, cmap: ColumnMap) -> np.ndarray:
         elif len(row) != n_cols:
             problems[k] = (f"{len(row)} cells, the column map names {n_cols}"
                            f"{_separator_hint(lines.text[a + k], n_cols)}")
+    counts = {len(row) for row in cells}
+    if len(counts) == 1 and n_cols not in counts and cells and len(problems) == len(cells):
+        # Not corrupt rows: a column map that does not fit the file.
+        raise RecordingError(f"{lines.source}: every row of lines {lines.numbers[a]}..{lines.numbers[b - 1]} has "
+                             f"{len(cells[0])} cells, the column map names {n_cols}"
+                             f"{_separator_hint(lines.text[a], n_cols)}; fix the column map (--columns, "
+                             f"columns= in Python)")
     values = np.full((len(cells), n_cols), np.nan)
     whole = [k for k in range(len(cells)) if k not in problems]
     try:
@@ -268,16 +281,40 @@ def _check_positions(q: np.ndarray, t: np.ndarray, numbers: Sequence[int], cmap:
         raise _bad(source, problems)
 
 
-def _check_velocities(dq: np.ndarray | None, span: np.ndarray, numbers: Sequence[int], cmap: ColumnMap,
-                      source: str) -> None:
+def _check_velocities(dq: np.ndarray | None, q: np.ndarray, t: np.ndarray, span: np.ndarray,
+                      numbers: Sequence[int], cmap: ColumnMap, source: str) -> None:
     """A velocity column that is 0 on every row while its joint moves is not a velocity (the
-    Hermite interpolation would flatten the motion between samples)."""
+    Hermite interpolation would flatten the motion between samples); one that does not match
+    the derivative of its joint's positions (relative RMS difference above VELOCITY_MISMATCH) is a
+    wrong column map (swapped or mislabelled columns, deg/s)."""
     if dq is None:
         return
     for j in np.flatnonzero(np.all(dq == 0.0, axis=0) & (span >= STILL)):
         raise RecordingError(f"{source}: column {cmap.qd[j] + 1} ('qd{j + 1}') is 0 on every row of lines "
                              f"{numbers[0]}..{numbers[-1]} while joint {j + 1} moves {span[j]:g} rad: it holds "
                              f"no recorded velocities; map it as _")
+    moving = np.flatnonzero(span >= MOVING_SPAN)
+    if t.size < 3 or not moving.size:
+        return
+    derivative = np.gradient(q, t, axis=0)
+    scale = np.sqrt(np.mean(derivative ** 2, axis=0))
+
+    def mismatch(v: np.ndarray, k: int) -> float:
+        return float(np.sqrt(np.mean((v - derivative[:, k]) ** 2)) / scale[k])
+
+    for j in moving:
+        off = mismatch(dq[:, j], j)
+        if off <= VELOCITY_MISMATCH:
+            continue
+        others = [(mismatch(dq[:, j], k), k) for k in moving if k != j]
+        best = min(others, default=(np.inf, -1))
+        hint = (f"; it matches the derivative of q{best[1] + 1} ({best[0]:.0%}): are columns swapped?"
+                if best[0] <= VELOCITY_MISMATCH else
+                "; check the column map (swapped or mislabelled columns) and the unit (rad/s)")
+        raise RecordingError(f"{source}: column {cmap.qd[j] + 1} ('qd{j + 1}') is not the velocity of column "
+                             f"{cmap.q[j] + 1} ('q{j + 1}'): RMS difference to the derivative of the positions "
+                             f"{off:.0%} of its RMS over lines {numbers[0]}..{numbers[-1]} (at most "
+                             f"{VELOCITY_MISMATCH:.0%}){hint}")
 
 
 # --------------------------------------------------------------------------------------------
@@ -365,7 +402,7 @@ def read_log(
 
     dq = values[:, list(cmap.qd)] if cmap.qd else None
     span = np.ptp(q, axis=0)
-    _check_velocities(dq, span, numbers, cmap, p.name)
+    _check_velocities(dq, q, t, span, numbers, cmap, p.name)
     if np.all(span < STILL):
         warnings.warn(f"{p.name}: no joint moves in lines {numbers[0]}..{numbers[-1]} (largest position span "
                       f"{span.max():g} rad): a recording at rest identifies gravity and offsets at most",

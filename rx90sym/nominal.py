@@ -88,6 +88,17 @@ def read_parameter_file(robot: Robot, path: str | Path) -> dict[str, float]:
         raise ValueError(f"{path}: expected a JSON object of parameter names to numbers")
     if isinstance(data.get("robot"), str) and data["robot"] != robot.name:
         raise ValueError(f"{path}: field 'robot' is {data['robot']!r}, not {robot.name!r}")
+    model = data.get("model")
+    if isinstance(model, dict) and ("tip" in model or "robot_file" in model):
+        # Same name, other frames: a URDF robot's link frames are not a robot file's Khalil frames.
+        urdf = getattr(robot, "urdf", None)
+        here = (f"URDF {robot.source} with tip {urdf.tip!r}" if urdf is not None else
+                f"robot file {robot.source or robot.name}")
+        there = (f"URDF {model.get('robot_file')} with tip {model['tip']!r}" if model.get("tip") else
+                 f"robot file {model.get('robot_file') or data.get('robot')}")
+        if (model.get("tip") or None) != (urdf.tip if urdf is not None else None):
+            raise ValueError(f"{path}: identified on the {there}, not on the {here}: its parameters are "
+                             f"expressed in that description's frames; load the same description")
     if isinstance(data.get("standard"), dict) and data["standard"]:
         table = data["standard"]
     elif isinstance(data.get("parameters"), dict):

@@ -50,15 +50,18 @@ def bundled_robots() -> list[str]:
 
 def load_robot(name_or_path: str | Path = "rx90", offsets: bool = False,
                coulomb_sign: str | None = None, tip: str | None = None,
-               asymmetric_coulomb: Any = None) -> Robot:
+               asymmetric_coulomb: Any = None, acceleration: Any = None) -> Robot:
     """Load a bundled robot by name ("rx90", "tx40", "ur10e", "panda": :func:`bundled_robots`), a robot
-    file or a URDF (``*.urdf``) by path.
+    file or a URDF (``*.urdf``) by path. A bundled name always means the bundled robot, even when
+    the working directory holds a file of that name (give such a file as ``./rx90``).
 
     offsets: append the per-joint torque offsets OFF1..OFFn to the parameters.
     coulomb_sign: override the coupling's Coulomb form ("paper" or "motor").
     tip: for a URDF, the link that ends the chain (rx90sym.urdf.load_urdf).
     asymmetric_coulomb: joint numbers (1-based) with FS+ / FS- instead of FS (overrides the file's
         ``[friction] asymmetric_coulomb``); () for none.
+    acceleration: for a URDF, the joint acceleration limits [rad/s^2 or m/s^2], one number or one
+        per joint (a URDF has none; rx90sym.urdf.load_urdf).
     """
     path = Path(name_or_path)
     if path.suffix.lower() == ".urdf":
@@ -66,7 +69,7 @@ def load_robot(name_or_path: str | Path = "rx90", offsets: bool = False,
 
         if coulomb_sign is not None:
             raise RobotFileError(f"{path}: coulomb_sign given but a URDF robot has no coupling")
-        robot = load_urdf(path, tip=tip)
+        robot = load_urdf(path, tip=tip, acceleration=acceleration)
         changes: dict[str, Any] = {"offsets": True} if offsets else {}
         if asymmetric_coulomb is not None:
             changes["asymmetric_coulomb"] = _joint_numbers(asymmetric_coulomb, robot.n,
@@ -74,7 +77,13 @@ def load_robot(name_or_path: str | Path = "rx90", offsets: bool = False,
         return robot.with_options(**changes) if changes else robot
     if tip is not None:
         raise RobotFileError(f"{path}: tip={tip!r} is for a URDF (*.urdf), not a robot file")
-    if path.suffix != ".toml" and not path.exists():
+    if acceleration is not None:
+        raise RobotFileError(f"{path}: acceleration limits given, but a robot file has its own "
+                             f"([limits] acceleration_deg_s2); the option is for a URDF (*.urdf)")
+    # A bundled robot's bare name means the bundled robot, even when a file or folder of that name
+    # lies in the working directory (write ./rx90 for such a file).
+    bundled = isinstance(name_or_path, str) and name_or_path in bundled_robots()
+    if bundled or (path.suffix != ".toml" and not path.exists()):
         candidate = ROBOTS_DIR / f"{name_or_path}.toml"
         if not candidate.exists():
             raise RobotFileError(f"unknown robot {str(name_or_path)!r}: not a file and not one of "
@@ -82,6 +91,8 @@ def load_robot(name_or_path: str | Path = "rx90", offsets: bool = False,
         path = candidate
     if not path.exists():
         raise RobotFileError(f"{path}: robot file not found")
+    if path.is_dir():
+        raise RobotFileError(f"{path}: is a folder, not a robot file")
     try:
         text = path.read_text(encoding="utf-8")
         data = tomllib.loads(text)

@@ -315,7 +315,7 @@ def _limits(path: str, joints: list, acceleration: float | Sequence[float] | Non
                         for j in joints])
         warnings.warn(f"{path}: a URDF has no acceleration limits; using {DEFAULT_ACCELERATION['revolute']:g} "
                       f"rad/s^2 (revolute) and {DEFAULT_ACCELERATION['prismatic']:g} m/s^2 (prismatic): "
-                      f"give acceleration= to set them", stacklevel=3)
+                      f"give acceleration= (Python) or --acceleration (command line) to set them", stacklevel=3)
     else:
         qdd = np.broadcast_to(np.asarray(acceleration, dtype=float), (n,)).copy()
         if np.any(~np.isfinite(qdd)) or np.any(qdd <= 0):

@@ -198,7 +198,6 @@ def test_surrogate_brackets_true_condition_number():
 # --------------------------------------------------------------------------- constraints
 def test_check_limits_reports_usage_and_violations():
     model = toy_model()
-    t = np.linspace(0, 1, 11)
     q = np.zeros((11, 2))
     qd = np.zeros((11, 2))
     qd[3, 1] = 5.0  # joint 2 limit is 4 rad/s

@@ -109,3 +109,41 @@ def test_simulate_any_robot_given_parameters(tmp_path, own_rx90):
     tau = np.array([np.array(robot.inverse_dynamics(qi, qdi, qddi, chi)).ravel() for qi, qdi, qddi in
                     zip(rec.q, qd, qdd)]) - robot.spring_torque_batch(rec.q).reshape(len(t), 6)
     np.testing.assert_allclose(rec.tau, tau, rtol=1e-6, atol=1e-6)
+
+
+def test_an_identification_of_the_same_name_in_other_frames_is_refused(tmp_path):
+    """The bundled Panda (a robot file) and franka's URDF of the Panda share the name 'panda' but
+    not their frames: parameters identified on one are refused for the other; the same kind of
+    description passes."""
+    urdf = rx90sym.load_robot(Path(__file__).parent / "data" / "urdf" / "panda.urdf", tip="panda_link8",
+                              acceleration=10.0)
+    bundled = rx90sym.load_robot("panda")
+    assert urdf.name == bundled.name == "panda"
+    params = rx90sym.nominal_parameters(urdf)
+    on_urdf = tmp_path / "urdf_fit.json"
+    on_urdf.write_text(json.dumps({"robot": "panda", "model": {"robot_file": str(urdf.source), "tip": "panda_link8"},
+                                   "standard": params}))
+    with pytest.raises(ValueError, match=r"identified on the URDF .*panda.urdf with tip 'panda_link8', not on "
+                                         r"the robot file .*panda.toml"):
+        rx90sym.nominal_parameters(bundled, on_urdf)
+    assert rx90sym.nominal_parameters(urdf, on_urdf) == pytest.approx(params)
+    rx90 = rx90sym.load_robot("rx90")
+    on_file = tmp_path / "file_fit.json"
+    on_file.write_text(json.dumps({"robot": "rx90", "model": {"robot_file": str(rx90.source), "tip": None},
+                                   "standard": rx90sym.nominal_parameters(rx90)}))
+    assert rx90sym.nominal_parameters(rx90, on_file) == pytest.approx(rx90sym.nominal_parameters(rx90))
+
+
+def test_acceleration_limits_of_a_urdf_from_python_and_the_command_line(tmp_path):
+    """A URDF has no acceleration limits: load_robot(acceleration=) and --acceleration set them
+    without the default's warning; a robot file refuses the option (it has its own)."""
+    path = Path(__file__).parent / "data" / "urdf" / "panda.urdf"
+    robot = rx90sym.load_robot(path, tip="panda_link8", acceleration=[1, 2, 3, 4, 5, 6, 7])
+    assert np.allclose(robot.limits.qdd_max, [1, 2, 3, 4, 5, 6, 7])
+    with pytest.raises(rx90sym.RobotFileError, match="a robot file has its own"):
+        rx90sym.load_robot("rx90", acceleration=5.0)
+    args = ["model", "--robot", str(path), "--tip", "panda_link8"]
+    quiet = subprocess.run([RX90, *args, "--acceleration", "5"], capture_output=True, text=True, timeout=300)
+    assert quiet.returncode == 0 and "acceleration" not in quiet.stderr, quiet.stderr
+    loud = subprocess.run([RX90, *args], capture_output=True, text=True, timeout=300)
+    assert loud.returncode == 0 and "--acceleration (command line)" in loud.stderr, loud.stderr

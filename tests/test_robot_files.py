@@ -52,6 +52,19 @@ def test_bad_robot_files_are_refused_naming_file_and_field(tmp_path, edit, field
     assert str(path) in str(err.value) and field in str(err.value)
 
 
+def test_a_bundled_name_is_the_bundled_robot_even_with_a_file_of_that_name_here(tmp_path, monkeypatch):
+    """A folder 'tx40' (e.g. the data) or a file 'rx90' in the working directory does not hide the
+    bundled robot; the file is reached as ./rx90, and a folder given as a path is named."""
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "tx40").mkdir()
+    _write(tmp_path, RX90.replace('name = "rx90"', 'name = "mine"'), "rx90")
+    assert rx90sym.load_robot("tx40").name == "tx40"
+    assert rx90sym.load_robot("rx90").name == "rx90"
+    assert rx90sym.load_robot("./rx90").name == "mine"
+    with pytest.raises(RobotFileError, match="tx40: is a folder, not a robot file"):
+        rx90sym.load_robot("./tx40")
+
+
 def test_unknown_robot_and_broken_toml(tmp_path):
     with pytest.raises(RobotFileError, match="unknown robot 'rx91'"):
         rx90sym.load_robot("rx91")

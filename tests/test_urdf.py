@@ -312,6 +312,7 @@ def _random_urdf(path, seed):
     types = ["revolute", "prismatic", "continuous", "revolute", "revolute"]
     parts = ['<robot name="random">', '<link name="base"/>']
     axis1 = rng.normal(size=3)
+    prev_axis = axis1
     for k, jtype in enumerate(types):
         parent = "base" if k == 0 else f"l{k}"
         xyz, rpy, axis = rng.uniform(-0.4, 0.4, 3), rng.uniform(-np.pi, np.pi, 3), rng.normal(size=3)

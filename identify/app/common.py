@@ -29,7 +29,8 @@ def check_output(path: str | None) -> None:
 
 
 def load_robot(args: argparse.Namespace, offsets: bool = False) -> rx90sym.Robot:
-    return rx90sym.load_robot(args.robot, offsets=offsets, tip=getattr(args, "tip", None))
+    return rx90sym.load_robot(args.robot, offsets=offsets, tip=getattr(args, "tip", None),
+                              acceleration=getattr(args, "acceleration", None))
 
 
 SPRING_MODES = ("default", "none", "identify", "identify-k")
@@ -125,8 +126,19 @@ def convention_option(sp: argparse.ArgumentParser) -> None:
                          "default: the file's header, else controller")
 
 
+def _acceleration(text: str) -> float | list[float]:
+    try:
+        values = [float(v) for v in text.split(",")]
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected numbers separated by commas, got {text!r}") from None
+    return values[0] if len(values) == 1 else values
+
+
 def robot_option(sp: argparse.ArgumentParser) -> None:
     """``--robot``: a bundled robot name, a robot file or a URDF; ``--tip``: a URDF's end link."""
     sp.add_argument("--robot", default="rx90", help="bundled robot name, robot file or URDF (default rx90)")
     sp.add_argument("--tip", help="with a URDF --robot: the link ending the chain from the URDF root "
                                   "(default: the only leaf link)")
+    sp.add_argument("--acceleration", type=_acceleration, metavar="A|A1,..,An",
+                    help="with a URDF --robot: joint acceleration limits [rad/s^2; m/s^2 prismatic], one "
+                         "number or one per joint (a URDF has none; default 10 rad/s^2, 2 m/s^2)")

@@ -180,11 +180,6 @@ def run(args: argparse.Namespace) -> int:
     if val is not None:
         print()
         print(val.table())
-    if args.urdf_out:  # first: a refused (non-physical) link leaves no other output
-        from rx90sym import write_urdf
-
-        written = write_urdf(robot, res.standard, args.urdf_out)
-        progress("wrote " + ", ".join(str(p) for p in written))
     if args.json:
         out = {"robot": robot.name, "method": args.method, **res.to_dict(), "spring": spring_entry,
                "bootstrap_std": [float(v) for v in boot],
@@ -199,6 +194,16 @@ def run(args: argparse.Namespace) -> int:
                                            fit_prediction=predict(robot, res, recs[0], base=base, **filt),
                                            model=model, extra_tables=[bootstrap_table(res, boot)])
         write_report(args.report, f"Identification of {robot.name}", [*sections, Section("Spring", spring_text)])
+    if args.urdf_out:  # last: a refused (non-physical) link must not cost the fit's JSON and report
+        from rx90sym import UrdfError, write_urdf
+
+        try:
+            written = write_urdf(robot, res.standard, args.urdf_out)
+        except UrdfError as exc:
+            kept = [p for p in (args.json, args.report) if p]
+            raise UrdfError(f"{args.urdf_out} not written: {exc}" +
+                            (f" (written: {', '.join(kept)})" if kept else "")) from None
+        progress("wrote " + ", ".join(str(p) for p in written))
     return 0
 
 

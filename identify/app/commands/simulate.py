@@ -32,7 +32,9 @@ def run(args: argparse.Namespace) -> int:
     params = rx90sym.nominal_parameters(robot, args.params)
     if params is None:
         raise UsageError(f"robot {robot.name!r} has no nominal parameters (only the bundled RX90 "
-                         f"and URDF robots do): pass --params FILE")
+                         f"and URDF robots do): pass --params FILE, a JSON object of standard "
+                         f"parameters name -> value in SI units (the names: \"parameters\" of rx90 model --robot "
+                         f"{args.robot} --json F), or the JSON of rx90 identify --method consistent on this robot")
     spring_notice(robot)
     trajectory = read_trajectory(args.trajectory, robot)
     progress(f"simulating {trajectory[0][-1] - trajectory[0][0]:.1f} s ({args.noise})")
