@@ -388,11 +388,16 @@ def test_a_column_map_that_does_not_fit_any_row_is_named_as_such(tmp_path, ur):
         read_log(path, ur, COLUMNS + ",_")
 
 
-def test_a_velocity_column_of_zeros_under_motion_is_refused(tmp_path, ur):
+def log_with_velocities(path: Path, velocity) -> Path:
+    """The analytic 100 Hz log with its velocity columns replaced by ``velocity(qd)``."""
     t = 838.0 + 0.01 * np.arange(200)
-    q, _, i = analytic(t)
-    rows = np.column_stack([t, q, np.zeros_like(q), i, np.zeros_like(t)])
-    path = write_log(tmp_path / "z.csv", [",".join(repr(float(v)) for v in r) for r in rows])
+    q, qd, i = analytic(t)
+    rows = np.column_stack([t, q, velocity(qd), i, np.zeros_like(t)])
+    return write_log(path, [",".join(repr(float(v)) for v in r) for r in rows])
+
+
+def test_a_velocity_column_of_zeros_under_motion_is_refused(tmp_path, ur):
+    path = log_with_velocities(tmp_path / "z.csv", np.zeros_like)
     with pytest.raises(RecordingError, match=r"column 8 \('qd1'\) is 0 on every row of lines 1..200 while joint 1 moves"):
         read_log(path, ur, COLUMNS)
 
@@ -406,10 +411,7 @@ def test_velocity_columns_that_are_not_the_derivative_of_their_positions_are_ref
     with pytest.raises(RecordingError, match=r"column 9 \('qd1'\) is not the velocity of column 2 \('q1'\): "
                                              r"RMS difference .* 68% .*it matches the derivative of q2 \(0%\)"):
         read_log(path, ur, swapped)
-    t = 838.0 + 0.01 * np.arange(200)
-    q, qd, i = analytic(t)
-    rows = np.column_stack([t, q, np.degrees(qd), i, np.zeros_like(t)])
-    degrees = write_log(tmp_path / "deg.csv", [",".join(repr(float(v)) for v in r) for r in rows])
+    degrees = log_with_velocities(tmp_path / "deg.csv", np.degrees)
     with pytest.raises(RecordingError, match=r"column 8 \('qd1'\) is not the velocity .*the unit \(rad/s\)"):
         read_log(degrees, ur, COLUMNS)
 
