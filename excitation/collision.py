@@ -163,8 +163,8 @@ def clearance_function(capsules: CapsuleSet, boxes: Sequence[Box] = (), self_col
     n = capsules.segments.size1_in(0)
     q = ca.SX.sym("q", n)
     ends = capsules.segments(q)
-    lengths = np.linalg.norm(np.diff(np.asarray(capsules.segments(np.zeros(n))).reshape(3, -1, 2, order="F"),
-                                     axis=2)[:, :, 0], axis=0)
+    rest = np.asarray(capsules.segments(np.zeros(n)))  # (3, 2k): [a_1 b_1 a_2 b_2 ...]
+    lengths = np.linalg.norm(rest[:, 1::2] - rest[:, 0::2], axis=0)
     k = len(capsules.radii)
     balls = []  # (centres list, inflated radius) per capsule
     for i in range(k):

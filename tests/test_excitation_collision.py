@@ -143,3 +143,8 @@ def test_the_optimisers_ball_cover_leaves_the_clearance_margin_at_the_centre_of_
     cover = float(np.min(np.asarray(model.clearance(centre))))
     assert excitation.OptimiserOptions().margins.clearance < cover <= exact
     assert exact - cover < 0.5 * min(model.capsules.radii) + 0.5 * max(model.capsules.radii)
+    # Balls at most one radius apart, at least 5: lengths from the table (base column 0.5 m,
+    # upper arm d3, forearm r4, tool 0.1 m), not from the capsule function.
+    lengths = (0.5, abs(arm.d[2]), abs(arm.r[3]), 0.1)
+    balls = [max(5, int(np.ceil(length / r)) + 1) for length, r in zip(lengths, model.capsules.radii)]
+    assert model.clearance.size1_out(0) == sum(balls[i] * balls[j] for i, j in model.capsules.pairs)
