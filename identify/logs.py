@@ -202,7 +202,7 @@ def _parse(lines: _Lines, a: int, b: int, cmap: ColumnMap) -> np.ndarray:
             problems[k] = (f"{len(row)} cells, the column map names {n_cols}"
                            f"{_separator_hint(lines.text[a + k], n_cols)}")
     counts = {len(row) for row in cells}
-    if len(counts) == 1 and n_cols not in counts and cells and len(problems) == len(cells):
+    if len(counts) == 1 and n_cols not in counts:
         # Not corrupt rows: a column map that does not fit the file.
         raise RecordingError(f"{lines.source}: every row of lines {lines.numbers[a]}..{lines.numbers[b - 1]} has "
                              f"{len(cells[0])} cells, the column map names {n_cols}"

@@ -317,7 +317,11 @@ def _limits(path: str, joints: list, acceleration: float | Sequence[float] | Non
                       f"rad/s^2 (revolute) and {DEFAULT_ACCELERATION['prismatic']:g} m/s^2 (prismatic): "
                       f"give acceleration= (Python) or --acceleration (command line) to set them", stacklevel=3)
     else:
-        qdd = np.broadcast_to(np.asarray(acceleration, dtype=float), (n,)).copy()
+        given = np.atleast_1d(np.asarray(acceleration, dtype=float))
+        if given.size not in (1, n):
+            raise ValueError(f"{path}: acceleration limits: expected 1 or {n} numbers (one per joint of "
+                             f"the chain), got {given.size}")
+        qdd = np.broadcast_to(given.ravel(), (n,)).copy()
         if np.any(~np.isfinite(qdd)) or np.any(qdd <= 0):
             raise ValueError(f"acceleration limits must be finite and > 0, got {acceleration!r}")
     return Limits(q_min, q_max, qd, qdd, tau)

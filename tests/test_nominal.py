@@ -142,8 +142,12 @@ def test_acceleration_limits_of_a_urdf_from_python_and_the_command_line(tmp_path
     assert np.allclose(robot.limits.qdd_max, [1, 2, 3, 4, 5, 6, 7])
     with pytest.raises(rx90sym.RobotFileError, match="a robot file has its own"):
         rx90sym.load_robot("rx90", acceleration=5.0)
+    with pytest.raises(ValueError, match=r"panda.urdf: acceleration limits: expected 1 or 7 numbers .*got 3"):
+        rx90sym.load_robot(path, tip="panda_link8", acceleration=[1, 2, 3])
     args = ["model", "--robot", str(path), "--tip", "panda_link8"]
     quiet = subprocess.run([RX90, *args, "--acceleration", "5"], capture_output=True, text=True, timeout=300)
     assert quiet.returncode == 0 and "acceleration" not in quiet.stderr, quiet.stderr
+    bad = subprocess.run([RX90, *args, "--acceleration", "5,x"], capture_output=True, text=True, timeout=300)
+    assert bad.returncode == 2 and "--acceleration: expected comma-separated numbers, got '5,x'" in bad.stderr
     loud = subprocess.run([RX90, *args], capture_output=True, text=True, timeout=300)
     assert loud.returncode == 0 and "--acceleration (command line)" in loud.stderr, loud.stderr

@@ -7,6 +7,7 @@ import sys
 from pathlib import Path
 from typing import Any
 
+import numpy as np
 
 import rx90sym
 
@@ -28,9 +29,23 @@ def check_output(path: str | None) -> None:
         raise UsageError(f"output folder of {path} does not exist")
 
 
+def floats(text: str, what: str, count: int | None = None) -> np.ndarray:
+    """Comma-separated finite numbers of option ``what`` (``count`` of them when given)."""
+    try:
+        values = np.array([float(v) for v in text.split(",")])
+    except ValueError:
+        raise UsageError(f"{what}: expected comma-separated numbers, got {text!r}") from None
+    if count is not None and values.size != count:
+        raise UsageError(f"{what}: expected {count} numbers, got {values.size}")
+    if not np.all(np.isfinite(values)):
+        raise UsageError(f"{what}: values must be finite, got {text!r}")
+    return values
+
+
 def load_robot(args: argparse.Namespace, offsets: bool = False) -> rx90sym.Robot:
+    acceleration = getattr(args, "acceleration", None)
     return rx90sym.load_robot(args.robot, offsets=offsets, tip=getattr(args, "tip", None),
-                              acceleration=getattr(args, "acceleration", None))
+                              acceleration=None if acceleration is None else floats(acceleration, "--acceleration"))
 
 
 SPRING_MODES = ("default", "none", "identify", "identify-k")
@@ -126,19 +141,11 @@ def convention_option(sp: argparse.ArgumentParser) -> None:
                          "default: the file's header, else controller")
 
 
-def _acceleration(text: str) -> float | list[float]:
-    try:
-        values = [float(v) for v in text.split(",")]
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected numbers separated by commas, got {text!r}") from None
-    return values[0] if len(values) == 1 else values
-
-
 def robot_option(sp: argparse.ArgumentParser) -> None:
     """``--robot``: a bundled robot name, a robot file or a URDF; ``--tip``: a URDF's end link."""
     sp.add_argument("--robot", default="rx90", help="bundled robot name, robot file or URDF (default rx90)")
     sp.add_argument("--tip", help="with a URDF --robot: the link ending the chain from the URDF root "
                                   "(default: the only leaf link)")
-    sp.add_argument("--acceleration", type=_acceleration, metavar="A|A1,..,An",
+    sp.add_argument("--acceleration", metavar="A|A1,..,An",
                     help="with a URDF --robot: joint acceleration limits [rad/s^2; m/s^2 prismatic], one "
                          "number or one per joint (a URDF has none; default 10 rad/s^2, 2 m/s^2)")

@@ -10,19 +10,7 @@ import numpy as np
 
 import rx90sym
 
-from ..common import UsageError, check_output, load_robot, progress, robot_option
-
-
-def _floats(text: str, what: str, count: int | None = None) -> np.ndarray:
-    try:
-        values = np.array([float(v) for v in text.split(",")])
-    except ValueError:
-        raise UsageError(f"{what}: expected comma-separated numbers, got {text!r}") from None
-    if count is not None and values.size != count:
-        raise UsageError(f"{what}: expected {count} numbers, got {values.size}")
-    if not np.all(np.isfinite(values)):
-        raise UsageError(f"{what}: values must be finite, got {text!r}")
-    return values
+from ..common import UsageError, check_output, floats, load_robot, progress, robot_option
 
 
 def register(sub: Any) -> None:
@@ -107,12 +95,12 @@ def run(args: argparse.Namespace) -> int:
         raise UsageError("--select is for --criterion sigma")
     if args.harmonics is not None and args.via_points is not None:
         raise UsageError("give --harmonics (Fourier series) or --via-points, not both")
-    noise = None if args.noise_std is None else _floats(args.noise_std, "--noise-std", robot.n)
+    noise = None if args.noise_std is None else floats(args.noise_std, "--noise-std", robot.n)
     if noise is not None and np.any(noise <= 0.0):
         raise UsageError("--noise-std: values must be > 0 N m")
     if args.start_pose is not None and args.controller is None:
         raise UsageError("--start-pose is for --controller (the approach move is part of the controller export)")
-    start_pose = None if args.start_pose is None else _floats(args.start_pose, "--start-pose", robot.n)
+    start_pose = None if args.start_pose is None else floats(args.start_pose, "--start-pose", robot.n)
     try:
         collision = excitation.collision_model(robot, args.obstacle, not args.no_self_collision)
     except ValueError as exc:
