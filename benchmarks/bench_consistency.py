@@ -1,4 +1,4 @@
-"""Benchmark of the physically consistent least squares (identify.consistency).
+"""Benchmark of the physically consistent least squares (identify.estimation.consistency).
 
 Times "compress the data, then solve the conic problem" at the paper's size (§III-A:
 r ≈ 63,000 equations, c = 54 base parameters) and at ten times as many rows. Because the conic
@@ -36,8 +36,8 @@ import numpy as np  # noqa: E402
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # run from a checkout
 
-from identify.consistency import consistency_report, consistent_least_squares  # noqa: E402
-from identify.least_squares import compress  # noqa: E402
+from identify.estimation.consistency import consistency_report, consistent_least_squares  # noqa: E402
+from identify.estimation.least_squares import compress  # noqa: E402
 
 N_LINKS = 6
 FIELDS = ("XX", "XY", "XZ", "YY", "YZ", "ZZ", "MX", "MY", "MZ", "M", "IA", "FS", "FV")

@@ -31,8 +31,8 @@ from timing import time_it  # noqa: E402,F401 (re-exported for the other scripts
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # run from a checkout
 
-from identify.essential import essential_parameters  # noqa: E402
-from identify.least_squares import weighted_least_squares  # noqa: E402
+from identify.estimation.essential import essential_parameters  # noqa: E402
+from identify.estimation.least_squares import weighted_least_squares  # noqa: E402
 
 N_JOINTS = 6
 N_PARAMETERS = 54

@@ -18,7 +18,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
 
 import identify  # noqa: E402
 import rx90sym  # noqa: E402
-from identify.spring_fit import spring_base  # noqa: E402
+from identify.observation.spring_fit import spring_base  # noqa: E402
 from motions import multisine  # noqa: E402
 from rx90sym.robot_file import ROBOTS_DIR  # noqa: E402
 from rx90sym.spring import Spring, SpringBasis, SpringStiffness  # noqa: E402

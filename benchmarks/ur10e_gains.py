@@ -30,10 +30,10 @@ import numpy as np
 import rx90sym
 from identify import identify
 from identify.drive_gains import drive_gains
-from identify.gains import DriveGains, apply_gains
-from identify.logs import read_log
-from identify.recordings import RecordingWarning
-from identify.pairing import pair_runs
+from identify.io.gains import DriveGains, apply_gains
+from identify.io.logs import read_log
+from identify.io.recordings import RecordingWarning
+from identify.signal.pairing import pair_runs
 from identify.payload import payload
 from rx90sym.recording import Recording
 

@@ -16,7 +16,7 @@ Printed:
 3. a held-out check with motion AND rest: fit on rows 195..2566 of the empty run (~24 s), predict
    rows 2567..5375 (~24 s of motion, then 4.4 s at rest), same policies.
 4. the rest threshold (0.005 to 0.2 rad/s; 0.05 is the default) on the split of 3;
-5. payload mass by methods 3 (the runs paired by ``identify.pairing``) and 4 on the whole
+5. payload mass by methods 3 (the runs paired by ``identify.signal.pairing``) and 4 on the whole
    14-harmonic pair with the source's gains and with the controller's constants, against the
    weighed 2.805 kg.
 
@@ -35,7 +35,7 @@ import numpy as np
 
 import rx90sym
 from identify import fit_recordings, predict
-from identify.gains import DriveGains, apply_gains
+from identify.io.gains import DriveGains, apply_gains
 
 
 def _sibling(name: str) -> ModuleType:

@@ -4,28 +4,28 @@ Recordings and their checks, derivatives and parallel filtering, the observation
 (eqs. 6-8), (weighted) least squares with statistics (eqs. 9-15), essential parameters,
 physically consistent least squares (LMIs, cvxpy), validation, and payload identification.
 """
-from .consistency import (BodyConsistency, ConsistencyError, ConsistencyReport, ConsistentSolution,
+from identify.estimation.consistency import (BodyConsistency, ConsistencyError, ConsistencyReport, ConsistentSolution,
                           consistency_margin, consistency_report, consistent_least_squares,
                           pseudo_inertia)
-from .bootstrap import segment_bootstrap_std
-from .delay import DelayEstimate, estimate_delay
-from .drive_gains import DriveGainsResult, drive_gains
-from .essential import essential_parameters
-from .fit_model import FitModel
-from .filtering import (DecimationPlan, Derivatives, choose_cutoff, decimate, decimation_factor,
+from identify.estimation.bootstrap import segment_bootstrap_std
+from identify.signal.delay import DelayEstimate, estimate_delay
+from identify.drive_gains import DriveGainsResult, drive_gains
+from identify.estimation.essential import essential_parameters
+from identify.fit_model import FitModel
+from identify.signal.filtering import (DecimationPlan, Derivatives, choose_cutoff, decimate, decimation_factor,
                         decimation_plan, derivatives, lowpass)
-from .identification import ConsistentResult, Validation, consistent_fit, identify, predict, validate
-from .log_columns import ColumnMap, parse_columns
-from .logs import read_log
-from .resampling import resample
-from .least_squares import CompressedSystem, IdentificationError, compress, weighted_least_squares
-from .observation import DEFAULT_MIN_VELOCITY, DEFAULT_REST, Observation, observation_matrix
-from .real_fit import Fit, fit_recordings
-from .pairing import PairedRuns, pair_runs
-from .payload import PayloadMonitor, PayloadResult, grouping_relations, payload
-from .recordings import (Recording, RecordingError, read_motor_recording, read_recording,
+from identify.identification import ConsistentResult, Validation, consistent_fit, identify, predict, validate
+from identify.io.columns import ColumnMap, parse_columns
+from identify.io.logs import read_log
+from identify.signal.resampling import resample
+from identify.estimation.least_squares import CompressedSystem, IdentificationError, compress, weighted_least_squares
+from identify.observation.matrix import DEFAULT_MIN_VELOCITY, DEFAULT_REST, Observation, observation_matrix
+from identify.real_fit import Fit, fit_recordings
+from identify.signal.pairing import PairedRuns, pair_runs
+from identify.payload import PayloadMonitor, PayloadResult, grouping_relations, payload
+from identify.io.recordings import (Recording, RecordingError, read_motor_recording, read_recording,
                          recording_from_arrays, split, write_recording)
-from .results import EliminationStep, IdentificationResult
+from identify.estimation.results import EliminationStep, IdentificationResult
 
 __all__ = [
     "BodyConsistency", "consistency_margin", "ConsistencyError", "ConsistencyReport", "ConsistentSolution", "consistency_report",

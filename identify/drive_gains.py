@@ -1,6 +1,6 @@
 """Drive gains identified with a payload of known mass (paper section IV turned around).
 
-Joint torques are ``tau = Rt diag(k) (i - i0)`` (:mod:`identify.gains`). With currents alone the
+Joint torques are ``tau = Rt diag(k) (i - i0)`` (:mod:`identify.io.gains`). With currents alone the
 scale of the gains is lost: k and every dynamic parameter can be multiplied together. A payload
 whose mass Mc is weighed fixes that scale (Gautier and Briot, global identification of joint drive
 gains and dynamic parameters of robots):
@@ -30,12 +30,12 @@ import rx90sym
 from rx90sym.parameters import PAYLOAD_NAMES
 from rx90sym.recording import Recording, RecordingError
 
-from .filtering import choose_cutoff
-from .gains import DriveGains, apply_gains
-from .least_squares import weighted_least_squares
-from .observation import FilteredMotion, filtered_motion, stack_rows
-from .pairing import POSITION_TOLERANCE, PairedRuns, pair_runs
-from .results import IdentificationResult, json_number
+from identify.signal.filtering import choose_cutoff
+from identify.io.gains import DriveGains, apply_gains
+from identify.estimation.least_squares import weighted_least_squares
+from identify.observation.matrix import FilteredMotion, filtered_motion, stack_rows
+from identify.signal.pairing import POSITION_TOLERANCE, PairedRuns, pair_runs
+from identify.estimation.results import IdentificationResult, json_number
 
 __all__ = ["DriveGainsResult", "drive_gains", "GAIN_METHODS", "FLAG_PCT"]
 
@@ -78,7 +78,7 @@ class DriveGainsResult:
     pairs: tuple[PairedRuns, ...] = field(default=(), repr=False)
 
     def to_dict(self) -> dict:
-        """The drive-gain JSON (identify.gains), read back by :func:`identify.gains.read_gains`."""
+        """The drive-gain JSON (identify.io.gains), read back by :func:`identify.io.gains.read_gains`."""
         return self.gains.to_dict()
 
     def table(self) -> str:
@@ -158,7 +158,7 @@ def drive_gains(robot: rx90sym.Robot, empty: Sequence[Recording], loaded: Sequen
     Args:
         robot: the robot (its transmission ``Rt`` maps motor to joint torques).
         empty, loaded: current recordings without / with the payload (``same-motion``: run i of
-            each is the same trajectory, paired in time by :func:`identify.pairing.pair_runs`).
+            each is the same trajectory, paired in time by :func:`identify.signal.pairing.pair_runs`).
         mass: the payload's weighed mass, kg.
         method: ``"same-motion"`` (eq. 28) or ``"global"`` (eq. 29).
         fix: joint number (1-based) -> gain [N·m/A] known from a datasheet.

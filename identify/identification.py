@@ -13,11 +13,11 @@ import numpy as np
 
 import rx90sym
 
-from .consistency import ConsistentSolution, consistency_margin, consistent_least_squares
-from .observation import Observation, observation_matrix
-from .results import IdentificationResult
-from .least_squares import weighted_least_squares
-from .validation import Validation, predict, validate  # noqa: F401 (re-exported)
+from identify.estimation.consistency import ConsistentSolution, consistency_margin, consistent_least_squares
+from identify.observation.matrix import Observation, observation_matrix
+from identify.estimation.results import IdentificationResult
+from identify.estimation.least_squares import weighted_least_squares
+from identify.validation import Validation, predict, validate  # noqa: F401 (re-exported)
 
 METHODS = ("ols", "wls", "consistent")
 
@@ -63,7 +63,7 @@ def identify(robot: rx90sym.Robot, recordings: Sequence[Any], method: str = "wls
 
     method: "ols", "wls" (paper: each joint's rows weighted by 1/sigma of its own residual) or
     "consistent" (WLS data, physically consistent standard parameters through cvxpy; extra
-    keyword arguments go to identify.consistency.consistent_least_squares, e.g. prior,
+    keyword arguments go to identify.estimation.consistency.consistent_least_squares, e.g. prior,
     prior_weight, total_mass, mass_bounds, com_boxes, solver).
     cutoff [Hz], decimate_to [Hz], min_velocity [rad/s], rest ("drop" | "zero-coulomb"),
     delay [s], spring: see observation_matrix.

@@ -24,12 +24,12 @@ import numpy as np
 import rx90sym
 from rx90sym.parameters import PAYLOAD_NAMES
 
-from .consistency import ConsistencyError, pseudo_inertia
-from .least_squares import compress, solve_system, stack_systems, weighted_least_squares
-from .filtering import choose_cutoff
-from .observation import filtered_motion, stack_rows
-from .pairing import POSITION_TOLERANCE, PairedRuns, pair_runs
-from .results import IdentificationResult, json_number
+from identify.estimation.consistency import ConsistencyError, pseudo_inertia
+from identify.estimation.least_squares import compress, solve_system, stack_systems, weighted_least_squares
+from identify.signal.filtering import choose_cutoff
+from identify.observation.matrix import filtered_motion, stack_rows
+from identify.signal.pairing import POSITION_TOLERANCE, PairedRuns, pair_runs
+from identify.estimation.results import IdentificationResult, json_number
 
 METHODS = (1, 2, 3, 4)
 # A loaded motion must move the wrist: otherwise Wc is (nearly) rank deficient (eq. 22).
@@ -160,7 +160,7 @@ def payload(robot: rx90sym.Robot, method: int, empty: Sequence[Any] = (), loaded
     standard) parameters for method 1; a_priori: CAD values (dict or bundled payload name) to
     print beside the estimates; constrained: impose the payload pseudo-inertia PSD and, when
     ``mass`` [kg] is given (weighed), |Mc - mass| <= mass_tol [kg]; position_tol [rad]: method 3
-    pairs each empty run with its loaded run in time (identify.pairing: lag, common part) and
+    pairs each empty run with its loaded run in time (identify.signal.pairing: lag, common part) and
     refuses pairs whose positions still differ by more; options: cutoff, decimate_to, spring,
     min_velocity, delay (see identify.observation_matrix; an identification's are
     ``FitModel.filtering()``).
@@ -283,7 +283,7 @@ def grouping_relations(robot: rx90sym.Robot, base: Any) -> np.ndarray:
 
 def _method_2(robot, base, empty, loaded, options, **_):
     kw = {k: options[k] for k in ("cutoff", "decimate_to", "spring", "min_velocity") if k in options}
-    from .identification import identify
+    from identify.identification import identify
 
     fit_v = identify(robot, empty, method="wls", base=base, **kw)
     fit_t = identify(robot, loaded, method="wls", base=base, **kw)

@@ -11,10 +11,10 @@ from typing import Any, Sequence
 
 import rx90sym
 
-from .delay import DelayEstimate, estimate_delay
-from .identification import identify
-from .observation import DEFAULT_MIN_VELOCITY, DEFAULT_REST, Observation, observation_matrix
-from .results import IdentificationResult
+from identify.signal.delay import DelayEstimate, estimate_delay
+from identify.identification import identify
+from identify.observation.matrix import DEFAULT_MIN_VELOCITY, DEFAULT_REST, Observation, observation_matrix
+from identify.estimation.results import IdentificationResult
 
 __all__ = ["Fit", "fit_recordings"]
 

@@ -14,8 +14,8 @@ import numpy as np
 
 import rx90sym
 
-from .observation import filtered_motion
-from .results import IdentificationResult, json_number
+from identify.observation.matrix import filtered_motion
+from identify.estimation.results import IdentificationResult, json_number
 
 __all__ = ["Validation", "predict", "validate"]
 

@@ -105,7 +105,7 @@ class SpringBasis:
     decay like (a/b)^h, needs a few orders). Coefficients in N m, named SP0_j, SPCh_j, SPSh_j
     (j = joint + 1). Columns aliased with the rigid-body model (the first harmonic with the
     gravity parameters MX2R/MY2 of a horizontal joint, the constant with the offset OFFj) are
-    removed when the basis is attached to an identification (identify.spring_fit).
+    removed when the basis is attached to an identification (identify.observation.spring_fit).
     """
 
     joint: int

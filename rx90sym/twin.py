@@ -529,7 +529,7 @@ class CurrentSensor:
     """The twin records motor currents instead of torques: i = (Rt diag(k))^-1 tau + i0 + noise.
 
     gains: (n,) drive gains, N·m/A, on the side ``side`` ("motor": tau = Rt diag(k) (i - i0),
-        "joint": tau = diag(k) (i - i0)), as :class:`identify.gains.DriveGains` reads them;
+        "joint": tau = diag(k) (i - i0)), as :class:`identify.io.gains.DriveGains` reads them;
     offsets: (n,) current offsets i0, A (None: 0);
     noise: standard deviation of the Gaussian current noise, A (a number or one per motor).
     """

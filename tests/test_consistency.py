@@ -1,4 +1,4 @@
-"""Tests of identify.consistency: pseudo-inertia, consistency report, consistent least squares.
+"""Tests of identify.estimation.consistency: pseudo-inertia, consistency report, consistent least squares.
 
 Independent truths used here (none of them goes through the code under test):
 
@@ -22,7 +22,7 @@ import scipy.linalg as sla
 
 cp = pytest.importorskip("cvxpy")
 
-from identify.consistency import (  # noqa: E402
+from identify.estimation.consistency import (  # noqa: E402
     ConsistencyError,
     build_consistent_problem,
     consistency_margin,
@@ -437,7 +437,7 @@ def test_failed_solve_is_an_error_never_a_result(arm: Arm) -> None:
 
 def _flaky_solve(monkeypatch: pytest.MonkeyPatch, index: int, bad_calls: int) -> list[float]:
     """Make the first ``bad_calls`` solves come back 1e-7 outside the cone on χ[index]."""
-    import identify.consistency.fit as module
+    import identify.estimation.consistency.fit as module
 
     real, margins = module.solve_problem, []
 

@@ -5,7 +5,7 @@ import numpy as np
 import pytest
 
 import rx90sym
-from identify.recordings import RecordingError, recording_from_arrays, read_recording, write_recording
+from identify.io.recordings import RecordingError, recording_from_arrays, read_recording, write_recording
 
 
 def test_controller_and_model_angles_with_old_names(tmp_path):

@@ -12,8 +12,8 @@ import pytest
 
 import rx90sym
 from identify.drive_gains import drive_gains
-from identify.gains import apply_gains, read_gains
-from identify.pairing import pair_runs
+from identify.io.gains import apply_gains, read_gains
+from identify.signal.pairing import pair_runs
 from rx90sym.files import write_json
 from rx90sym.twin import CurrentSensor
 

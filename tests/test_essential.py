@@ -1,4 +1,4 @@
-"""Tests of identify.essential: backward elimination with the σ_pe ≥ 1.02·σρ0 stop (paper §II-B).
+"""Tests of identify.estimation.essential: backward elimination with the σ_pe ≥ 1.02·σρ0 stop (paper §II-B).
 
 Truth: simulated systems where some parameters are exactly zero, and direct weighted least
 squares on the raw columns kept. Every draw is seeded.
@@ -11,9 +11,9 @@ import json
 import numpy as np
 import pytest
 
-from identify.essential import essential_parameters
-from identify.least_squares import weighted_least_squares
-from identify.results import IdentificationResult
+from identify.estimation.essential import essential_parameters
+from identify.estimation.least_squares import weighted_least_squares
+from identify.estimation.results import IdentificationResult
 
 IRRELEVANT = (1, 8, 13, 17)
 

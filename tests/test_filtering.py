@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from identify.filtering import (
+from identify.signal.filtering import (
     EDGE_PERIODS,
     choose_cutoff,
     crossover_frequencies,

@@ -1,4 +1,4 @@
-"""Tests of identify.least_squares and identify.results on simulated joint-grouped systems.
+"""Tests of identify.estimation.least_squares and identify.estimation.results on simulated joint-grouped systems.
 
 Truth is independent of the code under test: known parameters and noise levels, and textbook
 formulas evaluated with numpy on the raw (uncompressed) matrices. Every draw is seeded.
@@ -11,13 +11,13 @@ import json
 import numpy as np
 import pytest
 
-from identify.least_squares import (
+from identify.estimation.least_squares import (
     IdentificationError,
     compress,
     stack_systems,
     weighted_least_squares,
 )
-from identify.results import EliminationStep, IdentificationResult
+from identify.estimation.results import EliminationStep, IdentificationResult
 
 
 def make_w(seed: int, n: int, k: int, rows: int) -> tuple[np.ndarray, np.ndarray, list[str]]:

@@ -15,8 +15,8 @@ from conftest import SHARED
 from identify import read_log, read_recording
 from identify.app import cli
 from identify import parse_columns
-from identify.logs import MAX_GAP_PERIODS
-from identify.recordings import RecordingWarning
+from identify.io.logs import MAX_GAP_PERIODS
+from identify.io.recordings import RecordingWarning
 from rx90sym.recording import RecordingError
 
 UR_DATA = SHARED / "data" / "ur10e"
@@ -420,7 +420,7 @@ def test_velocity_columns_that_are_not_the_derivative_of_their_positions_are_ref
 def test_real_ur10e_velocities_match_their_positions_well_inside_the_tolerance(ur):
     """The margin of the rule on real data: 1.4-1.8 % RMS difference on every joint of both
     excitation runs, against the 50 % tolerance."""
-    from identify.logs import VELOCITY_MISMATCH
+    from identify.io.logs import VELOCITY_MISMATCH
     for name in ("ur-20_02_19_14harm50sec.csv", "ur-20_02_19_14harm50secLoad.csv"):
         raw = np.loadtxt(UR_DATA / name, delimiter=",", max_rows=5000)[150:]
         derivative = np.gradient(raw[:, 1:7], raw[:, 0], axis=0)

@@ -62,10 +62,10 @@ def test_rest_mask_and_moving_metrics(rx90, rx90_base, stop_go):
 
 def test_coupled_coulomb_rest_is_per_motor(tx40):
     robot = tx40.with_options(coupling=rx90sym.Coupling((4, 5), "motor"))
-    terms = identify.observation.coulomb_terms(robot, robot.parameter_names)
+    terms = identify.observation.matrix.coulomb_terms(robot, robot.parameter_names)
     fsm = [t for t in terms if t.name == "FSM6"]
     assert [t.row for t in fsm] == [4, 5] and all(t.driver == (0, 0, 0, 0, 1, 1) for t in fsm)
-    paper = identify.observation.coulomb_terms(tx40.with_options(coupling=rx90sym.Coupling((4, 5), "paper")),
+    paper = identify.observation.matrix.coulomb_terms(tx40.with_options(coupling=rx90sym.Coupling((4, 5), "paper")),
                                                tx40.parameter_names)
     assert [(t.row, t.driver.index(1)) for t in paper if t.name == "FSM6"] == [(4, 5), (5, 4)]
 
@@ -88,7 +88,7 @@ def test_prediction_with_the_fits_filtering_reproduces_the_fit(rx90, rx90_base, 
 def test_time_axis_is_the_recordings(rx90, rx90_base, stop_go):
     fit = identify.fit_recordings(rx90, [stop_go[0]], base=rx90_base)
     val = identify.predict(rx90, fit.result, stop_go[1], base=rx90_base, **fit.filtering())
-    edge = identify.filtering.EDGE_PERIODS / fit.cutoff
+    edge = identify.signal.filtering.EDGE_PERIODS / fit.cutoff
     assert val.t[0] == pytest.approx(stop_go[1].t[0] + edge, abs=2 / stop_go[1].rate)
     assert val.t[-1] == pytest.approx(stop_go[1].t[-1] - edge, abs=2 / fit.observation.rate + 2 / stop_go[1].rate)
 

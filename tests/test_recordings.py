@@ -9,9 +9,9 @@ import numpy as np
 import pytest
 
 import rx90sym
-from identify import filtering
-from identify import recordings as rec_mod
-from identify.recordings import (
+from identify.signal import filtering
+from identify.io import recordings as rec_mod
+from identify.io.recordings import (
     Recording,
     RecordingError,
     read_motor_recording,

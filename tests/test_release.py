@@ -77,8 +77,8 @@ def test_model_table_prints_every_digit_of_the_robot_file(tmp_path):
 
 
 def test_messages_print_plain_numbers_not_numpy_reprs():
-    from identify.consistency import consistent_least_squares
-    from identify.least_squares import weighted_least_squares
+    from identify.estimation.consistency import consistent_least_squares
+    from identify.estimation.least_squares import weighted_least_squares
     from rx90sym.messages import plain
 
     assert plain(np.float64(np.nan)) == "nan" and plain((np.float64(50.0), 25.5)) == "(50, 25.5)"

@@ -6,7 +6,7 @@ import pytest
 
 import identify
 import rx90sym
-from identify.spring_fit import spring_base, spring_torque
+from identify.observation.spring_fit import spring_base, spring_torque
 from rx90sym.spring import Spring, SpringBasis, SpringStiffness
 
 from motions import multisine
@@ -110,7 +110,7 @@ import subprocess  # noqa: E402
 import sys  # noqa: E402
 from pathlib import Path  # noqa: E402
 
-from identify.recordings import write_recording  # noqa: E402
+from identify.io.recordings import write_recording  # noqa: E402
 from rx90sym.robot_file import ROBOTS_DIR  # noqa: E402
 
 RX90_CLI = str(Path(sys.executable).parent / "rx90")

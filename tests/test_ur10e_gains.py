@@ -51,7 +51,7 @@ def ur():
 @pytest.mark.slow
 def test_gains_fitted_on_25_s_give_the_mass_on_the_rest(ur):
     from identify.drive_gains import drive_gains
-    from identify.pairing import pair_runs
+    from identify.signal.pairing import pair_runs
 
     b, robot, empty, loaded = ur
     p = pair_runs(empty, loaded)

@@ -41,7 +41,7 @@ def test_rest_handling_lowers_the_wrist_error_on_the_held_out_file(bench):
 
 
 def test_method_3_with_the_controller_constants_recovers_the_weighed_mass(bench):
-    """Method 3 on the 14-harmonic pair (paired in time by identify.pairing) with the controller's
+    """Method 3 on the 14-harmonic pair (paired in time by identify.signal.pairing) with the controller's
     constants: measured 2.793 kg on the whole pair (-0.4 %) and 2.796 kg on its second half
     (-0.3 %, benchmarks/ur10e_gains.py). Tolerance 1.5 % of 2.805 kg; the source's gains give
     2.476 kg (-11.7 %), far outside it."""

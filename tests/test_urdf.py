@@ -244,7 +244,7 @@ def test_load_robot_dispatches_on_the_urdf_suffix():
 
 def _recording(robot, chi, seed, path=None):
     """A noise-free motion of the robot with parameters chi, written as a recording (URDF angles)."""
-    from identify.recordings import recording_from_arrays, write_recording
+    from identify.io.recordings import recording_from_arrays, write_recording
     from motions import multisine
 
     t = np.arange(0, 20, 1 / 200)
@@ -371,7 +371,7 @@ def test_payload_of_a_urdf_robot_is_given_in_the_tip_frame(tmp_path):
 
 def test_payload_identified_on_a_urdf_robot_is_reported_in_the_tip_frame():
     from identify.payload import payload
-    from identify.recordings import recording_from_arrays
+    from identify.io.recordings import recording_from_arrays
 
     robot = _load(DATA / "ur10_robot.urdf", "tool0")
     chi = robot.parameter_vector(urdf_parameters(robot))

@@ -6,7 +6,7 @@ from typing import Any
 import numpy as np
 
 import rx90sym
-from identify.spring_fit import SpringBase, spring_base, spring_torque
+from identify.observation.spring_fit import SpringBase, spring_base, spring_torque
 
 from .common import UsageError, progress, spring_notice
 

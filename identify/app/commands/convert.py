@@ -14,8 +14,8 @@ from __future__ import annotations
 import argparse
 from typing import Any
 
-from identify.logs import read_log
-from identify.recordings import read_motor_recording, write_recording
+from identify.io.logs import read_log
+from identify.io.recordings import read_motor_recording, write_recording
 
 from ..common import UsageError, check_output, convention_option, load_robot, progress, robot_option
 

@@ -179,8 +179,8 @@ def _payload(args: argparse.Namespace, robot: rx90sym.Robot, base: Any, chi: Any
 
 def _motion(path: str, robot: rx90sym.Robot) -> tuple[np.ndarray, ...]:
     """(t, q, qd, qdd) of a recording (positions filtered and differentiated as for identification)."""
-    from identify.filtering import derivatives
-    from identify.recordings import read_recording
+    from identify.signal.filtering import derivatives
+    from identify.io.recordings import read_recording
 
     rec = read_recording(path, robot)
     d = derivatives(rec.t, rec.q)

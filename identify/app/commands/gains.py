@@ -9,8 +9,8 @@ import numpy as np
 from rx90sym.files import write_json
 from identify import read_recording
 from identify.drive_gains import FLAG_PCT, GAIN_METHODS, drive_gains
-from identify.gains import read_gains
-from identify.pairing import POSITION_TOLERANCE
+from identify.io.gains import read_gains
+from identify.signal.pairing import POSITION_TOLERANCE
 
 from ..common import UsageError, check_output, convention_option, load_robot, progress, robot_option
 

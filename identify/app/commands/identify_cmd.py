@@ -14,10 +14,10 @@ import numpy as np
 import rx90sym
 from rx90sym.files import write_json
 from identify import essential_parameters, predict, read_recording, validate
-from identify.bootstrap import segment_bootstrap_std
+from identify.estimation.bootstrap import segment_bootstrap_std
 from identify.fit_model import FitModel
-from identify.gains import apply_gains, read_gains
-from identify.observation import DEFAULT_MIN_VELOCITY, DEFAULT_REST, REST_POLICIES
+from identify.io.gains import apply_gains, read_gains
+from identify.observation.matrix import DEFAULT_MIN_VELOCITY, DEFAULT_REST, REST_POLICIES
 from identify.real_fit import fit_recordings
 
 from ..common import (UsageError, check_output, convention_option, progress, robot_option, robot_with_spring,

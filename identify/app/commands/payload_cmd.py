@@ -6,8 +6,8 @@ from typing import Any
 
 from rx90sym.files import write_json
 from identify import read_recording
-from identify.gains import apply_gains, read_gains
-from identify.pairing import POSITION_TOLERANCE
+from identify.io.gains import apply_gains, read_gains
+from identify.signal.pairing import POSITION_TOLERANCE
 from identify.payload import payload
 
 from ..common import (UsageError, check_output, convention_option, load_robot, progress, robot_option,

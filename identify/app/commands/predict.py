@@ -17,7 +17,7 @@ import rx90sym
 from rx90sym.files import atomic_write, write_json
 from identify import IdentificationResult, predict
 from identify.fit_model import FitModel
-from identify.gains import DriveGains
+from identify.io.gains import DriveGains
 
 from ..common import check_output, progress
 from .identify_cmd import read_recordings

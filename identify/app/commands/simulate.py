@@ -6,7 +6,7 @@ from typing import Any
 
 import rx90sym
 from excitation import read_trajectory
-from identify.recordings import write_recording
+from identify.io.recordings import write_recording
 
 from ..common import UsageError, check_output, load_robot, progress, robot_option, spring_notice
 

@@ -17,7 +17,7 @@ from scipy.signal import correlate
 
 from rx90sym.recording import Recording
 
-from .resampling import interpolate
+from identify.signal.resampling import interpolate
 
 __all__ = ["PairedRuns", "pair_runs", "POSITION_TOLERANCE"]
 

@@ -1,6 +1,6 @@
 """Motor files (Stäubli CS8 / TX40): motor-side positions and torques read as joint data.
 
-The format is described in :mod:`identify.recordings` (section "Motor files").
+The format is described in :mod:`identify.io.recordings` (section "Motor files").
 """
 
 from __future__ import annotations
@@ -15,9 +15,9 @@ import numpy as np
 from rx90sym.messages import plain
 from rx90sym.recording import Recording, RecordingError
 
-from .csv_tables import _column_index, _read_table
-from .recording_arrays import _build, _normalise_convention
-from .recording_checks import _check_finite, _check_robot_name, _Labels
+from identify.io.csv_tables import _column_index, _read_table
+from identify.io.arrays import _build, _normalise_convention
+from identify.io.checks import _check_finite, _check_robot_name, _Labels
 
 if TYPE_CHECKING:  # for annotations only
     import rx90sym

@@ -14,8 +14,8 @@ import numpy as np
 
 import rx90sym
 
-from .filtering import decimate
-from .observation import automatic_cutoff, column_regressor, filtered_motion, shifted_torques, stack_rows
+from identify.signal.filtering import decimate
+from identify.observation.matrix import automatic_cutoff, column_regressor, filtered_motion, shifted_torques, stack_rows
 
 __all__ = ["DelayEstimate", "estimate_delay"]
 

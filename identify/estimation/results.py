@@ -12,7 +12,7 @@ import numpy as np
 
 from rx90sym.recording import frozen_array
 
-from identify.compression import CompressedSystem
+from identify.estimation.compression import CompressedSystem
 
 __all__ = ["EliminationStep", "IdentificationResult"]
 

@@ -22,7 +22,7 @@ Names (n = the robot's number of joints):
 Shorthands: ``q1..q6`` (same prefix, increasing numbers; also ``x:i_target1..x:i_target6``) and
 ``_*3`` (three ignored columns). Either torques or currents (or both) must be present.
 
-Rules (one time tolerance everywhere, as in :mod:`identify.recordings`):
+Rules (one time tolerance everywhere, as in :mod:`identify.io.recordings`):
 
 * A row is corrupt when it has the wrong number of cells, a cell that is not a number, a value
   that is not finite or larger than :data:`ABSURD` in magnitude, a position more than
@@ -35,12 +35,12 @@ Rules (one time tolerance everywhere, as in :mod:`identify.recordings`):
   corrupt head jump forward and back, select by ``rows``.
 * Time steps within 1 % of the median step are regular (rate = 1 / mean step). Beyond that the
   log is refused with the figures unless ``resample=HZ`` puts every signal on a uniform grid
-  ``t0 + k/HZ`` (:func:`identify.resampling.resample`: positions by cubic Hermite interpolation
+  ``t0 + k/HZ`` (:func:`identify.signal.resampling.resample`: positions by cubic Hermite interpolation
   with the recorded velocities when there are some, the rest linearly), before any filtering.
 * A recorded-velocity column that is 0 on every row while its joint moves is refused (it holds
   no velocities); a window where no joint moves more than :data:`STILL` gives a
-  :class:`~identify.recordings.RecordingWarning`.
-* Currents become joint torques only with drive gains (:func:`identify.gains.apply_gains`);
+  :class:`~identify.io.recordings.RecordingWarning`.
+* Currents become joint torques only with drive gains (:func:`identify.io.gains.apply_gains`);
   without gains the recording keeps its currents and ``tau`` is None.
 """
 from __future__ import annotations
@@ -57,10 +57,10 @@ import numpy as np
 import rx90sym
 from rx90sym.recording import Recording, RecordingError
 
-from .log_columns import ColumnMap, parse_columns
-from .gains import DriveGains, apply_gains, read_gains
-from .resampling import resample as resample_recording
-from .recordings import JUMP_ATOL, JUMP_SAFETY, TIME_RTOL, RecordingWarning, _normalise_convention
+from identify.io.columns import ColumnMap, parse_columns
+from identify.io.gains import DriveGains, apply_gains, read_gains
+from identify.signal.resampling import resample as resample_recording
+from identify.io.recordings import JUMP_ATOL, JUMP_SAFETY, TIME_RTOL, RecordingWarning, _normalise_convention
 
 __all__ = ["ColumnMap", "parse_columns", "read_log", "ABSURD", "POSITION_MARGIN", "MAX_GAP_PERIODS",
            "STILL", "MOVING_SPAN", "VELOCITY_MISMATCH"]

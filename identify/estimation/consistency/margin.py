@@ -6,8 +6,8 @@ from collections.abc import Sequence
 import cvxpy as cp
 import numpy as np
 
-from .lmi import body_indices, nonnegative_indices, pseudo_inertia
-from .problem import DEFAULT_SOLVER_OPTIONS, SOLVERS, ConsistentProblem, null_space, solve_problem
+from identify.estimation.consistency.lmi import body_indices, nonnegative_indices, pseudo_inertia
+from identify.estimation.consistency.problem import DEFAULT_SOLVER_OPTIONS, SOLVERS, ConsistentProblem, null_space, solve_problem
 
 __all__ = ["consistency_margin"]
 

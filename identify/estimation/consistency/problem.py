@@ -19,7 +19,7 @@ import numpy as np
 
 from rx90sym.messages import plain
 
-from .lmi import body_indices, nonnegative_indices, pseudo_inertia
+from identify.estimation.consistency.lmi import body_indices, nonnegative_indices, pseudo_inertia
 
 __all__ = ["DEFAULT_SOLVER_OPTIONS", "SOLVERS", "ConsistencyError", "ConsistentProblem",
            "build_consistent_problem", "null_space", "solve_problem"]

@@ -17,7 +17,7 @@ import math
 
 import numpy as np
 
-from identify.least_squares import (
+from identify.estimation.least_squares import (
     RANK_RCOND,
     CompressedSystem,
     relative_std_pct,
@@ -25,7 +25,7 @@ from identify.least_squares import (
     solve_system,
     stack_systems,
 )
-from identify.results import EliminationStep, IdentificationResult
+from identify.estimation.results import EliminationStep, IdentificationResult
 
 __all__ = ["DEFAULT_THRESHOLD", "essential_parameters"]
 

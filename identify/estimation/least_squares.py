@@ -20,9 +20,9 @@ import numpy as np
 
 import scipy.linalg as sla
 
-from identify.compression import (DEFAULT_CHUNK_ROWS, CompressedSystem, check_system, compress, compress_rows,
+from identify.estimation.compression import (DEFAULT_CHUNK_ROWS, CompressedSystem, check_system, compress, compress_rows,
                                   stack_systems)
-from identify.results import IdentificationResult
+from identify.estimation.results import IdentificationResult
 from rx90sym.messages import plain
 
 __all__ = [

@@ -19,7 +19,7 @@ import numpy as np
 
 import rx90sym
 
-from .filtering import choose_cutoff, decimate, decimation_plan, derivatives
+from identify.signal.filtering import choose_cutoff, decimate, decimation_plan, derivatives
 
 __all__ = ["DECIMATION_PASSBAND", "automatic_cutoff", "DEFAULT_MIN_VELOCITY", "DEFAULT_REST", "REST_POLICIES", "CoulombTerm", "FilteredMotion", "Observation",
            "coulomb_terms", "filtered_motion", "observation_matrix", "stack_rows"]

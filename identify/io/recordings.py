@@ -24,11 +24,11 @@ Motor files (Stäubli CS8 / TX40)
 Validation
 ----------
 Every bad input raises :class:`RecordingError` (a ``ValueError``) whose message names the file,
-the column and the 1-based data row; the checks are listed in :mod:`identify.recording_checks`.
+the column and the 1-based data row; the checks are listed in :mod:`identify.io.checks`.
 
-The work is shared: :mod:`identify.csv_tables` parses CSV files, :mod:`identify.recording_arrays`
+The work is shared: :mod:`identify.io.csv_tables` parses CSV files, :mod:`identify.io.arrays`
 holds the angle conventions and builds validated recordings from arrays,
-:mod:`identify.motor_files` reads motor files; this module reads and writes CSV/NPZ recordings
+:mod:`identify.io.motor_files` reads motor files; this module reads and writes CSV/NPZ recordings
 and re-exports the public names of all of them.
 """
 
@@ -44,10 +44,10 @@ from rx90sym.files import atomic_write
 from rx90sym.messages import plain
 from rx90sym.recording import Recording, RecordingError  # noqa: F401 (re-exported)
 
-from .csv_tables import _column_index, _read_table
-from .motor_files import read_motor_recording
-from .recording_arrays import _build, _normalise_convention, _resolve_convention, recording_from_arrays
-from .recording_checks import (JUMP_ATOL, JUMP_SAFETY, TIME_RTOL, RecordingWarning,
+from identify.io.csv_tables import _column_index, _read_table
+from identify.io.motor_files import read_motor_recording
+from identify.io.arrays import _build, _normalise_convention, _resolve_convention, recording_from_arrays
+from identify.io.checks import (JUMP_ATOL, JUMP_SAFETY, TIME_RTOL, RecordingWarning,
                                _check_robot_name, _check_shapes, _default_labels, _warn_no_robot)
 
 if TYPE_CHECKING:  # for annotations only

@@ -10,8 +10,8 @@ from typing import Any
 
 import numpy as np
 
-from .lmi import ConsistencyReport, consistency_report
-from .problem import (DEFAULT_SOLVER_OPTIONS, NULL_SPACE_WEIGHT, SOLVERS, ComBoxes, ConsistencyError,
+from identify.estimation.consistency.lmi import ConsistencyReport, consistency_report
+from identify.estimation.consistency.problem import (DEFAULT_SOLVER_OPTIONS, NULL_SPACE_WEIGHT, SOLVERS, ComBoxes, ConsistencyError,
                       ConsistentProblem, Interval, MassBounds, build_consistent_problem, check_rss_outside,
                       prior_indices, solve_problem)
 

@@ -1,7 +1,7 @@
 """CSV tables: the comment lines, header and numbers of a recording or motor file.
 
 Parsing only: the names of the columns are checked here (:func:`_column_index`), what the
-numbers mean is up to the readers of :mod:`identify.recordings` and :mod:`identify.motor_files`.
+numbers mean is up to the readers of :mod:`identify.io.recordings` and :mod:`identify.io.motor_files`.
 """
 
 from __future__ import annotations

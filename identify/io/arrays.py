@@ -2,7 +2,7 @@
 
 Joint-angle conventions: ``"controller"`` (what the robot's controller and its logs use) and
 ``"model"`` (Khalil's). :func:`_build` converts the angles to Khalil's (the one place the
-conversion happens on reading) and runs every check of :mod:`identify.recording_checks`.
+conversion happens on reading) and runs every check of :mod:`identify.io.checks`.
 """
 
 from __future__ import annotations
@@ -13,7 +13,7 @@ import numpy as np
 
 from rx90sym.recording import Recording, RecordingError
 
-from .recording_checks import _Labels, _check_shapes, _default_labels, _validate
+from identify.io.checks import _Labels, _check_shapes, _default_labels, _validate
 
 if TYPE_CHECKING:  # for annotations only
     import rx90sym
@@ -85,7 +85,7 @@ def recording_from_arrays(
         convention: ``"model"`` (default: arrays from the model) or ``"controller"``.
 
     Raises:
-        RecordingError: on any check of :mod:`identify.recording_checks`.
+        RecordingError: on any check of :mod:`identify.io.checks`.
     """
     conv = _normalise_convention(convention, source)
     t_a = np.asarray(t, dtype=float)

@@ -1,4 +1,4 @@
-"""The column map of a controller log: what each column holds (see :mod:`identify.logs`).
+"""The column map of a controller log: what each column holds (see :mod:`identify.io.logs`).
 
 Names (n = the robot's number of joints): ``t``; ``q1..qn``, ``qd1..qdn``, ``tau1..taun``,
 ``i1..in`` (each group all or none; positions required; torques or currents required); ``_``

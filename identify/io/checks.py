@@ -14,8 +14,8 @@ the column and the 1-based data row (row 1 is the first line after the header). 
   ``JUMP_SAFETY * qd_max * dt + JUMP_ATOL`` (skipped for joints with an infinite ``qd_max``);
 * motor files of different lengths.
 
-The column checks of CSV files are in :mod:`identify.csv_tables`, the length check of motor
-files in :mod:`identify.motor_files`; the arrays of every reader end in :func:`_validate`.
+The column checks of CSV files are in :mod:`identify.io.csv_tables`, the length check of motor
+files in :mod:`identify.io.motor_files`; the arrays of every reader end in :func:`_validate`.
 """
 
 from __future__ import annotations
