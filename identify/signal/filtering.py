@@ -28,6 +28,8 @@ __all__ = [
     "lowpass",
     "choose_cutoff",
     "crossover_frequencies",
+    "cutoff_from_spectrum",
+    "welch_segment",
     "derivatives",
     "decimate",
     "decimation_factor",
@@ -88,13 +90,23 @@ def lowpass(x: np.ndarray, rate: float, cutoff: float, order: int = 4) -> np.nda
 
 
 def _band_spectrum(a: np.ndarray, rate: float, seconds: float, per_octave: int) -> tuple[np.ndarray, np.ndarray]:
-    """Welch PSD of ``a`` averaged in log-spaced bands: (band centre frequencies Hz, mean PSD).
-
-    Averaging in 1/``per_octave`` octave bands steadies the estimate at high frequency (many
-    bins per band) while keeping the resolution of the Welch estimate at low frequency.
-    """
-    nperseg = min(a.size, max(16, int(round(seconds * rate))))
+    """Welch PSD of ``a`` averaged in log-spaced bands: (band centre frequencies Hz, mean PSD)."""
+    nperseg = welch_segment(a.size, rate, seconds)
     f, psd = signal.welch(a, fs=rate, window="hann", nperseg=nperseg, detrend="constant")
+    return _bands(f, psd, rate, per_octave)
+
+
+def welch_segment(samples: int, rate: float, seconds: float) -> int:
+    """Samples per Welch segment of :func:`crossover_frequencies` (``seconds`` long, at most all)."""
+    return min(samples, max(16, int(round(seconds * rate))))
+
+
+def _bands(f: np.ndarray, psd: np.ndarray, rate: float, per_octave: int) -> tuple[np.ndarray, np.ndarray]:
+    """A Welch PSD averaged in 1/``per_octave`` octave bands: (band centres Hz, mean PSD).
+
+    Averaging in log-spaced bands steadies the estimate at high frequency (many bins per band)
+    while keeping the resolution of the Welch estimate at low frequency.
+    """
     df = f[1] - f[0]
     n_bands = int(np.floor(np.log2((rate / 2.0) / (2.0 * df)) * per_octave)) + 1
     edges = 2.0 * df * 2.0 ** (np.arange(n_bands + 1) / per_octave)
@@ -119,6 +131,12 @@ def _crossover(x: np.ndarray, rate: float, seconds: float, per_octave: int, snr_
     """
     a = (x[2:] - 2.0 * x[1:-1] + x[:-2]) * rate**2
     f, s_acc = _band_spectrum(a, rate, seconds, per_octave)
+    return _crossover_of_bands(f, s_acc, rate, snr_min, floor_ratio)
+
+
+def _crossover_of_bands(f: np.ndarray, s_acc: np.ndarray, rate: float, snr_min: float,
+                        floor_ratio: float = 4.0) -> float | None:
+    """The crossover of :func:`_crossover` from the band spectrum of the acceleration."""
     # Position spectrum seen through the exact gain of the second difference, |2·rate·sin(πf/rate)|⁴.
     s_pos = s_acc / (2.0 * rate * np.sin(np.pi * f / rate)) ** 4
     peak = int(np.argmax(s_pos))  # the motion's main frequency: positions are dominated by it
@@ -129,6 +147,24 @@ def _crossover(x: np.ndarray, rate: float, seconds: float, per_octave: int, snr_
     if s_pos[peak] < snr_min * s_pos[cross]:
         return None
     return float(f[cross])
+
+
+def cutoff_from_spectrum(f: np.ndarray, psd: np.ndarray, rate: float, *, min_cutoff: float = 2.0,
+                         max_fraction: float = 0.4, bands_per_octave: int = 6, snr_min: float = 100.0) -> float:
+    """:func:`choose_cutoff` from the Welch PSD (columns: joints) of the raw accelerations, computed elsewhere
+    (e.g. streamed over a long log by :class:`identify.signal.blocks.WelchAccumulator`)."""
+    found = []
+    for j in range(psd.shape[1]):
+        fb, sb = _bands(f, psd[:, j], rate, bands_per_octave)
+        found.append(_crossover_of_bands(fb, sb, rate, snr_min))
+    return _bounded_cutoff(np.array([np.nan if x is None else x for x in found]), rate, min_cutoff, max_fraction)
+
+
+def _bounded_cutoff(found: np.ndarray, rate: float, min_cutoff: float, max_fraction: float) -> float:
+    ceiling = max_fraction * rate / 2.0
+    if np.all(np.isnan(found)):
+        return float(min(min_cutoff, ceiling))
+    return float(min(max(np.nanmax(found), min_cutoff), ceiling))
 
 
 def crossover_frequencies(
@@ -207,10 +243,7 @@ def choose_cutoff(
     if not (0.0 < max_fraction < 1.0):
         raise ValueError(f"max_fraction must lie in (0, 1), got {max_fraction!r}")
     found = crossover_frequencies(q, rate, segment=segment, bands_per_octave=bands_per_octave, snr_min=snr_min)
-    ceiling = max_fraction * rate / 2.0
-    if np.all(np.isnan(found)):
-        return float(min(min_cutoff, ceiling))
-    return float(min(max(np.nanmax(found), min_cutoff), ceiling))
+    return _bounded_cutoff(found, rate, min_cutoff, max_fraction)
 
 
 @dataclass(frozen=True, eq=False)
@@ -257,6 +290,7 @@ def _central_difference(x: np.ndarray, step: float) -> np.ndarray:
 
 def derivatives(
     t: np.ndarray, q: np.ndarray, cutoff: float | None = None, order: int = 4, edge: int | None = None,
+    kept: slice | None = None,
 ) -> Derivatives:
     """Estimate q̇ and q̈ from sampled positions (§III-A: low-pass then central differences).
 
@@ -271,6 +305,8 @@ def derivatives(
         order: Butterworth order (4 in the paper).
         edge: samples dropped at each end (≥ 2); ``None`` uses
             ``max(2, ceil(EDGE_PERIODS · rate / cutoff))``, three periods of the cut-off.
+        kept: the samples to keep instead (a block of a longer signal, whose ends are margins:
+            :mod:`identify.signal.blocks`); at least 2 from each end.
 
     Returns:
         :class:`Derivatives` on the kept samples.
@@ -292,10 +328,12 @@ def derivatives(
     n = t_a.size
     if n - 2 * edge < 1:
         raise ValueError(f"{n} samples are too few to drop {edge} at each end (cut-off {fc:g} Hz)")
+    if kept is not None and not (kept.step in (None, 1) and 2 <= kept.start < kept.stop <= n - 2):
+        raise ValueError(f"kept must be a slice within [2, {n - 2}) of the {n} samples, got {kept}")
     q_f = lowpass(q_a, rate, fc, order)
     dq = _central_difference(q_f, step)   # eq. 20
     ddq = _central_difference(dq, step)   # eq. 20 again, on q̇
-    kept = slice(edge, n - edge)
+    kept = slice(edge, n - edge) if kept is None else kept
     return Derivatives(t=t_a[kept], q=q_f[kept], dq=dq[kept], ddq=ddq[kept], cutoff=fc, rate=rate, kept=kept)
 
 

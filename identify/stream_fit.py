@@ -1,0 +1,225 @@
+"""Identification and prediction on logs of any length: the real-data fit streamed block by block.
+
+:func:`fit_streamed` does what :func:`identify.fit_recordings` does (rest policy, torque-delay
+estimate, one filtering, (weighted) least squares, optionally the consistent fit) plus the segment
+bootstrap, without ever holding a full-rate array of a whole log: recordings are read in blocks
+(:mod:`identify.io.blocks`), filtered in overlapping blocks (:mod:`identify.signal.blocks`), turned
+into decimated rows block by block (:mod:`identify.observation.stream`) and folded into the
+per-joint triangular factors (:mod:`identify.estimation.incremental_qr`) from which eqs. 9-15 follow.
+
+With a Dask ``client`` every block is a task (filtering, regressor, parallel decimation and the
+block's QR run on the workers); the client folds the factors in block order, so the result is the
+serial one (the same operations in the same order).
+"""
+from __future__ import annotations
+
+from collections import deque
+from dataclasses import dataclass, replace
+from typing import Any, Iterable, Sequence
+
+import numpy as np
+
+import rx90sym
+
+from identify.estimation.bootstrap import SegmentBootstrap
+from identify.estimation.incremental_qr import JointFactors, stacked_rows
+from identify.estimation.least_squares import solve_joint_systems
+from identify.estimation.results import IdentificationResult
+from identify.io.blocks import BlockSource, block_source
+from identify.observation.matrix import DEFAULT_MIN_VELOCITY, DEFAULT_REST, column_regressor
+from identify.observation.stream import DEFAULT_BLOCK, Piece, StreamSettings, piece, plan_windows, scan_all
+from identify.signal.delay import DelayEstimate, delay_grid, joint_log_rms, refined_delay
+from identify.validation import Validation, _relative, _rms, base_vector
+
+__all__ = ["BootstrapSpec", "StreamedFit", "fit_streamed", "predict_streamed"]
+
+
+@dataclass(frozen=True)
+class BootstrapSpec:
+    """Segment bootstrap of the streamed fit: block length [s], draws, seed."""
+
+    block_s: float = 0.5
+    draws: int = 200
+    seed: int = 0
+
+
+@dataclass(frozen=True, eq=False)
+class StreamedFit:
+    """A fit on recordings read block by block.
+
+    result: the identification; cutoff [Hz]; rate [Hz] after decimation; notes: decimation notes;
+    sources: file names; samples: decimated samples used; moving_fraction: (n,) share of moving
+    samples per joint (None without a rest threshold); delay_estimate (None when not estimated);
+    delay [s] compensated; bootstrap_std: (c,) (None when not asked); bootstrap_block: samples per
+    bootstrap block; settings: the processing; blocks: number of blocks processed.
+    """
+
+    result: IdentificationResult
+    cutoff: float
+    rate: float
+    notes: tuple[str, ...]
+    sources: tuple[str, ...]
+    samples: int
+    moving_fraction: np.ndarray | None
+    delay_estimate: DelayEstimate | None
+    delay: float
+    bootstrap_std: np.ndarray | None
+    bootstrap_block: int
+    settings: StreamSettings
+    blocks: int
+
+    def filtering(self, spring: bool = True) -> dict[str, Any]:
+        """Keyword arguments of :func:`identify.predict` / :func:`predict_streamed` that reuse this processing."""
+        s = self.settings
+        return {"cutoff": self.cutoff, "decimate_to": s.decimate_to, "min_velocity": s.min_velocity,
+                "delay": self.delay, "spring": spring}
+
+
+def _block_task(robot: rx90sym.Robot, rec: Any, window: Any, plan: Any, cutoff: float, settings: StreamSettings,
+                base: Any, names: Sequence[str], first: int, lags: Sequence[float]) -> tuple[Piece, list]:
+    """One block: its decimated rows and, per joint, the triangular factor of ``[W_i | Y_i | Y_lags]``."""
+    p = piece(robot, rec, window, plan, cutoff, settings, base.regressor_batch, names, first, lags)
+    m = p.motion
+    drop = settings.min_velocity is not None and settings.rest == "drop"
+    factors = []
+    for j in range(m.Phi.shape[1]):
+        rows = stacked_rows(m.Phi, [m.Y, *p.extra_Y], j, m.usable[:, j] if drop else None)
+        factors.append((JointFactors.block_factor(rows), rows.shape[0]))
+    return p, factors
+
+
+def _in_order(tasks: Iterable[tuple], client: Any, in_flight: int) -> Iterable[tuple[Piece, list]]:
+    """Run the block tasks serially, or on Dask with at most ``in_flight`` blocks submitted; results in order."""
+    if client is None:
+        for args in tasks:
+            yield _block_task(*args)
+        return
+    queue: deque = deque()
+    for args in tasks:
+        queue.append(client.submit(_block_task, *args, pure=False))
+        if len(queue) >= in_flight:
+            yield queue.popleft().result()
+    while queue:
+        yield queue.popleft().result()
+
+
+def _tasks(robot: rx90sym.Robot, sources: Sequence[BlockSource], plans: Sequence[Any], cutoff: float,
+           settings: StreamSettings, base: Any, names: Sequence[str], lags: Sequence[float]) -> Iterable[tuple]:
+    offset = 0
+    for src, plan in zip(sources, plans):
+        for window, rec in zip(plan.windows, src.windows(plan.spans)):
+            yield (robot, rec, window, plan, cutoff, settings, base, names, offset, tuple(lags))
+        offset += plan.samples
+
+
+def _workers(client: Any) -> int:
+    try:
+        return max(1, len(client.scheduler_info().get("workers", {})))
+    except Exception:  # a client that cannot say: two blocks in flight per assumed worker
+        return 1
+
+
+def _accumulate(robot: rx90sym.Robot, sources: Sequence[BlockSource], plans: Sequence[Any], cutoff: float,
+                settings: StreamSettings, base: Any, lags: Sequence[float], client: Any,
+                boot: SegmentBootstrap | None) -> tuple[JointFactors, np.ndarray, int]:
+    """The second pass: per-joint factors, moving-sample counts and the number of blocks."""
+    names = tuple(base.names)
+    factors = JointFactors(robot.n, len(names), 1 + len(lags))
+    moving = np.zeros(robot.n)
+    drop = settings.min_velocity is not None and settings.rest == "drop"
+    count = 0
+    tasks = _tasks(robot, sources, plans, cutoff, settings, base, names, lags)
+    for p, block_factors in _in_order(tasks, client, 2 * _workers(client) if client is not None else 1):
+        count += 1
+        m = p.motion
+        moving += m.moving.sum(axis=0)
+        for j, (factor, rows) in enumerate(block_factors):
+            factors.add_factor(j, factor, rows)
+            if boot is not None:
+                keep = m.usable[:, j] if drop else np.ones(m.Y.shape[0], dtype=bool)
+                boot.add(j, p.first + np.flatnonzero(keep), m.Phi[keep, j, :], m.Y[keep, j])
+    return factors, moving, count
+
+
+def fit_streamed(robot: rx90sym.Robot, recordings: Sequence[Any], method: str = "wls", base: Any = None,
+                 cutoff: float | None = None, decimate_to: float | None = 50.0,
+                 min_velocity: float | None = DEFAULT_MIN_VELOCITY, rest: str = DEFAULT_REST,
+                 delay: float | str = 0.0, spring: bool = True, estimate: bool = False,
+                 block: int = DEFAULT_BLOCK, client: Any = None, bootstrap: BootstrapSpec | None = None,
+                 convention: str | None = None, gains: Any = None, **consistent_options: Any) -> StreamedFit:
+    """:func:`identify.fit_recordings` on recordings of any length, block by block.
+
+    recordings: CSV paths (streamed), :class:`~identify.Recording` objects or
+    :class:`~identify.io.blocks.BlockSource`; block: raw samples per block core (peak memory grows
+    with it, not with the logs: docs/long-logs.md); client: a ``dask.distributed.Client`` to run the
+    blocks on (None: here); bootstrap: also the segment-bootstrap σ; convention, gains: how CSV files
+    are read. The other arguments are those of :func:`identify.fit_recordings`.
+    """
+    from identify.identification import METHODS, consistent_fit
+
+    if method not in METHODS:
+        raise ValueError(f"method must be one of {METHODS}, got {method!r}")
+    if not (delay == "auto" or isinstance(delay, (int, float))):
+        raise ValueError(f"delay must be 'auto' or a number of seconds, got {delay!r}")
+    if int(block) != block or block < 1000:
+        raise ValueError(f"block must be a whole number of samples >= 1000, got {block!r}")
+    base = base if base is not None else rx90sym.base_parameters(robot)
+    sources = [block_source(r, robot, convention, gains) for r in recordings]
+    settings = StreamSettings(cutoff, decimate_to or None, min_velocity or None, rest,
+                              0.0 if delay == "auto" else float(delay), spring, int(block))
+    scans, fc = scan_all(sources, settings)
+    plans = [plan_windows(s, fc, replace(settings, delay=0.02 if (estimate or delay == "auto") else settings.delay))
+             for s in scans]
+    rates = [p.rate for p in plans]
+    if max(rates) > min(rates) * (1 + 1e-3):
+        raise ValueError(f"recordings have different rates after decimation: {', '.join(f'{r:g}' for r in rates)} Hz; "
+                         f"give decimate_to")
+    grid, step = delay_grid(max(1.0 / s.rate for s in scans))
+    lags = tuple(grid) if (estimate or delay == "auto") else ()
+    total = sum(p.samples for p in plans)
+    bblock = max(1, int(round(bootstrap.block_s * plans[0].rate))) if bootstrap else 0
+    make_boot = (lambda: SegmentBootstrap(total, bblock, robot.n, len(base.names), bootstrap.draws, bootstrap.seed)
+                 if bootstrap else None)
+    boot = make_boot()
+    factors, moving, count = _accumulate(robot, sources, plans, fc, settings, base, lags, client, boot)
+    found = None
+    if lags:
+        found = refined_delay(grid, np.array([joint_log_rms(factors.systems(k + 1)) for k in range(len(lags))]), step)
+    if delay == "auto":  # a second pass with the torques put back in step
+        settings = replace(settings, delay=found.delay)
+        boot = make_boot()
+        factors, moving, count = _accumulate(robot, sources, plans, fc, settings, base, (), client, boot)
+    result = solve_joint_systems(factors.systems(0), base.names, weighted=method != "ols")
+    if method == "consistent":
+        result = consistent_fit(robot, result, base, **consistent_options)
+    return StreamedFit(result, fc, plans[0].rate, tuple(p.note for p in plans), tuple(s.source for s in scans), total,
+                       moving / total if settings.min_velocity is not None else None, found, settings.delay,
+                       boot.std(result.weights) if boot is not None else None, bblock, settings, count)
+
+
+def predict_streamed(robot: rx90sym.Robot, result: IdentificationResult, recording: Any, base: Any = None,
+                     cutoff: float | None = None, decimate_to: float | None = 50.0, spring: bool = True,
+                     min_velocity: float | None = None, delay: float = 0.0, block: int = DEFAULT_BLOCK,
+                     convention: str | None = None, gains: Any = None) -> Validation:
+    """:func:`identify.predict` on a recording of any length: predicted and measured torques block by block
+    (only the decimated torques are held, n columns at the decimated rate)."""
+    base = base if base is not None else rx90sym.base_parameters(robot)
+    beta = base_vector(result, base, robot)
+    src = block_source(recording, robot, convention, gains)
+    settings = StreamSettings(cutoff, decimate_to or None, min_velocity or None, "zero-coulomb", float(delay),
+                              spring, int(block))
+    scans, fc = scan_all([src], settings)
+    plan = plan_windows(scans[0], fc, settings)
+    names, regressor = column_regressor(robot, base)
+    parts = []
+    for window, rec in zip(plan.windows, src.windows(plan.spans)):
+        m = piece(robot, rec, window, plan, fc, settings, regressor, names, 0).motion
+        parts.append((m.Y, m.Phi @ beta, m.t, m.moving))
+    Y, pred, t, mov = (np.concatenate(a) for a in zip(*parts))
+    err = Y - pred
+    every = np.ones_like(mov)
+    return Validation(
+        relative_error_pct=_relative(err, Y, every), rms_error=_rms(err, every), measured=Y, predicted=pred, t=t,
+        source=src.source, relative_error_pct_moving=_relative(err, Y, mov), rms_error_moving=_rms(err, mov),
+        moving_fraction=mov.mean(axis=0), moving_threshold=settings.min_velocity, moving=mov, cutoff=fc,
+        rate=plan.rate)
