@@ -51,7 +51,8 @@ class StreamedFit:
     sources: file names; samples: decimated samples used; moving_fraction: (n,) share of moving
     samples per joint (None without a rest threshold); delay_estimate (None when not estimated);
     delay [s] compensated; bootstrap_std: (c,) (None when not asked); bootstrap_block: samples per
-    bootstrap block; settings: the processing; blocks: number of blocks processed.
+    bootstrap block; settings: the processing; blocks: number of blocks processed; q_range: (2, n)
+    smallest and largest position of each joint over the recordings [rad].
     """
 
     result: IdentificationResult
@@ -67,6 +68,7 @@ class StreamedFit:
     bootstrap_block: int
     settings: StreamSettings
     blocks: int
+    q_range: np.ndarray | None = None
 
     def filtering(self, spring: bool = True) -> dict[str, Any]:
         """Keyword arguments of :func:`identify.predict` / :func:`predict_streamed` that reuse this processing."""
@@ -128,7 +130,9 @@ def _accumulate(robot: rx90sym.Robot, sources: Sequence[BlockSource], plans: Seq
     moving = np.zeros(robot.n)
     drop = settings.min_velocity is not None and settings.rest == "drop"
     count = 0
-    tasks = _tasks(robot, sources, plans, cutoff, settings, base, names, lags)
+    # On Dask the robot and its compiled regressor are sent once to each worker, not with every block.
+    shared = client.scatter([robot, base], broadcast=True) if client is not None else (robot, base)
+    tasks = _tasks(shared[0], sources, plans, cutoff, settings, shared[1], names, lags)
     for p, block_factors in _in_order(tasks, client, 2 * _workers(client) if client is not None else 1):
         count += 1
         m = p.motion
@@ -194,7 +198,9 @@ def fit_streamed(robot: rx90sym.Robot, recordings: Sequence[Any], method: str = 
         result = consistent_fit(robot, result, base, **consistent_options)
     return StreamedFit(result, fc, plans[0].rate, tuple(p.note for p in plans), tuple(s.source for s in scans), total,
                        moving / total if settings.min_velocity is not None else None, found, settings.delay,
-                       boot.std(result.weights) if boot is not None else None, bblock, settings, count)
+                       boot.std(result.weights) if boot is not None else None, bblock, settings, count,
+                       np.vstack([np.min([s.q_range[0] for s in scans], axis=0),
+                                  np.max([s.q_range[1] for s in scans], axis=0)]))
 
 
 def predict_streamed(robot: rx90sym.Robot, result: IdentificationResult, recording: Any, base: Any = None,

@@ -206,7 +206,8 @@ def filtered_motion(robot: rx90sym.Robot, rec: Any, cutoff: float | None = None,
         speed = np.asarray(rec.dq, dtype=float)[d.kept] if getattr(rec, "dq", None) is not None else d.dq
         moving = np.abs(speed) >= min_velocity
         terms = coulomb_terms(robot, names if names is not None else robot.parameter_names)
-        Phi = np.array(Phi, copy=True)
+        if not (Phi.flags.owndata and Phi.flags.writeable):  # a reused workspace's view: not ours to change
+            Phi = np.array(Phi, copy=True)
         for term in terms:
             driver_moving = np.abs(speed @ np.asarray(term.driver)) >= min_velocity
             usable[:, term.row] &= driver_moving

@@ -16,7 +16,7 @@ Every quantity downstream (incremental QR, bootstrap, validation) consumes piece
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import Any, Callable, Iterator, Sequence
 
 import numpy as np
@@ -59,14 +59,20 @@ class Scan:
     rate: float
     spectrum: tuple[np.ndarray, np.ndarray] | None
     whole: Any = None
+    q_range: np.ndarray | None = None  # (2, n) smallest and largest position of each joint [rad]
 
 
 def scan(src: BlockSource, block: int, need_spectrum: bool) -> Scan:
     """First pass over one recording (checks every block; see the module docstring)."""
     welch, rate, first = None, float("nan"), None
+    lo = hi = None
+    steps = []  # every time step (8 bytes a sample): the rate is the whole log's, 1 / median step
     for k, rec in enumerate(src.scan(block)):
+        lo = rec.q.min(axis=0) if lo is None else np.minimum(lo, rec.q.min(axis=0))
+        hi = rec.q.max(axis=0) if hi is None else np.maximum(hi, rec.q.max(axis=0))
+        steps.append(np.diff(rec.t[max(0, int(rec.meta.get("new_from", 0)) - 1):]))
         if k == 0:
-            rate = 1.0 / float(np.median(np.diff(rec.t)))
+            rate = 1.0 / float(np.median(np.diff(rec.t)))  # for the spectrum; the same to rounding
             first = rec
             if need_spectrum:
                 welch = WelchAccumulator(rate, max(16, int(round(4.0 * rate))), rec.q.shape[1])
@@ -77,9 +83,11 @@ def scan(src: BlockSource, block: int, need_spectrum: bool) -> Scan:
             q = rec.q[max(0, new - 2):]
             welch.feed((q[2:] - 2.0 * q[1:-1] + q[:-2]) * rate**2)
     n = int(src.n_samples)
+    rate = 1.0 / float(np.median(np.concatenate(steps)))
+    q_range = np.vstack([lo, hi])
     if first is not None:  # one block: the whole-recording rule, exactly
-        return Scan(src.source, n, rate, None, first)
-    return Scan(src.source, n, rate, welch.result() if welch is not None else None)
+        return Scan(src.source, n, rate, None, first, q_range)
+    return Scan(src.source, n, rate, welch.result() if welch is not None else None, None, q_range)
 
 
 def scan_all(sources: Sequence[BlockSource], settings: StreamSettings) -> tuple[list[Scan], float]:
@@ -119,7 +127,9 @@ def plan_windows(s: Scan, cutoff: float, settings: StreamSettings) -> Plan:
     delay_samples = int(math.ceil(abs(settings.delay) * s.rate)) + 1 if settings.delay else 0
     lp = lowpass_margin(s.rate, cutoff) + delay_samples + DELAY_MARGIN
     windows = motion_windows(s.samples, edge, k, settings.block, lp, decimation_margin(k))
-    return Plan(s, edge, k, dplan.rate, dplan.note, tuple(windows), windows[-1].core[1])
+    # The plan travels with every block (Dask tasks): without the recording a short log's scan keeps.
+    return Plan(replace(s, whole=None, spectrum=None, q_range=None), edge, k, dplan.rate, dplan.note, tuple(windows),
+                windows[-1].core[1])
 
 
 #: Extra raw samples of margin for the torque shifts of the delay search (±20 ms at up to 2.5 kHz).

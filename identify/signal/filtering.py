@@ -427,7 +427,20 @@ def decimate(x: np.ndarray, factor: int, ftype: str = "iir") -> np.ndarray:
         raise ValueError(f"factor must be an integer >= 1, got {plain(factor)}")
     if ftype not in ("iir", "fir"):
         raise ValueError(f"ftype must be 'iir' or 'fir', got {ftype!r}")
-    y = np.array(_as_samples(x, "x"), dtype=float, copy=True)
-    for stage in _stages(int(factor)):
-        y = signal.decimate(y, stage, ftype=ftype, zero_phase=True, axis=0)
-    return y
+    a = _as_samples(x, "x")
+    flat = a.reshape(a.shape[0], -1)
+    # Column groups of about DECIMATE_CHUNK_BYTES: the filter's padded copies and passes then take
+    # that much memory, not several copies of a wide W (each column is filtered alone either way).
+    step = max(1, DECIMATE_CHUNK_BYTES // (8 * max(1, flat.shape[0])))
+    parts = []
+    for c0 in range(0, flat.shape[1], step):
+        y = np.array(flat[:, c0:c0 + step], dtype=float, copy=True)
+        for stage in _stages(int(factor)):
+            y = signal.decimate(y, stage, ftype=ftype, zero_phase=True, axis=0)
+        parts.append(y)
+    out = parts[0] if len(parts) == 1 else np.concatenate(parts, axis=1)
+    return out.reshape((out.shape[0],) + a.shape[1:])
+
+
+#: Bytes of the input filtered at once by :func:`decimate` (column groups of a wide array).
+DECIMATE_CHUNK_BYTES = 32 << 20

@@ -13,20 +13,18 @@ import numpy as np
 
 import rx90sym
 from rx90sym.files import write_json
-from identify import essential_parameters, predict, read_recording, validate
-from identify.estimation.bootstrap import segment_bootstrap_std
+from identify import essential_parameters, read_recording, validate
 from identify.fit_model import FitModel
 from identify.io.gains import apply_gains, read_gains
 from identify.observation.matrix import DEFAULT_MIN_VELOCITY, DEFAULT_REST, REST_POLICIES
-from identify.real_fit import fit_recordings
+from identify.observation.stream import DEFAULT_BLOCK
+from identify.stream_fit import predict_streamed
 
 from ..common import (UsageError, check_output, convention_option, progress, robot_option, robot_with_spring,
                       spring_options)
 from ..spring_output import attach_spring, spring_summary
+from .identify_runs import BOOTSTRAP_DRAWS, block_option, fit_long, fit_whole, streamed
 
-#: Segment-bootstrap block length, s, and number of draws.
-BOOTSTRAP_BLOCK_S = 0.5
-BOOTSTRAP_DRAWS = 200
 
 
 def _delay(text: str) -> str | float:
@@ -83,6 +81,12 @@ def register(sub: Any) -> None:
     sp.add_argument("--delay", type=_delay, default=0.0,
                     help="torque lag behind the positions: 'auto' (estimated) or seconds (default 0; "
                          "the estimate is always reported)")
+    sp.add_argument("--block", type=block_option, default=DEFAULT_BLOCK,
+                    help=f"samples per block for long logs: a log longer than this is read, filtered and "
+                         f"fitted block by block, memory bounded by the block (default {DEFAULT_BLOCK})")
+    sp.add_argument("--scheduler", metavar="ADDR|local",
+                    help="fit the blocks on Dask: a scheduler address (tcp://host:8786) or 'local' "
+                         "(a local cluster, one worker per core)")
     sp.add_argument("--bootstrap-seed", type=int, default=0, help="seed of the segment bootstrap (default 0)")
     sp.add_argument("--validate", help="recording used for cross-validation only")
     sp.add_argument("--json", help="results as JSON")
@@ -141,31 +145,30 @@ def run(args: argparse.Namespace) -> int:
         raise UsageError(f"--urdf-out needs a URDF robot (--robot FILE.urdf), not {args.robot!r}")
     sb = attach_spring(robot, spring_model, args.validate, args.method)
     gains = read_gains(args.gains, robot) if args.gains else None
-    progress(f"reading {len(args.recordings)} recording(s)")
-    recs = read_recordings(args.recordings, robot, args.convention, gains)
-    val_rec = read_recordings([args.validate], robot, args.convention, gains)[0] if args.validate else None
     decimate_to = None if (args.no_decimate or args.decimate_to == 0) else args.decimate_to
     min_velocity = args.min_velocity or None
     base = sb if sb is not None else rx90sym.base_parameters(robot)
-    progress(f"identifying ({args.method}) on {sum(len(r.t) for r in recs)} samples")
-    fit = fit_recordings(robot, recs, method=args.method, base=base, cutoff=args.cutoff,
-                         decimate_to=decimate_to, min_velocity=min_velocity, rest=args.rest,
-                         delay=args.delay, spring=sb is None, estimate=True)
-    obs, res, delay, estimate = fit.observation, fit.result, fit.delay, fit.delay_estimate
+    long_logs = streamed(args.recordings + ([args.validate] if args.validate else []), args.block, args.scheduler)
+    if long_logs:
+        run_fit = fit_long(args, robot, gains, base, sb is None, decimate_to, min_velocity)
+        val_rec = args.validate
+    else:
+        progress(f"reading {len(args.recordings)} recording(s)")
+        recs = read_recordings(args.recordings, robot, args.convention, gains)
+        val_rec = read_recordings([args.validate], robot, args.convention, gains)[0] if args.validate else None
+        run_fit = fit_whole(args, robot, recs, base, sb is None, decimate_to, min_velocity)
+    res, delay, estimate, boot = run_fit.result, run_fit.delay, run_fit.estimate, run_fit.boot
     progress(estimate.summary() + ("" if args.delay == "auto" else " (not compensated: --delay auto does)"))
-    progress(obs.summary().replace("\n", "\n  "))
-    print(f"filtering: cut-off {obs.cutoffs[0]:.4g} Hz, rate {obs.rate:.6g} Hz"
+    progress(run_fit.summary.replace("\n", "\n  "))
+    print(f"filtering: cut-off {run_fit.cutoff:.4g} Hz, rate {run_fit.rate:.6g} Hz"
           + (f" (decimated to {decimate_to:g} Hz)" if decimate_to else " (no decimation)")
           + f", torque delay {1e3 * delay:.3g} ms compensated")
-    for note in obs.notes:
+    for note in run_fit.notes:
         if note:
             print(f"note: {note}")
-    block = max(1, int(round(BOOTSTRAP_BLOCK_S * obs.rate)))
-    boot = segment_bootstrap_std(obs.W, obs.Y, obs.joint, obs.samples, res.weights, block,
-                                 BOOTSTRAP_DRAWS, args.bootstrap_seed)
     print(res.table())
     print(bootstrap_table(res, boot))
-    spring_entry, spring_text = spring_summary(robot, sb, res, recs)
+    spring_entry, spring_text = spring_summary(robot, sb, res, run_fit.spring_recs)
     print(f"\n{spring_text}")
     ess = essential_parameters(res) if args.essential else None
     if ess is not None:
@@ -173,25 +176,32 @@ def run(args: argparse.Namespace) -> int:
         print(ess.table())
     model = FitModel.of(robot, convention=args.convention, gains=gains.to_dict() if gains else None,
                         rest=args.rest, min_velocity=min_velocity, spring=args.spring,
-                        cutoff_hz=obs.cutoffs[0], decimate_to_hz=decimate_to, rate_hz=obs.rate,
+                        cutoff_hz=run_fit.cutoff, decimate_to_hz=decimate_to, rate_hz=run_fit.rate,
                         delay_s=delay)
     filt = model.filtering()
-    val = validate(robot, ess or res, val_rec, base=base, **filt) if val_rec is not None else None
+    if val_rec is None:
+        val = None
+    elif long_logs:
+        val = predict_streamed(robot, ess or res, val_rec, base=base, block=args.block, convention=args.convention,
+                               gains=gains, **filt)
+    else:
+        val = validate(robot, ess or res, val_rec, base=base, **filt)
     if val is not None:
         print()
         print(val.table())
     if args.json:
         out = {"robot": robot.name, "method": args.method, **res.to_dict(), "spring": spring_entry,
                "bootstrap_std": [float(v) for v in boot],
-               "bootstrap": {"block_s": block / obs.rate, "draws": BOOTSTRAP_DRAWS, "seed": args.bootstrap_seed},
-               "cutoff_hz": obs.cutoffs[0], "decimate_to_hz": decimate_to,
+               "bootstrap": {"block_s": run_fit.boot_block_s, "draws": BOOTSTRAP_DRAWS, "seed": args.bootstrap_seed},
+               "cutoff_hz": run_fit.cutoff, "decimate_to_hz": decimate_to,
                "delay_estimate_s": estimate.delay, "model": model.to_dict(),
                "essential": ess.to_dict() if ess is not None else {},
                "validation": val.to_dict() if val is not None else {}}
         write_json(args.json, out)
     if args.report:
-        sections = identification_sections(robot, res, recs, validation=val, essential=ess,
-                                           fit_prediction=predict(robot, res, recs[0], base=base, **filt),
+        first = run_fit.recordings[0] if run_fit.recordings else args.recordings[0]
+        sections = identification_sections(robot, res, run_fit.recordings, validation=val, essential=ess,
+                                           fit_prediction=run_fit.predict(first, **filt),
                                            model=model, extra_tables=[bootstrap_table(res, boot)])
         write_report(args.report, f"Identification of {robot.name}", [*sections, Section("Spring", spring_text)])
     if args.urdf_out:  # last: a refused (non-physical) link must not cost the fit's JSON and report
