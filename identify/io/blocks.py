@@ -101,18 +101,22 @@ class BlockSource:
 
     def windows(self, spans: Iterable[tuple[int, int]]) -> Iterator[Recording]:
         """The samples [r0, r1) of each span, spans in increasing order of r0 and r1."""
-        buffer = np.empty((0, 0))
+        buffer: np.ndarray | None = None
         first = 0  # file index of buffer[0]
         rows = self._rows()
         for r0, r1 in spans:
-            if r0 > first:
-                buffer, first = buffer[min(r0 - first, buffer.shape[0]):], r0
-            while first + buffer.shape[0] < r1:
+            while buffer is None or first + buffer.shape[0] < r1:
                 more = next(rows, None)
                 if more is None:
                     break
-                buffer = more if buffer.size == 0 else np.concatenate([buffer, more])
-            yield self._finish(self._record(buffer[r0 - first:r1 - first]))
+                buffer = more if buffer is None else np.concatenate([buffer, more])
+                if first + buffer.shape[0] <= r0:  # rows before the span: not kept
+                    first, buffer = first + buffer.shape[0], None
+            if buffer is None:
+                raise ValueError(f"{self.source}: samples {r0}..{r1} asked beyond the end of the file")
+            if r0 > first:
+                buffer, first = buffer[r0 - first:], r0
+            yield self._finish(self._record(buffer[:r1 - first]))
 
 
 class MemorySource(BlockSource):
