@@ -194,3 +194,19 @@ def test_cli_identify_streams_a_log_longer_than_the_block(rx90, twin_empty, whol
     _close(values, whole_fit.result.values, 1e-8)
     bad = subprocess.run([RX90, "identify", str(path), "--block", "10"], capture_output=True, text=True)
     assert bad.returncode == 2 and "--block must be at least 1000" in bad.stderr
+
+
+def test_fleet_fits_every_robot_on_its_own_logs(rx90, rx90_base, twin_empty, whole_fit):
+    """Two robots in one call (two RX90 cells, each with its own log): one fit each, equal to that
+    robot's whole-signal fit, and one table line each."""
+    from identify.fleet import fit_fleet
+
+    fleet = fit_fleet({"cell-1": (rx90, twin_empty[:1]), "cell-2": (rx90, twin_empty[1:2])}, base=rx90_base,
+                      block=2000)
+    assert list(fleet.fits) == ["cell-1", "cell-2"]
+    _close(fleet.fits["cell-1"].result.values, whole_fit.result.values, 1e-8)
+    other = identify.fit_recordings(rx90, twin_empty[1:2], base=rx90_base)
+    _close(fleet.fits["cell-2"].result.values, other.result.values, 1e-8)
+    assert not np.allclose(other.result.values, whole_fit.result.values, rtol=1e-6)
+    lines = fleet.table().splitlines()
+    assert len(lines) == 3 and lines[1].startswith("cell-1") and lines[2].startswith("cell-2")
