@@ -77,7 +77,7 @@ class SegmentBootstrap:
         if block < 1 or draws < 2:
             raise ValueError(f"block must be >= 1 sample and draws >= 2, got {block} and {draws}")
         self.block = int(block)
-        self.counts = _draw_counts(-(-int(samples) // self.block), draws, seed).astype(float)
+        self.counts = _draw_counts(-(-int(samples) // self.block), draws, seed).astype(np.int32)  # 4 B a block
         self.M = np.zeros((draws, joints, columns, columns))
         self.g = np.zeros((draws, joints, columns))
 
@@ -90,7 +90,7 @@ class SegmentBootstrap:
         stops = np.r_[starts[1:], ids.size]
         A = np.stack([W[a:b].T @ W[a:b] for a, b in zip(starts, stops)])
         g = np.stack([W[a:b].T @ Y[a:b] for a, b in zip(starts, stops)])
-        picked = self.counts[:, ids[starts]]
+        picked = self.counts[:, ids[starts]].astype(float)
         self.M[:, joint] += (picked @ A.reshape(A.shape[0], -1)).reshape(self.M.shape[0], *A.shape[1:])
         self.g[:, joint] += picked @ g
 

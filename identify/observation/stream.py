@@ -62,15 +62,35 @@ class Scan:
     q_range: np.ndarray | None = None  # (2, n) smallest and largest position of each joint [rad]
 
 
+class StepCounts:
+    """The distinct time steps of a log and how often each occurs (a regular log has a few hundred
+    distinct values whatever its length): their median is ``np.median`` of all the steps."""
+
+    def __init__(self) -> None:
+        self.values, self.counts = np.empty(0), np.empty(0, dtype=np.int64)
+
+    def add(self, steps: np.ndarray) -> None:
+        values, where = np.unique(np.concatenate([self.values, steps]), return_inverse=True)
+        weights = np.concatenate([self.counts, np.ones(steps.size, dtype=np.int64)])
+        self.values, self.counts = values, np.bincount(where, weights=weights).astype(np.int64)
+
+    def median(self) -> float:
+        total = int(self.counts.sum())
+        cum = np.cumsum(self.counts)
+        lo = self.values[np.searchsorted(cum, (total - 1) // 2, side="right")]
+        hi = self.values[np.searchsorted(cum, total // 2, side="right")]
+        return float((lo + hi) / 2.0) if lo != hi else float(lo)
+
+
 def scan(src: BlockSource, block: int, need_spectrum: bool) -> Scan:
     """First pass over one recording (checks every block; see the module docstring)."""
     welch, rate, first = None, float("nan"), None
     lo = hi = None
-    steps = []  # every time step (8 bytes a sample): the rate is the whole log's, 1 / median step
+    steps = StepCounts()  # the rate is the whole log's, 1 / median step
     for k, rec in enumerate(src.scan(block)):
         lo = rec.q.min(axis=0) if lo is None else np.minimum(lo, rec.q.min(axis=0))
         hi = rec.q.max(axis=0) if hi is None else np.maximum(hi, rec.q.max(axis=0))
-        steps.append(np.diff(rec.t[max(0, int(rec.meta.get("new_from", 0)) - 1):]))
+        steps.add(np.diff(rec.t[max(0, int(rec.meta.get("new_from", 0)) - 1):]))
         if k == 0:
             rate = 1.0 / float(np.median(np.diff(rec.t)))  # for the spectrum; the same to rounding
             first = rec
@@ -83,7 +103,7 @@ def scan(src: BlockSource, block: int, need_spectrum: bool) -> Scan:
             q = rec.q[max(0, new - 2):]
             welch.feed((q[2:] - 2.0 * q[1:-1] + q[:-2]) * rate**2)
     n = int(src.n_samples)
-    rate = 1.0 / float(np.median(np.concatenate(steps)))
+    rate = 1.0 / steps.median()
     q_range = np.vstack([lo, hi])
     if first is not None:  # one block: the whole-recording rule, exactly
         return Scan(src.source, n, rate, None, first, q_range)
