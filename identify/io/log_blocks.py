@@ -25,11 +25,10 @@ import rx90sym
 from rx90sym.files import atomic_write
 from rx90sym.recording import Recording, RecordingError
 
-from identify.io.arrays import _normalise_convention
-from identify.io.columns import ColumnMap, parse_columns
-from identify.io.gains import apply_gains, read_gains
+from identify.io.columns import ColumnMap
+from identify.io.gains import apply_gains
 from identify.io.logs import (ABSURD, _check_header, _check_positions, _check_time, _check_velocities,
-                              _irregular, _Lines, _parse)
+                              _irregular, _Lines, _log_options, _parse, gains_label)
 from identify.signal.resampling import interpolate
 
 __all__ = ["DEFAULT_LOG_BLOCK", "convert_log"]
@@ -190,18 +189,9 @@ def convert_log(path: str | os.PathLike[str], robot: rx90sym.Robot, columns: str
     file ``out`` (CSV, controller angles), ``block`` lines at a time. Returns the ``meta["log"]`` report.
     """
     p = Path(path)
-    if rows is not None and (t_from is not None or t_to is not None):
-        raise ValueError("give rows or t_from/t_to (--rows or --from/--to), not both")
     if Path(out).suffix.lower() != ".csv":
         raise RecordingError(f"{Path(out).name}: a log converted block by block is written as CSV")
-    cmap = parse_columns(columns, robot)
-    conv = _normalise_convention(convention, p.name) or "controller"
-    if gains is not None and not cmap.i:
-        raise ValueError(f"drive gains given, but the column map names no motor currents (i1..i{robot.n})")
-    if gains is not None and cmap.tau:
-        raise ValueError("drive gains given, but the log already holds joint torques (tau1..): "
-                         "the gains would replace them; map the torques as x:NAME to keep both")
-    drive = read_gains(gains, robot) if isinstance(gains, (str, os.PathLike)) else gains
+    cmap, conv, drive = _log_options(p, robot, columns, rows, t_from, t_to, gains, convention)
     report = _Report()
     resampler = _Resampler(resample) if resample else None
 
@@ -243,8 +233,7 @@ def convert_log(path: str | os.PathLike[str], robot: rx90sym.Robot, columns: str
             "median_step_s": float(np.median(report.medians)), "largest_gap_s": report.gap,
             "largest_gap_lines": report.gap_lines, "irregular_steps": report.irregular,
             "resampled_hz": float(resample) if resample else None, "samples": report.samples,
-            "gains": None if drive is None else (drive.source if drive.source not in ("--gains", "<memory>") else
-                                                 ",".join(f"{k:g}" for k in drive.gains) + " N·m/A"),
+            "gains": None if drive is None else gains_label(drive),
             "convention": conv, "blocks_of_lines": block}
 
 

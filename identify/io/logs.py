@@ -384,17 +384,7 @@ def read_log(
         ValueError: a bad column map, window or gains.
     """
     p = Path(path)
-    if rows is not None and (t_from is not None or t_to is not None):
-        raise ValueError("give rows or t_from/t_to (--rows or --from/--to), not both")
-    cmap = parse_columns(columns, robot)
-    conv = _normalise_convention(convention, p.name) or "controller"
-    if gains is not None and not cmap.i:
-        raise ValueError(f"drive gains given, but the column map names no motor currents (i1..i{robot.n})")
-    if gains is not None and cmap.tau:
-        raise ValueError("drive gains given, but the log already holds joint torques (tau1..): "
-                         "the gains would replace them; map the torques as x:NAME to keep both")
-    drive = read_gains(gains, robot) if isinstance(gains, (str, os.PathLike)) else gains
-
+    cmap, conv, drive = _log_options(p, robot, columns, rows, t_from, t_to, gains, convention)
     lines = _data_lines(p, header, len(cmap.names))
     a, b = _window(lines, rows, t_from, t_to, cmap.t)
     values = _parse(lines, a, b, cmap)
@@ -437,6 +427,26 @@ def read_log(
         report["samples"] = rec.n_samples
     if drive is not None:
         rec = apply_gains(rec, drive, robot)
-        rec.meta["log"]["gains"] = (drive.source if drive.source not in ("--gains", "<memory>") else
-                                     ",".join(f"{k:g}" for k in drive.gains) + " N·m/A")
+        rec.meta["log"]["gains"] = gains_label(drive)
     return rec
+
+
+def gains_label(drive: DriveGains) -> str:
+    """How the report names the drive gains: their file, or their values."""
+    return drive.source if drive.source not in ("--gains", "<memory>") else ",".join(f"{k:g}" for k in drive.gains) + " N·m/A"
+
+
+def _log_options(p: Path, robot: rx90sym.Robot, columns: str | Sequence[str], rows: tuple[int, int] | None,
+                 t_from: float | None, t_to: float | None, gains: DriveGains | str | None,
+                 convention: str | None) -> tuple[ColumnMap, str, DriveGains | None]:
+    """The column map, the convention and the drive gains of a log, checked together."""
+    if rows is not None and (t_from is not None or t_to is not None):
+        raise ValueError("give rows or t_from/t_to (--rows or --from/--to), not both")
+    cmap = parse_columns(columns, robot)
+    conv = _normalise_convention(convention, p.name) or "controller"
+    if gains is not None and not cmap.i:
+        raise ValueError(f"drive gains given, but the column map names no motor currents (i1..i{robot.n})")
+    if gains is not None and cmap.tau:
+        raise ValueError("drive gains given, but the log already holds joint torques (tau1..): "
+                         "the gains would replace them; map the torques as x:NAME to keep both")
+    return cmap, conv, read_gains(gains, robot) if isinstance(gains, (str, os.PathLike)) else gains
