@@ -15,6 +15,7 @@ from __future__ import annotations
 
 from collections import deque
 from dataclasses import dataclass, replace
+from types import SimpleNamespace
 from typing import Any, Iterable, Sequence
 
 import numpy as np
@@ -31,7 +32,7 @@ from identify.observation.stream import DEFAULT_BLOCK, Piece, StreamSettings, pi
 from identify.signal.delay import DelayEstimate, delay_grid, joint_log_rms, refined_delay
 from identify.validation import Validation, _relative, _rms, base_vector
 
-__all__ = ["BootstrapSpec", "StreamedFit", "fit_streamed", "predict_streamed"]
+__all__ = ["BootstrapSpec", "StreamedFit", "fit_in_blocks", "fit_streamed", "predict_streamed"]
 
 
 @dataclass(frozen=True)
@@ -69,6 +70,16 @@ class StreamedFit:
     settings: StreamSettings
     blocks: int
     q_range: np.ndarray | None = None
+
+    def summary(self) -> str:
+        """What was fitted, in the manner of :meth:`identify.Observation.summary`."""
+        lines = [f"{self.result.rows} equations, {len(self.result.names)} parameters, {self.samples} samples after "
+                 f"decimation to {self.rate:g} Hz, {self.blocks} blocks of at most {self.settings.block} samples"]
+        lines += [f"  {src}: cut-off {self.cutoff:.3g} Hz" for src in self.sources]
+        if self.moving_fraction is not None:
+            frac = " ".join(f"{100 * f:.0f}%" for f in self.moving_fraction)
+            lines.append(f"  rest below {self.settings.min_velocity:g} rad/s ({self.settings.rest}); moving per joint: {frac}")
+        return "\n".join(lines + [f"  note: {n}" for n in self.notes if n])
 
     def filtering(self, spring: bool = True) -> dict[str, Any]:
         """Keyword arguments of :func:`identify.predict` / :func:`predict_streamed` that reuse this processing."""
@@ -159,7 +170,8 @@ def fit_streamed(robot: rx90sym.Robot, recordings: Sequence[Any], method: str = 
     blocks on (None: here); bootstrap: also the segment-bootstrap σ; convention, gains: how CSV files
     are read. The other arguments are those of :func:`identify.fit_recordings`.
     """
-    from identify.identification import METHODS, consistent_fit
+    from identify.estimation.consistent_fit import consistent_fit
+    from identify.fitting import METHODS
 
     if method not in METHODS:
         raise ValueError(f"method must be one of {METHODS}, got {method!r}")
@@ -229,3 +241,32 @@ def predict_streamed(robot: rx90sym.Robot, result: IdentificationResult, recordi
         source=src.source, relative_error_pct_moving=_relative(err, Y, mov), rms_error_moving=_rms(err, mov),
         moving_fraction=mov.mean(axis=0), moving_threshold=settings.min_velocity, moving=mov, cutoff=fc,
         rate=plan.rate)
+
+
+def fit_in_blocks(robot: rx90sym.Robot, recordings: Sequence[Any], processing: Any = None, method: str = "wls", *,
+                  base: Any = None, gains: Any = None, convention: str | None = None, spring_source: str | None = None,
+                  block: int | None = None, client: Any = None, bootstrap_seed: int = 0,
+                  **consistent_options: Any) -> Any:
+    """:func:`identify.fit` block by block (``identify.fit(..., block=..., client=...)`` calls this): a
+    :class:`identify.Fit` without an observation matrix, its bootstrap computed on the way."""
+    from identify.fitting import BOOTSTRAP_BLOCK_S, BOOTSTRAP_DRAWS, Bootstrap, Fit, _spring_label
+    from identify.fit_file import FitModel
+    from identify.observation.processing import Processing
+    from identify.observation.spring_fit import SpringBase, spring_summary
+
+    p = processing if processing is not None else Processing()
+    block = DEFAULT_BLOCK if block is None else int(block)
+    base = base if base is not None else rx90sym.base_parameters(robot)
+    recordings = list(recordings) if isinstance(recordings, (list, tuple)) else [recordings]
+    spec = BootstrapSpec(BOOTSTRAP_BLOCK_S, BOOTSTRAP_DRAWS, bootstrap_seed)
+    sf = fit_streamed(robot, recordings, method, base, p.cutoff, p.decimate_to, p.min_velocity, p.rest, p.delay,
+                      p.spring, p.estimate_delay, block, client, spec, convention, gains, **consistent_options)
+    model = FitModel.of(robot, convention=convention, gains=gains.to_dict() if gains is not None else None,
+                        rest=p.rest, min_velocity=p.min_velocity, spring=spring_source or _spring_label(robot, base),
+                        cutoff_hz=sf.cutoff, decimate_to_hz=p.decimate_to, rate_hz=sf.rate, delay_s=sf.delay)
+    angles = [SimpleNamespace(q=sf.q_range)]  # what the spring summary reads: the range visited
+    spring = spring_summary(robot, base if isinstance(base, SpringBase) else None, sf.result, angles)[0]
+    boot = Bootstrap(sf.bootstrap_std, sf.bootstrap_block / sf.rate, spec.draws, spec.seed)
+    found = sf.delay_estimate
+    return Fit(robot, sf.result, p, model, base, None, found, found.delay if found is not None else None, spring,
+               boot, block=block, streamed=sf)

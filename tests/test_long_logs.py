@@ -18,6 +18,7 @@ from identify.estimation.compression import compress
 from identify.estimation.incremental_qr import JointFactors
 from identify.io.blocks import CsvSource
 from identify.io.log_blocks import convert_log
+from identify.observation.processing import Processing
 from identify.signal.blocks import WelchAccumulator, decimation_margin, lowpass_margin, motion_windows
 from identify.signal.filtering import decimate, lowpass
 from identify.stream_fit import BootstrapSpec, fit_streamed, predict_streamed
@@ -87,7 +88,7 @@ def test_incremental_qr_and_bootstrap_equal_the_whole_matrix():
 
 @pytest.fixture(scope="module")
 def whole_fit(rx90, rx90_base, twin_empty):
-    return identify.fit_recordings(rx90, twin_empty[:1], base=rx90_base, estimate=True)
+    return identify.fit(rx90, twin_empty[:1], base=rx90_base)
 
 
 def _close(a: np.ndarray, b: np.ndarray, rtol: float) -> None:
@@ -118,23 +119,30 @@ def test_streamed_fit_equals_the_whole_fit(rx90, rx90_base, twin_empty, whole_fi
 @pytest.mark.slow
 def test_streamed_fit_of_several_recordings_with_rest_dropped(rx90, rx90_base, twin_empty):
     """80 s in four recordings, rest rows dropped and the cut-off chosen: equal to the whole path."""
-    whole = identify.fit_recordings(rx90, twin_empty, base=rx90_base, rest="drop", delay="auto")
+    whole = identify.fit(rx90, twin_empty, Processing(rest="drop", delay="auto"), base=rx90_base)
     fit = fit_streamed(rx90, twin_empty, base=rx90_base, rest="drop", delay="auto", block=2000)
     assert fit.cutoff == whole.cutoff and fit.result.rows == whole.result.rows
     assert fit.delay == pytest.approx(whole.delay, abs=1e-9)
     _close(fit.result.values, whole.result.values, 1e-8)
 
 
-def test_dask_blocks_equal_serial(rx90, rx90_base, twin_empty):
-    """Blocks as Dask tasks (two local workers) give the serial result (same operations, same order)."""
+def test_dask_blocks_equal_serial(rx90, rx90_base, twin_empty, whole_fit, tmp_path):
+    """identify.fit with blocks as Dask tasks (two local workers) gives the serial block-wise fit (same
+    operations, same order), which equals the whole fit; the fit file saves and loads."""
     from dask.distributed import Client, LocalCluster
 
-    serial = fit_streamed(rx90, twin_empty[:1], base=rx90_base, block=1000)
+    serial = identify.fit(rx90, twin_empty[:1], base=rx90_base, block=1000)
     with LocalCluster(n_workers=2, threads_per_worker=1, processes=False, dashboard_address=None) as cluster, \
             Client(cluster) as client:
-        spread = fit_streamed(rx90, twin_empty[:1], base=rx90_base, block=1000, client=client)
+        spread = identify.fit(rx90, twin_empty[:1], base=rx90_base, block=1000, client=client)
     np.testing.assert_allclose(spread.result.values, serial.result.values, rtol=1e-10)
-    assert spread.blocks == serial.blocks
+    np.testing.assert_allclose(spread.bootstrap.std, serial.bootstrap.std, rtol=1e-10)
+    assert spread.streamed.blocks == serial.streamed.blocks >= 4 and serial.observation is None
+    _close(serial.result.values, whole_fit.result.values, 1e-8)
+    assert serial.bootstrapped(0) is serial
+    loaded = identify.load_fit(serial.save(tmp_path / "fit.json"))
+    np.testing.assert_array_equal(loaded.result.values, serial.result.values)
+    assert loaded.cutoff == whole_fit.cutoff
 
 
 def test_csv_blocks_read_the_file_and_name_bad_rows(rx90, twin_empty, tmp_path):
@@ -205,7 +213,7 @@ def test_fleet_fits_every_robot_on_its_own_logs(rx90, rx90_base, twin_empty, who
                       block=2000)
     assert list(fleet.fits) == ["cell-1", "cell-2"]
     _close(fleet.fits["cell-1"].result.values, whole_fit.result.values, 1e-8)
-    other = identify.fit_recordings(rx90, twin_empty[1:2], base=rx90_base)
+    other = identify.fit(rx90, twin_empty[1:2], base=rx90_base)
     _close(fleet.fits["cell-2"].result.values, other.result.values, 1e-8)
     assert not np.allclose(other.result.values, whole_fit.result.values, rtol=1e-6)
     lines = fleet.table().splitlines()
