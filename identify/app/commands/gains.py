@@ -42,6 +42,7 @@ def register(sub: Any) -> None:
     sp.add_argument("--cutoff", type=float, help="Butterworth cut-off for q [Hz] (default: chosen from the data)")
     sp.add_argument("--decimate-to", type=float, default=50.0, help="rate after parallel filtering [Hz] (default 50)")
     sp.add_argument("--json", help="the gains as JSON (read by --gains of every command)")
+    sp.add_argument("--report", help="self-contained HTML report")
 
 
 def parse_fix(items: list[str], n: int) -> dict[int, float]:
@@ -67,6 +68,7 @@ def run(args: argparse.Namespace) -> int:
     if args.method == "global" and args.position_tol != POSITION_TOLERANCE:
         raise UsageError("conflicting options: --position-tol is for --method same-motion (global pairs no runs)")
     check_output(args.json)
+    check_output(args.report)
     robot = load_robot(args)
     fix = parse_fix(args.fix, robot.n)
     reference = read_gains(args.gains, robot) if args.gains else None
@@ -82,6 +84,11 @@ def run(args: argparse.Namespace) -> int:
         print(_comparison(res.gains.gains, reference, res.gains.side))
     if args.json:
         write_json(args.json, res.to_dict())
+    if args.report:
+        from ..report.writers import write_gains_report
+
+        record = {**res.to_dict(), "data": {"empty": [r.source for r in empty], "loaded": [r.source for r in loaded]}}
+        write_gains_report(args.report, record)
     return 0
 
 

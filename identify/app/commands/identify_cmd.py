@@ -122,8 +122,6 @@ def with_asymmetric_coulomb(robot: rx90sym.Robot, spec: str) -> rx90sym.Robot:
 
 
 def run(args: argparse.Namespace) -> int:
-    from ..report import Section, identification_sections, write_report
-
     if args.essential and args.method == "consistent":
         raise UsageError("conflicting options: --essential works on the ols/wls estimate, "
                          "not with --method consistent")
@@ -180,20 +178,20 @@ def run(args: argparse.Namespace) -> int:
     if val is not None:
         print()
         print(val.table())
+    out = {"robot": robot.name, "method": args.method, **res.to_dict(), "spring": spring_entry,
+           "bootstrap_std": [float(v) for v in boot],
+           "bootstrap": {"block_s": block / obs.rate, "draws": BOOTSTRAP_DRAWS, "seed": args.bootstrap_seed},
+           "cutoff_hz": obs.cutoffs[0], "decimate_to_hz": decimate_to,
+           "delay_estimate_s": estimate.delay, "model": model.to_dict(), "data": data_record(recs, obs),
+           "essential": ess.to_dict() if ess is not None else {},
+           "validation": val.to_dict() if val is not None else {}}
     if args.json:
-        out = {"robot": robot.name, "method": args.method, **res.to_dict(), "spring": spring_entry,
-               "bootstrap_std": [float(v) for v in boot],
-               "bootstrap": {"block_s": block / obs.rate, "draws": BOOTSTRAP_DRAWS, "seed": args.bootstrap_seed},
-               "cutoff_hz": obs.cutoffs[0], "decimate_to_hz": decimate_to,
-               "delay_estimate_s": estimate.delay, "model": model.to_dict(),
-               "essential": ess.to_dict() if ess is not None else {},
-               "validation": val.to_dict() if val is not None else {}}
         write_json(args.json, out)
     if args.report:
-        sections = identification_sections(robot, res, recs, validation=val, essential=ess,
-                                           fit_prediction=predict(robot, res, recs[0], base=base, **filt),
-                                           model=model, extra_tables=[bootstrap_table(res, boot)])
-        write_report(args.report, f"Identification of {robot.name}", [*sections, Section("Spring", spring_text)])
+        from ..report.writers import write_identify_report
+
+        write_identify_report(args.report, robot, out, res, recs[0], val,
+                              predict(robot, res, recs[0], base=base, **filt), spring_text)
     if args.urdf_out:  # last: a refused (non-physical) link must not cost the fit's JSON and report
         from rx90sym import UrdfError, write_urdf
 
@@ -205,6 +203,15 @@ def run(args: argparse.Namespace) -> int:
                             (f" (written: {', '.join(kept)})" if kept else "")) from None
         progress("wrote " + ", ".join(str(p) for p in written))
     return 0
+
+
+def data_record(recs: list, obs: Any) -> dict:
+    """What was fitted: per recording its source, samples, duration [s] and recorded rate [Hz]
+    (1 / mean period); the share of samples where each joint moves (after filtering)."""
+    rows = [{"source": src, "samples": int(len(r.t)), "duration_s": float(r.t[-1] - r.t[0]),
+             "rate_hz": float((len(r.t) - 1) / (r.t[-1] - r.t[0]))} for r, src in zip(recs, obs.sources)]
+    share = None if obs.moving_fraction is None else [float(v) for v in obs.moving_fraction]
+    return {"recordings": rows, "moving_fraction": share}
 
 
 def bootstrap_table(res: Any, boot: np.ndarray) -> str:
