@@ -217,3 +217,8 @@ def test_numbers_in_cells():
     assert fmt(-0.0123456) == "−0.01235"
     assert fmt(1.23456e-5, 3) == "1.23×10⁻⁵" and fmt(123456.7) == "123457"
     assert fixed(12.345, 1) == "12.3" and fixed(None) == "–"
+
+
+def test_without_chromium_the_browser_tests_say_why(tmp_path):
+    with pytest.raises(BrowserUnavailable, match="apt-get install -y chromium"):
+        Browser(str(tmp_path / "no-chromium"))

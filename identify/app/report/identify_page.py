@@ -82,6 +82,10 @@ def identify_summary(record: Mapping[str, Any]) -> Summary:
              *data_facts(data, model),
              ("Conditioning", f"cond(W) = {fmt(record.get('cond'), 4)} (unweighted {fmt(record.get('cond_unweighted'), 4)})"),
              ("Residual σρ (eq. 12)", fmt(record.get("sigma_rho"), 4))]
+    gains = model.get("gains") or {}
+    if gains.get("gains"):
+        facts.append(("Drive gains", f"{', '.join(fmt(k, 4) for k in gains['gains'])} N·m/A, "
+                                     f"{gains.get('side', 'joint')} side"))
     if record.get("cost_increase_pct") is not None:
         facts.append(("Consistent fit", f"cost +{fmt(record.get('cost_increase_pct'), 3)} % over WLS"))
     val = record.get("validation") or {}
