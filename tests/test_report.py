@@ -173,6 +173,15 @@ def test_sorting_a_column_by_a_click(browser, reports):
     assert np.all(np.diff(twice[np.isfinite(twice)]) <= 0)
 
 
+@pytest.mark.slow
+def test_every_report_prints_on_a4_without_overflow(browser, reports):
+    """Print style at 718 px (A4 less 15 mm margins at 96 dpi): no navigation, nothing wider."""
+    nav = "getComputedStyle(document.querySelector('nav')).display"
+    for name, folder in reports.items():
+        m = browser.check(folder / f"{name}.html", media="print", width=718, script=nav)
+        assert m["script"] == "none" and m["scroll_width"] <= 718, (name, m["scroll_width"])
+
+
 # ---------------------------------------------------------------- the check fails on broken pages
 def _broken(browser, reports, tmp_path, edit) -> list[str]:
     text = (reports["tx40"] / "tx40.html").read_text()
@@ -222,3 +231,31 @@ def test_numbers_in_cells():
 def test_without_chromium_the_browser_tests_say_why(tmp_path):
     with pytest.raises(BrowserUnavailable, match="apt-get install -y chromium"):
         Browser(str(tmp_path / "no-chromium"))
+
+
+def test_bodies_give_back_mass_centre_and_principal_inertias():
+    """Against bodies built from known mass, centre and principal moments (conftest.random_body)."""
+    from conftest import random_body
+    from identify.app.report.tables import body, bodies_table
+
+    names = ("XX", "XY", "XZ", "YY", "YZ", "ZZ", "MX", "MY", "MZ", "M")
+    for seed in range(5):
+        rng = np.random.default_rng(seed)
+        chi = random_body(rng)
+        rng = np.random.default_rng(seed)  # the same draws again: m, c, rotation, second moments
+        m, c = rng.uniform(0.5, 20.0), rng.uniform(-0.3, 0.3, 3)
+        rng.normal(size=(3, 3))
+        s = rng.uniform(0.001, 0.05, 3) * m
+        mass, centre, principal = body({f"{k}1": v for k, v in zip(names, chi)}, 1)
+        assert mass == pytest.approx(m) and np.allclose(centre, c, atol=1e-12)
+        assert np.allclose(principal, np.sort([s[1] + s[2], s[0] + s[2], s[0] + s[1]]), rtol=1e-9)
+    table = bodies_table({f"{k}1": v for k, v in zip(names, chi)}, 1, {f"{k}1": v for k, v in zip(names, chi)})
+    assert [r[1] for r in table.rows] == ["identified", "prior"]
+
+
+@pytest.mark.slow
+def test_payload_summary_is_the_jsons(checked, reports):
+    record = json.loads((reports["payload"] / "payload.json").read_text())
+    mc = {p["name"]: p for p in record["payload"]}["Mc"]
+    row = checked["payload"]["summary_cells"][0]
+    assert row[0] == "Mc" and row[3] == fmt(mc["value"]) and row[4] == fmt(mc["std"], 3)

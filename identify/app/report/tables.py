@@ -6,7 +6,7 @@ from typing import Any, Mapping, Sequence
 
 import numpy as np
 
-from .cells import number
+from .cells import fmt, number
 from .page import Cell, Column, Table
 from .summary import WEAK_REL_STD_PCT, mark
 
@@ -69,28 +69,19 @@ def body(standard: Mapping[str, float], j: int) -> tuple[float, np.ndarray, np.n
 
 
 def bodies_table(standard: Mapping[str, float], n: int, prior: Mapping[str, float] | None = None) -> Table:
-    """Per link: mass, centre of mass, principal inertias (identified, and the prior's beside them)."""
-    cols = [Column("link", decimals=0), Column("mass", "kg"), Column("CoG x", "m", digits=3),
-            Column("CoG y", "m", digits=3), Column("CoG z", "m", digits=3),
-            Column("I₁", "kg·m²", digits=3), Column("I₂", "kg·m²", digits=3), Column("I₃", "kg·m²", digits=3)]
-    if prior is not None:
-        cols += [Column("prior mass", "kg"), Column("prior CoG x", "m", digits=3),
-                 Column("prior CoG y", "m", digits=3), Column("prior CoG z", "m", digits=3),
-                 Column("prior I₁", "kg·m²", digits=3), Column("prior I₂", "kg·m²", digits=3),
-                 Column("prior I₃", "kg·m²", digits=3)]
+    """Per link: mass, centre of mass, principal inertias; the prior's on the next row when given."""
+    cols = (Column("link", decimals=0), Column("values", text=True), Column("mass", "kg"),
+            Column("CoG x", "m", digits=3), Column("CoG y", "m", digits=3), Column("CoG z", "m", digits=3),
+            Column("I₁", "kg·m²", digits=3), Column("I₂", "kg·m²", digits=3), Column("I₃", "kg·m²", digits=3))
     rows = []
     for j in range(1, n + 1):
-        b = body(standard, j)
-        if b is None:
-            continue
-        row = [j, b[0], *b[1], *b[2]]
-        if prior is not None:
-            p = body(prior, j)
-            row += [*(p[0], *p[1], *p[2])] if p is not None else [None] * 7
-        rows.append(tuple(row))
+        for label, params in (("identified", standard), ("prior", prior)):
+            b = body(params, j) if params is not None else None
+            if b is not None:
+                rows.append((j, label, b[0], *b[1], *b[2]))
     return Table("bodies", "Bodies of the consistent fit" + (" beside the prior" if prior is not None else ""),
-                 tuple(cols), tuple(rows),
-                 "Centre of mass in the link's frame (Khalil); principal inertias about the centre of mass, ascending.")
+                 cols, tuple(rows), "Centre of mass in the link's frame (Khalil); principal inertias about the "
+                 "centre of mass, ascending. A link the data do not see keeps what the constraints allow.")
 
 
 def validation_table(validation: Mapping[str, Any], table_id: str = "validation") -> Table:
@@ -138,8 +129,6 @@ def key_values(table_id: str, caption: str, items: Sequence[tuple[str, str, Any]
 
 
 def _text(value: Any) -> str:
-    from .cells import fmt
-
     if isinstance(value, bool):
         return "yes" if value else "no"
     if isinstance(value, (int, float)) or value is None:
