@@ -2,7 +2,8 @@
 
 The reports are made by the command line from real runs: the shipped TX40 record (fit on the first
 6 s, held out on the rest), the UR10e 14-harmonic run (fit on its first part, held out on the
-second; ../shared, skipped when absent), and a twin payload and drive-gain run. One Chromium
+second; ../shared, skipped when absent), a twin payload and drive-gain run and a random feasible
+excitation trajectory. One Chromium
 process checks every page (tests/browser.py). Screenshots of the first screen go to
 $RX90_REPORT_SCREENSHOTS when set (docs/images/ holds the committed ones).
 """
@@ -20,6 +21,7 @@ import rx90sym
 from identify import read_motor_recording, write_recording
 from identify.app.cli import main
 from identify.app.report.cells import fixed, fmt
+from rx90sym.files import write_json
 
 from browser import Browser, BrowserUnavailable, problems
 from conftest import SHARED
@@ -76,6 +78,18 @@ def twin_gains_report(out: Path, rx90) -> str:
     return "gains"
 
 
+def excite_report(out: Path, rx90) -> str:
+    """A random feasible 6 s trajectory (the excitation's baseline: fast, at its limits)."""
+    import excitation
+    from identify.app.report.writers import write_excite_report
+
+    chi = rx90.parameter_vector(rx90sym.twin.default_parameters(rx90))
+    trajectory = excitation.random_trajectory(rx90, 6.0, 3, seed=1, chi_nominal=chi)
+    write_json(out / "excite.json", {**trajectory.summary(), "robot": rx90.name})
+    write_excite_report(out / "excite.html", json.loads((out / "excite.json").read_text()), trajectory)
+    return "excite"
+
+
 @pytest.fixture(scope="module")
 def browser():
     try:
@@ -91,7 +105,7 @@ def reports(tmp_path_factory, rx90, twin_empty, twin_loaded) -> dict[str, Path]:
     """name -> folder holding NAME.html and NAME.json, made by the command line."""
     out = tmp_path_factory.mktemp("reports")
     names = [tx40_report(out), twin_payload_report(out, rx90, twin_empty[0], twin_loaded["tables_4"][0]),
-             twin_gains_report(out, rx90)]
+             twin_gains_report(out, rx90), excite_report(out, rx90)]
     if (UR10E / "ur-20_02_19_14harm50sec.csv").exists():
         names.append(ur10e_report(out))
     return {n: out for n in names}
@@ -120,7 +134,7 @@ def _save_small_png(png: bytes, path: Path) -> None:
 
 
 @pytest.mark.slow
-@pytest.mark.parametrize("name", ["tx40", "ur10e", "payload", "gains"])
+@pytest.mark.parametrize("name", ["tx40", "ur10e", "payload", "gains", "excite"])
 def test_every_report_is_clean_in_chromium(checked, name):
     """No console error, every image decodes, no overflow at 1280 px, summary first and in the
     first screen, tables (with headers) instead of preformatted text."""
@@ -129,8 +143,7 @@ def test_every_report_is_clean_in_chromium(checked, name):
     m = checked[name]
     assert problems(m) == []
     assert m["summary_top"] < 200 and m["tables"] >= 2
-    if name in ("tx40", "ur10e", "payload", "gains"):
-        assert m["images"] >= 1 and m["figures"] == m["images"]
+    assert m["images"] >= 1 and m["figures"] == m["images"]
 
 
 @pytest.mark.slow
@@ -259,3 +272,11 @@ def test_payload_summary_is_the_jsons(checked, reports):
     mc = {p["name"]: p for p in record["payload"]}["Mc"]
     row = checked["payload"]["summary_cells"][0]
     assert row[0] == "Mc" and row[3] == fmt(mc["value"]) and row[4] == fmt(mc["std"], 3)
+
+
+@pytest.mark.slow
+def test_excite_summary_is_the_jsons(checked, reports):
+    usage = json.loads((reports["excite"] / "excite.json").read_text())["limits_usage"]
+    rows = [[re.sub(r"[✓!✗]", "", c).strip() for c in r] for r in checked["excite"]["summary_cells"]]
+    for k, kind in enumerate(("position", "velocity", "acceleration", "torque"), start=1):
+        assert [r[k] for r in rows] == [fixed(100 * v, 0) for v in usage[kind]]

@@ -88,7 +88,8 @@ def _pairing_table(pairing: Sequence[Mapping[str, Any]]) -> Table:
 def gains_page(record: Mapping[str, Any], figures: Sequence[Figure] = ()) -> Page:
     """The drive-gain report: flagged gains first, the gains table, the weighing's share of σ."""
     flags = [as_flag(f) for f in record.get("flags") or ()]
-    for j in record.get("flagged") or ():
+    told = {f["joint"] for f in flags}  # the library's own flag on a gain wins over this one
+    for j in (j for j in record.get("flagged") or () if j not in told):
         rel = (record.get("rel_std_pct") or [None] * j)[j - 1]
         flags.append(flag("gain-flagged", "warning", f"gain σr {fmt(rel, 3)} % above {fmt(record.get('flag_pct'))} %",
                           "set this gain from the datasheet (--fix J=VALUE) or use a motion that moves the "
