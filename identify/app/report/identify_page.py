@@ -4,7 +4,7 @@ from __future__ import annotations
 from typing import Any, Mapping, Sequence
 
 from .cells import fixed, fmt, number
-from .page import Figure, Page, Section, Summary, Text
+from .page import Column, Figure, Page, Section, Summary, Table, Text
 from .summary import (REST_SHARE_CHECK, as_flag, flag, heldout_flags, heldout_table, next_steps,
                       parameter_flags)
 from .tables import bodies_table, gains_table, key_values, parameter_table, validation_table
@@ -120,10 +120,21 @@ def identify_page(record: Mapping[str, Any], figures: Mapping[str, Sequence[Figu
         sections.append(Section("fit", "Fit: measured and predicted torques", tuple(figures["fit"])))
     sections.append(Section("processing", "Processing record", (processing_table(record),)))
     if spring_text or figures.get("trajectory"):
-        blocks = (Text(tuple(spring_text.split("\n\n"))),) if spring_text else ()
-        sections.append(Section("motion", "Motion and spring", (*blocks, *figures.get("trajectory", ()))))
+        sections.append(Section("motion", "Motion and spring", (*_spring_blocks(record.get("spring"), spring_text),
+                                                                *figures.get("trajectory", ()))))
     return Page(f"Identification of {record.get('robot', '')}", _subtitle(record), identify_summary(record),
                 tuple(sections))
+
+
+def _spring_blocks(spring: Any, text: str) -> tuple:
+    """An identified spring's coefficients as a table; otherwise its one-line description."""
+    if isinstance(spring, Mapping) and spring.get("mode") == "identified":
+        rows = tuple((name, c.get("value"), c.get("std")) for name, c in (spring.get("coefficients") or {}).items())
+        return (Text((f"Spring on joint {spring.get('joint')}, identified ({spring.get('model')}); grouped with "
+                      f"the rigid-body parameters: {', '.join(spring.get('grouped') or []) or 'none'}.",)),
+                Table("spring", "Spring coefficients", (Column("coefficient", text=True), Column("value"),
+                                                         Column("σ", digits=3)), rows))
+    return (Text((text.splitlines()[0],)),) if text else ()
 
 
 def _subtitle(record: Mapping[str, Any]) -> str:
