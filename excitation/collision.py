@@ -80,6 +80,8 @@ class CapsuleSet:
     names: tuple[str, ...]
     pairs: tuple[tuple[int, int], ...]
     ignored: tuple[tuple[int, int], ...] = ()
+    links: tuple[int, ...] = ()  # Khalil frame each capsule is fixed in (0: base); () unknown
+    never: tuple[tuple[int, int], ...] = ()  # pairs never near in random poses: checked exactly, not in IPOPT's cover
 
     def pair_names(self, pairs: Sequence[tuple[int, int]]) -> list[str]:
         """'a / b' for each pair of capsule indices."""
@@ -107,7 +109,7 @@ def without_pairs_touching_at(capsules: CapsuleSet, q: Sequence[float], every: b
         touching = list(capsules.pairs)
     kept = tuple(p for p in capsules.pairs if p not in touching)
     return CapsuleSet(capsules.segments, capsules.radii, capsules.names, kept,
-                      capsules.ignored + tuple(touching))
+                      capsules.ignored + tuple(touching), capsules.links)
 
 
 def arm_capsules(robot: rx90sym.Robot, tool_point: Sequence[float] = (0.0, 0.0, 0.1), base_length: float = 0.5,
@@ -125,9 +127,11 @@ def arm_capsules(robot: rx90sym.Robot, tool_point: Sequence[float] = (0.0, 0.0, 
             kept.append(j)
     points = [ca.DM([0.0, 0.0, -base_length]), ca.DM.zeros(3)] + [origins[:, j] for j in kept]
     names = ["base"] + [f"link to frame {j + 1}" for j in kept]
+    links = [0] + kept  # O_j+1 is fixed in frame j, and so is the previous kept origin
     tool = ca.mtimes(t0n, ca.DM([*tool_point, 1.0]))[:3]
     points.append(tool)
     names.append("wrist and tool")
+    links.append(n)
     k = len(points) - 1
     ends = ca.horzcat(*[ca.horzcat(points[i], points[i + 1]) for i in range(k)])
     if radii is None:
@@ -139,7 +143,8 @@ def arm_capsules(robot: rx90sym.Robot, tool_point: Sequence[float] = (0.0, 0.0, 
     if len(radii) != k or any(r <= 0 for r in radii):
         raise ValueError(f"capsules: {k} positive radii needed ({', '.join(names)}), got {radii}")
     pairs = tuple((i, j) for i in range(k) for j in range(i + 2, k))
-    return CapsuleSet(ca.Function("capsules", [q], [ends], ["q"], ["ends"]), radii, tuple(names), pairs)
+    return CapsuleSet(ca.Function("capsules", [q], [ends], ["q"], ["ends"]), radii, tuple(names), pairs,
+                      links=tuple(links))
 
 
 def _box_distance(p: Any, box: Box) -> Any:
@@ -179,6 +184,8 @@ def clearance_function(capsules: CapsuleSet, boxes: Sequence[Box] = (), self_col
     rows = []
     if self_collision:
         for i, j in capsules.pairs:
+            if (i, j) in capsules.never:
+                continue
             (ci, ri), (cj, rj) = balls[i], balls[j]
             rows += [ca.norm_2(x - y) - ri - rj for x in ci for y in cj]
     for box in boxes:
