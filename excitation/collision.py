@@ -187,13 +187,25 @@ def clearance_function(capsules: CapsuleSet, boxes: Sequence[Box] = (), self_col
             if (i, j) in capsules.never:
                 continue
             (ci, ri), (cj, rj) = balls[i], balls[j]
-            rows += [ca.norm_2(x - y) - ri - rj for x in ci for y in cj]
+            rows.append(_soft_min([ca.norm_2(x - y) - ri - rj for x in ci for y in cj]))
     for box in boxes:
         for centres, r in balls:
-            rows += [_box_distance(c, box) - r for c in centres]
+            rows.append(_soft_min([_box_distance(c, box) - r for c in centres]))
     if not rows:
         return None
     return ca.Function("clearances", [q], [ca.vertcat(*rows)], ["q"], ["clearance"])
+
+
+SOFT_MIN = 0.002  # [m] temperature of the smooth minimum over ball pairs
+
+
+def _soft_min(values: list) -> ca.SX:
+    """Smooth minimum -k log sum exp(-v / k) (k = SOFT_MIN): one smooth row per capsule pair,
+    never above the true minimum (so never optimistic) and at most k log(count) below it."""
+    if len(values) == 1:
+        return values[0]
+    v = ca.vertcat(*values)
+    return -SOFT_MIN * ca.logsumexp(-v / SOFT_MIN)
 
 
 def _segment_distance(p1: np.ndarray, q1: np.ndarray, p2: np.ndarray, q2: np.ndarray) -> np.ndarray:

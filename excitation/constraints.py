@@ -159,8 +159,10 @@ class _Rows:
 def kinematic_constraints(model: ExcitationModel, q: ca.MX, qd: ca.MX, qdd: ca.MX,
                           margins: Margins) -> tuple[ca.MX, np.ndarray, np.ndarray]:
     """(g, lbg, ubg) on MX samples (n x N): position, velocity and acceleration limits with
-    margins (linear in the coefficients), and the floor (forward kinematics) when the model has
-    one: a floor is usually active, so it is imposed from the start."""
+    margins (linear in the coefficients), and the envelope's rows when the model has them: the
+    floor (forward kinematics), capsule clearances >= margins.clearance [m] (one smooth row per
+    pair or capsule and box, collision.py) and squared Cartesian speeds: imposed from the start,
+    since a repair from a point in collision rarely recovers."""
     lim = model.limits
     rows = _Rows()
     lo, hi = position_bounds(model, margins.position)
@@ -171,6 +173,11 @@ def kinematic_constraints(model: ExcitationModel, q: ca.MX, qd: ca.MX, qdd: ca.M
         z = model.heights.map(q.shape[1], "serial")(q)
         k = z.shape[0]
         rows.add(z, np.full(k, model.z_min + margins.height), np.full(k, np.inf))
+    clearance = None if model.collision is None else model.collision.clearance
+    if clearance is not None and q.shape[1] > 0:  # one smooth row per capsule pair: from the start
+        c = clearance.map(q.shape[1], "serial")(q)
+        k = c.shape[0]
+        rows.add(c, np.full(k, margins.clearance), np.full(k, np.inf))
     if model.speeds is not None and q.shape[1] > 0:  # squared speeds: smooth, active at once
         v2 = model.speeds.map(q.shape[1], "serial")(q, qd)
         k = v2.shape[0]
@@ -181,18 +188,12 @@ def kinematic_constraints(model: ExcitationModel, q: ca.MX, qd: ca.MX, qdd: ca.M
 def torque_constraints(model: ExcitationModel, q: ca.MX, qd: ca.MX, qdd: ca.MX,
                        margins: Margins) -> tuple[ca.MX, np.ndarray, np.ndarray]:
     """(g, lbg, ubg) on MX samples (n x N): motor torque limits with margin (inverse dynamics
-    with the nominal parameters, minus the spring) and, when the model has a collision model,
-    capsule clearances >= margins.clearance [m] (the constraints imposed lazily)."""
+    with the nominal parameters, minus the spring), imposed lazily."""
     lim = model.limits
     rows = _Rows()
     if model.torque is not None and np.any(np.isfinite(lim.tau_max)) and q.shape[1] > 0:
         tau = model.torque.map(q.shape[1], "serial")(q, qd, qdd)
         rows.add(tau, -(1.0 - margins.torque) * lim.tau_max, (1.0 - margins.torque) * lim.tau_max)
-    clearance = None if model.collision is None else model.collision.clearance
-    if clearance is not None and q.shape[1] > 0:  # imposed lazily too: rarely active
-        c = clearance.map(q.shape[1], "serial")(q)
-        k = c.shape[0]
-        rows.add(c, np.full(k, margins.clearance), np.full(k, np.inf))
     return rows.result()
 
 
