@@ -3,7 +3,7 @@
 Sources, in order:
 
 - a robot file's ``[excitation]`` table (``mounting_plane_z`` [m, frame 0], ``tool_point`` [m,
-  frame n]) and its ``[[capsules]]`` (``name``, ``frame`` j, end points ``a``, ``b`` [m, frame j],
+  frame n], default the ``[flange]`` translation) and its ``[[capsules]]`` (``name``, ``frame`` j, end points ``a``, ``b`` [m, frame j],
   ``radius`` [m]);
 - a URDF: the mounting plane is the root link's z = 0, the tool point the tip link's origin, and
   one capsule per ``<collision>`` element: a cylinder (or capsule) becomes the capsule of the same
@@ -68,13 +68,15 @@ def arm_geometry(robot: rx90sym.Robot, mesh_radius: float = MESH_RADIUS) -> ArmG
         return _urdf_geometry(robot, mesh_radius)
     table: dict = {}
     capsules: list = []
+    data: dict = {}
     path = Path(robot.source) if robot.source else None
     if path is not None and path.suffix == ".toml" and path.exists():
         data = tomllib.loads(path.read_text(encoding="utf-8"))
         table, capsules = data.get("excitation", {}), data.get("capsules", [])
     where = robot.source or robot.name
     specs = tuple(_spec(c, i, robot.n, where) for i, c in enumerate(capsules))
-    tool = tuple(float(x) for x in table.get("tool_point", (0.0, 0.0, 0.0)))
+    flange = data.get("flange", {}).get("translation", (0.0, 0.0, 0.0)) if capsules or table else (0.0, 0.0, 0.0)
+    tool = tuple(float(x) for x in table.get("tool_point", flange))
     if len(tool) != 3:
         raise ValueError(f"{where}: [excitation] tool_point needs 3 numbers [m, frame {robot.n}]")
     if "mounting_plane_z" in table:
