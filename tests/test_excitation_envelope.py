@@ -23,10 +23,12 @@ UR5_ARGS = ("excite", "--robot", UR5, "--tip", "tool0")
 
 @pytest.fixture(scope="session")
 def ur5_run(tmp_path_factory):
-    """The issue's example with the defaults: 12 s, --controller ur, URScript and CSV."""
+    """The issue's example with the defaults (one start instead of two, for time): 12 s,
+    --controller ur, URScript, CSV and the HTML report."""
     out = tmp_path_factory.mktemp("ur5")
-    proc = run(*UR5_ARGS, "--duration", "12", "--controller", "ur", "--program", str(out / "T.script"),
-               "--out", str(out / "T.csv"), "--json", str(out / "T.json"))
+    proc = run(*UR5_ARGS, "--duration", "12", "--starts", "1", "--controller", "ur",
+               "--program", str(out / "T.script"), "--out", str(out / "T.csv"), "--json", str(out / "T.json"),
+               "--report", str(out / "T.html"))
     assert proc.returncode == 0, proc.stderr
     return out, proc
 
@@ -72,6 +74,25 @@ def test_ur5_default_excitation_holds_the_envelope_by_pinocchio_at_the_controlle
     assert "angle_convention" not in summary and "staubli_offsets_rad" not in summary
     assert summary["envelope"]["self_collision"] and summary["envelope"]["pairs_checked"] > 0
     assert "NOT checked" not in proc.stderr and "self-collision: " in proc.stderr
+    report = (out / "T.html").read_text()
+    assert report.count("<img") == 2 and "largest point speed" in report
+
+
+@pytest.mark.slow
+def test_a_floor_with_a_start_pose_above_it_succeeds_and_is_held(tmp_path):
+    home = "0,-1.5708,0,-1.5708,0,0"  # UR's upright home pose, far above z = 0.1 m
+    proc = run(*UR5_ARGS, "--acceleration", "6", "--duration", "6", "--harmonics", "2", "--starts", "1",
+               "--floor", "0.1", "--controller", "ur", "--start-pose", home, "--out", str(tmp_path / "t.csv"),
+               "--json", str(tmp_path / "t.json"))
+    assert proc.returncode == 0, proc.stderr
+    usage = json.loads((tmp_path / "t.json").read_text())["limits_usage"]
+    assert usage["z_min_m"] == 0.1 and usage["min_height_m"] >= 0.1
+    data = np.genfromtxt(tmp_path / "t.csv", delimiter=",", names=True)
+    q = np.column_stack([data[f"q{j}"] for j in range(1, 7)])
+    assert np.allclose(q[0], [0, -1.5708, 0, -1.5708, 0, 0])  # the approach starts at the pose
+    frames = _pinocchio_frames(q[::10])
+    base_to_frame0 = 0.089159  # the URDF root is 0.089 m below frame 0 (the shoulder)
+    assert frames["tool0"][:, 2].min() >= 0.1 + base_to_frame0 - 1e-6
 
 
 def test_urscript_has_one_servoj_per_sample_at_the_period():

@@ -88,6 +88,9 @@ def register(sub: Any) -> None:
                          "1.0, at most 1.5)")
     sp.add_argument("--mounting-margin", type=float, default=None,
                     help="clearance [m] above the robot's mounting plane (default 0.05)")
+    sp.add_argument("--report", default=None,
+                    help="HTML report of the envelope: tool path, speeds and accelerations against "
+                         "their limits, distances to the floor and between links along time")
     sp.add_argument("--out", required=True, help="trajectory CSV (controller angles, 250 Hz)")
     sp.add_argument("--json", help="coefficients and summary as JSON")
 
@@ -95,7 +98,7 @@ def register(sub: Any) -> None:
 def run(args: argparse.Namespace) -> int:
     import excitation
 
-    for path in (args.out, args.json, args.program):
+    for path in (args.out, args.json, args.program, args.report):
         check_output(path)
     _check_options(args)
     robot = load_robot(args)
@@ -136,12 +139,29 @@ def run(args: argparse.Namespace) -> int:
     _save(args, traj, robot, start_pose, model)
     if args.json:
         traj.save_json(args.json)
+    _report(args, robot, model, traj, described)
     skipped = traj.info.skipped_starts
     if skipped:
         progress(f"{len(skipped)} start(s) skipped by the time budget: {', '.join(map(str, skipped))}")
     print(f"cond = {traj.cond:.2f} (base observation matrix at 250 Hz), criterion {criterion} = "
           f"{traj.info.criterion_value:.4g}; written {args.out}")
     return 0
+
+
+def _report(args: argparse.Namespace, robot: rx90sym.Robot, model: Any, traj: Any, described: dict) -> None:
+    """--report: the envelope as applied, its worst values and figures along time."""
+    if args.report is None:
+        return
+    import excitation
+    from excitation import envelope_report as er
+    from excitation.robot_geometry import arm_geometry
+
+    from ..report import Section, write_report
+
+    series = er.along_time(robot, model, traj, arm_geometry(robot).tool_point)
+    text = "\n".join(excitation.envelope_lines(described)) + "\n\n" + er.table(series)
+    write_report(args.report, f"Excitation of {robot.name}: safety envelope",
+                 [Section("Safety envelope along the trajectory", text, tuple(er.figures(series)))])
 
 
 def _check_options(args: argparse.Namespace) -> None:
