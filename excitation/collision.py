@@ -18,11 +18,13 @@ links) self-collision is not checked, and this is reported (:func:`without_pairs
 no capsule may enter an obstacle box.
 
 For IPOPT each capsule is covered by balls on its segment (at least ``spheres``, and at most one
-radius r apart), radius sqrt(r^2 + (spacing/2)^2) so that the balls contain the capsule: clearances (m, >= 0 required) are ball-centre distances
-minus the inflated radii, and the box's signed distance minus the inflated radius. They are
-smooth except on measure-zero sets. The optimiser imposes them lazily, like torques (where the
-fine-grid check finds a violation); :func:`capsule_clearances` gives the exact distances for the
-check (segment-segment distance, box distance by a fine sampling of the segment).
+radius r apart), radius sqrt(r^2 + (spacing/2)^2) so that the balls contain the capsule; each
+pair of capsules (and each capsule and box) gives ONE smooth row, the soft minimum
+-k log sum exp(-d/k) (k = SOFT_MIN) of its ball-pair clearances d (ball-centre distance minus
+the inflated radii, or the box's signed distance minus the inflated radius): never above the true
+minimum, so never optimistic. The optimiser imposes these rows on its constraint grid from the
+start (constraints.kinematic_constraints); :func:`capsule_clearances` gives the exact distances
+for the check (segment-segment distance, box distance by a fine sampling of the segment).
 """
 from __future__ import annotations
 
