@@ -52,8 +52,17 @@ def _flags(record: Mapping[str, Any]) -> list[dict]:
     return flags
 
 
-def excite_page(record: Mapping[str, Any], figures: Sequence[Figure] = ()) -> Page:
-    """The excitation report from ``Trajectory.summary()`` (what ``rx90 excite --json`` writes)."""
+def envelope_table(worst: Sequence[tuple[str, str, Any, Any, str]]) -> Table:
+    """The safety envelope's worst values along the trajectory (excitation.envelope_report.worst)."""
+    rows = tuple((name, unit, value, t, limit) for name, unit, value, t, limit in worst)
+    return Table("envelope", "Safety envelope: worst values along the trajectory", (
+        Column("quantity", text=True), Column("unit", text=True), Column("worst"), Column("at t", "s", digits=4),
+        Column("limit", text=True)), rows)
+
+
+def excite_page(record: Mapping[str, Any], figures: Sequence[Figure] = (), more: Sequence[Section] = ()) -> Page:
+    """The excitation report from ``Trajectory.summary()`` (what ``rx90 excite --json`` writes);
+    figures go with the limit usage, ``more`` sections after it."""
     usage = record.get("limits_usage") or {}
     flags = _flags(record)
     feasible = usage.get("feasible")
@@ -68,7 +77,7 @@ def excite_page(record: Mapping[str, Any], figures: Sequence[Figure] = ()) -> Pa
     if usage.get("min_height_m") is not None:
         facts.append(("Lowest tool height", f"{fmt(usage['min_height_m'], 3)} m (floor {fmt(usage.get('z_min_m'))} m)"))
     optimiser = record.get("optimiser") or {}
-    sections = [Section("limits", "Limit usage", (usage_table(usage), *figures))]
+    sections = [Section("limits", "Limit usage", (usage_table(usage), *figures)), *more]
     items = [(k.replace("_", " "), "", v) for k, v in optimiser.items() if v not in (None, "") and not isinstance(v, dict)]
     if items:
         sections.append(Section("optimiser", "Optimiser", (key_values("optimiser", "How it was optimised", items),)))
