@@ -81,12 +81,13 @@ def twin_gains_report(out: Path, rx90) -> str:
 def excite_report(out: Path, rx90) -> str:
     """A random feasible 6 s trajectory (the excitation's baseline: fast, at its limits)."""
     import excitation
-    from identify.app.report.writers import write_excite_report
+    from identify.app.report import excite_page, figure, write_page
 
     chi = rx90.parameter_vector(rx90sym.twin.default_parameters(rx90))
     trajectory = excitation.random_trajectory(rx90, 6.0, 3, seed=1, chi_nominal=chi)
     write_json(out / "excite.json", {**trajectory.summary(), "robot": rx90.name})
-    write_excite_report(out / "excite.html", json.loads((out / "excite.json").read_text()), trajectory)
+    fig = figure("fig-trajectory", "Positions, velocities and accelerations against their limits", trajectory.plot())
+    write_page(out / "excite.html", excite_page(json.loads((out / "excite.json").read_text()), (fig,)))
     return "excite"
 
 

@@ -11,7 +11,6 @@ import numpy as np
 import rx90sym
 
 from .figures import figure, parameter_figure, residual_figure, torque_figure, trajectory_figure
-from .excite_page import excite_page
 from .identify_page import identify_page
 from .page import write_page
 from .payload_pages import gains_page, payload_page
@@ -59,9 +58,3 @@ def write_gains_report(path: str | os.PathLike, record: Mapping[str, Any]) -> Pa
     fig = figure("fig-gains", "Drive gains with 2σ bars [N·m/A]", parameter_figure(shown, None, "Drive gains with 2σ"))
     return write_page(path, gains_page(record, (fig,)))
 
-
-def write_excite_report(path: str | os.PathLike, record: Mapping[str, Any], trajectory: Any) -> Path:
-    """The excitation report from ``trajectory.summary()`` (plus e.g. "robot", "flags") and its plot."""
-    fig = figure("fig-trajectory", "Positions, velocities and accelerations as fractions of their limits",
-                 trajectory.plot())
-    return write_page(path, excite_page(record, (fig,)))
