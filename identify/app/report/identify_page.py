@@ -1,6 +1,7 @@
 """The report of ``rx90 identify``, built from its JSON record (what ``--json`` writes) and figures."""
 from __future__ import annotations
 
+from pathlib import Path
 from typing import Any, Mapping, Sequence
 
 from .cells import fixed, fmt, number
@@ -77,7 +78,8 @@ def identify_summary(record: Mapping[str, Any]) -> Summary:
     model = record.get("model") or {}
     data = record.get("data")
     flags = _flags(record, data)
-    facts = [("Robot", f"{record.get('robot', '')} ({model.get('robot_file') or 'bundled'})"),
+    robot_file = Path(str(model["robot_file"])).name if model.get("robot_file") else "built in memory"
+    facts = [("Robot", f"{record.get('robot', '')} (file {robot_file}; full path in the processing record)"),
              ("Method", f"{record.get('method', '')}, {len(record.get('parameters') or [])} parameters"),
              *data_facts(data, model),
              ("Conditioning", f"cond(W) = {fmt(record.get('cond'), 4)} (unweighted {fmt(record.get('cond_unweighted'), 4)})"),
