@@ -28,7 +28,7 @@ def register(sub: Any) -> None:
             "recording file")
     sp = sub.add_parser("convert", help=text, description=text + "; see docs/real-logs.md")
     sp.set_defaults(func=run)
-    robot_option(sp)
+    robot_option(sp, None, "")
     sp.add_argument("log", nargs="?", metavar="LOG.csv", help="controller log (comma separated)")
     sp.add_argument("--columns", metavar="SPEC",
                     help="what each column of the log holds, in order: t, q1..qn, qd1..qdn (recorded "
@@ -68,6 +68,9 @@ def _rows(text: str | None) -> tuple[int, int] | None:
 
 
 def run(args: argparse.Namespace) -> int:
+    if args.robot is None:
+        raise UsageError("convert needs --robot NAME|FILE.toml|FILE.urdf: the robot the log was recorded "
+                         "on (its joint count, limits and angle offsets; written into the recording)")
     if args.log is None:
         return _run_motor(args)
     mixed = _given(args, _MOTOR_OPTIONS)

@@ -20,6 +20,9 @@ from identify.io.gains import apply_gains, read_gains
 from identify.observation.matrix import DEFAULT_MIN_VELOCITY, DEFAULT_REST, REST_POLICIES
 from identify.real_fit import fit_recordings
 
+from identify.plausibility import estimate_flags, residual_flags, torque_scale_flags
+
+from ..flags import checked, flag_lines, given_gain_flags, settle
 from ..common import (UsageError, check_output, convention_option, progress, robot_option, robot_with_spring,
                       spring_options)
 from ..spring_output import attach_spring, spring_summary
@@ -49,7 +52,7 @@ def add_recording_options(sp: argparse.ArgumentParser) -> None:
 
 
 def read_recordings(paths: list[str], robot: rx90sym.Robot, convention: str | None, gains: Any) -> list:
-    recs = [read_recording(p, robot, convention=convention) for p in paths]
+    recs = [checked(read_recording(p, robot, convention=convention), robot) for p in paths]
     if gains is None:
         return recs
     return [apply_gains(r, gains, robot) if r.current is not None else r for r in recs]
@@ -60,7 +63,7 @@ def register(sub: Any) -> None:
                         description="identify the base parameters from recordings")
     sp.set_defaults(func=run)
     sp.add_argument("recordings", nargs="+", help="recording CSV files")
-    robot_option(sp)
+    robot_option(sp, None, "the robot the recordings' '# robot:' line names")
     add_recording_options(sp)
     spring_options(sp)
     sp.add_argument("--offsets", action="store_true", help="add per-joint torque offsets OFF1..OFFn")
@@ -92,7 +95,7 @@ def register(sub: Any) -> None:
 
 
 def _robot(args: argparse.Namespace) -> tuple[rx90sym.Robot, Any]:
-    robot, spring_model = robot_with_spring(args)
+    robot, spring_model = robot_with_spring(args, args.recordings)
     if args.coulomb_sign is not None:
         if robot.coupling is None:
             raise UsageError(f"--coulomb-sign: robot {robot.name!r} has no coupled joints")
@@ -142,7 +145,9 @@ def run(args: argparse.Namespace) -> int:
     sb = attach_spring(robot, spring_model, args.validate, args.method)
     gains = read_gains(args.gains, robot) if args.gains else None
     progress(f"reading {len(args.recordings)} recording(s)")
+    flags = given_gain_flags(gains) if gains is not None else []
     recs = read_recordings(args.recordings, robot, args.convention, gains)
+    flags += settle(torque_scale_flags([r.tau for r in recs if r.tau is not None], robot))
     val_rec = read_recordings([args.validate], robot, args.convention, gains)[0] if args.validate else None
     decimate_to = None if (args.no_decimate or args.decimate_to == 0) else args.decimate_to
     min_velocity = args.min_velocity or None
@@ -163,8 +168,15 @@ def run(args: argparse.Namespace) -> int:
     block = max(1, int(round(BOOTSTRAP_BLOCK_S * obs.rate)))
     boot = segment_bootstrap_std(obs.W, obs.Y, obs.joint, obs.samples, res.weights, block,
                                  BOOTSTRAP_DRAWS, args.bootstrap_seed)
+    torque_rms = np.array([np.sqrt(np.mean(obs.Y[obs.joint == j] ** 2)) if np.any(obs.joint == j) else np.inf
+                           for j in range(len(res.residual_rms))])
+    flags += settle(residual_flags(res.residual_rms, torque_rms))
+    if args.method != "consistent":  # judged with the larger of the two sigma
+        flags += settle(estimate_flags(res.names, res.values, np.fmax(res.std, boot)))
     print(res.table())
     print(bootstrap_table(res, boot))
+    if flags:
+        print(flag_lines(flags))
     spring_entry, spring_text = spring_summary(robot, sb, res, recs)
     print(f"\n{spring_text}")
     ess = essential_parameters(res) if args.essential else None
@@ -186,6 +198,7 @@ def run(args: argparse.Namespace) -> int:
                "bootstrap": {"block_s": block / obs.rate, "draws": BOOTSTRAP_DRAWS, "seed": args.bootstrap_seed},
                "cutoff_hz": obs.cutoffs[0], "decimate_to_hz": decimate_to,
                "delay_estimate_s": estimate.delay, "model": model.to_dict(),
+               "flags": [f.to_json() for f in flags],
                "essential": ess.to_dict() if ess is not None else {},
                "validation": val.to_dict() if val is not None else {}}
         write_json(args.json, out)
@@ -193,7 +206,9 @@ def run(args: argparse.Namespace) -> int:
         sections = identification_sections(robot, res, recs, validation=val, essential=ess,
                                            fit_prediction=predict(robot, res, recs[0], base=base, **filt),
                                            model=model, extra_tables=[bootstrap_table(res, boot)])
-        write_report(args.report, f"Identification of {robot.name}", [*sections, Section("Spring", spring_text)])
+        checks = Section("Plausibility", flag_lines(flags) or "no flags: every plausibility check passed")
+        write_report(args.report, f"Identification of {robot.name}",
+                     [*sections, Section("Spring", spring_text), checks])
     if args.urdf_out:  # last: a refused (non-physical) link must not cost the fit's JSON and report
         from rx90sym import UrdfError, write_urdf
 

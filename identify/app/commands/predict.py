@@ -19,7 +19,7 @@ from identify import IdentificationResult, predict
 from identify.fit_model import FitModel
 from identify.io.gains import DriveGains
 
-from ..common import check_output, progress
+from ..common import announce_robot, check_output, progress
 from .identify_cmd import read_recordings
 
 
@@ -100,6 +100,7 @@ def run(args: argparse.Namespace) -> int:
     asymmetric = tuple(j for j in range(robot.n) if f"FSP{j + 1}" in result.names)
     if asymmetric != tuple(robot.asymmetric_coulomb):
         robot = robot.with_options(asymmetric_coulomb=asymmetric)
+    announce_robot(robot, "from --robot" if args.robot else "recorded by the identification")
     warning = model.check_robot(robot)
     if warning:
         progress(f"warning: {warning}")
