@@ -5,8 +5,9 @@ Each check returns :class:`Flag` objects; severity ``"error"`` stops a run (the 
 
 Errors (the likely cause is named):
 
-- ``gains_all_negative`` — every identified drive gain is negative: the empty and loaded runs are
-  swapped (a payload "removed" gives negative gains);
+- ``gains_negative`` — most drive gains (more than half) are negative: the empty and loaded
+  runs are swapped (a payload "removed" gives negative gains; the wrist motor of a coupled wrist,
+  which the payload hardly loads, may keep its sign);
 - ``payload_mass_negative`` — the payload mass is below 0 by more than 3 sigma: empty and loaded
   swapped (or gains of the wrong sign);
 - ``torque_scale`` — the torques are far from the robot's torque limits: every joint's peak below
@@ -19,7 +20,8 @@ Errors (the likely cause is named):
 
 Warnings:
 
-- ``gain_negative`` — one (not all) gain negative: that motor's current sign may be inverted;
+- ``gain_negative`` — a negative gain (half of the gains at most): that motor's current sign may be
+  inverted (the gain then makes the right torque: the run goes on);
 - ``gain_uncertain`` — a gain whose relative sigma is above the flag threshold;
 - ``gain_unidentified`` (error) — a gain of the wrong sign whose sigma is larger than itself is
   never returned: it is not identified; fix it from a datasheet;
@@ -108,10 +110,12 @@ def gain_flags(gains: np.ndarray, std: np.ndarray, fixed: Sequence[int] = (), re
     """
     k, s = np.asarray(gains, dtype=float), np.asarray(std, dtype=float)
     free = [j for j in range(k.size) if j + 1 not in fixed]
-    if free and all(k[j] < 0 for j in free):
+    negative = [j for j in free if k[j] < 0]
+    if len(negative) > len(free) / 2:
         values = ", ".join(f"{k[j]:.4g}" for j in free)
-        return [Flag("gains_all_negative", "error", f"every identified drive gain is negative ({values} N m/A)",
-                     "are the empty and loaded recordings swapped? (the payload must be on in the loaded runs)")]
+        return [Flag("gains_negative", "error", f"{len(negative)} of {len(free)} drive gains are negative "
+                     f"({values} N m/A)",
+                     "were they identified with the empty and loaded recordings swapped? (the payload must be on in the loaded runs)")]
     flags = []
     for j in free:
         if k[j] < 0 and not abs(k[j]) > s[j]:

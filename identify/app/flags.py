@@ -10,7 +10,7 @@ from .common import progress
 
 #: The option that addresses each flag (the library's messages quote no options).
 HINTS = {
-    "gains_all_negative": "swap --empty and --loaded",
+    "gains_negative": "swap --empty and --loaded",
     "payload_mass_negative": "swap --empty and --loaded",
     "gain_unidentified": "--fix J=VALUE",
     "gain_uncertain": "--fix J=VALUE",

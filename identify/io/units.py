@@ -3,7 +3,8 @@
 Two mistakes make a log look like corrupt rows although every row is fine:
 
 - positions in **degrees** (a log exported for a person): angles beyond the robot's joint limits
-  by more than :data:`MARGIN` on many rows, which the limits would hold once divided by 180/pi;
+  by more than :data:`MARGIN` on many rows, some beyond a full turn, which the limits would all
+  hold once divided by 180/pi;
 - the **position and velocity groups swapped** (``qd1..qdn`` mapped as ``q1..qn`` and the other
   way round): the derivative of the "velocities" is the "positions", not the reverse.
 
@@ -20,12 +21,14 @@ import numpy as np
 import rx90sym
 from rx90sym.recording import RecordingError
 
-__all__ = ["check_units", "MARGIN", "DEGREE_SHARE", "SWAP_MATCH"]
+__all__ = ["check_units", "MARGIN", "DEGREE_SHARE", "DEGREE_LEAST", "SWAP_MATCH"]
 
 #: Positions further than this beyond a joint's limits (rad) are out of range.
 MARGIN = 1.0
 #: Degrees: at least this share of the rows out of range, all within the limits once in radians.
 DEGREE_SHARE = 0.05
+#: Degrees: and some angle beyond a full turn (rad), which small angles in radians never reach.
+DEGREE_LEAST = 2 * np.pi
 #: Swapped groups: the derivative of the velocity columns matches the position columns within
 #: this relative RMS difference while the positions' derivative does not match the velocities
 #: (the same 50 % as the log reader's velocity check, identify.io.logs.VELOCITY_MISMATCH).
@@ -89,7 +92,8 @@ def check_units(t: np.ndarray, q: np.ndarray, dq: np.ndarray | None, robot: rx90
     k = int(rows[0])
     j = int(np.flatnonzero(out[k])[0])
     qr = model(np.deg2rad(q))
-    if rows.size >= DEGREE_SHARE * len(q) and not np.any((qr < lo) | (qr > hi)):
+    if (rows.size >= DEGREE_SHARE * len(q) and np.max(np.abs(q)) > DEGREE_LEAST
+            and not np.any((qr < lo) | (qr > hi))):
         raise RecordingError(f"{source}: positions look like degrees: {rows.size} of {len(q)} rows lie beyond "
                              f"the joint limits of robot {robot.name} (first {_where(numbers, k)}, joint "
                              f"{j + 1}: {q[k, j]:g}), and all fit once converted to radians; give positions "
