@@ -16,7 +16,8 @@ Errors (the likely cause is named):
 - ``model_unexplained`` — a joint whose residual RMS is more than :data:`RESIDUAL_SHARE` of its
   torque RMS: the model does not explain it (wrong robot, swapped joints, wrong units or sign).
   Measured: good fits leave 5-15 % (TX40), 7-24 % (UR10e, 14-harmonic run); the UR10e run with
-  q1 and q2 swapped leaves 94 %, 75 % and 59 % on joints 1-3.
+  q1 and q2 swapped leaves 94 %, 75 % and 59 % on joints 1-3. A joint whose torque RMS is below
+  :data:`RESIDUAL_FLOOR` of its torque limit is not judged (its torque may be mostly noise).
 
 Warnings:
 
@@ -41,7 +42,7 @@ import numpy as np
 import rx90sym
 
 __all__ = ["Flag", "PlausibilityError", "raise_errors", "gain_flags", "payload_flags", "torque_scale_flags",
-           "residual_flags", "estimate_flags", "margin_flags", "TORQUE_LOW", "TORQUE_HIGH", "RESIDUAL_SHARE",
+           "residual_flags", "estimate_flags", "margin_flags", "TORQUE_LOW", "TORQUE_HIGH", "RESIDUAL_SHARE", "RESIDUAL_FLOOR",
            "SIGMAS"]
 
 #: Every joint's torque peak below this fraction of its limit: torques of the wrong scale.
@@ -50,6 +51,9 @@ TORQUE_LOW = 0.01
 TORQUE_HIGH = 10.0
 #: A joint whose residual RMS exceeds this fraction of its torque RMS is not explained.
 RESIDUAL_SHARE = 0.5
+#: A joint whose torque RMS is below this fraction of its torque limit is not judged by
+#: RESIDUAL_SHARE: its torque may be mostly noise (the UR10 twin's wrist: ~1e-3 of the limits).
+RESIDUAL_FLOOR = 0.01
 #: How many sigma below zero a non-negative quantity may lie before it is flagged.
 SIGMAS = 3.0
 # Plain parameters that physics wants >= 0: masses, diagonal inertias, rotor inertias, viscous
@@ -176,10 +180,17 @@ def torque_scale_flags(torques: Sequence[np.ndarray], robot: rx90sym.Robot, what
     return []
 
 
-def residual_flags(residual_rms: np.ndarray, torque_rms: np.ndarray) -> list[Flag]:
-    """Joints the model does not explain: residual RMS > RESIDUAL_SHARE x torque RMS (both N m)."""
-    share = np.asarray(residual_rms, dtype=float) / np.asarray(torque_rms, dtype=float)
-    bad = [j for j in range(share.size) if share[j] > RESIDUAL_SHARE]
+def residual_flags(residual_rms: np.ndarray, torque_rms: np.ndarray, torque_limit: np.ndarray | None = None
+                   ) -> list[Flag]:
+    """Joints the model does not explain: residual RMS > RESIDUAL_SHARE x torque RMS (both N m).
+
+    torque_limit: (n,) the robot's torque limits, N m: a joint whose torque RMS is below
+    RESIDUAL_FLOOR of its limit is not judged (its torque may be mostly noise).
+    """
+    rms = np.asarray(torque_rms, dtype=float)
+    share = np.asarray(residual_rms, dtype=float) / rms
+    judged = np.ones(share.size, bool) if torque_limit is None else ~(rms < RESIDUAL_FLOOR * np.asarray(torque_limit))
+    bad = [j for j in range(share.size) if judged[j] and share[j] > RESIDUAL_SHARE]
     if not bad:
         return []
     text = ", ".join(f"joint {j + 1} {100 * share[j]:.0f} %" for j in bad)

@@ -247,3 +247,6 @@ def test_torque_scale_and_residual_flags(rx90):
     assert residual_flags(rms * RESIDUAL_SHARE * 0.9, rms) == []
     flag = residual_flags(rms * [0.2, 0.9, 0.2, 0.2, 0.2, 0.7], rms)[0]
     assert flag.joint == 2 and "joint 6 70 %" in flag.message
+    limit = np.full(6, 100.0)  # joint 2's torque RMS (1 N m) is 1 % of it: judged; at 0.5 %, not
+    assert residual_flags(rms * [0.2, 0.9, 0.2, 0.2, 0.2, 0.2], rms, limit)[0].joint == 2
+    assert residual_flags(rms * [0.2, 0.9, 0.2, 0.2, 0.2, 0.2], rms, 2 * limit) == []

@@ -170,7 +170,7 @@ def run(args: argparse.Namespace) -> int:
                                  BOOTSTRAP_DRAWS, args.bootstrap_seed)
     torque_rms = np.array([np.sqrt(np.mean(obs.Y[obs.joint == j] ** 2)) if np.any(obs.joint == j) else np.inf
                            for j in range(len(res.residual_rms))])
-    flags += settle(residual_flags(res.residual_rms, torque_rms))
+    flags += settle(residual_flags(res.residual_rms, torque_rms, robot.limits.tau_max[:torque_rms.size]))
     if args.method != "consistent":  # judged with the larger of the two sigma
         flags += settle(estimate_flags(res.names, res.values, np.fmax(res.std, boot)))
     print(res.table())
