@@ -8,11 +8,11 @@ import numpy as np
 
 from rx90sym.files import write_json
 from identify import read_recording
-from identify.drive_gains import FLAG_PCT, GAIN_METHODS, drive_gains
+from identify.drive_gains import DEFAULT_METHOD, FLAG_PCT, GAIN_METHODS, drive_gains
 from identify.io.gains import read_gains
 from identify.signal.pairing import POSITION_TOLERANCE
 
-from identify.plausibility import gain_flags
+from identify.plausibility import PlausibilityError, gain_flags
 
 from ..flags import checked, flag_lines, settle
 from ..common import UsageError, check_output, convention_option, load_robot, progress, robot_option
@@ -29,7 +29,8 @@ def register(sub: Any) -> None:
     sp.add_argument("--loaded", nargs="+", required=True, help="current recordings with the payload")
     sp.add_argument("--mass", type=float, required=True, help="the payload's weighed mass [kg]")
     sp.add_argument("--mass-std", type=float, default=0.0, help="standard deviation of the weighing [kg] (default 0)")
-    sp.add_argument("--method", choices=GAIN_METHODS, default="same-motion")
+    sp.add_argument("--method", choices=GAIN_METHODS, default=DEFAULT_METHOD,
+                    help=f"default {DEFAULT_METHOD} (chosen on the UR10e pair: docs/drive-gains.md)")
     sp.add_argument("--fix", nargs="+", default=[], metavar="J=VALUE",
                     help="set gain J from a datasheet instead of identifying it [N·m/A]")
     sp.add_argument("--side", choices=("motor", "joint"),
@@ -77,9 +78,13 @@ def run(args: argparse.Namespace) -> int:
     empty = [checked(read_recording(p, robot, convention=args.convention), robot) for p in args.empty]
     loaded = [checked(read_recording(p, robot, convention=args.convention), robot) for p in args.loaded]
     progress(f"identifying the drive gains ({args.method})")
-    res = drive_gains(robot, empty, loaded, args.mass, method=args.method, fix=fix, mass_std=args.mass_std,
-                      side=args.side, offsets=not args.no_offsets, flag_pct=args.flag_pct,
-                      position_tol=args.position_tol, cutoff=args.cutoff, decimate_to=args.decimate_to)
+    try:
+        res = drive_gains(robot, empty, loaded, args.mass, method=args.method, fix=fix, mass_std=args.mass_std,
+                          side=args.side, offsets=not args.no_offsets, flag_pct=args.flag_pct,
+                          position_tol=args.position_tol, cutoff=args.cutoff, decimate_to=args.decimate_to)
+    except PlausibilityError as exc:
+        settle(exc.flags)  # the same errors, with the options that address them
+        raise
     flags = settle(gain_flags(res.gains.gains, res.gains.std, res.fixed, res.rel_std_pct, res.flag_pct))
     print(res.table())
     if flags:

@@ -4,6 +4,8 @@ from __future__ import annotations
 import argparse
 from typing import Any
 
+import numpy as np
+
 from rx90sym.files import write_json
 from identify import read_recording
 from identify.io.gains import apply_gains, read_gains
@@ -91,7 +93,8 @@ def run(args: argparse.Namespace) -> int:
                   a_priori=args.a_priori, constrained=args.constrained, mass=args.mass,
                   mass_tol=args.mass_tol if args.mass_tol is not None else 0.05,
                   position_tol=args.position_tol if args.position_tol is not None else POSITION_TOLERANCE)
-    flags += settle(payload_flags(res.names, res.values, res.std))
+    std = res.std if res.bootstrap_std is None else np.fmax(res.std, res.bootstrap_std)
+    flags += settle(payload_flags(res.names, res.values, std))
     print(res.table())
     if flags:
         print(flag_lines(flags))
