@@ -69,6 +69,8 @@ class Robot:
     sigma_j = 0 revolute (q_j = theta_j - theta offset), 1 prismatic. Lengths in m, angles in rad.
     gravity: a number g [m/s^2] (gravity along -z0) or the gravity vector in frame 0.
     urdf: for a robot imported from a URDF, its chain (rx90sym.urdf.UrdfChain), else None.
+    nominal: the robot file's [nominal] table (rx90sym.nominal_table.NominalTable), else None.
+    flange: 4x4 pose of the maker's tool flange frame in frame n (robot file's [flange]), else None.
     """
 
     name: str
@@ -92,6 +94,8 @@ class Robot:
     description: str = ""
     source: str = ""
     urdf: Any = None
+    nominal: Any = None
+    flange: np.ndarray | None = None
 
     @property
     def gravity_vector(self) -> np.ndarray:
