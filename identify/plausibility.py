@@ -19,6 +19,9 @@ Errors (the likely cause is named):
   q1 and q2 swapped leaves 94 %, 75 % and 59 % on joints 1-3. A joint whose torque RMS is below
   :data:`RESIDUAL_FLOOR` of its torque limit is not judged (its torque may be mostly noise).
 
+- ``static_gravity`` — at rest, a joint's torque is not the gravity of the robot's nominal
+  parameters (``[nominal]``) within a factor :data:`GRAVITY_RATIO` (or of the opposite sign).
+
 Warnings:
 
 - ``gain_negative`` — a negative gain (half of the gains at most): that motor's current sign may be
@@ -42,7 +45,7 @@ import numpy as np
 import rx90sym
 
 __all__ = ["Flag", "PlausibilityError", "raise_errors", "gain_flags", "payload_flags", "torque_scale_flags",
-           "residual_flags", "estimate_flags", "margin_flags", "TORQUE_LOW", "TORQUE_HIGH", "RESIDUAL_SHARE", "RESIDUAL_FLOOR",
+           "residual_flags", "estimate_flags", "margin_flags", "static_gravity_flags", "TORQUE_LOW", "TORQUE_HIGH", "RESIDUAL_SHARE", "RESIDUAL_FLOOR",
            "SIGMAS"]
 
 #: Every joint's torque peak below this fraction of its limit: torques of the wrong scale.
@@ -54,6 +57,13 @@ RESIDUAL_SHARE = 0.5
 #: A joint whose torque RMS is below this fraction of its torque limit is not judged by
 #: RESIDUAL_SHARE: its torque may be mostly noise (the UR10 twin's wrist: ~1e-3 of the limits).
 RESIDUAL_FLOOR = 0.01
+#: Rest for the static check: every joint slower than this, rad/s; at least REST_SAMPLES samples.
+REST_SPEED = 0.01
+REST_SAMPLES = 25
+#: Joints judged by the static check: nominal gravity RMS at least this fraction of the limit.
+GRAVITY_SHARE = 0.1
+#: Measured / nominal gravity at rest outside [1/GRAVITY_RATIO, GRAVITY_RATIO] is refused.
+GRAVITY_RATIO = 3.0
 #: How many sigma below zero a non-negative quantity may lie before it is flagged.
 SIGMAS = 3.0
 # Plain parameters that physics wants >= 0: masses, diagonal inertias, rotor inertias, viscous
@@ -217,3 +227,45 @@ def margin_flags(margin: float) -> list[Flag]:
         return []
     return [Flag("consistency_margin_negative", "warning", f"no physical standard parameters reproduce the "
                  f"estimate (consistency margin {margin:.3g})", "use the physically consistent fit")]
+
+
+def static_gravity_flags(recordings: Sequence, robot: rx90sym.Robot, nominal: dict | None) -> list[Flag]:
+    """Torques at rest against the gravity of the robot's nominal parameters ([nominal] table).
+
+    At rest (every joint slower than REST_SPEED) the torque is gravity (and the spring) plus at
+    most the Coulomb friction; on each joint whose nominal gravity RMS is at least GRAVITY_SHARE of
+    its torque limit, the least-squares scale s of measured on nominal must lie in
+    [1/GRAVITY_RATIO, GRAVITY_RATIO]; s < 0 is a wrong sign. Measured on the UR10e at rest
+    (ur-20_01_17-p4.csv, the source's gains): s = 0.875 on joint 3 (the only joint judged).
+    No nominal parameters (None): no check.
+    """
+    if not nominal or not recordings:
+        return []
+    chi = robot.parameter_vector({k: v for k, v in nominal.items() if k in robot.parameter_names
+                                  and not k.startswith(("FS", "FV", "OFF"))}, strict=False)
+    Qs, Ts = [], []
+    for rec in recordings:
+        if rec.tau is None or len(rec.t) < 3:
+            continue
+        dq = rec.dq if rec.dq is not None else np.gradient(np.asarray(rec.q), np.asarray(rec.t), axis=0)
+        rest = np.all(np.abs(dq) < REST_SPEED, axis=1)
+        Qs.append(np.asarray(rec.q)[rest])
+        Ts.append(np.asarray(rec.tau)[rest])
+    Q = np.concatenate(Qs) if Qs else np.zeros((0, robot.n))
+    if len(Q) < REST_SAMPLES:
+        return []
+    Z = np.zeros_like(Q)
+    g = robot.regressor_batch(Q, Z, Z) @ chi
+    if robot.spring is not None:
+        g = g + robot.spring_torque_batch(Q)[:, :, 0]
+    tau = np.concatenate(Ts)
+    judged = np.sqrt(np.mean(g ** 2, axis=0)) >= GRAVITY_SHARE * np.asarray(robot.limits.tau_max, dtype=float)
+    flags = []
+    for j in np.flatnonzero(judged):
+        s = float(tau[:, j] @ g[:, j] / (g[:, j] @ g[:, j]))
+        if not 1 / GRAVITY_RATIO <= s <= GRAVITY_RATIO:
+            cause = "the torque sign" if s < 0 else "the robot, the units or the gains"
+            flags.append(Flag("static_gravity", "error", f"at rest, joint {j + 1}'s torque is {s:.3g} x the gravity of "
+                              f"robot {robot.name}'s nominal parameters ({len(Q)} samples at rest; expected "
+                              f"{1 / GRAVITY_RATIO:.2g}..{GRAVITY_RATIO:g})", f"check {cause}", joint=int(j) + 1))
+    return flags

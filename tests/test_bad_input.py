@@ -19,7 +19,7 @@ import rx90sym
 from identify.app.cli import main
 from identify.io.recordings import write_recording
 from identify.plausibility import (RESIDUAL_SHARE, Flag, estimate_flags, gain_flags, payload_flags,
-                                   residual_flags, torque_scale_flags)
+                                   residual_flags, static_gravity_flags, torque_scale_flags)
 from rx90sym.twin import CurrentSensor
 
 from motions import multisine
@@ -250,3 +250,18 @@ def test_torque_scale_and_residual_flags(rx90):
     limit = np.full(6, 100.0)  # joint 2's torque RMS (1 N m) is 1 % of it: judged; at 0.5 %, not
     assert residual_flags(rms * [0.2, 0.9, 0.2, 0.2, 0.2, 0.2], rms, limit)[0].joint == 2
     assert residual_flags(rms * [0.2, 0.9, 0.2, 0.2, 0.2, 0.2], rms, 2 * limit) == []
+
+
+def test_static_torques_are_checked_against_the_nominal_gravity(rx90):
+    """At rest, the twin's torques are the gravity of its true parameters: within the nominal
+    table's factor; joint 2's torque negated is refused, a robot without nominal table not judged."""
+    t = np.arange(250) / 250.0
+    q = np.tile(np.array([0.3, -1.0, 2.0, 0.2, 0.8, 0.1]), (t.size, 1))
+    rest = rx90sym.twin.simulate(rx90, (t, q, 0 * q, 0 * q), noise="quantised", seed=0)
+    nominal = rx90sym.nominal_parameters(rx90)
+    assert static_gravity_flags([rest], rx90, nominal) == []
+    tau = rest.tau.copy()
+    tau[:, 1] *= -1
+    flags = static_gravity_flags([dataclasses.replace(rest, tau=tau)], rx90, nominal)
+    assert [(f.code, f.joint) for f in flags] == [("static_gravity", 2)] and "sign" in flags[0].action
+    assert static_gravity_flags([dataclasses.replace(rest, tau=tau)], rx90, None) == []

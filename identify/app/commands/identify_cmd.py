@@ -20,7 +20,7 @@ from identify.io.gains import apply_gains, read_gains
 from identify.observation.matrix import DEFAULT_MIN_VELOCITY, DEFAULT_REST, REST_POLICIES
 from identify.real_fit import fit_recordings
 
-from identify.plausibility import estimate_flags, residual_flags, torque_scale_flags
+from identify.plausibility import estimate_flags, residual_flags, static_gravity_flags, torque_scale_flags
 
 from ..flags import checked, flag_lines, given_gain_flags, settle
 from ..common import (UsageError, check_output, convention_option, progress, robot_option, robot_with_spring,
@@ -148,6 +148,7 @@ def run(args: argparse.Namespace) -> int:
     flags = given_gain_flags(gains) if gains is not None else []
     recs = read_recordings(args.recordings, robot, args.convention, gains)
     flags += settle(torque_scale_flags([r.tau for r in recs if r.tau is not None], robot))
+    flags += settle(static_gravity_flags(recs, robot, rx90sym.nominal_parameters(robot)))
     val_rec = read_recordings([args.validate], robot, args.convention, gains)[0] if args.validate else None
     decimate_to = None if (args.no_decimate or args.decimate_to == 0) else args.decimate_to
     min_velocity = args.min_velocity or None
