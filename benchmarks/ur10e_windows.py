@@ -23,11 +23,9 @@ Usage: PYTHONPATH=. python benchmarks/ur10e_windows.py [--data DIR]   (~1 min)
 from __future__ import annotations
 
 import argparse
-import importlib.util
 import sys
 import time
 from pathlib import Path
-from types import ModuleType
 
 import numpy as np
 
@@ -39,14 +37,8 @@ from identify.signal.pairing import pair_runs
 WINDOWS = 4
 
 
-def _sibling(name: str) -> ModuleType:
-    spec = importlib.util.spec_from_file_location(name, Path(__file__).with_name(f"{name}.py"))
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    return module
-
-
-ug = _sibling("ur10e_gains")
+sys.path.insert(0, str(Path(__file__).resolve().parent))  # the sibling benchmark's loader and constants
+import ur10e_gains as ug  # noqa: E402
 
 
 def window_masses(robot, empty, loaded, gains: np.ndarray, method: int) -> dict:
