@@ -95,6 +95,12 @@ class Flag:
         return {"code": self.code, "severity": self.severity, "joint": self.joint, "parameter": self.parameter,
                 "message": self.message, "action": self.action}
 
+    @classmethod
+    def from_json(cls, d: dict) -> "Flag":
+        """The flag of :meth:`to_json` (a fit file's ``flags``)."""
+        return cls(str(d["code"]), str(d["severity"]), str(d["message"]), str(d["action"]),
+                   None if d.get("joint") is None else int(d["joint"]), d.get("parameter"))
+
     def line(self) -> str:
         return f"{self.message}: {self.action}"
 
