@@ -62,6 +62,7 @@ def main() -> None:
     parser.add_argument("--duration", type=float, default=20.0)
     parser.add_argument("--harmonics", type=int, default=5)
     parser.add_argument("--only", nargs="*", default=None, help="run only these configurations")
+    parser.add_argument("--progress", action="store_true", help="a line per start on stderr")
     parser.add_argument("--json", help="also write the figures to this JSON file")
     args = parser.parse_args()
 
@@ -82,7 +83,7 @@ def main() -> None:
         options = OptimiserOptions(criterion=objective)
         t0 = time.perf_counter()
         traj = excitation.optimise_model(model, excitation.FourierSeries(args.duration, args.harmonics),
-                                         seed=args.seed, starts=1, options=options, progress=False)
+                                         seed=args.seed, starts=1, options=options, progress=args.progress)
         elapsed = time.perf_counter() - t0
         rows.append({"config": name, "time_s": elapsed, "iterations": traj.info.iterations,
                      "cond": traj.cond, "criterion": traj.info.criterion_value,
