@@ -241,6 +241,8 @@ def find_centre(model: ExcitationModel, margins: Margins = Margins(), slack: flo
                                           for k in range(1, 6)]):
         sol = solver(x0=np.clip(guess, lo, hi), lbx=lo, ubx=hi, lbg=np.concatenate(lbg), ubg=np.inf)
         x = np.asarray(sol["x"]).ravel()
+        turns = np.round((x - centre) / (2.0 * np.pi))  # the same pose one turn nearer the centre
+        x = np.where((x - 2.0 * np.pi * turns >= lo) & (x - 2.0 * np.pi * turns <= hi), x - 2.0 * np.pi * turns, x)
         if not pose_violations(model, x, margins) and _cover_ok(model, x, margins.clearance):
             if best is None or np.sum(((x - centre) / scale) ** 2) < np.sum(((best - centre) / scale) ** 2):
                 best = x
