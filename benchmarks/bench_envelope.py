@@ -98,7 +98,11 @@ def main() -> None:
     parser.add_argument("--only", nargs="*", default=None, help="run only these configurations")
     parser.add_argument("--progress", action="store_true", help="a line per start on stderr")
     parser.add_argument("--json", help="also write the figures to this JSON file")
+    parser.add_argument("--every-robot", action="store_true", help="default rx90 excite on every robot")
     args = parser.parse_args()
+    if args.every_robot:
+        every_robot(args.duration)
+        return
 
     import excitation
     import rx90sym
