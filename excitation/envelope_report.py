@@ -98,15 +98,15 @@ def figures(s: EnvelopeSeries) -> list[tuple[str, str, Any]]:
     ax[1].plot(s.t, s.velocity, label="velocity")
     ax[1].plot(s.t, s.acceleration, label="acceleration")
     ax[1].axhline(1.0, color="r", ls="--")
-    ax[1].set_ylabel("max over joints / limit")
+    ax[1].set_ylabel("joints / limit")
     ax[1].legend(fontsize=7)
     ax[2].plot(s.t, s.height)
     ax[2].axhline(0.0, color="r", ls="--")
-    ax[2].set_ylabel("lowest point above floor [m]")
+    ax[2].set_ylabel("above floor [m]")
     if np.all(np.isfinite(s.clearance)):
         ax[3].plot(s.t, s.clearance)
         ax[3].axhline(0.0, color="r", ls="--")
-    ax[3].set_ylabel("smallest clearance [m]")
+    ax[3].set_ylabel("clearance [m]")
     ax[3].set_xlabel("t [s]")
     return [("fig-tool-path", "Tool point path, projections in frame 0", path),
             ("fig-envelope-time", "Speeds, joint limits, height and clearance along time (limits dashed)", timeline)]

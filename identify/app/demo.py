@@ -52,7 +52,8 @@ def run_demo(out: str | Path = "demo-output", quick: bool = False) -> int:
     truth_std = rx90sym.twin.default_parameters(robot)
     chi = robot.parameter_vector(truth_std)
     truth = dict(zip(bp.names, bp.beta(chi)))
-    _say(f"[1/6] model: {robot.name}, {len(robot.parameter_names)} standard, {bp.nb} base parameters")
+    _say(f"[1/6] model: {robot.name} ({robot.source}; {robot.n} joints), {len(robot.parameter_names)} "
+         f"standard, {bp.nb} base parameters")
 
     duration = 10.0 if quick else 20.0
     _say(f"[2/6] optimising a {duration:g} s excitation trajectory (IPOPT, exact derivatives)...")

@@ -60,8 +60,8 @@ def register(sub: Any) -> None:
                     help="do not keep the link capsules apart (default: they are; the robot's own "
                          "capsules, docs/excitation.md)")
     sp.add_argument("--floor", type=float, default=None,
-                    help="floor height z [m, base frame] no moving point may go below (with the mounting "
-                         "plane's margin, the higher of the two)")
+                    help="floor height [m above the robot's mounting plane] no moving point may go "
+                         "below (default: the mounting margin, 0.05 m)")
     sp.add_argument("--controller", choices=("ur", "franka"), default=None,
                     help="write --out at this controller's rate and form (UR e-Series 500 Hz, see "
                          "--controller-rate; Franka 1 kHz, jerk checked); default 250 Hz")
