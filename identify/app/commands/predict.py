@@ -16,7 +16,7 @@ from identify.fitting import load_fit
 from identify.observation.stream import DEFAULT_BLOCK
 from identify.stream_fit import predict_streamed
 
-from ..common import check_output, progress, read_recordings
+from ..common import announce_robot, check_output, progress, read_recordings
 from .identify_runs import block_option, streamed
 
 
@@ -49,6 +49,7 @@ def run(args: argparse.Namespace) -> int:
     for out in (args.out, args.json):
         check_output(out)
     f = load_fit(args.identification, args.robot)
+    announce_robot(f.robot, "from --robot" if args.robot else "recorded by the identification")
     warning = f.model.check_robot(f.robot)
     if warning:
         progress(f"warning: {warning}")
