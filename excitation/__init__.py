@@ -22,6 +22,9 @@ _EXPORTS = {
     "optimise": "excitation.api",
     "optimise_payload": "excitation.api",
     "random_trajectory": "excitation.api",
+    "safe_model": "excitation.api",
+    "Envelope": "excitation.envelope",
+    "envelope_lines": "excitation.envelope:summary_lines",
     "Box": "excitation.collision",
     "CollisionModel": "excitation.collision",
     "LimitReport": "excitation.constraints",
@@ -50,13 +53,14 @@ _EXPORTS = {
     "Trajectory": "excitation.trajectory",
     "ViaPointSpline": "excitation.via_points",
 }
+_SUBMODULES = ("envelope",)
 
 __all__ = [
     "optimise", "random_trajectory", "condition_number", "stacked_regressor", "observation_matrix",
     "FourierSeries", "ViaPointSpline", "Trajectory", "SolveInfo", "OptimiserOptions", "Margins",
     "LimitReport", "check_limits", "read_trajectory", "ExcitationModel", "JointLimits", "model_from_robot",
     "optimise_model", "random_feasible", "plot_trajectory", "plot_limit_usage",
-    "collision_model", "optimise_payload", "Box", "CollisionModel", "DEFAULT_CRITERION", "FALLBACK_CRITERION", "make_objective", "dask_client", "OBJECTIVES", "Objective", "reference_magnitudes",
+    "collision_model", "optimise_payload", "Envelope", "envelope", "envelope_lines", "safe_model", "Box", "CollisionModel", "DEFAULT_CRITERION", "FALLBACK_CRITERION", "make_objective", "dask_client", "OBJECTIVES", "Objective", "reference_magnitudes",
 ]
 
-lazy_package(__name__, _EXPORTS)
+lazy_package(__name__, _EXPORTS, _SUBMODULES)

@@ -15,8 +15,9 @@ __all__ = ["lazy_package"]
 
 
 def lazy_package(name: str, exports: Mapping[str, str], submodules: tuple[str, ...] = ()) -> None:
-    """Give package ``name`` the attributes ``exports`` (public name -> module it is defined in)
-    and ``submodules`` (imported on first use), resolved when first read."""
+    """Give package ``name`` the attributes ``exports`` (public name -> module it is defined in,
+    or "module:attribute" when the public name is an alias) and ``submodules`` (imported on first
+    use), resolved when first read."""
     package = sys.modules[name]
     table = dict(exports)
 
@@ -27,7 +28,8 @@ def lazy_package(name: str, exports: Mapping[str, str], submodules: tuple[str, .
             source = table.get(attr)
             if source is None:
                 raise AttributeError(f"module {name!r} has no attribute {attr!r}")
-            value = getattr(importlib.import_module(source), attr)
+            module, _, original = source.partition(":")
+            value = getattr(importlib.import_module(module), original or attr)
             types.ModuleType.__setattr__(self, attr, value)
             return value
 
