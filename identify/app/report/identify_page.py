@@ -79,7 +79,7 @@ def identify_summary(record: Mapping[str, Any]) -> Summary:
     data = record.get("data")
     flags = _flags(record, data)
     robot_file = Path(str(model["robot_file"])).name if model.get("robot_file") else "built in memory"
-    facts = [("Robot", f"{record.get('robot', '')} (file {robot_file}; full path in the processing record)"),
+    facts = [("Robot", f"{record.get('robot', '')} (file {robot_file})"),
              ("Method", f"{record.get('method', '')}, {len(record.get('parameters') or [])} parameters"),
              *data_facts(data, model),
              ("Conditioning", f"cond(W) = {fmt(record.get('cond'), 4)} (unweighted {fmt(record.get('cond_unweighted'), 4)})"),
