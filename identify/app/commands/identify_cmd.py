@@ -213,18 +213,22 @@ def _write_report(path: str, f: Fit, recs: list) -> None:
     """The HTML report from the fit file's content (what --json writes) plus the recordings' extent."""
     from ..report.writers import write_identify_report
 
-    record = {**f.to_json(), "data": data_record(recs, f.observation)}
+    record = {**f.to_json(), "data": data_record(recs, f.observation, f.validation)}
     write_identify_report(path, f.robot, record, f.result, recs[0], f.validation, f.predict(recs[0]),
                           _spring_text(f, recs))
 
 
-def data_record(recs: list, obs: Any) -> dict:
-    """What was fitted: per recording its source, samples, duration [s] and recorded rate [Hz]
-    (1 / mean period); the share of samples where each joint moves (after filtering)."""
-    rows = [{"source": src, "samples": int(len(r.t)), "duration_s": float(r.t[-1] - r.t[0]),
-             "rate_hz": float((len(r.t) - 1) / (r.t[-1] - r.t[0]))} for r, src in zip(recs, obs.sources)]
+def data_record(recs: list, obs: Any, validation: Any = None) -> dict:
+    """What was fitted: per recording its source, samples, first and last time [s], duration [s] and
+    recorded rate [Hz] (1 / mean period); the share of samples where each joint moves (after
+    filtering); the held-out samples' first and last time [s]."""
+    rows = [{"source": src, "samples": int(len(r.t)), "t_first_s": float(r.t[0]), "t_last_s": float(r.t[-1]),
+             "duration_s": float(r.t[-1] - r.t[0]), "rate_hz": float((len(r.t) - 1) / (r.t[-1] - r.t[0]))}
+            for r, src in zip(recs, obs.sources)]
     share = None if obs.moving_fraction is None else [float(v) for v in obs.moving_fraction]
-    return {"recordings": rows, "moving_fraction": share}
+    held = None if validation is None else {"source": validation.source, "t_first_s": float(validation.t[0]),
+                                            "t_last_s": float(validation.t[-1])}
+    return {"recordings": rows, "moving_fraction": share, "heldout": held}
 
 
 def _write_urdf(args: argparse.Namespace, f: Fit) -> None:
