@@ -17,7 +17,8 @@ import numpy as np
 import rx90sym
 from rx90sym.files import write_json
 
-from identify.estimation.bootstrap import segment_bootstrap_std
+from identify.estimation.bootstrap import BLOCK_S, DRAWS, segment_bootstrap_std
+from identify.plausibility import Flag
 from identify.estimation.results import IdentificationResult
 from identify.fit_file import SCHEMA_VERSION, FitModel, gains_of, read_fit_file, robot_of
 from identify.io.gains import DriveGains
@@ -29,9 +30,9 @@ from identify.validation import Validation, predict
 __all__ = ["METHODS", "Bootstrap", "Fit", "fit", "load_fit"]
 
 METHODS = ("ols", "wls", "consistent")
-#: Segment bootstrap: block length [s] (longer than the residual's correlation) and number of draws.
-BOOTSTRAP_BLOCK_S = 0.5
-BOOTSTRAP_DRAWS = 200
+#: Segment bootstrap: block length [s] and number of draws (the library's one bootstrap).
+BOOTSTRAP_BLOCK_S = BLOCK_S
+BOOTSTRAP_DRAWS = DRAWS
 
 
 @dataclass(frozen=True, eq=False)
@@ -74,7 +75,8 @@ class Fit:
     base: the base parameters (columns) used; observation: W, Y and notes (None when loaded);
     delay_estimate: the lag search (None when not run or loaded); delay_estimate_s [s];
     spring: how the spring entered (JSON entry); bootstrap, essential, validation: None until
-    asked (:meth:`bootstrapped`, :meth:`with_essential`, :meth:`validated`).
+    asked (:meth:`bootstrapped`, :meth:`with_essential`, :meth:`validated`); flags: the
+    plausibility warnings of the fit (identify.plausibility, :meth:`with_flags`).
     """
 
     robot: rx90sym.Robot
@@ -89,6 +91,7 @@ class Fit:
     bootstrap: Bootstrap | None = None
     essential: IdentificationResult | None = None
     validation: Validation | None = None
+    flags: tuple[Flag, ...] = ()
 
     # ------------------------------------------------------------ what the fit used
     @property
@@ -135,6 +138,10 @@ class Fit:
         """This fit with its validation on ``recording`` recorded (saved in the file)."""
         return replace(self, validation=self.validate(recording))
 
+    def with_flags(self, flags: Sequence[Flag]) -> "Fit":
+        """This fit with its plausibility flags recorded (saved in the file's ``flags``)."""
+        return replace(self, flags=tuple(flags))
+
     def with_essential(self) -> "Fit":
         """This fit with its essential parameters (eqs. 16-17) computed."""
         from identify.estimation.essential import essential_parameters
@@ -161,7 +168,8 @@ class Fit:
                     "delay_estimate_s": self.delay_estimate_s, "model": self.model.to_json(),
                     "essential": self.essential.to_dict() if self.essential is not None else {},
                     "validation": self.validation.to_dict() if self.validation is not None else {},
-                    "schema_version": SCHEMA_VERSION, "processing": self.processing.to_json()})
+                    "schema_version": SCHEMA_VERSION, "processing": self.processing.to_json(),
+                    "flags": [f.to_json() for f in self.flags]})
         return out
 
     def save(self, path: str | Path) -> Path:
@@ -179,6 +187,7 @@ class Fit:
             result = IdentificationResult.from_dict(data)
             essential = IdentificationResult.from_dict(data["essential"]) if data.get("essential") else None
             bootstrap = Bootstrap.from_json(data)
+            flags = tuple(Flag.from_json(f) for f in data.get("flags", []))
         except (KeyError, TypeError, ValueError) as exc:
             raise ValueError(f"{path}: {exc}".replace(f"{path}: {path}: ", f"{path}: ")) from None
         rob = robot if isinstance(robot, rx90sym.Robot) else robot_of(model, robot)
@@ -188,7 +197,7 @@ class Fit:
             rob = rob.with_options(asymmetric_coulomb=asymmetric)
         return cls(rob, result, processing, model, rx90sym.base_parameters(rob),
                    delay_estimate_s=data.get("delay_estimate_s"), spring=data.get("spring"),
-                   bootstrap=bootstrap, essential=essential)
+                   bootstrap=bootstrap, essential=essential, flags=flags)
 
 
 def load_fit(path: str | Path, robot: rx90sym.Robot | str | None = None) -> Fit:

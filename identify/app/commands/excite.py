@@ -156,12 +156,15 @@ def _report(args: argparse.Namespace, robot: rx90sym.Robot, model: Any, traj: An
     from excitation import envelope_report as er
     from excitation.robot_geometry import arm_geometry
 
-    from ..report import Section, write_report
+    from ..report.excite_page import envelope_table, excite_page
+    from ..report.figures import figure
+    from ..report.page import Section, Text, write_page
 
     series = er.along_time(robot, model, traj, arm_geometry(robot).tool_point)
-    text = "\n".join(excitation.envelope_lines(described)) + "\n\n" + er.table(series)
-    write_report(args.report, f"Excitation of {robot.name}: safety envelope",
-                 [Section("Safety envelope along the trajectory", text, tuple(er.figures(series)))])
+    envelope = Section("envelope", "Safety envelope along the trajectory", (
+        Text(tuple(excitation.envelope_lines(described))), envelope_table(er.worst(series)),
+        *(figure(i, caption, fig) for i, caption, fig in er.figures(series))))
+    write_page(args.report, excite_page({**traj.summary(), "robot": robot.name}, (), (envelope,)))
 
 
 def _check_options(args: argparse.Namespace) -> None:

@@ -16,6 +16,9 @@ from identify.fitting import Fit, fit
 from identify.io.gains import read_gains
 from identify.observation.processing import DEFAULT_MIN_VELOCITY, DEFAULT_REST, REST_POLICIES, Processing
 from identify.observation.spring_fit import SpringBase, spring_summary
+from identify.plausibility import estimate_flags, residual_flags, static_gravity_flags, torque_scale_flags
+
+from ..flags import flag_lines, given_gain_flags, settle
 
 from ..common import (UsageError, check_output, convention_option, progress, read_recordings, robot_option,
                       robot_with_spring, spring_options)
@@ -45,7 +48,7 @@ def register(sub: Any) -> None:
                         description="identify the base parameters from recordings")
     sp.set_defaults(func=run)
     sp.add_argument("recordings", nargs="+", help="recording CSV files")
-    robot_option(sp)
+    robot_option(sp, None, "the robot the recordings' '# robot:' line names")
     add_recording_options(sp)
     spring_options(sp)
     sp.add_argument("--offsets", action="store_true", help="add per-joint torque offsets OFF1..OFFn")
@@ -77,7 +80,7 @@ def register(sub: Any) -> None:
 
 
 def _robot(args: argparse.Namespace) -> tuple[rx90sym.Robot, Any]:
-    robot, spring_model = robot_with_spring(args)
+    robot, spring_model = robot_with_spring(args, args.recordings)
     if args.coulomb_sign is not None:
         if robot.coupling is None:
             raise UsageError(f"--coulomb-sign: robot {robot.name!r} has no coupled joints")
@@ -136,12 +139,16 @@ def run(args: argparse.Namespace) -> int:
     sb = attach_spring(robot, spring_model, args.validate, args.method)
     gains = read_gains(args.gains, robot) if args.gains else None
     progress(f"reading {len(args.recordings)} recording(s)")
+    flags = given_gain_flags(gains) if gains is not None else []
     recs = read_recordings(args.recordings, robot, args.convention, gains)
+    flags += settle(torque_scale_flags([r.tau for r in recs if r.tau is not None], robot))
+    flags += settle(static_gravity_flags(recs, robot, rx90sym.nominal_parameters(robot)))
     val_rec = read_recordings([args.validate], robot, args.convention, gains)[0] if args.validate else None
     progress(f"identifying ({args.method}) on {sum(len(r.t) for r in recs)} samples")
     result = fit(robot, recs, processing_of(args, sb is None), args.method, base=sb, gains=gains,
                  convention=args.convention, spring_source=args.spring)
     result = result.bootstrapped(args.bootstrap_seed)
+    result = result.with_flags([*flags, *_fit_flags(result, args.method)])
     if args.essential:
         result = result.with_essential()
     if val_rec is not None:
@@ -156,6 +163,18 @@ def run(args: argparse.Namespace) -> int:
     return 0
 
 
+def _fit_flags(f: Fit, method: str) -> list:
+    """A joint the model does not explain stops the run; non-physical WLS estimates are flagged
+    (judged with the larger of eq. 13's and the bootstrap's sigma)."""
+    obs, res = f.observation, f.result
+    torque_rms = np.array([np.sqrt(np.mean(obs.Y[obs.joint == j] ** 2)) if np.any(obs.joint == j) else np.inf
+                           for j in range(len(res.residual_rms))])
+    flags = settle(residual_flags(res.residual_rms, torque_rms, f.robot.limits.tau_max[:torque_rms.size]))
+    if method != "consistent":
+        flags += settle(estimate_flags(res.names, res.values, np.fmax(res.std, f.bootstrap.std)))
+    return flags
+
+
 def _print_fit(f: Fit, recs: list, auto_delay: bool) -> None:
     obs, res = f.observation, f.result
     progress(f.delay_estimate.summary() + ("" if auto_delay else " (not compensated: --delay auto does)"))
@@ -168,6 +187,8 @@ def _print_fit(f: Fit, recs: list, auto_delay: bool) -> None:
             print(f"note: {note}")
     print(res.table())
     print(f.bootstrap.table(res))
+    if f.flags:
+        print(flag_lines(f.flags))
     print(f"\n{_spring_text(f, recs)}")
     if f.essential is not None:
         print()
@@ -182,12 +203,21 @@ def _spring_text(f: Fit, recs: list) -> str:
 
 
 def _write_report(path: str, f: Fit, recs: list) -> None:
-    from ..report import Section, identification_sections, write_report
+    """The HTML report from the fit file's content (what --json writes) plus the recordings' extent."""
+    from ..report.writers import write_identify_report
 
-    sections = identification_sections(f.robot, f.result, recs, validation=f.validation, essential=f.essential,
-                                       fit_prediction=f.predict(recs[0]), model=f.model,
-                                       extra_tables=[f.bootstrap.table(f.result)])
-    write_report(path, f"Identification of {f.robot.name}", [*sections, Section("Spring", _spring_text(f, recs))])
+    record = {**f.to_json(), "data": data_record(recs, f.observation)}
+    write_identify_report(path, f.robot, record, f.result, recs[0], f.validation, f.predict(recs[0]),
+                          _spring_text(f, recs))
+
+
+def data_record(recs: list, obs: Any) -> dict:
+    """What was fitted: per recording its source, samples, duration [s] and recorded rate [Hz]
+    (1 / mean period); the share of samples where each joint moves (after filtering)."""
+    rows = [{"source": src, "samples": int(len(r.t)), "duration_s": float(r.t[-1] - r.t[0]),
+             "rate_hz": float((len(r.t) - 1) / (r.t[-1] - r.t[0]))} for r, src in zip(recs, obs.sources)]
+    share = None if obs.moving_fraction is None else [float(v) for v in obs.moving_fraction]
+    return {"recordings": rows, "moving_fraction": share}
 
 
 def _write_urdf(args: argparse.Namespace, f: Fit) -> None:
