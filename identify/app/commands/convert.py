@@ -14,11 +14,14 @@ from __future__ import annotations
 import argparse
 from typing import Any
 
+<<<<<<< HEAD
 from identify.io.blocks import count_rows
 from identify.io.columns import parse_columns
 from identify.io.log_blocks import DEFAULT_LOG_BLOCK, convert_log
 from identify.io.logs import read_log
 from identify.io.recordings import read_motor_recording, write_recording
+=======
+>>>>>>> main
 
 from ..common import UsageError, check_output, convention_option, load_robot, progress, robot_option
 from .identify_runs import block_option
@@ -82,6 +85,9 @@ def _robot(args: argparse.Namespace):
 
 
 def run(args: argparse.Namespace) -> int:
+    from identify.io.logs import read_log
+    from identify.io.recordings import write_recording
+
     if args.log is None:
         return _run_motor(args)
     mixed = _given(args, _MOTOR_OPTIONS)
@@ -131,7 +137,13 @@ def _print_report(args: argparse.Namespace, log: dict, what_else: str) -> None:
 
 
 def _run_motor(args: argparse.Namespace) -> int:
+<<<<<<< HEAD
     extra = _given(args, _LOG_OPTIONS) + (["--block"] if args.block != DEFAULT_LOG_BLOCK else [])
+=======
+    from identify.io.recordings import read_motor_recording, write_recording
+
+    extra = _given(args, _LOG_OPTIONS)
+>>>>>>> main
     if extra:
         raise UsageError(f"{', '.join(extra)} belong to the log form (give LOG.csv)")
     missing = [f for f, v in (("--motor-positions", args.motor_positions), ("--motor-torques", args.motor_torques),

@@ -12,9 +12,12 @@ from typing import Any
 import numpy as np
 
 from rx90sym.files import atomic_write, write_json
+<<<<<<< HEAD
 from identify.fitting import load_fit
 from identify.observation.stream import DEFAULT_BLOCK
 from identify.stream_fit import predict_streamed
+=======
+>>>>>>> main
 
 from ..common import announce_robot, check_output, progress, read_recordings
 from .identify_runs import block_option, streamed
@@ -46,6 +49,8 @@ def write_prediction(path: str, val: Any) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
+    from identify.fitting import load_fit
+
     for out in (args.out, args.json):
         check_output(out)
     f = load_fit(args.identification, args.robot)
