@@ -252,7 +252,7 @@ def fit_in_blocks(robot: rx90sym.Robot, recordings: Sequence[Any], processing: A
     from identify.fitting import BOOTSTRAP_BLOCK_S, BOOTSTRAP_DRAWS, Bootstrap, Fit, _spring_label
     from identify.fit_file import FitModel
     from identify.observation.processing import Processing
-    from identify.observation.spring_fit import SpringBase, spring_summary
+    from identify.observation.spring_fit import BaseWithSpring, spring_summary
 
     p = processing if processing is not None else Processing()
     block = DEFAULT_BLOCK if block is None else int(block)
@@ -265,7 +265,7 @@ def fit_in_blocks(robot: rx90sym.Robot, recordings: Sequence[Any], processing: A
                         rest=p.rest, min_velocity=p.min_velocity, spring=spring_source or _spring_label(robot, base),
                         cutoff_hz=sf.cutoff, decimate_to_hz=p.decimate_to, rate_hz=sf.rate, delay_s=sf.delay)
     angles = [SimpleNamespace(q=sf.q_range)]  # what the spring summary reads: the range visited
-    spring = spring_summary(robot, base if isinstance(base, SpringBase) else None, sf.result, angles)[0]
+    spring = spring_summary(robot, base if isinstance(base, BaseWithSpring) else None, sf.result, angles)[0]
     boot = Bootstrap(sf.bootstrap_std, sf.bootstrap_block / sf.rate, spec.draws, spec.seed)
     found = sf.delay_estimate
     return Fit(robot, sf.result, p, model, base, None, found, found.delay if found is not None else None, spring,

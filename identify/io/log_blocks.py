@@ -25,6 +25,7 @@ import rx90sym
 from rx90sym.files import atomic_write
 from rx90sym.recording import Recording, RecordingError
 
+from identify.io.blocks import DEFAULT_LOG_BLOCK
 from identify.io.columns import ColumnMap
 from identify.io.gains import apply_gains
 from identify.io.logs import (ABSURD, _check_header, _check_positions, _check_time, _check_velocities,
@@ -33,8 +34,6 @@ from identify.signal.resampling import interpolate
 
 __all__ = ["DEFAULT_LOG_BLOCK", "convert_log"]
 
-#: Lines per block of :func:`convert_log` (≈ 30 MB of text for a 15-column log).
-DEFAULT_LOG_BLOCK = 200_000
 #: Samples beyond a resampled block's end: the not-a-knot spline's dependence on far samples decays
 #: by ≈ 0.27 per sample, so 40 samples change an interpolated value by < 1e-20 of the signal.
 SPLINE_MARGIN = 40

@@ -23,16 +23,13 @@ import numpy as np
 
 import rx90sym
 
-from identify.io.blocks import BlockSource
+from identify.io.blocks import DEFAULT_BLOCK, BlockSource
 from identify.observation.matrix import DECIMATION_PASSBAND, automatic_cutoff, filtered_motion, shifted_torques
 from identify.signal.blocks import WelchAccumulator, decimation_margin, lowpass_margin, motion_windows
 from identify.signal.filtering import EDGE_PERIODS, cutoff_from_spectrum, decimate, decimation_plan
 
 __all__ = ["DEFAULT_BLOCK", "Piece", "Scan", "StreamSettings", "pieces", "plan_windows", "scan", "scan_all"]
 
-#: Default block: raw samples per block core (60 s at 1 kHz). Peak memory of ``rx90 identify`` on a
-#: 7-joint arm with 78 parameters is then about 0.6-0.9 GB (docs/long-logs.md), whatever the log's length.
-DEFAULT_BLOCK = 60_000
 
 
 @dataclass(frozen=True)

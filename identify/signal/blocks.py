@@ -19,7 +19,6 @@ from dataclasses import dataclass
 from functools import lru_cache
 
 import numpy as np
-from scipy import signal
 
 from identify.signal.filtering import _stages
 
@@ -40,6 +39,8 @@ def settling_samples(b: tuple[float, ...], a: tuple[float, ...], tol: float = BL
     The response is computed until its envelope (running maximum from the end) falls below ``tol``;
     the forward–backward filter's transient decays like the same response, so this is the margin.
     """
+    from scipy import signal  # imported when filtering, not when a command starts
+
     length = 1024
     while True:
         impulse = np.zeros(length)
@@ -54,6 +55,8 @@ def settling_samples(b: tuple[float, ...], a: tuple[float, ...], tol: float = BL
 
 def lowpass_margin(rate: float, cutoff: float, order: int = 4, tol: float = BLOCK_TOLERANCE) -> int:
     """Margin (samples) for the zero-phase Butterworth of :func:`identify.lowpass` at ``cutoff`` Hz."""
+    from scipy import signal
+
     b, a = signal.butter(int(order), cutoff, btype="low", fs=rate)
     return settling_samples(tuple(b), tuple(a), tol)
 
@@ -64,6 +67,8 @@ def decimation_margin(factor: int, tol: float = BLOCK_TOLERANCE) -> int:
     Stage after stage, as scipy's IIR decimation filter (Chebyshev I, order 8, 0.05 dB, cut-off
     0.8/stage) runs: a stage's margin counts in the samples of its own rate.
     """
+    from scipy import signal
+
     total, scale = 0, 1
     for stage in _stages(int(factor)):
         b, a = signal.cheby1(8, 0.05, 0.8 / stage)
@@ -137,6 +142,8 @@ class WelchAccumulator:
         if segments < 1:
             return
         used = (segments - 1) * self.step + self.nperseg
+        from scipy import signal
+
         # Column by column, as choose_cutoff computes it (same FFT calls, same rounding).
         spectra = [signal.welch(self._buffer[:used, j], fs=self.rate, window="hann", nperseg=self.nperseg,
                                 noverlap=self.nperseg - self.step, detrend="constant")

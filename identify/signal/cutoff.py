@@ -8,7 +8,6 @@
 from __future__ import annotations
 
 import numpy as np
-from scipy import signal
 
 from identify.signal._checks import _as_samples, _check_rate
 
@@ -17,6 +16,7 @@ __all__ = ["choose_cutoff", "crossover_frequencies", "cutoff_from_spectrum", "we
 
 def _band_spectrum(a: np.ndarray, rate: float, seconds: float, per_octave: int) -> tuple[np.ndarray, np.ndarray]:
     """Welch PSD of ``a`` averaged in log-spaced bands: (band centre frequencies Hz, mean PSD)."""
+    from scipy import signal  # imported when filtering, not when a command starts
     nperseg = welch_segment(a.size, rate, seconds)
     f, psd = signal.welch(a, fs=rate, window="hann", nperseg=nperseg, detrend="constant")
     return _bands(f, psd, rate, per_octave)

@@ -14,14 +14,8 @@ from __future__ import annotations
 import argparse
 from typing import Any
 
-<<<<<<< HEAD
-from identify.io.blocks import count_rows
-from identify.io.columns import parse_columns
-from identify.io.log_blocks import DEFAULT_LOG_BLOCK, convert_log
-from identify.io.logs import read_log
-from identify.io.recordings import read_motor_recording, write_recording
-=======
->>>>>>> main
+
+from identify.io.blocks import DEFAULT_LOG_BLOCK, count_rows
 
 from ..common import UsageError, check_output, convention_option, load_robot, progress, robot_option
 from .identify_runs import block_option
@@ -114,6 +108,9 @@ def _run_long(args: argparse.Namespace, robot: Any) -> int:
     if not args.out.lower().endswith(".csv"):
         raise UsageError(f"--out {args.out}: a log longer than --block ({args.block} lines) is converted block by "
                          f"block into a CSV recording")
+    from identify.io.columns import parse_columns
+    from identify.io.log_blocks import convert_log
+
     progress(f"converting the log {args.log} block by block ({args.block} lines per block)")
     log = convert_log(args.log, robot, args.columns, args.out, header=not args.no_header, rows=_rows(args.rows),
                       t_from=args.t_from, t_to=args.t_to, resample=args.resample, gains=args.gains,
@@ -137,13 +134,9 @@ def _print_report(args: argparse.Namespace, log: dict, what_else: str) -> None:
 
 
 def _run_motor(args: argparse.Namespace) -> int:
-<<<<<<< HEAD
-    extra = _given(args, _LOG_OPTIONS) + (["--block"] if args.block != DEFAULT_LOG_BLOCK else [])
-=======
     from identify.io.recordings import read_motor_recording, write_recording
 
-    extra = _given(args, _LOG_OPTIONS)
->>>>>>> main
+    extra = _given(args, _LOG_OPTIONS) + (["--block"] if args.block != DEFAULT_LOG_BLOCK else [])
     if extra:
         raise UsageError(f"{', '.join(extra)} belong to the log form (give LOG.csv)")
     missing = [f for f, v in (("--motor-positions", args.motor_positions), ("--motor-torques", args.motor_torques),

@@ -7,37 +7,26 @@ one filtering for fit and validation, reused by ``rx90 predict`` through :func:`
 from __future__ import annotations
 
 import argparse
-<<<<<<< HEAD
-from types import SimpleNamespace
-from typing import Any
-=======
 import math
+from types import SimpleNamespace
 from typing import TYPE_CHECKING, Any
->>>>>>> main
 
 import numpy as np
 
 import rx90sym
 from identify.observation.processing import DEFAULT_MIN_VELOCITY, DEFAULT_REST, REST_POLICIES, Processing
-<<<<<<< HEAD
-from identify.observation.stream import DEFAULT_BLOCK
-from identify.observation.spring_fit import SpringBase, spring_summary
-=======
->>>>>>> main
+from identify.io.blocks import DEFAULT_BLOCK
 from identify.plausibility import estimate_flags, residual_flags, static_gravity_flags, torque_scale_flags
 
 from ..flags import flag_lines, given_gain_flags, settle
 from ..common import (UsageError, check_output, convention_option, progress, read_recordings, robot_option,
                       robot_with_spring, spring_options)
-<<<<<<< HEAD
-from ..spring_output import attach_spring
+
 from .identify_runs import block_option, fit_long, streamed
-=======
 
 if TYPE_CHECKING:  # the method is imported when the command runs, not for its --help
     from identify.fitting import Fit
 
->>>>>>> main
 
 def _delay(text: str) -> str | float:
     if text == "auto":
@@ -237,14 +226,10 @@ def _print_fit(f: Fit, recs: list, auto_delay: bool) -> None:
 
 
 def _spring_text(f: Fit, recs: list) -> str:
-<<<<<<< HEAD
-    visited = recs or [SimpleNamespace(q=f.streamed.q_range)]  # a long log: its range, from the scan
-    return spring_summary(f.robot, f.base if isinstance(f.base, SpringBase) else None, f.result, visited)[1]
-=======
     from identify.observation.spring_fit import BaseWithSpring, spring_summary
 
-    return spring_summary(f.robot, f.base if isinstance(f.base, BaseWithSpring) else None, f.result, recs)[1]
->>>>>>> main
+    visited = recs or [SimpleNamespace(q=f.streamed.q_range)]  # a long log: its range, from the scan
+    return spring_summary(f.robot, f.base if isinstance(f.base, BaseWithSpring) else None, f.result, visited)[1]
 
 
 def _write_report(path: str, f: Fit, recs: list) -> None:

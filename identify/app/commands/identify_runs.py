@@ -8,12 +8,14 @@ from __future__ import annotations
 
 import argparse
 import os
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import rx90sym
-from identify.fitting import Fit, fit
 from identify.io.blocks import count_rows
-from identify.observation.processing import Processing
+
+if TYPE_CHECKING:  # for annotations only: the method is imported when a fit runs
+    from identify.fitting import Fit
+    from identify.observation.processing import Processing
 
 from ..common import progress
 
@@ -27,6 +29,8 @@ def streamed(paths: list[str], block: int, scheduler: str | None) -> bool:
 
 def fit_long(args: argparse.Namespace, robot: rx90sym.Robot, processing: Processing, base: Any, gains: Any) -> Fit:
     """The fit of ``args.recordings`` block by block (on Dask with ``--scheduler``)."""
+    from identify.fitting import fit
+
     progress(f"identifying ({args.method}) block by block ({args.block} samples per block"
              + (f", Dask scheduler {args.scheduler}" if args.scheduler else "") + ")")
     options = dict(base=base, gains=gains, convention=args.convention, spring_source=args.spring,

@@ -12,12 +12,8 @@ from typing import Any
 import numpy as np
 
 from rx90sym.files import atomic_write, write_json
-<<<<<<< HEAD
-from identify.fitting import load_fit
-from identify.observation.stream import DEFAULT_BLOCK
-from identify.stream_fit import predict_streamed
-=======
->>>>>>> main
+
+from identify.io.blocks import DEFAULT_BLOCK
 
 from ..common import announce_robot, check_output, progress, read_recordings
 from .identify_runs import block_option, streamed
@@ -59,6 +55,8 @@ def run(args: argparse.Namespace) -> int:
     if warning:
         progress(f"warning: {warning}")
     if streamed([args.recording], args.block, None):  # a long log: predicted block by block
+        from identify.stream_fit import predict_streamed
+
         val = predict_streamed(f.robot, f.result, args.recording, base=f.base,
                                block=args.block, convention=args.convention or f.model.convention, gains=f.gains,
                                **f.filtering())
