@@ -58,7 +58,7 @@ def write_log(path: Path, rec, seconds: float) -> int:
     from pyarrow import csv
 
     arm = robot()
-    q_ctrl = np.asarray(arm.to_staubli(rec.q), dtype=float)
+    q_ctrl = np.asarray(arm.to_controller(rec.q), dtype=float)
     n = rec.n_samples
     total = int(round(seconds * RATE))
     with open(path, "wb") as fh:

@@ -167,7 +167,7 @@ def test_csv_blocks_read_the_file_and_name_bad_rows(rx90, twin_empty, tmp_path):
 def test_convert_log_in_blocks_equals_the_whole_reader(rx90, twin_empty, tmp_path):
     rec = twin_empty[0]
     log = tmp_path / "log.csv"
-    q = np.asarray(rx90.to_staubli(rec.q))
+    q = np.asarray(rx90.to_controller(rec.q))
     table = np.column_stack([rec.t, q, rec.tau])
     np.savetxt(log, table, delimiter=",", fmt="%.17g",
                header=",".join(["t"] + [f"q{j}" for j in range(1, 7)] + [f"tau{j}" for j in range(1, 7)]),

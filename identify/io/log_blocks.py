@@ -134,7 +134,7 @@ def _joined(a: Recording, b: Recording) -> Recording:
 def _columns(rec: Recording, robot: rx90sym.Robot, convention: str) -> tuple[list[str], np.ndarray]:
     """Header names and the table of :func:`identify.write_recording` for one block."""
     n = robot.n
-    q = np.asarray(robot.to_staubli(rec.q), dtype=float) if convention == "controller" else rec.q
+    q = np.asarray(robot.to_controller(rec.q), dtype=float) if convention == "controller" else rec.q
     names, parts = ["t", *[f"q{j + 1}" for j in range(n)]], [rec.t[:, None], q]
     for values, prefix in ((rec.tau, "tau"), (rec.dq, "dq"), (rec.current, "i")):
         if values is not None:
