@@ -46,6 +46,7 @@ def register(sub: Any) -> None:
     sp.add_argument("--cutoff", type=float, help="Butterworth cut-off for q [Hz] (default: chosen from the data)")
     sp.add_argument("--decimate-to", type=float, default=50.0, help="rate after parallel filtering [Hz] (default 50)")
     sp.add_argument("--json", help="the gains as JSON (read by --gains of every command)")
+    sp.add_argument("--report", help="self-contained HTML report")
 
 
 def parse_fix(items: list[str], n: int) -> dict[int, float]:
@@ -71,6 +72,7 @@ def run(args: argparse.Namespace) -> int:
     if args.method == "global" and args.position_tol != POSITION_TOLERANCE:
         raise UsageError("conflicting options: --position-tol is for --method same-motion (global pairs no runs)")
     check_output(args.json)
+    check_output(args.report)
     robot = load_robot(args, recordings=args.empty + args.loaded)
     fix = parse_fix(args.fix, robot.n)
     reference = read_gains(args.gains, robot) if args.gains else None
@@ -93,6 +95,11 @@ def run(args: argparse.Namespace) -> int:
         print(_comparison(res.gains.gains, reference, res.gains.side))
     if args.json:
         write_json(args.json, {**res.to_dict(), "flags": [f.to_json() for f in flags]})
+    if args.report:
+        from ..report.writers import write_gains_report
+
+        write_gains_report(args.report, {**res.to_dict(), "flags": [f.to_json() for f in flags],
+                                         "data": {"empty": args.empty, "loaded": args.loaded}})
     return 0
 
 

@@ -203,14 +203,21 @@ def _spring_text(f: Fit, recs: list) -> str:
 
 
 def _write_report(path: str, f: Fit, recs: list) -> None:
-    from ..report import Section, identification_sections, write_report
+    """The HTML report from the fit file's content (what --json writes) plus the recordings' extent."""
+    from ..report.writers import write_identify_report
 
-    sections = identification_sections(f.robot, f.result, recs, validation=f.validation, essential=f.essential,
-                                       fit_prediction=f.predict(recs[0]), model=f.model,
-                                       extra_tables=[f.bootstrap.table(f.result)])
-    checks = Section("Plausibility", flag_lines(f.flags) or "no flags: every plausibility check passed")
-    write_report(path, f"Identification of {f.robot.name}",
-                 [*sections, Section("Spring", _spring_text(f, recs)), checks])
+    record = {**f.to_json(), "data": data_record(recs, f.observation)}
+    write_identify_report(path, f.robot, record, f.result, recs[0], f.validation, f.predict(recs[0]),
+                          _spring_text(f, recs))
+
+
+def data_record(recs: list, obs: Any) -> dict:
+    """What was fitted: per recording its source, samples, duration [s] and recorded rate [Hz]
+    (1 / mean period); the share of samples where each joint moves (after filtering)."""
+    rows = [{"source": src, "samples": int(len(r.t)), "duration_s": float(r.t[-1] - r.t[0]),
+             "rate_hz": float((len(r.t) - 1) / (r.t[-1] - r.t[0]))} for r, src in zip(recs, obs.sources)]
+    share = None if obs.moving_fraction is None else [float(v) for v in obs.moving_fraction]
+    return {"recordings": rows, "moving_fraction": share}
 
 
 def _write_urdf(args: argparse.Namespace, f: Fit) -> None:

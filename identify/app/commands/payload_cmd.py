@@ -51,6 +51,7 @@ def register(sub: Any) -> None:
     sp.add_argument("--position-tol", type=float,
                     help=f"method 3: largest position gap of a paired run [rad] (default {POSITION_TOLERANCE:g})")
     sp.add_argument("--json", help="results as JSON")
+    sp.add_argument("--report", help="self-contained HTML report")
 
 
 def run(args: argparse.Namespace) -> int:
@@ -68,6 +69,7 @@ def run(args: argparse.Namespace) -> int:
     if args.method != 3 and args.position_tol is not None:
         raise UsageError("conflicting options: --position-tol is for method 3 (paired runs)")
     check_output(args.json)
+    check_output(args.report)
     robot = load_robot(args, offsets=args.offsets, recordings=args.empty + args.loaded)
     spring_notice(robot)
     gains = read_gains(args.gains, robot) if args.gains else None
@@ -97,7 +99,13 @@ def run(args: argparse.Namespace) -> int:
     print(res.table())
     if flags:
         print(flag_lines(flags))
+    spring = robot.spring.describe() if robot.spring is not None else None
+    record = {**res.to_dict(), "spring": spring, "flags": [f.to_json() for f in flags], "robot_name": robot.name,
+              "mass": args.mass, "data": {"empty": [r.source for r in empty], "loaded": [r.source for r in loaded]}}
     if args.json:
-        spring = robot.spring.describe() if robot.spring is not None else None
-        write_json(args.json, {**res.to_dict(), "spring": spring, "flags": [f.to_json() for f in flags]})
+        write_json(args.json, record)
+    if args.report:
+        from ..report.writers import write_payload_report
+
+        write_payload_report(args.report, record, res)
     return 0
