@@ -26,7 +26,8 @@ from identify.estimation.least_squares import CompressedSystem, IdentificationEr
 from identify.observation.matrix import DEFAULT_MIN_VELOCITY, DEFAULT_REST, Observation, observation_matrix
 from identify.real_fit import fit_recordings  # deprecated: fit
 from identify.signal.pairing import PairedRuns, pair_runs
-from identify.payload import PayloadMonitor, PayloadResult, grouping_relations, payload
+from identify.payload import PayloadResult, grouping_relations, payload
+from identify.payload_monitor import PayloadMonitor
 from identify.io.recordings import (Recording, RecordingError, read_motor_recording, read_recording,
                          recording_from_arrays, split, write_recording)
 from identify.estimation.results import EliminationStep, IdentificationResult
