@@ -11,7 +11,7 @@ from rx90sym.parameters import PAYLOAD_NAMES
 
 from identify.estimation.least_squares import compress, solve_system, stack_systems, weighted_least_squares
 from identify.payload import (PayloadResult, _as_list, _check_robot, _check_wrist_motion, _in_tip_frame,
-                              _motions, _payload_part, _rows, _subset)
+                              _payload_motions, _payload_part, _rows, _subset)
 
 __all__ = ["MonitorStep", "PayloadMonitor"]
 
@@ -46,7 +46,7 @@ class PayloadMonitor:
         cols = list(self.base.independent) + list(rx90sym.payload_regressor_columns(robot))
         self._cols = cols
         nb = self.base.nb
-        m_e = _motions(robot, empty, cols, options)
+        m_e = _payload_motions(robot, empty, cols, options)
         blocks = [np.concatenate([m.Phi[:, :, :nb], np.zeros_like(m.Phi[:, :, nb:])], axis=2) for m in m_e]
         W, Y, joint, _ = _rows(blocks, [m.Y for m in m_e], m_e, options)
         empty_fit = weighted_least_squares(W[:, :nb], Y, joint, self.base.names)
@@ -59,7 +59,7 @@ class PayloadMonitor:
         """Add one loaded motion and return the new payload estimate."""
         _check_robot(self.robot, [loaded], "loaded")
         _check_wrist_motion(self.robot, [loaded])
-        m = _motions(self.robot, [loaded], self._cols, self.options)
+        m = _payload_motions(self.robot, [loaded], self._cols, self.options)
         W, Y, joint, _ = _rows([x.Phi for x in m], [x.Y for x in m], m, self.options)
         new = [compress(W[joint == j], Y[joint == j]) for j in range(self.robot.n)]
         self._systems = [stack_systems([a, b]) for a, b in zip(self._systems, new)]
