@@ -59,7 +59,7 @@ _EXPORTS = {
     "fit_recordings": "identify.real_fit",
     "PairedRuns": "identify.signal.pairing",
     "pair_runs": "identify.signal.pairing",
-    "PayloadMonitor": "identify.payload",
+    "PayloadMonitor": "identify.payload_monitor",
     "PayloadResult": "identify.payload",
     "grouping_relations": "identify.payload",
     "payload": "identify.payload",
