@@ -7,9 +7,7 @@ from typing import Any
 import numpy as np
 
 from rx90sym.files import write_json
-from identify import read_recording
-from identify.drive_gains import DEFAULT_METHOD, FLAG_PCT, GAIN_METHODS, drive_gains
-from identify.io.gains import read_gains
+from identify.drive_gains import DEFAULT_METHOD, FLAG_PCT, GAIN_METHODS
 from identify.signal.pairing import POSITION_TOLERANCE
 
 from identify.plausibility import PlausibilityError, gain_flags
@@ -67,6 +65,10 @@ def parse_fix(items: list[str], n: int) -> dict[int, float]:
 
 
 def run(args: argparse.Namespace) -> int:
+    from identify.drive_gains import drive_gains
+    from identify.io.gains import read_gains
+    from identify.io.recordings import read_recording
+
     if args.method == "same-motion" and args.no_offsets:
         raise UsageError("conflicting options: --no-offsets is for --method global (offsets cancel in same-motion)")
     if args.method == "global" and args.position_tol != POSITION_TOLERANCE:

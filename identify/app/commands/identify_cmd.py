@@ -7,22 +7,22 @@ one filtering for fit and validation, reused by ``rx90 predict`` through :func:`
 from __future__ import annotations
 
 import argparse
-from typing import Any
+import math
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 import rx90sym
-from identify.fitting import Fit, fit
-from identify.io.gains import read_gains
 from identify.observation.processing import DEFAULT_MIN_VELOCITY, DEFAULT_REST, REST_POLICIES, Processing
-from identify.observation.spring_fit import SpringBase, spring_summary
 from identify.plausibility import estimate_flags, residual_flags, static_gravity_flags, torque_scale_flags
 
 from ..flags import flag_lines, given_gain_flags, settle
-
 from ..common import (UsageError, check_output, convention_option, progress, read_recordings, robot_option,
                       robot_with_spring, spring_options)
-from ..spring_output import attach_spring
+
+if TYPE_CHECKING:  # the method is imported when the command runs, not for its --help
+    from identify.fitting import Fit
+
 
 def _delay(text: str) -> str | float:
     if text == "auto":
@@ -31,7 +31,7 @@ def _delay(text: str) -> str | float:
         value = float(text)
     except ValueError:
         raise argparse.ArgumentTypeError(f"--delay takes 'auto' or a number of seconds, got {text!r}") from None
-    if not np.isfinite(value) or abs(value) > 1.0:
+    if not math.isfinite(value) or abs(value) > 1.0:
         raise argparse.ArgumentTypeError(f"--delay must be a finite number of seconds within ±1, got {text!r}")
     return value
 
@@ -132,6 +132,11 @@ def processing_of(args: argparse.Namespace, spring: bool) -> Processing:
 
 
 def run(args: argparse.Namespace) -> int:
+    from identify.fitting import fit
+    from identify.io.gains import read_gains
+
+    from ..spring_output import attach_spring
+
     _check(args)
     robot, spring_model = _robot(args)
     if args.urdf_out and robot.urdf is None:
@@ -199,7 +204,9 @@ def _print_fit(f: Fit, recs: list, auto_delay: bool) -> None:
 
 
 def _spring_text(f: Fit, recs: list) -> str:
-    return spring_summary(f.robot, f.base if isinstance(f.base, SpringBase) else None, f.result, recs)[1]
+    from identify.observation.spring_fit import BaseWithSpring, spring_summary
+
+    return spring_summary(f.robot, f.base if isinstance(f.base, BaseWithSpring) else None, f.result, recs)[1]
 
 
 def _write_report(path: str, f: Fit, recs: list) -> None:
