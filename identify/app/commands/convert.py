@@ -14,8 +14,6 @@ from __future__ import annotations
 import argparse
 from typing import Any
 
-from identify.io.logs import read_log
-from identify.io.recordings import read_motor_recording, write_recording
 
 from ..common import UsageError, check_output, convention_option, load_robot, progress, robot_option
 
@@ -75,6 +73,9 @@ def _robot(args: argparse.Namespace):
 
 
 def run(args: argparse.Namespace) -> int:
+    from identify.io.logs import read_log
+    from identify.io.recordings import write_recording
+
     if args.log is None:
         return _run_motor(args)
     mixed = _given(args, _MOTOR_OPTIONS)
@@ -105,6 +106,8 @@ def run(args: argparse.Namespace) -> int:
 
 
 def _run_motor(args: argparse.Namespace) -> int:
+    from identify.io.recordings import read_motor_recording, write_recording
+
     extra = _given(args, _LOG_OPTIONS)
     if extra:
         raise UsageError(f"{', '.join(extra)} belong to the log form (give LOG.csv)")
