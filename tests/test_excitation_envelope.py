@@ -113,6 +113,10 @@ def test_franka_check_names_the_broken_limit_from_finite_differences():
     assert any("velocity limit of joint 1" in p for p in problems) and any("jerk" in p for p in problems)
     tau = np.cumsum(np.full((2000, 7), 2.0), axis=0)  # 2000 N m/s
     assert any("torque rate" in p for p in cp.franka_check(slow, tau))
+    step = np.where(t[:, None] < 1.0, -1.0, 1.0) * np.ones(7)  # a Coulomb step at a reversal
+    qd = (t - 0.9995)[:, None] * np.ones(7)  # the velocity changes sign between t = 0.999 and 1.0 s
+    assert any("torque rate" in p for p in cp.franka_check(slow, step))
+    assert not any("torque rate" in p for p in cp.franka_check(slow, step, qd=qd))
 
 
 @pytest.mark.parametrize("name", ["rx90", "tx40", "ur10e", "panda", UR5])
