@@ -87,8 +87,8 @@ def register(sub: Any) -> None:
     sp.add_argument("--validate", help="recording used for cross-validation only")
     sp.add_argument("--json", help="results as JSON")
     sp.add_argument("--report", help="self-contained HTML report")
-    sp.add_argument("--urdf-out", help="with --method consistent and a URDF robot: the URDF with the "
-                                       "identified inertials (and FILE.actuation.json: IA, FS, FV)")
+    sp.add_argument("--urdf-out", help="with --method consistent: the URDF with the identified inertials "
+                                       "and joint dynamics, and FILE.actuation.json (as rx90 export --urdf)")
 
 
 def _robot(args: argparse.Namespace) -> tuple[rx90sym.Robot, Any]:
@@ -137,8 +137,6 @@ def run(args: argparse.Namespace) -> int:
     for out in (args.json, args.report, args.urdf_out):
         check_output(out)
     robot, spring_model = _robot(args)
-    if args.urdf_out and robot.urdf is None:
-        raise UsageError(f"--urdf-out needs a URDF robot (--robot FILE.urdf), not {args.robot!r}")
     sb = attach_spring(robot, spring_model, args.validate, args.method)
     gains = read_gains(args.gains, robot) if args.gains else None
     progress(f"reading {len(args.recordings)} recording(s)")
