@@ -15,6 +15,7 @@ from .nominal import nominal_parameters
 from .spring import Spring
 from .urdf import UrdfChain, load_urdf, urdf_parameters
 from .urdf_export import write_urdf
+from .mjcf_export import write_mjcf
 from .urdf_tree import UrdfError
 from .payloads import add_payload, bundled_payloads, load_payload, payload_regressor_columns
 from . import datasets, twin
@@ -27,5 +28,5 @@ __all__ = [
     "RobotFileError", "bundled_robots", "load_robot", "Spring", "bundled_payloads",
     "load_payload", "twin", "datasets", "add_payload", "payload_regressor_columns", "default_parameters",
     "pinocchio_model", "nominal_parameters", "UrdfChain", "UrdfError", "load_urdf", "urdf_parameters",
-    "write_urdf",
+    "write_urdf", "write_mjcf",
 ]

@@ -20,7 +20,7 @@ import numpy as np
 
 from .description import Robot
 from .files import atomic_write, write_json
-from .model_export import (actuation, companion, flange_pose, fmt, joint_origin, limits_in_controller_angles,
+from .model_export import (actuation, companion, companion_path, flange_pose, fmt, joint_origin, limits_in_controller_angles,
                            link_bodies, parameter_vector, payload_body, quaternion)
 from .rigid_body import RigidBody
 
@@ -28,12 +28,6 @@ from .rigid_body import RigidBody
 # body that light is a fit artefact, refused here with its name instead.
 MIN_MASS = 1e-9          # kg
 MIN_INERTIA = 1e-12      # kg m^2, smallest principal moment about the CoG
-
-
-def mjcf_companion_path(path: str | Path) -> Path:
-    """``NAME.xml`` -> ``NAME.actuation.json`` (the same companion as a URDF's)."""
-    path = Path(path)
-    return path.with_name(path.stem + ".actuation.json")
 
 
 def _vec(v: Sequence[float]) -> str:
@@ -112,10 +106,16 @@ def write_mjcf(robot: Robot, params: Mapping[str, float] | Sequence[float], path
     its companion ``NAME.actuation.json``; payload: XXc..Mc in the payload frame (frame n; a
     URDF robot's tip link), a body fixed on the flange. Returns the paths written; nothing is
     written when a body is refused (ValueError naming it)."""
+    text, side = mjcf_export(robot, params, path, payload)
+    out = Path(path)
+    atomic_write(out, lambda fh: fh.write(text))
+    return [out, write_json(companion_path(out), side)]
+
+
+def mjcf_export(robot: Robot, params: Mapping[str, float] | Sequence[float], path: str | Path,
+                payload: Mapping[str, float] | None = None) -> tuple[str, dict]:
+    """(MJCF text, companion dict) that :func:`write_mjcf` writes to ``path``; nothing written."""
     chi = parameter_vector(robot, params)
     body = payload_body(robot, payload) if payload is not None else None
     text = mjcf_text(robot, chi, body)
-    out = Path(path)
-    side = companion(robot, chi, out, "mjcf", actuation(robot, chi).notes)
-    atomic_write(out, lambda fh: fh.write(text))
-    return [out, write_json(mjcf_companion_path(out), side)]
+    return text, companion(robot, chi, path, "mjcf", actuation(robot, chi).notes)

@@ -24,6 +24,12 @@ _K = len(LINK_PARAMETERS)
 COMPANION_FORMAT = "rx90sym-actuation/1"
 
 
+def companion_path(path: str | Path) -> Path:
+    """Where an exported model's companion goes: ``NAME.urdf`` / ``NAME.xml`` -> ``NAME.actuation.json``."""
+    path = Path(path)
+    return path.with_name(path.stem + ".actuation.json")
+
+
 def parameter_vector(robot: Robot, params: Mapping[str, float] | Sequence[float]) -> np.ndarray:
     """chi of ``robot`` from a name -> value mapping (all names) or a vector."""
     if isinstance(params, Mapping):
@@ -85,18 +91,24 @@ def flange_pose(robot: Robot) -> np.ndarray:
     return np.array(robot.flange, dtype=float) if robot.flange is not None else np.eye(4)
 
 
-def payload_body(robot: Robot, payload: Mapping[str, float]) -> RigidBody:
+def payload_in_flange(robot: Robot, payload: Mapping[str, float]) -> RigidBody:
     """The payload (XXc..Mc in the payload frame: frame n of a robot file, the tip link of a URDF
-    robot) as a body in the flange frame, checked physical (ValueError with the reason)."""
+    robot, which is its flange) as a body in the flange frame (not checked physical)."""
     from .payloads import validate_payload
 
     values = validate_payload(payload)
     body = RigidBody.from_vector(np.array([values[f"{p}c"] for p in LINK_PARAMETERS[:10]]))
+    if robot.urdf is None and robot.flange is not None:
+        body = body.expressed_in_child(robot.flange[:3, :3], robot.flange[:3, 3])
+    return body
+
+
+def payload_body(robot: Robot, payload: Mapping[str, float]) -> RigidBody:
+    """:func:`payload_in_flange`, checked physical (ValueError with the reason)."""
+    body = payload_in_flange(robot, payload)
     problem = physical_problem(body)
     if problem:
         raise ValueError(f"payload: not a physical rigid body ({problem})")
-    if robot.urdf is None and robot.flange is not None:
-        body = body.expressed_in_child(robot.flange[:3, :3], robot.flange[:3, 3])
     return body
 
 

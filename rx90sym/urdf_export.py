@@ -19,7 +19,7 @@ import numpy as np
 
 from .description import Robot
 from .files import atomic_write, write_json
-from .model_export import companion, joint_terms, link_bodies, parameter_vector, payload_body
+from .model_export import companion, companion_path, joint_terms, link_bodies, parameter_vector, payload_body
 from .parameters import LINK_PARAMETERS
 from .rigid_body import RigidBody, physical_problem
 from .urdf import relative_pose, zero_poses
@@ -27,12 +27,6 @@ from .urdf_generate import dynamics_xml, generated_urdf, gravity_note, inertial_
 from .urdf_tree import UrdfError
 
 _K = len(LINK_PARAMETERS)
-
-
-def companion_path(path: str | Path) -> Path:
-    """Where write_urdf puts rotor inertia and friction: ``NAME.urdf`` -> ``NAME.actuation.json``."""
-    path = Path(path)
-    return path.with_name(path.stem + ".actuation.json")
 
 
 def link_inertials(robot: Robot, params: Mapping[str, float] | Sequence[float]) -> dict[str, RigidBody]:
@@ -82,22 +76,27 @@ def write_urdf(robot: Robot, params: Mapping[str, float] | Sequence[float], path
     payload: the payload's ten parameters XXc..Mc in the payload frame (frame n; a URDF robot's
     tip link), added as a fixed ``payload`` link on the flange.
     Returns the paths written; nothing is written when a link is refused (UrdfError)."""
+    text, side = urdf_export(robot, params, path, payload)
+    out = Path(path)
+    atomic_write(out, lambda fh: fh.write(text))
+    return [out, write_json(companion_path(out), side)]
+
+
+def urdf_export(robot: Robot, params: Mapping[str, float] | Sequence[float], path: str | Path,
+                payload: Mapping[str, float] | None = None) -> tuple[str, dict]:
+    """(URDF text, companion dict) that :func:`write_urdf` writes to ``path``; nothing written."""
     chi = parameter_vector(robot, params)
     _, FV, FS = joint_terms(robot, chi)
     try:
         body = payload_body(robot, payload) if payload is not None else None
+        if robot.urdf is None:
+            text = generated_urdf(robot, link_bodies(robot, chi), FV, FS, body)
+        else:
+            text = _edited_urdf(robot, chi, FV, FS, body)
+    except UrdfError:
+        raise
     except ValueError as exc:
         raise UrdfError(str(exc)) from None
-    if robot.urdf is None:
-        try:
-            bodies = link_bodies(robot, chi)
-        except ValueError as exc:
-            raise UrdfError(str(exc)) from None
-        text = generated_urdf(robot, bodies, FV, FS, body)
-        source = robot.source or None
-    else:
-        text = _edited_urdf(robot, chi, FV, FS, body)
-        source = robot.urdf.path
     try:
         ET.fromstring(text)
     except ET.ParseError as exc:  # pragma: no cover - a bug of the writers
@@ -107,11 +106,9 @@ def write_urdf(robot: Robot, params: Mapping[str, float] | Sequence[float], path
         notes.append("coupled wrist: the terms IA_b q''_a, IA_b q''_b, FVM, FSM of eqs. 17-18 are not in a URDF "
                      "(companion 'coupling', 'other')")
     notes += [n for n in (gravity_note(robot),) if n]
-    out = Path(path)
-    side = companion(robot, chi, out, "urdf", notes)
-    side["source_model"] = source
-    atomic_write(out, lambda fh: fh.write(text))
-    return [out, write_json(companion_path(out), side)]
+    side = companion(robot, chi, path, "urdf", notes)
+    side["source_model"] = robot.urdf.path if robot.urdf is not None else (robot.source or None)
+    return text, side
 
 
 def _edited_urdf(robot: Robot, chi: np.ndarray, FV: np.ndarray, FS: np.ndarray,

@@ -5,6 +5,7 @@ import argparse
 from typing import Any
 
 from rx90sym.files import write_json
+from rx90sym.flange_payload import flange_payload
 from identify import read_recording
 from identify.io.gains import apply_gains, read_gains
 from identify.signal.pairing import POSITION_TOLERANCE
@@ -89,5 +90,8 @@ def run(args: argparse.Namespace) -> int:
     print(res.table())
     if args.json:
         spring = robot.spring.describe() if robot.spring is not None else None
-        write_json(args.json, {**res.to_dict(), "spring": spring})
+        # The neutral block: mass, CoG and inertia at the CoG in the maker's flange frame (what a
+        # controller takes; rx90 export --ur / --franka writes it in the controller's form).
+        flange = flange_payload(robot, res.as_dict()).to_dict()
+        write_json(args.json, {**res.to_dict(), "spring": spring, "flange": flange})
     return 0

@@ -1,0 +1,139 @@
+"""``rx90 export``: the one command for artefacts made from a JSON.
+
+- a consistent fit (``rx90 identify --method consistent --json ID.json``) -> ``--urdf`` and/or
+  ``--mjcf`` (with ``--payload PAYLOAD.json``: the payload as a body on the flange);
+- a payload (``rx90 payload --json PAYLOAD.json``) -> ``--ur`` (URScript ``set_target_payload``)
+  and/or ``--franka`` (libfranka's ``setLoad`` arguments as JSON).
+
+Every output is checked before anything is written: a refused link or payload writes nothing.
+"""
+from __future__ import annotations
+
+import argparse
+import json
+from pathlib import Path
+from typing import Any
+
+import rx90sym
+from rx90sym.files import atomic_write, write_json
+from rx90sym.flange_payload import FlangePayload, franka_load, ur_script
+from rx90sym.mjcf_export import mjcf_export
+from rx90sym.model_export import companion_path
+from rx90sym.urdf_export import urdf_export
+
+from ..common import UsageError, check_output, progress
+
+
+def register(sub: Any) -> None:
+    sp = sub.add_parser("export", help="URDF / MJCF from a consistent fit, controller payloads from a payload JSON",
+                        description="make the artefacts a user needs from a JSON: a consistent fit -> URDF, "
+                                    "MJCF; a payload -> UR's set_target_payload, Franka's load")
+    sp.set_defaults(func=run)
+    sp.add_argument("input", help="ID.json (rx90 identify --method consistent --json) or PAYLOAD.json "
+                                  "(rx90 payload --json)")
+    sp.add_argument("--robot", help="with ID.json: the robot (default: the one the fit records; another "
+                                    "robot is refused)")
+    sp.add_argument("--urdf", metavar="OUT.urdf", help="URDF (and OUT.actuation.json beside it)")
+    sp.add_argument("--mjcf", metavar="OUT.xml", help="MJCF for MuJoCo (and OUT.actuation.json beside it)")
+    sp.add_argument("--payload", metavar="PAYLOAD.json", help="with --urdf/--mjcf: add this payload (rx90 "
+                                                              "payload --json) as a body on the flange")
+    sp.add_argument("--ur", metavar="OUT.script", help="from PAYLOAD.json: URScript set_target_payload line")
+    sp.add_argument("--franka", metavar="OUT.json", help="from PAYLOAD.json: Franka's load (libfranka setLoad)")
+
+
+def _read(path: str) -> dict:
+    try:
+        data = json.loads(Path(path).read_text(encoding="utf-8"))
+    except OSError as exc:
+        raise ValueError(f"{path}: cannot read ({exc.strerror})") from None
+    except json.JSONDecodeError as exc:
+        raise ValueError(f"{path}: not valid JSON (line {exc.lineno}, column {exc.colno}: {exc.msg})") from None
+    if not isinstance(data, dict):
+        raise ValueError(f"{path}: expected a JSON object")
+    return data
+
+
+def is_payload_file(data: dict) -> bool:
+    """A payload JSON (rx90 payload --json) rather than a fit."""
+    return isinstance(data.get("payload"), list) and isinstance(data.get("method"), int)
+
+
+def run(args: argparse.Namespace) -> int:
+    outputs = [args.urdf, args.mjcf, args.ur, args.franka]
+    if not any(outputs):
+        raise UsageError("nothing to export: give --urdf, --mjcf (from a fit) or --ur, --franka (from a payload)")
+    for out in outputs:
+        check_output(out)
+    if args.urdf and args.mjcf and companion_path(args.urdf) == companion_path(args.mjcf):
+        raise UsageError(f"--urdf {args.urdf} and --mjcf {args.mjcf} would share the companion "
+                         f"{companion_path(args.urdf)}: give them different names")
+    data = _read(args.input)
+    if is_payload_file(data):
+        return _payload(args, data)
+    if args.ur or args.franka:
+        raise UsageError(f"--ur/--franka take a payload JSON (rx90 payload --json); {args.input} is not one")
+    return _model(args, data)
+
+
+def _payload(args: argparse.Namespace, data: dict) -> int:
+    if args.urdf or args.mjcf or args.payload or args.robot:
+        raise UsageError(f"{args.input} is a payload JSON: it exports --ur and --franka only "
+                         f"(--urdf/--mjcf take a consistent fit, with --payload {args.input})")
+    if "flange" not in data:
+        raise ValueError(f"{args.input}: no 'flange' block (the payload in the flange frame): written by an "
+                         f"older rx90 payload; run it again")
+    load = FlangePayload.from_dict(data["flange"], args.input)
+    if load.problem is not None:
+        raise ValueError(f"{args.input}: the payload is not a physical rigid body ({load.problem}): a controller "
+                         f"refuses it; identify it with rx90 payload --constrained")
+    texts = {}
+    if args.ur:
+        texts[args.ur] = ur_script(load)
+    if args.franka:
+        texts[args.franka] = json.dumps(franka_load(load), indent=1) + "\n"
+    for path, text in texts.items():
+        atomic_write(path, lambda fh, text=text: fh.write(text))
+        progress(f"wrote {path}")
+    return 0
+
+
+def _model(args: argparse.Namespace, data: dict) -> int:
+    from identify.app.commands.predict import robot_of
+    from identify.fit_model import FitModel
+
+    method = data.get("method")
+    if method != "consistent":
+        raise ValueError(f"{args.input}: a {method or 'unknown'} fit holds base parameters, not physical "
+                         f"bodies: identify with --method consistent and export its JSON")
+    if args.ur or args.franka:
+        raise UsageError("--ur/--franka take a payload JSON")
+    if "model" not in data or not isinstance(data.get("standard"), dict):
+        raise ValueError(f"{args.input}: no 'model' record or 'standard' parameters (write it with rx90 identify "
+                         f"--method consistent --json)")
+    model = FitModel.from_dict(data["model"], args.input)
+    robot = robot_of(model, args.robot)
+    asymmetric = tuple(j for j in range(robot.n) if f"FSP{j + 1}" in data["standard"])
+    if asymmetric != tuple(robot.asymmetric_coulomb):
+        robot = robot.with_options(asymmetric_coulomb=asymmetric)
+    warning = model.check_robot(robot)
+    if warning.startswith("the identification is of robot"):
+        raise ValueError(f"{args.input}: {warning}")
+    if warning:
+        progress(f"warning: {warning}")
+    params = rx90sym.nominal_parameters(robot, args.input)
+    payload = None
+    if args.payload:
+        pdata = _read(args.payload)
+        if not is_payload_file(pdata):
+            raise ValueError(f"{args.payload}: not a payload JSON (rx90 payload --json)")
+        payload = {p["name"]: p["value"] for p in pdata["payload"]}
+    artefacts = []  # every text first: a refused link or payload writes nothing
+    if args.urdf:
+        artefacts.append((args.urdf, *urdf_export(robot, params, args.urdf, payload)))
+    if args.mjcf:
+        artefacts.append((args.mjcf, *mjcf_export(robot, params, args.mjcf, payload)))
+    for path, text, side in artefacts:
+        atomic_write(path, lambda fh, text=text: fh.write(text))
+        write_json(companion_path(path), side)
+        progress(f"wrote {path} and {companion_path(path)}")
+    return 0
