@@ -9,12 +9,19 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["segment_bootstrap_std"]
+__all__ = ["segment_bootstrap_draws", "segment_bootstrap_std"]
 
 
 def segment_bootstrap_std(W: np.ndarray, Y: np.ndarray, joint: np.ndarray, samples: np.ndarray,
                           weights: np.ndarray, block: int, draws: int = 200, seed: int = 0) -> np.ndarray:
-    """Standard deviation of each estimate over ``draws`` segment-bootstrap refits.
+    """Standard deviation of each estimate over ``draws`` segment-bootstrap refits
+    (:func:`segment_bootstrap_draws`; NaN where a draw was rank deficient)."""
+    return np.nanstd(segment_bootstrap_draws(W, Y, joint, samples, weights, block, draws, seed), axis=0, ddof=1)
+
+
+def segment_bootstrap_draws(W: np.ndarray, Y: np.ndarray, joint: np.ndarray, samples: np.ndarray,
+                            weights: np.ndarray, block: int, draws: int = 200, seed: int = 0) -> np.ndarray:
+    """The ``draws`` segment-bootstrap least-squares estimates, (draws, c).
 
     Args:
         W: (r, c) observation matrix; Y: (r,) torques; joint: (r,) joint of each row;
@@ -23,7 +30,7 @@ def segment_bootstrap_std(W: np.ndarray, Y: np.ndarray, joint: np.ndarray, sampl
         draws: number of bootstrap refits; seed: seeds the draws.
 
     Returns:
-        (c,) standard deviations, units of the parameters (NaN where a draw was rank deficient).
+        (draws, c) estimates, units of the parameters (a row of NaN where a draw was rank deficient).
     """
     if block < 1 or draws < 2:
         raise ValueError(f"block must be >= 1 sample and draws >= 2, got {block} and {draws}")
@@ -46,4 +53,4 @@ def segment_bootstrap_std(W: np.ndarray, Y: np.ndarray, joint: np.ndarray, sampl
         M = np.tensordot(counts, A, axes=1)
         if np.linalg.matrix_rank(M) == c:
             estimates[i] = np.linalg.solve(M, counts @ g)
-    return np.nanstd(estimates, axis=0, ddof=1)
+    return estimates
