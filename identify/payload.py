@@ -26,6 +26,7 @@ from rx90sym.parameters import PAYLOAD_NAMES
 
 from identify.estimation.consistency import ConsistencyError, pseudo_inertia
 from identify.estimation.least_squares import compress, solve_system, stack_systems, weighted_least_squares
+from identify.observation.processing import Processing
 from identify.signal.filtering import choose_cutoff
 from identify.observation.matrix import filtered_motion, stack_rows
 from identify.signal.pairing import POSITION_TOLERANCE, PairedRuns, pair_runs
@@ -282,11 +283,12 @@ def grouping_relations(robot: rx90sym.Robot, base: Any) -> np.ndarray:
 
 
 def _method_2(robot, base, empty, loaded, options, **_):
-    kw = {k: options[k] for k in ("cutoff", "decimate_to", "spring", "min_velocity") if k in options}
-    from identify.identification import identify
+    from identify.fitting import fit
 
-    fit_v = identify(robot, empty, method="wls", base=base, **kw)
-    fit_t = identify(robot, loaded, method="wls", base=base, **kw)
+    kw = {k: options[k] for k in ("cutoff", "decimate_to", "spring", "min_velocity", "delay") if k in options}
+    processing = Processing(**{"min_velocity": None, "rest": "drop", "estimate_delay": False, **kw})
+    fit_v = fit(robot, empty, processing, base=base).result
+    fit_t = fit(robot, loaded, processing, base=base).result
     delta = fit_t.values - fit_v.values                    # eq. 23
     cov = fit_t.covariance + fit_v.covariance
     Kc = grouping_relations(robot, base)

@@ -149,3 +149,14 @@ def robot_option(sp: argparse.ArgumentParser) -> None:
     sp.add_argument("--acceleration", metavar="A|A1,..,An",
                     help="with a URDF --robot: joint acceleration limits [rad/s^2; m/s^2 prismatic], one "
                          "number or one per joint (a URDF has none; default 10 rad/s^2, 2 m/s^2)")
+
+
+def read_recordings(paths: list[str], robot: rx90sym.Robot, convention: str | None, gains: Any) -> list:
+    """The recordings of ``paths``, current recordings turned into torques with ``gains``."""
+    from identify.io.gains import apply_gains
+    from identify.io.recordings import read_recording
+
+    recs = [read_recording(p, robot, convention=convention) for p in paths]
+    if gains is None:
+        return recs
+    return [apply_gains(r, gains, robot) if r.current is not None else r for r in recs]

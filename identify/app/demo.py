@@ -38,8 +38,8 @@ def run_demo(out: str | Path = "demo-output", quick: bool = False) -> int:
     import excitation
     import rx90sym
 
-    from identify import (consistent_fit, essential_parameters, identify, predict, read_motor_recording, split,
-                   validate, write_recording)
+    from identify import (Processing, consistent_fit, essential_parameters, fit, predict, read_motor_recording,
+                          split, validate, write_recording)
     from identify.payload import payload
     from .report import Section, identification_sections, parameter_figure, write_report
 
@@ -76,10 +76,11 @@ def run_demo(out: str | Path = "demo-output", quick: bool = False) -> int:
     # Each joint's samples below 0.1 rad/s are left out: the twin has Stribeck friction there,
     # which the model (eq. 5) does not contain.
     rest = {"min_velocity": 0.1}
-    res = identify(robot, [recs["empty"]], method="wls", base=bp, **rest)
+    drop = Processing(min_velocity=0.1, rest="drop", estimate_delay=False)
+    res = fit(robot, [recs["empty"]], drop, base=bp).result
     # The same identification on the random trajectory (the validation motion): what the
     # criterion (predicted relative sigma) buys, measured per parameter group.
-    res_random = identify(robot, [recs["validation"]], method="wls", base=bp, **rest)
+    res_random = fit(robot, [recs["validation"]], drop, base=bp).result
     groups = group_medians(res, truth), group_medians(res_random, truth)
     ess = essential_parameters(res)
     con = consistent_fit(robot, res, bp)  # on the WLS fit's compressed system: no second pass
@@ -100,7 +101,7 @@ def run_demo(out: str | Path = "demo-output", quick: bool = False) -> int:
     tx = rx90sym.load_robot("tx40", offsets=True)
     raw = read_motor_recording(data.positions, data.torques, tx, period=data.period)
     fit_part, held = split(raw, 2 / 3)
-    tx_res = identify(tx, [fit_part], decimate_to=100.0)
+    tx_res = fit(tx, [fit_part], Processing(decimate_to=100.0, min_velocity=None, estimate_delay=False)).result
     tx_val = validate(tx, tx_res, held, decimate_to=100.0)
     tx40_section = Section("Real data: Staubli TX40 (FIGAROH record, Apache-2.0)",
                            tx_res.table() + "\n\n" + tx_val.table(), ())

@@ -6,7 +6,8 @@ from typing import Any
 
 from rx90sym.files import write_json
 from rx90sym.flange_payload import flange_payload
-from identify import read_recording
+from identify.fitting import load_fit
+from identify.io.recordings import read_recording
 from identify.io.gains import apply_gains, read_gains
 from identify.signal.pairing import POSITION_TOLERANCE
 from identify.payload import payload
@@ -78,10 +79,8 @@ def run(args: argparse.Namespace) -> int:
     params = robot_params(args.robot_params) if args.robot_params else None
     progress(f"identifying the payload (method {args.method})")
     filt = {}
-    if args.filtering_from:
-        from .predict import load_identification
-
-        f = load_identification(args.filtering_from)[1].filtering()
+    if args.filtering_from:  # the fit's achieved cut-off, decimation and delay (not its rest handling)
+        f = load_fit(args.filtering_from, robot).filtering()
         filt = {k: f[k] for k in ("cutoff", "decimate_to", "delay")}
     res = payload(robot, args.method, empty=empty, loaded=loaded, robot_params=params, **filt,
                   a_priori=args.a_priori, constrained=args.constrained, mass=args.mass,
