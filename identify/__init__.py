@@ -30,8 +30,10 @@ from identify.payload import PayloadMonitor, PayloadResult, grouping_relations, 
 from identify.io.recordings import (Recording, RecordingError, read_motor_recording, read_recording,
                          recording_from_arrays, split, write_recording)
 from identify.estimation.results import EliminationStep, IdentificationResult
+from identify.export import export_mjcf, export_urdf
 
 __all__ = [
+    "export_urdf", "export_mjcf",
     "BodyConsistency", "consistency_margin", "ConsistencyError", "ConsistencyReport", "ConsistentSolution", "consistency_report",
     "consistent_least_squares", "pseudo_inertia", "essential_parameters", "Derivatives",
     "choose_cutoff", "decimate", "decimation_factor", "derivatives", "lowpass",

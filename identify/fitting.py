@@ -18,6 +18,7 @@ import rx90sym
 from rx90sym.files import write_json
 
 from identify.estimation.bootstrap import segment_bootstrap_std
+from identify.estimation.consistent_fit import ConsistentResult
 from identify.estimation.results import IdentificationResult
 from identify.fit_file import SCHEMA_VERSION, FitModel, gains_of, read_fit_file, robot_of
 from identify.io.gains import DriveGains
@@ -176,7 +177,8 @@ class Fit:
         try:
             model = FitModel.from_json(data["model"], str(path))
             processing = Processing.from_json(data.get("processing", {}), f"{path}: processing")
-            result = IdentificationResult.from_dict(data)
+            consistent = data.get("method") == "consistent" and isinstance(data.get("standard"), dict)
+            result = (ConsistentResult if consistent else IdentificationResult).from_dict(data)
             essential = IdentificationResult.from_dict(data["essential"]) if data.get("essential") else None
             bootstrap = Bootstrap.from_json(data)
         except (KeyError, TypeError, ValueError) as exc:

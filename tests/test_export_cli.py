@@ -70,12 +70,21 @@ def test_exported_urdf_and_mjcf_reproduce_the_fits_inverse_dynamics(fits, tmp_pa
         assert np.abs(mjd.qfrc_inverse - ref).max() <= 1e-8 * max(1.0, np.abs(ref).max())
 
 
-def test_identify_urdf_out_is_the_same_export(fits, tmp_path):
+def test_the_library_exports_a_loaded_fit_like_the_command(fits, tmp_path):
+    """identify.export_urdf / export_mjcf on identify.load_fit; a WLS fit is refused."""
+    import identify
+
     robot, folder = fits
-    a, b = tmp_path / "a.urdf", tmp_path / "b.urdf"
+    a, b, c = tmp_path / "a.urdf", tmp_path / "b.urdf", tmp_path / "c.xml"
     assert main(["export", str(folder / "id.json"), "--urdf", str(a)]) == 0
-    rx90sym.write_urdf(robot, json.loads((folder / "id.json").read_text())["standard"], b)
+    fit = identify.load_fit(folder / "id.json")
+    assert identify.export_urdf(fit, b) == [b, tmp_path / "b.actuation.json"]
     assert a.read_text() == b.read_text()
+    identify.export_mjcf(fit, c)
+    assert c.read_text().startswith('<mujoco model="ur10e">')
+    with pytest.raises(ValueError, match="consistent method"):
+        identify.export_urdf(identify.load_fit(folder / "wls.json"), tmp_path / "w.urdf")
+    assert not (tmp_path / "w.urdf").exists()
 
 
 def _payload_json(path: Path, values: dict, flange: dict) -> Path:

@@ -1,7 +1,7 @@
 """The physically consistent refit of a (W)LS result (standard parameters through cvxpy's LMIs)."""
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Any
 
 import numpy as np
@@ -44,6 +44,17 @@ class ConsistentResult(IdentificationResult):
                   "cost_increase_pct": self.cost_increase_pct,
                   "wls_was_consistent": self.wls_was_consistent})
         return d
+
+    @classmethod
+    def from_dict(cls, d: dict[str, Any]) -> "ConsistentResult":
+        """Inverse of :meth:`to_dict` (no compressed system, no solution: it cannot be re-solved)."""
+        result = super().from_dict(d)
+        standard = d.get("standard")
+        if not isinstance(standard, dict):
+            raise ValueError("a consistent result without its 'standard' parameters")
+        return replace(result, standard={str(k): float(v) for k, v in standard.items()},
+                       cost=float(d.get("cost", float("nan"))), wls_cost=float(d.get("wls_cost", float("nan"))),
+                       wls_was_consistent=bool(d.get("wls_was_consistent", False)))
 
 
 

@@ -14,7 +14,6 @@ import json
 from pathlib import Path
 from typing import Any
 
-import rx90sym
 from rx90sym.files import atomic_write, write_json
 from rx90sym.flange_payload import FlangePayload, franka_load, ur_script
 from rx90sym.mjcf_export import mjcf_export
@@ -98,29 +97,19 @@ def _payload(args: argparse.Namespace, data: dict) -> int:
 
 
 def _model(args: argparse.Namespace, data: dict) -> int:
-    from identify.app.commands.predict import robot_of
-    from identify.fit_model import FitModel
+    from identify import load_fit
+    from identify.export import fit_standard
 
-    method = data.get("method")
-    if method != "consistent":
-        raise ValueError(f"{args.input}: a {method or 'unknown'} fit holds base parameters, not physical "
-                         f"bodies: identify with --method consistent and export its JSON")
-    if args.ur or args.franka:
-        raise UsageError("--ur/--franka take a payload JSON")
-    if "model" not in data or not isinstance(data.get("standard"), dict):
-        raise ValueError(f"{args.input}: no 'model' record or 'standard' parameters (write it with rx90 identify "
-                         f"--method consistent --json)")
-    model = FitModel.from_dict(data["model"], args.input)
-    robot = robot_of(model, args.robot)
-    asymmetric = tuple(j for j in range(robot.n) if f"FSP{j + 1}" in data["standard"])
-    if asymmetric != tuple(robot.asymmetric_coulomb):
-        robot = robot.with_options(asymmetric_coulomb=asymmetric)
-    warning = model.check_robot(robot)
+    if data.get("method") != "consistent":
+        raise ValueError(f"{args.input}: a {data.get('method') or 'unknown'} fit holds base parameters, not "
+                         f"physical bodies: identify with --method consistent and export its JSON")
+    fit = load_fit(args.input, args.robot)
+    warning = fit.model.check_robot(fit.robot)
     if warning.startswith("the identification is of robot"):
         raise ValueError(f"{args.input}: {warning}")
     if warning:
         progress(f"warning: {warning}")
-    params = rx90sym.nominal_parameters(robot, args.input)
+    params = fit_standard(fit)
     payload = None
     if args.payload:
         pdata = _read(args.payload)
@@ -129,9 +118,9 @@ def _model(args: argparse.Namespace, data: dict) -> int:
         payload = {p["name"]: p["value"] for p in pdata["payload"]}
     artefacts = []  # every text first: a refused link or payload writes nothing
     if args.urdf:
-        artefacts.append((args.urdf, *urdf_export(robot, params, args.urdf, payload)))
+        artefacts.append((args.urdf, *urdf_export(fit.robot, params, args.urdf, payload)))
     if args.mjcf:
-        artefacts.append((args.mjcf, *mjcf_export(robot, params, args.mjcf, payload)))
+        artefacts.append((args.mjcf, *mjcf_export(fit.robot, params, args.mjcf, payload)))
     for path, text, side in artefacts:
         atomic_write(path, lambda fh, text=text: fh.write(text))
         write_json(companion_path(path), side)

@@ -189,10 +189,12 @@ def _write_report(path: str, f: Fit, recs: list) -> None:
 
 
 def _write_urdf(args: argparse.Namespace, f: Fit) -> None:
-    from rx90sym import UrdfError, write_urdf
+    """--urdf-out: a shortcut of rx90 export --urdf (identify.export_urdf)."""
+    from rx90sym import UrdfError
+    from identify.export import export_urdf
 
     try:
-        written = write_urdf(f.robot, f.result.standard, args.urdf_out)
+        written = export_urdf(f, args.urdf_out)
     except UrdfError as exc:
         kept = [p for p in (args.json, args.report) if p]
         raise UrdfError(f"{args.urdf_out} not written: {exc}" +
