@@ -85,7 +85,11 @@ class PayloadResult:
                     lines.append(f"{n:10s} {'':>10s} {v:11.4g} {2 * s:9.3g} {p:9.3f}")
         for n, v, s, p in zip(self.names, self.values, self.std, self.rel_std_pct):
             ap = "" if not self.a_priori or n not in self.a_priori else f"{self.a_priori[n]:.4g}"
-            lines.append(f"{n:10s} {ap:>10s} {v:11.4g} {2 * s:9.3g} {p:9.3f}")
+            # A constrained estimate has no σ of its own here: eq. 13's is the unconstrained one's.
+            spread = f"{'—':>9s} {'—':>9s}" if self.constrained else f"{2 * s:9.3g} {p:9.3f}"
+            lines.append(f"{n:10s} {ap:>10s} {v:11.4g} {spread}")
+        if self.constrained:
+            lines.append("no σ is printed for the constrained payload (eq. 13's is the unconstrained fit's)")
         lines += [p.summary() for p in self.pairs]
         return "\n".join(lines)
 

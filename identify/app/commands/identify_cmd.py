@@ -55,6 +55,10 @@ def register(sub: Any) -> None:
                     help="FS+ / FS- instead of FS on these joints: 'all', 'none' or e.g. 1,2,3 "
                          "(default: the robot file's [friction]); not with --offsets (collinear)")
     sp.add_argument("--method", choices=("ols", "wls", "consistent"), default="wls")
+    sp.add_argument("--prior", metavar="FILE|none",
+                    help="with --method consistent: where the parameters the data cannot see come from "
+                         "(default: the robot's nominal parameters, its [nominal] table or URDF inertials; "
+                         "FILE: a JSON parameter file; none: no prior, the split is arbitrary)")
     sp.add_argument("--essential", action="store_true", help="also compute the essential parameters")
     sp.add_argument("--cutoff", type=float, help="Butterworth cut-off for q [Hz] (default: chosen from the data)")
     sp.add_argument("--decimate-to", type=float, default=50.0,
@@ -117,6 +121,8 @@ def _check(args: argparse.Namespace) -> None:
         raise UsageError(f"--min-velocity must be >= 0 rad/s, got {args.min_velocity:g}")
     if args.urdf_out and args.method != "consistent":
         raise UsageError("--urdf-out needs --method consistent (a URDF holds physical bodies only)")
+    if args.prior is not None and args.method != "consistent":
+        raise UsageError("--prior is for --method consistent")
     for out in (args.json, args.report, args.urdf_out):
         check_output(out)
 
@@ -137,14 +143,16 @@ def run(args: argparse.Namespace) -> int:
     recs = read_recordings(args.recordings, robot, args.convention, gains)
     val_rec = read_recordings([args.validate], robot, args.convention, gains)[0] if args.validate else None
     progress(f"identifying ({args.method}) on {sum(len(r.t) for r in recs)} samples")
+    prior = physical_prior(args, robot) if args.method == "consistent" else None
+    options = {"physical_prior": prior} if args.method == "consistent" else {}
     result = fit(robot, recs, processing_of(args, sb is None), args.method, base=sb, gains=gains,
-                 convention=args.convention, spring_source=args.spring)
+                 convention=args.convention, spring_source=args.spring, **options)
     result = result.bootstrapped(args.bootstrap_seed)
     if args.essential:
         result = result.with_essential()
     if val_rec is not None:
         result = result.validated(val_rec)
-    _print_fit(result, recs, args.delay == "auto")
+    _print_fit(result, recs, args.delay == "auto", prior)
     if args.json:
         result.save(args.json)
     if args.report:
@@ -154,7 +162,25 @@ def run(args: argparse.Namespace) -> int:
     return 0
 
 
-def _print_fit(f: Fit, recs: list, auto_delay: bool) -> None:
+def physical_prior(args: argparse.Namespace, robot: rx90sym.Robot) -> Any:
+    """The prior of a consistent fit (--prior), or None with a line saying the split is arbitrary."""
+    from identify.estimation.consistency.prior import PhysicalPrior
+
+    if args.prior == "none":
+        progress("no prior (--prior none): the split of what the data cannot see is arbitrary")
+        return None
+    values = rx90sym.nominal_parameters(robot, args.prior)
+    if values is None:
+        progress(f"robot {robot.name!r} has no nominal parameters: the split of what the data cannot see is "
+                 f"arbitrary (give --prior FILE)")
+        return None
+    source = (args.prior if args.prior is not None else
+              f"[nominal] of {robot.source}" if robot.urdf is None else f"URDF inertials of {robot.source}")
+    progress(f"prior: {source}")
+    return PhysicalPrior(values, source)
+
+
+def _print_fit(f: Fit, recs: list, auto_delay: bool, prior: Any = None) -> None:
     obs, res = f.observation, f.result
     progress(f.delay_estimate.summary() + ("" if auto_delay else " (not compensated: --delay auto does)"))
     progress(obs.summary().replace("\n", "\n  "))
@@ -165,7 +191,15 @@ def _print_fit(f: Fit, recs: list, auto_delay: bool) -> None:
         if note:
             print(f"note: {note}")
     print(res.table())
+    if res.method == "consistent":
+        print("segment bootstrap of the unconstrained WLS estimate (the data's spread, not the consistent one's):")
     print(f.bootstrap.table(res))
+    if res.method == "consistent":
+        from identify.estimation.consistency.prior import bodies_table
+
+        print(f"\nsplit of the standard parameters: {res.split}")
+        print(f"weighted RSS {res.cost:.6g} vs WLS {res.wls_cost:.6g} ({res.cost_increase_pct:+.3f} %)")
+        print(bodies_table(f.robot.n, res.standard, prior))
     print(f"\n{_spring_text(f, recs)}")
     if f.essential is not None:
         print()

@@ -41,7 +41,7 @@ from rx90sym.rigid_body import RigidBody
 
 from identify.estimation.consistency.lmi import body_indices, nonnegative_indices, pseudo_inertia
 
-__all__ = ["Ellipsoid", "PhysicalPrior", "prior_constraints", "prior_scales"]
+__all__ = ["Ellipsoid", "PhysicalPrior", "bodies_table", "prior_constraints", "prior_scales"]
 
 MIN_MASS = 1e-3  # kg: MuJoCo and every simulator refuse near-massless moving bodies
 # Relative uncertainty of the prior per kind (the scales s_i): makers publish masses and centres
@@ -135,3 +135,30 @@ def prior_constraints(chi: cp.Variable, names: Sequence[str], prior: PhysicalPri
         if ia > 0:
             out += [chi[i] >= ia / prior.rotor_ratio, chi[i] <= ia * prior.rotor_ratio]
     return out
+
+
+def bodies_table(n: int, standard: Mapping[str, float], prior: PhysicalPrior | None) -> str:
+    """Per link: mass, centre of mass (frame j) and principal inertias at it, beside the prior's,
+    and whether the centre of mass lies in the prior's bounding ellipsoid."""
+    head = f"{'link':<5}{'mass kg':>9}{'prior':>9}   {'CoG m (frame j)':<26}{'prior CoG':<26}{'in ellipsoid':<13}" \
+           f"principal inertias at CoG kg m^2 (prior)"
+    lines = [head]
+    for j in range(1, n + 1):
+        body = RigidBody.from_vector(np.array([standard[f"{p}{j}"] for p in
+                                               ("XX", "XY", "XZ", "YY", "YZ", "ZZ", "MX", "MY", "MZ", "M")]))
+        c, I = body.com_inertia() if body.m > 0 else (np.full(3, np.nan), np.full((3, 3), np.nan))
+        cells = [f"{j:<5}{body.m:9.3f}"]
+        if prior is not None and str(j) in prior.links(list(standard)):
+            pb = prior.body(str(j))
+            pc, pI = pb.com_inertia()
+            inside = "yes" if prior.ellipsoid(str(j)).contains(c) else "NO"
+            cells += [f"{pb.m:9.3f}   {_vec(c):<26}{_vec(pc):<26}{inside:<13}"
+                      f"{_vec(np.linalg.eigvalsh(I), '.3g')} ({_vec(np.linalg.eigvalsh(pI), '.3g')})"]
+        else:
+            cells += [f"{'—':>9}   {_vec(c):<26}{'—':<26}{'—':<13}{_vec(np.linalg.eigvalsh(I), '.3g')}"]
+        lines.append("".join(cells))
+    return "\n".join(lines)
+
+
+def _vec(x: np.ndarray, fmt: str = "+.3f") -> str:
+    return "[" + " ".join(f"{v:{fmt}}" for v in x) + "]"
