@@ -22,7 +22,6 @@ Usage: PYTHONPATH=. python benchmarks/ur10e_prior.py [--data DIR]   (~1 min)
 from __future__ import annotations
 
 import argparse
-import dataclasses
 import importlib.util
 import sys
 import time
@@ -32,9 +31,9 @@ from types import ModuleType
 import numpy as np
 
 import rx90sym
-from identify import fit_recordings, predict
+from identify import fit
 from identify.estimation.consistency.prior import PhysicalPrior
-from identify.estimation.consistency.prior_fit import prior_fit, unseen_distance
+from identify.estimation.consistency.prior_fit import unseen_distance
 from identify.io.gains import DriveGains, apply_gains
 from rx90sym.rigid_body import RigidBody
 
@@ -59,36 +58,24 @@ def body(values: dict, j: int) -> RigidBody:
 
 def figures(data: Path = DATA) -> dict:
     robot = gains_bench.ur10e_robot()
-    raw_fit = gains_bench.load_run(data / EMPTY[0], FIT_ROWS)
     gains = DriveGains(np.array(gains_bench.SOURCE_GAINS), side="joint")
-    fit_rec = apply_gains(raw_fit, gains, robot)
+    fit_rec = apply_gains(gains_bench.load_run(data / EMPTY[0], FIT_ROWS), gains, robot)
     val_rec = apply_gains(gains_bench.load_run(data / EMPTY[0], VAL_ROWS), gains, robot)
-    fit = fit_recordings(robot, [fit_rec])
-    wls, system = fit.result, fit.result.system
+    wls = fit(robot, [fit_rec])   # the defaults of rx90 identify
     prior = PhysicalPrior(rx90sym.nominal_parameters(robot), "UR10e [nominal] (rx90sym/robots/ur10e.toml)")
+    common = dict(method="consistent", base=wls.base, observation=wls.observation)
     start = time.perf_counter()
-    _, second = prior_fit(system.R, system.z, rx90sym.base_parameters(robot).K, robot.parameter_names, prior,
-                          rss_outside=system.rss_outside, rows=system.rows)
-    elapsed = time.perf_counter() - start
-    bare = _bare(robot, system)
-    out = {"robot": robot, "prior": prior, "gains": gains.gains, "time_s": elapsed, "fits": {}}
-    for name, beta, chi in (("WLS", wls.values, None), ("consistent, no prior", bare.beta, bare.chi),
-                            ("consistent, prior", second.beta, second.chi)):
-        res = dataclasses.replace(wls, values=np.asarray(beta))
-        val = predict(robot, res, val_rec, **fit.filtering())
-        out["fits"][name] = {"validation": val, "chi": chi, "cost": system.rss(np.asarray(beta))}
-    out["unseen"] = {"consistent, no prior": unseen_distance(rx90sym.base_parameters(robot).K, robot.parameter_names,
-                                                             prior, bare.chi),
-                     "consistent, prior": unseen_distance(rx90sym.base_parameters(robot).K, robot.parameter_names,
-                                                          prior, second.chi)}
+    fits = {"WLS": wls, "consistent, no prior": fit(robot, [fit_rec], **common),
+            "consistent, prior": fit(robot, [fit_rec], physical_prior=prior, **common)}
+    out = {"robot": robot, "prior": prior, "gains": gains.gains, "time_s": time.perf_counter() - start, "fits": {}}
+    for name, f in fits.items():
+        standard = getattr(f.result, "standard", None)
+        out["fits"][name] = {"validation": f.predict(val_rec), "cost": wls.result.system.rss(f.result.values),
+                             "chi": None if standard is None else robot.parameter_vector(standard)}
+    K = wls.base.K
+    out["unseen"] = {name: unseen_distance(K, robot.parameter_names, prior, out["fits"][name]["chi"])
+                     for name in ("consistent, no prior", "consistent, prior")}
     return out
-
-
-def _bare(robot: rx90sym.Robot, system):
-    from identify.estimation.consistency import consistent_least_squares
-
-    return consistent_least_squares(system.R, system.z, rx90sym.base_parameters(robot).K, robot.parameter_names,
-                                    rss_outside=system.rss_outside, rows=system.rows)
 
 
 def moving_rms(val) -> np.ndarray:
@@ -125,7 +112,7 @@ def main(argv: list[str] | None = None) -> int:
     robot, prior = f["robot"], f["prior"]
     print(f"Fit rows {FIT_ROWS[0]}..{FIT_ROWS[1]}, predict rows {VAL_ROWS[0]}..{VAL_ROWS[1]} of {EMPTY[0]}; "
           f"gains (README) " + " ".join(f"{k:.4g}" for k in f["gains"]))
-    print(f"prior: {prior.source}; prior fit {f['time_s']:.2f} s")
+    print(f"prior: {prior.source}; the two consistent fits {f['time_s']:.1f} s")
     maker = sum(prior.values[f"M{j}"] for j in range(1, 7))
     for name in ("consistent, no prior", "consistent, prior"):
         values = dict(zip(robot.parameter_names, f["fits"][name]["chi"]))
