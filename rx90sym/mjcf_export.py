@@ -19,9 +19,8 @@ from typing import Mapping, Sequence
 import numpy as np
 
 from .description import Robot
-from .files import atomic_write, write_json
-from .model_export import (actuation, companion, companion_path, flange_pose, fmt, joint_origin, limits_in_controller_angles,
-                           link_bodies, parameter_vector, payload_body, quaternion)
+from .model_export import (actuation, companion, flange_pose, fmt, joint_origin, limits_in_controller_angles,
+                           link_bodies, parameter_vector, payload_body, quaternion, write_model)
 from .rigid_body import RigidBody
 
 # MuJoCo refuses moving bodies whose mass or principal inertia is below mjMINVAL (1e-15); a
@@ -106,10 +105,7 @@ def write_mjcf(robot: Robot, params: Mapping[str, float] | Sequence[float], path
     its companion ``NAME.actuation.json``; payload: XXc..Mc in the payload frame (frame n; a
     URDF robot's tip link), a body fixed on the flange. Returns the paths written; nothing is
     written when a body is refused (ValueError naming it)."""
-    text, side = mjcf_export(robot, params, path, payload)
-    out = Path(path)
-    atomic_write(out, lambda fh: fh.write(text))
-    return [out, write_json(companion_path(out), side)]
+    return write_model(path, *mjcf_export(robot, params, path, payload))
 
 
 def mjcf_export(robot: Robot, params: Mapping[str, float] | Sequence[float], path: str | Path,

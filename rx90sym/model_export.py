@@ -30,6 +30,15 @@ def companion_path(path: str | Path) -> Path:
     return path.with_name(path.stem + ".actuation.json")
 
 
+def write_model(path: str | Path, text: str, side: dict) -> list[Path]:
+    """Write an exported model file and its companion (each atomically); the paths written."""
+    from .files import atomic_write, write_json
+
+    out = Path(path)
+    atomic_write(out, lambda fh: fh.write(text))
+    return [out, write_json(companion_path(out), side)]
+
+
 def parameter_vector(robot: Robot, params: Mapping[str, float] | Sequence[float]) -> np.ndarray:
     """chi of ``robot`` from a name -> value mapping (all names) or a vector."""
     if isinstance(params, Mapping):

@@ -18,8 +18,8 @@ from typing import Mapping, Sequence
 import numpy as np
 
 from .description import Robot
-from .files import atomic_write, write_json
-from .model_export import companion, companion_path, joint_terms, link_bodies, parameter_vector, payload_body
+from .model_export import (companion, companion_path, joint_terms, link_bodies, parameter_vector,  # noqa: F401
+                           payload_body, write_model)
 from .parameters import LINK_PARAMETERS
 from .rigid_body import RigidBody, physical_problem
 from .urdf import relative_pose, zero_poses
@@ -76,10 +76,7 @@ def write_urdf(robot: Robot, params: Mapping[str, float] | Sequence[float], path
     payload: the payload's ten parameters XXc..Mc in the payload frame (frame n; a URDF robot's
     tip link), added as a fixed ``payload`` link on the flange.
     Returns the paths written; nothing is written when a link is refused (UrdfError)."""
-    text, side = urdf_export(robot, params, path, payload)
-    out = Path(path)
-    atomic_write(out, lambda fh: fh.write(text))
-    return [out, write_json(companion_path(out), side)]
+    return write_model(path, *urdf_export(robot, params, path, payload))
 
 
 def urdf_export(robot: Robot, params: Mapping[str, float] | Sequence[float], path: str | Path,

@@ -11,13 +11,12 @@ from __future__ import annotations
 
 import argparse
 import json
-from pathlib import Path
 from typing import Any
 
-from rx90sym.files import atomic_write, write_json
+from rx90sym.files import atomic_write, read_json
 from rx90sym.flange_payload import FlangePayload, franka_load, ur_script
 from rx90sym.mjcf_export import mjcf_export
-from rx90sym.model_export import companion_path
+from rx90sym.model_export import companion_path, write_model
 from rx90sym.urdf_export import urdf_export
 
 from ..common import UsageError, check_output, progress
@@ -41,12 +40,7 @@ def register(sub: Any) -> None:
 
 
 def _read(path: str) -> dict:
-    try:
-        data = json.loads(Path(path).read_text(encoding="utf-8"))
-    except OSError as exc:
-        raise ValueError(f"{path}: cannot read ({exc.strerror})") from None
-    except json.JSONDecodeError as exc:
-        raise ValueError(f"{path}: not valid JSON (line {exc.lineno}, column {exc.colno}: {exc.msg})") from None
+    data = read_json(path)
     if not isinstance(data, dict):
         raise ValueError(f"{path}: expected a JSON object")
     return data
@@ -122,7 +116,5 @@ def _model(args: argparse.Namespace, data: dict) -> int:
     if args.mjcf:
         artefacts.append((args.mjcf, *mjcf_export(fit.robot, params, args.mjcf, payload)))
     for path, text, side in artefacts:
-        atomic_write(path, lambda fh, text=text: fh.write(text))
-        write_json(companion_path(path), side)
-        progress(f"wrote {path} and {companion_path(path)}")
+        progress("wrote " + " and ".join(str(p) for p in write_model(path, text, side)))
     return 0
