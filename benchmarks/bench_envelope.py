@@ -16,6 +16,12 @@ of 1 % of each torque limit; groups and reference magnitudes as docs/excitation.
 full / none of the time per start is the figure the issue's target (<= 2x) refers to.
 
     python benchmarks/bench_envelope.py [--seed 0] [--duration 20] [--json out.json]
+
+With --every-robot: ``rx90 excite`` with its defaults (one start) on every bundled robot and the
+UR5 URDF: time, cond, the largest torque usage, the smallest clearance and height margin, the
+fastest point, and any warning that a check is off (there should be none).
+
+    python benchmarks/bench_envelope.py --every-robot [--duration 20]
 """
 from __future__ import annotations
 
@@ -56,14 +62,47 @@ def group_sigma(traj, model, objective) -> dict[str, float]:
     return {name: float(100 * np.median(rel[groups == name])) for name in GROUPS if np.any(groups == name)}
 
 
+def every_robot(duration: float) -> None:
+    """The default excitation of every bundled robot and the UR5 URDF, through the command line."""
+    import subprocess
+    import sys
+    import tempfile
+
+    rx90 = str(Path(sys.executable).with_name("rx90"))
+    print(f"{'robot':10s} {'s':>6s} {'cond':>7s} {'torque':>7s} {'clear m':>8s} {'above m':>8s} {'v m/s':>6s}  warnings")
+    for name in ("rx90", "tx40", "ur10e", "panda", str(UR5)):
+        extra = ["--tip", "tool0"] if name.endswith(".urdf") else []
+        with tempfile.TemporaryDirectory() as tmp:
+            t0 = time.perf_counter()
+            proc = subprocess.run([rx90, "excite", "--robot", name, *extra, "--duration", f"{duration:g}", "--starts",
+                                   "1", "--out", f"{tmp}/t.csv", "--json", f"{tmp}/t.json"],
+                                  capture_output=True, text=True)
+            elapsed = time.perf_counter() - t0
+            label = Path(name).name
+            if proc.returncode != 0:
+                print(f"{label:10s} failed: {proc.stderr.strip().splitlines()[-1]}")
+                continue
+            usage = json.loads(Path(f"{tmp}/t.json").read_text())["limits_usage"]
+            warns = [w for w in proc.stderr.splitlines() if "warning" in w and "acceleration" not in w]
+            torque = max(v for v in usage["torque"] if v is not None) if isinstance(usage["torque"], list) else "off"
+            print(f"{label:10s} {elapsed:6.1f} {json.loads(Path(f'{tmp}/t.json').read_text())['cond']:7.1f} "
+                  f"{torque:7.3f} {usage['min_clearance_m']:8.4f} {usage['min_height_m'] - usage['z_min_m']:8.4f} "
+                  f"{usage['max_point_speed_m_s']:6.3f}  {'; '.join(warns) or 'none'}", flush=True)
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--seed", type=int, default=0)
     parser.add_argument("--duration", type=float, default=20.0)
     parser.add_argument("--harmonics", type=int, default=5)
     parser.add_argument("--only", nargs="*", default=None, help="run only these configurations")
+    parser.add_argument("--progress", action="store_true", help="a line per start on stderr")
     parser.add_argument("--json", help="also write the figures to this JSON file")
+    parser.add_argument("--every-robot", action="store_true", help="default rx90 excite on every robot")
     args = parser.parse_args()
+    if args.every_robot:
+        every_robot(args.duration)
+        return
 
     import excitation
     import rx90sym
@@ -82,7 +121,7 @@ def main() -> None:
         options = OptimiserOptions(criterion=objective)
         t0 = time.perf_counter()
         traj = excitation.optimise_model(model, excitation.FourierSeries(args.duration, args.harmonics),
-                                         seed=args.seed, starts=1, options=options, progress=False)
+                                         seed=args.seed, starts=1, options=options, progress=args.progress)
         elapsed = time.perf_counter() - t0
         rows.append({"config": name, "time_s": elapsed, "iterations": traj.info.iterations,
                      "cond": traj.cond, "criterion": traj.info.criterion_value,

@@ -121,14 +121,14 @@ def safe_model(robot: rx90sym.Robot, chi_nominal: Any, base: Any, envelope: Enve
     capsules, no boxes). Raises ValueError when no pose lies inside the envelope or a given centre
     pose breaks it."""
     from .constraints import Margins
-    from .envelope import describe, envelope_model
+    from .envelope import describe_robot, envelope_model
     from .robot_geometry import arm_geometry
 
     geometry = arm_geometry(robot)
     collision = collision if collision is not None else collision_model(robot)
     model = envelope_model(model_from_robot(robot, chi_nominal, base), robot, envelope, geometry,
                            collision, margins or Margins())
-    return model, describe(envelope, geometry, model, robot.limits)
+    return model, describe_robot(envelope, geometry, model, robot)
 
 
 def random_trajectory(robot: rx90sym.Robot, duration: float = 20.0, harmonics: int = 5, seed: int = 0, *,
@@ -185,14 +185,14 @@ def optimise_payload(robot: rx90sym.Robot, duration: float = 10.0, via_points: i
     model = dataclasses.replace(payload_model(robot, base, chi_nominal, payload, z_min), collision=collision)
     described = None
     if envelope is not None:  # the same envelope as optimise (see safe_model)
-        from .envelope import describe, envelope_model
+        from .envelope import describe_robot, envelope_model
         from .robot_geometry import arm_geometry
 
         geometry = arm_geometry(robot)
         collision = collision if collision is not None else collision_model(robot)
         model = envelope_model(dataclasses.replace(model, heights=None, z_min=None), robot, envelope,
                                geometry, collision)
-        described = describe(envelope, geometry, model, robot.limits)
+        described = describe_robot(envelope, geometry, model, robot)
     noise = default_noise(model.limits) if noise_std is None else np.asarray(noise_std, dtype=float)
     # Short, fast motions press on the torque limits: imposed from the start (20 Hz grid), since
     # the lazy repairs of optimiser.py failed on the RX90 at 10 s.

@@ -43,7 +43,7 @@ URDF_ACCELERATION_PER_VELOCITY = 2.0  # [1/s] a URDF without accelerations: full
 class Envelope:
     """Settings of the safety envelope (see the module docstring); angles are model angles [rad].
 
-    margin [m] above the mounting plane; floor [m, frame 0] or None; max_speed [m/s];
+    margin [m] above the mounting plane; floor [m above the mounting plane] or None; max_speed [m/s];
     position_limits ((lo, hi) per joint) or None for position_fraction of each range;
     velocity_scale, acceleration_scale in (0, 1]; centre: pose to start from, or None (found);
     urdf_acceleration: the robot's acceleration limits are a URDF loader's default (replaced by
@@ -71,9 +71,10 @@ class Envelope:
             raise ValueError(f"envelope: margin above the mounting plane must be >= 0 m, got {self.margin}")
 
     def z_min(self, geometry: ArmGeometry) -> float:
-        """Lowest height [m, frame 0] any moving point may reach."""
-        plane = geometry.mounting_z + self.margin
-        return plane if self.floor is None else max(plane, float(self.floor))
+        """Lowest height [m, frame 0] any moving point may reach: the mounting plane plus the
+        margin or the floor (a height above the mounting plane), whichever is higher."""
+        above = self.margin if self.floor is None else max(self.margin, float(self.floor))
+        return geometry.mounting_z + above
 
     def joint_limits(self, limits: Any) -> JointLimits:
         """The experiment's limits from the robot's; ValueError naming the joint when given
@@ -114,27 +115,43 @@ def envelope_functions(robot: rx90sym.Robot, geometry: ArmGeometry, capsules: An
     q, qd = ca.SX.sym("q", robot.n), ca.SX.sym("qd", robot.n)
     t0n, origins = robot.forward_kinematics(q)
     tool = ca.mtimes(t0n, ca.DM([*geometry.tool_point, 1.0]))[:3]
-    heights, h_names, points, p_names = [], [], [tool], ["tool point"]
+    candidates, points, p_names = [], [tool], ["tool point"]
     for j in range(1, robot.n):  # origin of frame j+1
-        heights.append(origins[2, j])
-        h_names.append(f"origin of frame {j + 1}")
+        candidates.append((origins[2, j], f"origin of frame {j + 1}"))
     ends = capsules.segments(q)
     for i, (name, r) in enumerate(zip(capsules.names, capsules.radii)):
         link = capsules.links[i] if capsules.links else 1
         for e, label in ((2 * i, "a"), (2 * i + 1, "b")):
             if link >= 2:
-                heights.append(ends[2, e] - r)
-                h_names.append(f"capsule {name!r} end {label} (lower surface)")
+                candidates.append((ends[2, e] - r, f"capsule {name!r} end {label} (lower surface)"))
             if link >= 1:
                 points.append(ends[:, e])
                 p_names.append(f"capsule {name!r} end {label}")
-    heights.append(tool[2])
-    h_names.append("tool point")
+    candidates.append((tool[2], "tool point"))
+    # Points whose height no joint changes (on the first, vertical axis: a UR's shoulder) cannot
+    # move below anything: they are the fixed part, checked once (fixed_heights).
+    moving = [(z, n) for z, n in candidates if ca.depends_on(z, q)]
+    heights, h_names = [z for z, _ in moving], [n for _, n in moving]
     pts = ca.horzcat(*points)
     vel = ca.jtimes(pts, q, qd)  # dp/dt = J(q) qd, exact
     speeds = ca.sum1(vel * vel).T
     return (ca.Function("heights", [q], [ca.vertcat(*heights)], ["q"], ["z"]), tuple(h_names),
             ca.Function("speeds2", [q, qd], [speeds], ["q", "qd"], ["v2"]), tuple(p_names))
+
+
+def fixed_heights(robot: rx90sym.Robot, geometry: ArmGeometry, capsules: Any) -> list[tuple[str, float]]:
+    """(name, z [m]) of the frame origins after joint 1 and capsule ends on frames >= 2 whose
+    height no joint changes."""
+    q = ca.SX.sym("q", robot.n)
+    origins = robot.forward_kinematics(q)[1]
+    ends = capsules.segments(q)
+    out = [(f"origin of frame {j + 1}", origins[2, j]) for j in range(1, robot.n)]
+    for i, (name, r) in enumerate(zip(capsules.names, capsules.radii)):
+        if (capsules.links[i] if capsules.links else 1) >= 2:
+            out += [(f"capsule {name!r} end {lab} (lower surface)", ends[2, e] - r)
+                    for e, lab in ((2 * i, "a"), (2 * i + 1, "b"))]
+    zero = np.zeros(robot.n)
+    return [(n, float(ca.Function("z", [q], [z])(zero))) for n, z in out if not ca.depends_on(z, q)]
 
 
 def envelope_model(model: ExcitationModel, robot: rx90sym.Robot, envelope: Envelope,
@@ -197,9 +214,9 @@ def collision_violations(collision: CollisionModel, q: np.ndarray, clearance: fl
     return out
 
 
-def find_centre(model: ExcitationModel, margins: Margins = Margins(), slack: float = 0.02) -> np.ndarray:
+def find_centre(model: ExcitationModel, margins: Margins = Margins(), slack: float = 0.1) -> np.ndarray:
     """The centre of the joint ranges if it is inside the envelope (with the optimiser's margins
-    plus ``slack`` [m]), else the nearest such pose (IPOPT, ranges scaled to 1). ValueError when
+    plus ``slack`` [m], 0.1 m: room for the random starts), else the nearest such pose (IPOPT, ranges scaled to 1). ValueError when
     none is found (e.g. a floor the arm cannot clear), naming what the best pose breaks."""
     lim = model.limits
     lo, hi = position_bounds(model, margins.position)
@@ -224,6 +241,8 @@ def find_centre(model: ExcitationModel, margins: Margins = Margins(), slack: flo
                                           for k in range(1, 6)]):
         sol = solver(x0=np.clip(guess, lo, hi), lbx=lo, ubx=hi, lbg=np.concatenate(lbg), ubg=np.inf)
         x = np.asarray(sol["x"]).ravel()
+        turns = np.round((x - centre) / (2.0 * np.pi))  # the same pose one turn nearer the centre
+        x = np.where((x - 2.0 * np.pi * turns >= lo) & (x - 2.0 * np.pi * turns <= hi), x - 2.0 * np.pi * turns, x)
         if not pose_violations(model, x, margins) and _cover_ok(model, x, margins.clearance):
             if best is None or np.sum(((x - centre) / scale) ** 2) < np.sum(((best - centre) / scale) ** 2):
                 best = x
@@ -260,7 +279,8 @@ def describe(envelope: Envelope, geometry: ArmGeometry, model: ExcitationModel, 
     caps = model.collision.capsules if model.collision is not None else None
     return {
         "mounting_plane_z_m": geometry.mounting_z, "mounting_plane_source": geometry.mounting_source,
-        "margin_above_mounting_m": envelope.margin, "floor_z_m": envelope.floor, "z_min_m": model.z_min,
+        "margin_above_mounting_m": envelope.margin, "floor_above_mounting_m": envelope.floor,
+        "z_min_m": model.z_min,
         "height_points": list(model.point_names[0]),
         "max_point_speed_m_s": envelope.max_speed, "speed_points": list(model.point_names[1]),
         "position_limits_rad": np.c_[lim.q_min, lim.q_max].tolist(),
@@ -274,7 +294,20 @@ def describe(envelope: Envelope, geometry: ArmGeometry, model: ExcitationModel, 
         "self_collision": bool(model.collision is not None and model.collision.self_collision),
         "pairs_checked": 0 if caps is None else len(caps.pairs),
         "obstacles": [] if model.collision is None else [[*b.lo, *b.hi] for b in model.collision.boxes],
+        "fixed_points_below_z_min": [],
     }
+
+
+def describe_robot(envelope: Envelope, geometry: ArmGeometry, model: ExcitationModel,
+                   robot: rx90sym.Robot) -> dict[str, Any]:
+    """:func:`describe` plus the points no joint moves that lie below z_min (left out: the floor
+    then cuts the arm's fixed part, which the user should know)."""
+    out = describe(envelope, geometry, model, robot.limits)
+    caps = model.collision.capsules if model.collision is not None else None
+    if caps is not None:
+        out["fixed_points_below_z_min"] = [f"{n} at z = {z:.4f} m" for n, z in fixed_heights(robot, geometry, caps)
+                                           if z < model.z_min]
+    return out
 
 
 def summary_lines(info: dict[str, Any]) -> list[str]:
@@ -282,9 +315,10 @@ def summary_lines(info: dict[str, Any]) -> list[str]:
     deg = np.degrees
     pos = ", ".join(f"[{deg(lo):.0f}, {deg(hi):.0f}]" for lo, hi in info["position_limits_rad"])
     return [
-        f"safety envelope: no moving point below z = {info['z_min_m']:.3f} m (mounting plane "
-        f"{info['mounting_plane_z_m']:.3f} m from {info['mounting_plane_source']} + {info['margin_above_mounting_m']:g} m"
-        + (f", floor {info['floor_z_m']:g} m" if info["floor_z_m"] is not None else "") + ")",
+        f"safety envelope: no moving point below z = {info['z_min_m']:.3f} m in frame 0 (mounting plane z = "
+        f"{info['mounting_plane_z_m']:.3f} m: {info['mounting_plane_source']}; margin {info['margin_above_mounting_m']:g} m"
+        + (f"; floor {info['floor_above_mounting_m']:g} m above the mounting plane"
+           if info["floor_above_mounting_m"] is not None else "") + ")",
         f"  joint ranges [deg]: {pos}",
         f"  velocities x{info['velocity_scale']:g}: {', '.join(f'{v:.3g}' for v in info['velocity_limits_rad_s'])} rad/s; "
         f"accelerations x{info['acceleration_scale']:g}: {', '.join(f'{v:.3g}' for v in info['acceleration_limits_rad_s2'])} rad/s^2"
@@ -294,7 +328,9 @@ def summary_lines(info: dict[str, Any]) -> list[str]:
         f"{info['capsules_source']}); {len(info['obstacles'])} obstacle box(es)",
         f"  centre pose [deg]: {', '.join(f'{v:.1f}' for v in deg(info['centre_pose_rad']))}"
         + (" (given)" if info["centre_given"] else ""),
-    ]
+    ] + ([f"  note: {len(info['fixed_points_below_z_min'])} point(s) no joint moves lie below z_min and are "
+          f"left out (the floor cuts the arm's fixed part), e.g. {info['fixed_points_below_z_min'][0]}"]
+         if info.get("fixed_points_below_z_min") else [])
 
 
 def shrink_to_envelope(model: ExcitationModel, form: Any, z: np.ndarray, z_centre: np.ndarray,

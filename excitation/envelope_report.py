@@ -3,7 +3,7 @@
 :func:`along_time` evaluates, on samples of the trajectory, the tool point's path (frame 0), the
 largest Cartesian point speed, the largest joint velocity and acceleration as fractions of the
 experiment's limits, the lowest height above the envelope's floor and the smallest clearance
-between capsules (and obstacle boxes); :func:`table` and :func:`figures` present them. The
+between capsules (and obstacle boxes); :func:`worst` and :func:`figures` present them. The
 application puts them in its HTML report (identify.app.report).
 """
 from __future__ import annotations
@@ -58,21 +58,21 @@ def along_time(robot: rx90sym.Robot, model: ExcitationModel, trajectory: Any, to
         clearance, float(model.speed_max or np.inf), clearance_margin)
 
 
-def table(s: EnvelopeSeries) -> str:
-    """Worst value of each quantity, its limit and when it happens."""
+def worst(s: EnvelopeSeries) -> list[tuple[str, str, float | None, float | None, str]]:
+    """Per quantity: (name, unit, worst value, its time [s], limit); None where not checked."""
     rows = [("largest point speed", s.speed, "max", f"{s.speed_max:g} m/s", "m/s"),
             ("joint velocity / limit", s.velocity, "max", "1", ""),
             ("joint acceleration / limit", s.acceleration, "max", "1", ""),
             ("lowest point above the floor", s.height, "min", "0 m", "m"),
             ("smallest clearance", s.clearance, "min", f"0 m ({s.clearance_margin:g} m kept by the optimiser)", "m")]
-    lines = [f"{'quantity':32s} {'worst':>10s} {'at t [s]':>9s}  limit"]
+    out = []
     for name, x, kind, limit, unit in rows:
         if not np.all(np.isfinite(x)):
-            lines.append(f"{name:32s} {'n/a':>10s} {'':>9s}  not checked")
+            out.append((name, unit, None, None, "not checked"))
             continue
         k = int(np.argmax(x) if kind == "max" else np.argmin(x))
-        lines.append(f"{name:32s} {x[k]:10.4g} {s.t[k]:9.3f}  {limit} {unit}".rstrip())
-    return "\n".join(lines)
+        out.append((name, unit, float(x[k]), float(s.t[k]), limit))
+    return out
 
 
 def figures(s: EnvelopeSeries) -> list[tuple[str, str, Any]]:
@@ -98,15 +98,15 @@ def figures(s: EnvelopeSeries) -> list[tuple[str, str, Any]]:
     ax[1].plot(s.t, s.velocity, label="velocity")
     ax[1].plot(s.t, s.acceleration, label="acceleration")
     ax[1].axhline(1.0, color="r", ls="--")
-    ax[1].set_ylabel("max over joints / limit")
+    ax[1].set_ylabel("joints / limit")
     ax[1].legend(fontsize=7)
     ax[2].plot(s.t, s.height)
     ax[2].axhline(0.0, color="r", ls="--")
-    ax[2].set_ylabel("lowest point above floor [m]")
+    ax[2].set_ylabel("above floor [m]")
     if np.all(np.isfinite(s.clearance)):
         ax[3].plot(s.t, s.clearance)
         ax[3].axhline(0.0, color="r", ls="--")
-    ax[3].set_ylabel("smallest clearance [m]")
+    ax[3].set_ylabel("clearance [m]")
     ax[3].set_xlabel("t [s]")
     return [("fig-tool-path", "Tool point path, projections in frame 0", path),
             ("fig-envelope-time", "Speeds, joint limits, height and clearance along time (limits dashed)", timeline)]

@@ -17,8 +17,9 @@ import numpy as np
 import rx90sym
 from rx90sym.files import write_json
 
-from identify.estimation.bootstrap import segment_bootstrap_std
+from identify.estimation.bootstrap import BLOCK_S, DRAWS, bootstrap_std, segment_bootstrap_std
 from identify.estimation.consistent_fit import ConsistentResult
+from identify.plausibility import Flag
 from identify.estimation.results import IdentificationResult
 from identify.fit_file import SCHEMA_VERSION, FitModel, gains_of, read_fit_file, robot_of
 from identify.io.gains import DriveGains
@@ -30,9 +31,9 @@ from identify.validation import Validation, predict
 __all__ = ["METHODS", "Bootstrap", "Fit", "fit", "load_fit"]
 
 METHODS = ("ols", "wls", "consistent")
-#: Segment bootstrap: block length [s] (longer than the residual's correlation) and number of draws.
-BOOTSTRAP_BLOCK_S = 0.5
-BOOTSTRAP_DRAWS = 200
+#: Segment bootstrap: block length [s] and number of draws (the library's one bootstrap).
+BOOTSTRAP_BLOCK_S = BLOCK_S
+BOOTSTRAP_DRAWS = DRAWS
 
 
 @dataclass(frozen=True, eq=False)
@@ -75,7 +76,8 @@ class Fit:
     base: the base parameters (columns) used; observation: W, Y and notes (None when loaded);
     delay_estimate: the lag search (None when not run or loaded); delay_estimate_s [s];
     spring: how the spring entered (JSON entry); bootstrap, essential, validation: None until
-    asked (:meth:`bootstrapped`, :meth:`with_essential`, :meth:`validated`).
+    asked (:meth:`bootstrapped`, :meth:`with_essential`, :meth:`validated`); flags: the
+    plausibility warnings of the fit (identify.plausibility, :meth:`with_flags`).
     """
 
     robot: rx90sym.Robot
@@ -90,6 +92,7 @@ class Fit:
     bootstrap: Bootstrap | None = None
     essential: IdentificationResult | None = None
     validation: Validation | None = None
+    flags: tuple[Flag, ...] = ()
 
     # ------------------------------------------------------------ what the fit used
     @property
@@ -136,6 +139,10 @@ class Fit:
         """This fit with its validation on ``recording`` recorded (saved in the file)."""
         return replace(self, validation=self.validate(recording))
 
+    def with_flags(self, flags: Sequence[Flag]) -> "Fit":
+        """This fit with its plausibility flags recorded (saved in the file's ``flags``)."""
+        return replace(self, flags=tuple(flags))
+
     def with_essential(self) -> "Fit":
         """This fit with its essential parameters (eqs. 16-17) computed."""
         from identify.estimation.essential import essential_parameters
@@ -162,7 +169,8 @@ class Fit:
                     "delay_estimate_s": self.delay_estimate_s, "model": self.model.to_json(),
                     "essential": self.essential.to_dict() if self.essential is not None else {},
                     "validation": self.validation.to_dict() if self.validation is not None else {},
-                    "schema_version": SCHEMA_VERSION, "processing": self.processing.to_json()})
+                    "schema_version": SCHEMA_VERSION, "processing": self.processing.to_json(),
+                    "flags": [f.to_json() for f in self.flags]})
         return out
 
     def save(self, path: str | Path) -> Path:
@@ -181,6 +189,7 @@ class Fit:
             result = (ConsistentResult if consistent else IdentificationResult).from_dict(data)
             essential = IdentificationResult.from_dict(data["essential"]) if data.get("essential") else None
             bootstrap = Bootstrap.from_json(data)
+            flags = tuple(Flag.from_json(f) for f in data.get("flags", []))
         except (KeyError, TypeError, ValueError) as exc:
             raise ValueError(f"{path}: {exc}".replace(f"{path}: {path}: ", f"{path}: ")) from None
         rob = robot if isinstance(robot, rx90sym.Robot) else robot_of(model, robot)
@@ -190,7 +199,7 @@ class Fit:
             rob = rob.with_options(asymmetric_coulomb=asymmetric)
         return cls(rob, result, processing, model, rx90sym.base_parameters(rob),
                    delay_estimate_s=data.get("delay_estimate_s"), spring=data.get("spring"),
-                   bootstrap=bootstrap, essential=essential)
+                   bootstrap=bootstrap, essential=essential, flags=flags)
 
 
 def load_fit(path: str | Path, robot: rx90sym.Robot | str | None = None) -> Fit:
@@ -199,9 +208,9 @@ def load_fit(path: str | Path, robot: rx90sym.Robot | str | None = None) -> Fit:
 
 
 def _spring_label(robot: rx90sym.Robot, base: Any) -> str:
-    from identify.observation.spring_fit import SpringBase
+    from identify.observation.spring_fit import BaseWithSpring
 
-    if isinstance(base, SpringBase):
+    if isinstance(base, BaseWithSpring):
         return "identify-k" if type(base.model).__name__ == "SpringStiffness" else "identify"
     return "none" if robot.spring is None else "default"
 
@@ -217,9 +226,10 @@ def fit(robot: rx90sym.Robot, recordings: Sequence[Any], processing: Processing 
     "consistent" (WLS data, physically consistent standard parameters through cvxpy; extra
     keyword arguments go to identify.estimation.consistent_fit.consistent_fit, e.g.
     physical_prior (a PhysicalPrior: the unseen directions from the robot's nominal parameters,
-    within a covariance of the base parameters calibrated by the segment bootstrap) or consistent_least_squares' prior, prior_weight,
-    total_mass, mass_bounds, com_boxes, solver); base: the columns (default: the
-    symbolic base parameters; a SpringBase identifies the spring too, with processing.spring
+    within a covariance of the base parameters calibrated by the segment bootstrap) or
+    consistent_least_squares' prior, prior_weight, total_mass, mass_bounds, com_boxes, solver);
+    base: the columns (default: the symbolic base parameters; a BaseWithSpring identifies the
+    spring too, with processing.spring
     False). Recorded in the fit file for :func:`load_fit`: gains (already applied to current
     recordings), convention (of the files; None: each file's header), spring_source ("default",
     "none" or a table file; None: from the robot). observation: an already built observation
@@ -241,9 +251,9 @@ def fit(robot: rx90sym.Robot, recordings: Sequence[Any], processing: Processing 
     model = FitModel.of(robot, convention=convention, gains=gains.to_dict() if gains is not None else None,
                         rest=p.rest, min_velocity=p.min_velocity, spring=spring_source or _spring_label(robot, base),
                         cutoff_hz=obs.cutoffs[0], decimate_to_hz=p.decimate_to, rate_hz=obs.rate, delay_s=lag)
-    from identify.observation.spring_fit import SpringBase, spring_summary
+    from identify.observation.spring_fit import BaseWithSpring, spring_summary
 
-    spring = spring_summary(robot, base if isinstance(base, SpringBase) else None, result, recordings)[0]
+    spring = spring_summary(robot, base if isinstance(base, BaseWithSpring) else None, result, recordings)[0]
     return Fit(robot, result, p, model, base, obs, found, found.delay if found is not None else None, spring)
 
 
@@ -251,8 +261,7 @@ def _honest_covariance(obs: Observation, result: IdentificationResult) -> np.nda
     """Eq. 13's covariance of the base parameters, inflated by the median ratio of the segment
     bootstrap's σ to eq. 13's when above 1 (coloured residuals: eq. 13 is optimistic; white
     ones leave it as it is). The budget of the prior fit is measured in it."""
-    block = max(1, int(round(BOOTSTRAP_BLOCK_S * obs.rate)))
-    std = segment_bootstrap_std(obs.W, obs.Y, obs.joint, obs.samples, result.weights, block, BOOTSTRAP_DRAWS, 0)
+    std = bootstrap_std(obs.W, obs.Y, obs.joint, obs.samples, result.weights, obs.rate)
     ratio = np.nanmedian(std / np.where(result.std > 0, result.std, np.nan))
     return result.covariance * max(1.0, float(ratio) if np.isfinite(ratio) else 1.0) ** 2
 

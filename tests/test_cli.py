@@ -27,7 +27,7 @@ def write_trajectory(path: Path, robot, seed: int, duration: float = 12.0) -> No
     t = np.arange(0, duration, 1 / 250)
     q, qd, qdd = multisine(robot, seed, duration)(t)
     header = ",".join(["t"] + [f"{k}{j}" for k in ("q", "dq", "ddq") for j in range(1, 7)])
-    np.savetxt(path, np.c_[t, robot.to_staubli(q), qd, qdd], delimiter=",", header=header, comments="")
+    np.savetxt(path, np.c_[t, robot.to_controller(q), qd, qdd], delimiter=",", header=header, comments="")
 
 
 class _Figures(HTMLParser):
@@ -140,7 +140,7 @@ def test_convert_the_tx40_files_then_identify(tmp_path):
 
 @pytest.mark.parametrize("args, needle", [
     (("identify", "missing.csv", "--json", "out.json"), "missing.csv"),
-    (("identify", "corrupt.csv", "--json", "out.json"), "corrupt.csv"),
+    (("identify", "corrupt.csv", "--robot", "rx90", "--json", "out.json"), "corrupt.csv"),
     (("identify", "empty.csv", "--robot", "rx91", "--json", "out.json"), "unknown robot 'rx91'"),
     (("identify", "empty.csv", "--method", "consistent", "--essential", "--json", "out.json"), "conflicting options"),
     (("payload", "--method", "3", "--loaded", "loaded.csv", "--mass", "7", "--json", "out.json"), "conflicting options"),

@@ -86,13 +86,13 @@ def test_a_floor_with_a_start_pose_above_it_succeeds_and_is_held(tmp_path):
                "--json", str(tmp_path / "t.json"))
     assert proc.returncode == 0, proc.stderr
     usage = json.loads((tmp_path / "t.json").read_text())["limits_usage"]
-    assert usage["z_min_m"] == 0.1 and usage["min_height_m"] >= 0.1
+    assert usage["z_min_m"] == pytest.approx(0.1 - 0.089159) and usage["min_height_m"] >= usage["z_min_m"]
     data = np.genfromtxt(tmp_path / "t.csv", delimiter=",", names=True)
     q = np.column_stack([data[f"q{j}"] for j in range(1, 7)])
     assert np.allclose(q[0], [0, -1.5708, 0, -1.5708, 0, 0])  # the approach starts at the pose
     frames = _pinocchio_frames(q[::10])
-    base_to_frame0 = 0.089159  # the URDF root is 0.089 m below frame 0 (the shoulder)
-    assert frames["tool0"][:, 2].min() >= 0.1 + base_to_frame0 - 1e-6
+    for name in ("forearm_link", "wrist_1_link", "wrist_2_link", "wrist_3_link", "tool0"):
+        assert frames[name][:, 2].min() >= 0.1 - 1e-6, name  # --floor: above the URDF root's z = 0
 
 
 def test_urscript_has_one_servoj_per_sample_at_the_period():
@@ -154,7 +154,7 @@ def test_capsule_distances_agree_with_coal():
 @pytest.mark.parametrize("extra, message", [
     (("--position-limits", "0:0,-1:1,-1:1,-1:1,-1:1,-1:1"), "zero or negative width"),
     (("--controller", "ur", "--start-pose", "9,0,0,0,0,0"), "outside the robot's range"),
-    (("--floor", "5"), "no pose of the arm lies inside the envelope"),
+    (("--floor", "5"), "no pose of the arm lies inside the envelope"),  # above the arm's reach
     (("--max-tool-speed", "2"), "at most 1.5"),
     (("--controller", "ur", "--start-pose", "0,0,0,0,0,0"), "outside the safety envelope: "),
 ])

@@ -159,7 +159,7 @@ def test_cli_spring_option_conflicts_exit_2(tmp_path, args, needle):
     text = (ROBOTS_DIR / "rx90.toml").read_text()
     (tmp_path / "arm.toml").write_text(text[:text.index("[spring]")])
     (tmp_path / "a.csv").write_text("t,q1\n")
-    out = cli("identify", "a.csv", *args, cwd=tmp_path)
+    out = cli("identify", "a.csv", "--robot", "rx90", *args, cwd=tmp_path)
     assert out.returncode == 2 and needle in out.stderr, out.stderr
 
 

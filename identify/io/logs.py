@@ -58,6 +58,7 @@ import rx90sym
 from rx90sym.recording import Recording, RecordingError
 
 from identify.io.columns import ColumnMap, parse_columns
+from identify.io.units import check_units
 from identify.io.gains import DriveGains, apply_gains, read_gains
 from identify.signal.resampling import resample as resample_recording
 from identify.io.recordings import JUMP_ATOL, JUMP_SAFETY, TIME_RTOL, RecordingWarning, _normalise_convention
@@ -398,9 +399,11 @@ def read_log(
     _check_time(t, numbers, p.name)
     q_file = values[:, list(cmap.q)]
     q = np.asarray(robot.to_model(q_file), dtype=float) if conv == "controller" else q_file
+    dq = values[:, list(cmap.qd)] if cmap.qd else None
+    # Degrees and swapped q/qd groups named as such, before they read as corrupt rows.
+    check_units(t, q_file, dq, robot, p.name, numbers, to_model=conv == "controller", ranges=False)
     _check_positions(q, t, numbers, cmap, robot, p.name)
 
-    dq = values[:, list(cmap.qd)] if cmap.qd else None
     span = np.ptp(q, axis=0)
     _check_velocities(dq, q, t, span, numbers, cmap, p.name)
     if np.all(span < STILL):

@@ -14,7 +14,6 @@ import numbers
 from dataclasses import replace
 
 import numpy as np
-from scipy.interpolate import CubicHermiteSpline, CubicSpline
 
 from rx90sym.messages import plain
 from rx90sym.recording import Recording
@@ -36,6 +35,8 @@ def interpolate(rec: Recording, t: np.ndarray) -> Recording:
     Returns:
         A recording with the same source, robot, meta and signals, on the time stamps ``t``.
     """
+    from scipy.interpolate import CubicHermiteSpline, CubicSpline  # when used: a fast start
+
     t = np.asarray(t, dtype=float)
     if rec.dq is not None:
         q = CubicHermiteSpline(rec.t, rec.q, rec.dq, axis=0)(t)

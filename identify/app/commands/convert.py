@@ -14,8 +14,6 @@ from __future__ import annotations
 import argparse
 from typing import Any
 
-from identify.io.logs import read_log
-from identify.io.recordings import read_motor_recording, write_recording
 
 from ..common import UsageError, check_output, convention_option, load_robot, progress, robot_option
 
@@ -28,7 +26,7 @@ def register(sub: Any) -> None:
             "recording file")
     sp = sub.add_parser("convert", help=text, description=text + "; see docs/real-logs.md")
     sp.set_defaults(func=run)
-    robot_option(sp)
+    robot_option(sp, None, "")
     sp.add_argument("log", nargs="?", metavar="LOG.csv", help="controller log (comma separated)")
     sp.add_argument("--columns", metavar="SPEC",
                     help="what each column of the log holds, in order: t, q1..qn, qd1..qdn (recorded "
@@ -67,7 +65,17 @@ def _rows(text: str | None) -> tuple[int, int] | None:
     return first, last
 
 
+def _robot(args: argparse.Namespace):
+    if args.robot is None:
+        raise UsageError("convert needs --robot NAME|FILE.toml|FILE.urdf: the robot the log was recorded "
+                         "on (its joint count, limits and angle offsets; written into the recording)")
+    return load_robot(args)
+
+
 def run(args: argparse.Namespace) -> int:
+    from identify.io.logs import read_log
+    from identify.io.recordings import write_recording
+
     if args.log is None:
         return _run_motor(args)
     mixed = _given(args, _MOTOR_OPTIONS)
@@ -75,7 +83,7 @@ def run(args: argparse.Namespace) -> int:
         raise UsageError(f"{', '.join(mixed)} belong to the motor form, not to a LOG.csv")
     if args.columns is None:
         raise UsageError("a LOG.csv needs --columns SPEC (e.g. t,q1..q6,qd1..qd6,i1..i6)")
-    robot = load_robot(args)
+    robot = _robot(args)
     check_output(args.out)
     progress(f"reading the log {args.log}")
     rec = read_log(args.log, robot, args.columns, header=not args.no_header, rows=_rows(args.rows),
@@ -98,6 +106,8 @@ def run(args: argparse.Namespace) -> int:
 
 
 def _run_motor(args: argparse.Namespace) -> int:
+    from identify.io.recordings import read_motor_recording, write_recording
+
     extra = _given(args, _LOG_OPTIONS)
     if extra:
         raise UsageError(f"{', '.join(extra)} belong to the log form (give LOG.csv)")
@@ -105,7 +115,7 @@ def _run_motor(args: argparse.Namespace) -> int:
                               ("--period", args.period)) if v is None]
     if missing:
         raise UsageError(f"give LOG.csv --columns SPEC, or the motor form ({', '.join(missing)} missing)")
-    robot = load_robot(args)
+    robot = _robot(args)
     check_output(args.out)
     progress("reading the motor-side files")
     rec = read_motor_recording(args.motor_positions, args.motor_torques, robot, period=args.period,

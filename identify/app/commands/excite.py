@@ -60,8 +60,8 @@ def register(sub: Any) -> None:
                     help="do not keep the link capsules apart (default: they are; the robot's own "
                          "capsules, docs/excitation.md)")
     sp.add_argument("--floor", type=float, default=None,
-                    help="floor height z [m, base frame] no moving point may go below (with the mounting "
-                         "plane's margin, the higher of the two)")
+                    help="floor height [m above the robot's mounting plane] no moving point may go "
+                         "below (default: the mounting margin, 0.05 m)")
     sp.add_argument("--controller", choices=("ur", "franka"), default=None,
                     help="write --out at this controller's rate and form (UR e-Series 500 Hz, see "
                          "--controller-rate; Franka 1 kHz, jerk checked); default 250 Hz")
@@ -156,12 +156,15 @@ def _report(args: argparse.Namespace, robot: rx90sym.Robot, model: Any, traj: An
     from excitation import envelope_report as er
     from excitation.robot_geometry import arm_geometry
 
-    from ..report import Section, write_report
+    from ..report.excite_page import envelope_table, excite_page
+    from ..report.figures import figure
+    from ..report.page import Section, Text, write_page
 
     series = er.along_time(robot, model, traj, arm_geometry(robot).tool_point)
-    text = "\n".join(excitation.envelope_lines(described)) + "\n\n" + er.table(series)
-    write_report(args.report, f"Excitation of {robot.name}: safety envelope",
-                 [Section("Safety envelope along the trajectory", text, tuple(er.figures(series)))])
+    envelope = Section("envelope", "Safety envelope along the trajectory", (
+        Text(tuple(excitation.envelope_lines(described))), envelope_table(er.worst(series)),
+        *(figure(i, caption, fig) for i, caption, fig in er.figures(series))))
+    write_page(args.report, excite_page({**traj.summary(), "robot": robot.name}, (), (envelope,)))
 
 
 def _check_options(args: argparse.Namespace) -> None:

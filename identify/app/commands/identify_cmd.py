@@ -7,19 +7,22 @@ one filtering for fit and validation, reused by ``rx90 predict`` through :func:`
 from __future__ import annotations
 
 import argparse
-from typing import Any
+import math
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 import rx90sym
-from identify.fitting import Fit, fit
-from identify.io.gains import read_gains
 from identify.observation.processing import DEFAULT_MIN_VELOCITY, DEFAULT_REST, REST_POLICIES, Processing
-from identify.observation.spring_fit import SpringBase, spring_summary
+from identify.plausibility import estimate_flags, residual_flags, static_gravity_flags, torque_scale_flags
 
+from ..flags import flag_lines, given_gain_flags, settle
 from ..common import (UsageError, check_output, convention_option, progress, read_recordings, robot_option,
                       robot_with_spring, spring_options)
-from ..spring_output import attach_spring
+
+if TYPE_CHECKING:  # the method is imported when the command runs, not for its --help
+    from identify.fitting import Fit
+
 
 def _delay(text: str) -> str | float:
     if text == "auto":
@@ -28,7 +31,7 @@ def _delay(text: str) -> str | float:
         value = float(text)
     except ValueError:
         raise argparse.ArgumentTypeError(f"--delay takes 'auto' or a number of seconds, got {text!r}") from None
-    if not np.isfinite(value) or abs(value) > 1.0:
+    if not math.isfinite(value) or abs(value) > 1.0:
         raise argparse.ArgumentTypeError(f"--delay must be a finite number of seconds within ±1, got {text!r}")
     return value
 
@@ -45,7 +48,7 @@ def register(sub: Any) -> None:
                         description="identify the base parameters from recordings")
     sp.set_defaults(func=run)
     sp.add_argument("recordings", nargs="+", help="recording CSV files")
-    robot_option(sp)
+    robot_option(sp, None, "the robot the recordings' '# robot:' line names")
     add_recording_options(sp)
     spring_options(sp)
     sp.add_argument("--offsets", action="store_true", help="add per-joint torque offsets OFF1..OFFn")
@@ -81,7 +84,7 @@ def register(sub: Any) -> None:
 
 
 def _robot(args: argparse.Namespace) -> tuple[rx90sym.Robot, Any]:
-    robot, spring_model = robot_with_spring(args)
+    robot, spring_model = robot_with_spring(args, args.recordings)
     if args.coulomb_sign is not None:
         if robot.coupling is None:
             raise UsageError(f"--coulomb-sign: robot {robot.name!r} has no coupled joints")
@@ -135,12 +138,20 @@ def processing_of(args: argparse.Namespace, spring: bool) -> Processing:
 
 
 def run(args: argparse.Namespace) -> int:
+    from identify.fitting import fit
+    from identify.io.gains import read_gains
+
+    from ..spring_output import attach_spring
+
     _check(args)
     robot, spring_model = _robot(args)
     sb = attach_spring(robot, spring_model, args.validate, args.method)
     gains = read_gains(args.gains, robot) if args.gains else None
     progress(f"reading {len(args.recordings)} recording(s)")
+    flags = given_gain_flags(gains) if gains is not None else []
     recs = read_recordings(args.recordings, robot, args.convention, gains)
+    flags += settle(torque_scale_flags([r.tau for r in recs if r.tau is not None], robot))
+    flags += settle(static_gravity_flags(recs, robot, rx90sym.nominal_parameters(robot)))
     val_rec = read_recordings([args.validate], robot, args.convention, gains)[0] if args.validate else None
     progress(f"identifying ({args.method}) on {sum(len(r.t) for r in recs)} samples")
     prior = physical_prior(args, robot) if args.method == "consistent" else None
@@ -148,6 +159,7 @@ def run(args: argparse.Namespace) -> int:
     result = fit(robot, recs, processing_of(args, sb is None), args.method, base=sb, gains=gains,
                  convention=args.convention, spring_source=args.spring, **options)
     result = result.bootstrapped(args.bootstrap_seed)
+    result = result.with_flags([*flags, *_fit_flags(result, args.method)])
     if args.essential:
         result = result.with_essential()
     if val_rec is not None:
@@ -180,6 +192,18 @@ def physical_prior(args: argparse.Namespace, robot: rx90sym.Robot) -> Any:
     return PhysicalPrior(values, source)
 
 
+def _fit_flags(f: Fit, method: str) -> list:
+    """A joint the model does not explain stops the run; non-physical WLS estimates are flagged
+    (judged with the larger of eq. 13's and the bootstrap's sigma)."""
+    obs, res = f.observation, f.result
+    torque_rms = np.array([np.sqrt(np.mean(obs.Y[obs.joint == j] ** 2)) if np.any(obs.joint == j) else np.inf
+                           for j in range(len(res.residual_rms))])
+    flags = settle(residual_flags(res.residual_rms, torque_rms, f.robot.limits.tau_max[:torque_rms.size]))
+    if method != "consistent":
+        flags += settle(estimate_flags(res.names, res.values, np.fmax(res.std, f.bootstrap.std)))
+    return flags
+
+
 def _print_fit(f: Fit, recs: list, auto_delay: bool, prior: Any = None) -> None:
     obs, res = f.observation, f.result
     progress(f.delay_estimate.summary() + ("" if auto_delay else " (not compensated: --delay auto does)"))
@@ -200,6 +224,8 @@ def _print_fit(f: Fit, recs: list, auto_delay: bool, prior: Any = None) -> None:
         print(f"\nsplit of the standard parameters: {res.split}")
         print(f"weighted RSS {res.cost:.6g} vs WLS {res.wls_cost:.6g} ({res.cost_increase_pct:+.3f} %)")
         print(bodies_table(f.robot.n, res.standard, prior))
+    if f.flags:
+        print(flag_lines(f.flags))
     print(f"\n{_spring_text(f, recs)}")
     if f.essential is not None:
         print()
@@ -210,16 +236,31 @@ def _print_fit(f: Fit, recs: list, auto_delay: bool, prior: Any = None) -> None:
 
 
 def _spring_text(f: Fit, recs: list) -> str:
-    return spring_summary(f.robot, f.base if isinstance(f.base, SpringBase) else None, f.result, recs)[1]
+    from identify.observation.spring_fit import BaseWithSpring, spring_summary
+
+    return spring_summary(f.robot, f.base if isinstance(f.base, BaseWithSpring) else None, f.result, recs)[1]
 
 
 def _write_report(path: str, f: Fit, recs: list) -> None:
-    from ..report import Section, identification_sections, write_report
+    """The HTML report from the fit file's content (what --json writes) plus the recordings' extent."""
+    from ..report.writers import write_identify_report
 
-    sections = identification_sections(f.robot, f.result, recs, validation=f.validation, essential=f.essential,
-                                       fit_prediction=f.predict(recs[0]), model=f.model,
-                                       extra_tables=[f.bootstrap.table(f.result)])
-    write_report(path, f"Identification of {f.robot.name}", [*sections, Section("Spring", _spring_text(f, recs))])
+    record = {**f.to_json(), "data": data_record(recs, f.observation, f.validation)}
+    write_identify_report(path, f.robot, record, f.result, recs[0], f.validation, f.predict(recs[0]),
+                          _spring_text(f, recs))
+
+
+def data_record(recs: list, obs: Any, validation: Any = None) -> dict:
+    """What was fitted: per recording its source, samples, first and last time [s], duration [s] and
+    recorded rate [Hz] (1 / mean period); the share of samples where each joint moves (after
+    filtering); the held-out samples' first and last time [s]."""
+    rows = [{"source": src, "samples": int(len(r.t)), "t_first_s": float(r.t[0]), "t_last_s": float(r.t[-1]),
+             "duration_s": float(r.t[-1] - r.t[0]), "rate_hz": float((len(r.t) - 1) / (r.t[-1] - r.t[0]))}
+            for r, src in zip(recs, obs.sources)]
+    share = None if obs.moving_fraction is None else [float(v) for v in obs.moving_fraction]
+    held = None if validation is None else {"source": validation.source, "t_first_s": float(validation.t[0]),
+                                            "t_last_s": float(validation.t[-1])}
+    return {"recordings": rows, "moving_fraction": share, "heldout": held}
 
 
 def _write_urdf(args: argparse.Namespace, f: Fit) -> None:

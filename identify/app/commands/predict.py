@@ -12,9 +12,8 @@ from typing import Any
 import numpy as np
 
 from rx90sym.files import atomic_write, write_json
-from identify.fitting import load_fit
 
-from ..common import check_output, progress, read_recordings
+from ..common import announce_robot, check_output, progress, read_recordings
 
 
 def register(sub: Any) -> None:
@@ -41,9 +40,12 @@ def write_prediction(path: str, val: Any) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
+    from identify.fitting import load_fit
+
     for out in (args.out, args.json):
         check_output(out)
     f = load_fit(args.identification, args.robot)
+    announce_robot(f.robot, "from --robot" if args.robot else "recorded by the identification")
     warning = f.model.check_robot(f.robot)
     if warning:
         progress(f"warning: {warning}")
