@@ -22,11 +22,9 @@ Usage: PYTHONPATH=. python benchmarks/ur10e_prior.py [--data DIR]   (~1 min)
 from __future__ import annotations
 
 import argparse
-import importlib.util
 import sys
 import time
 from pathlib import Path
-from types import ModuleType
 
 import numpy as np
 
@@ -34,18 +32,9 @@ import rx90sym
 from identify import fit
 from identify.estimation.consistency.prior import PhysicalPrior
 from identify.estimation.consistency.prior_fit import unseen_distance
-from identify.io.gains import DriveGains, apply_gains
 from rx90sym.rigid_body import RigidBody
+from ur10e_heldout import SOURCE_GAINS, gains_bench, torques   # this folder (the script's own)
 
-
-def _sibling(name: str) -> ModuleType:
-    spec = importlib.util.spec_from_file_location(name, Path(__file__).with_name(f"{name}.py"))
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    return module
-
-
-gains_bench = _sibling("ur10e_gains")
 DATA = gains_bench.DATA
 EMPTY = gains_bench.EMPTY
 FIT_ROWS, VAL_ROWS = (195, 2566), (2567, 5375)
@@ -58,16 +47,14 @@ def body(values: dict, j: int) -> RigidBody:
 
 def figures(data: Path = DATA) -> dict:
     robot = gains_bench.ur10e_robot()
-    gains = DriveGains(np.array(gains_bench.SOURCE_GAINS), side="joint")
-    fit_rec = apply_gains(gains_bench.load_run(data / EMPTY[0], FIT_ROWS), gains, robot)
-    val_rec = apply_gains(gains_bench.load_run(data / EMPTY[0], VAL_ROWS), gains, robot)
+    fit_rec, val_rec = (torques(data / EMPTY[0], rows, robot) for rows in (FIT_ROWS, VAL_ROWS))
     wls = fit(robot, [fit_rec])   # the defaults of rx90 identify
     prior = PhysicalPrior(rx90sym.nominal_parameters(robot), "UR10e [nominal] (rx90sym/robots/ur10e.toml)")
     common = dict(method="consistent", base=wls.base, observation=wls.observation)
     start = time.perf_counter()
     fits = {"WLS": wls, "consistent, no prior": fit(robot, [fit_rec], **common),
             "consistent, prior": fit(robot, [fit_rec], physical_prior=prior, **common)}
-    out = {"robot": robot, "prior": prior, "gains": gains.gains, "time_s": time.perf_counter() - start, "fits": {}}
+    out = {"robot": robot, "prior": prior, "gains": SOURCE_GAINS, "time_s": time.perf_counter() - start, "fits": {}}
     for name, f in fits.items():
         standard = getattr(f.result, "standard", None)
         out["fits"][name] = {"validation": f.predict(val_rec), "cost": wls.result.system.rss(f.result.values),
