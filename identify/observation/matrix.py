@@ -9,6 +9,11 @@ Coulomb term is then the sign of noise. ``rest="drop"`` leaves those rows out of
 ``rest="zero-coulomb"`` keeps them with the Coulomb entries set to 0 (see :func:`coulomb_terms`).
 The speed is the recorded one when the recording has it (``Recording.dq``), else the filtered
 derivative; it decides the mask only, W keeps the filtered derivatives.
+
+Lost packets: a recording made of segments (``Recording.segment``) is filtered, differentiated
+and decimated segment by segment (:meth:`Recording.pieces`), the rows stacked in one W; a sample
+bridged over lost packets (``Recording.measured`` False) runs through the filters but gives no
+row, nor does a decimated sample whose decimation filter (± the factor) reaches one.
 """
 from __future__ import annotations
 
@@ -19,10 +24,10 @@ import numpy as np
 
 import rx90sym
 
-from identify.signal.filtering import choose_cutoff, decimate, decimation_plan, derivatives
+from identify.signal.filtering import EDGE_PERIODS, choose_cutoff, decimate, decimation_plan, derivatives
 
 __all__ = ["DECIMATION_PASSBAND", "automatic_cutoff", "DEFAULT_MIN_VELOCITY", "DEFAULT_REST", "REST_POLICIES", "CoulombTerm", "FilteredMotion", "Observation",
-           "coulomb_terms", "filtered_motion", "observation_matrix", "stack_rows"]
+           "coulomb_terms", "filtered_motion", "filtered_motions", "observation_matrix", "stack_rows"]
 
 #: Rest threshold of the CLI, rad/s (measured on the TX40 and the twin: docs/real-data-identification.md).
 DEFAULT_MIN_VELOCITY = 0.05
@@ -137,6 +142,12 @@ class FilteredMotion:
     kept: slice = field(default_factory=lambda: slice(None))
     extra: np.ndarray | float = 0.0
     note: str = ""
+    measured: np.ndarray | None = None
+
+    def rows(self, drop_rest: bool) -> np.ndarray:
+        """(S, n) rows that enter W: measured samples, and with ``drop_rest`` only ``usable`` ones."""
+        keep = self.usable if drop_rest else np.ones(self.usable.shape, dtype=bool)
+        return keep if self.measured is None else keep & self.measured[:, None]
 
 
 #: Pass band of the parallel decimation filter, as a fraction of the decimated rate (0.8 of its Nyquist).
@@ -148,11 +159,19 @@ def automatic_cutoff(recordings: Sequence[Any], decimate_to: float | None = None
     and, when decimating, at least the pass band of the parallel filter (0.4 × ``decimate_to``):
     Y keeps its content up to there, so W must too (parallel filtering filters both alike)."""
     cuts = []
-    for rec in recordings:
+    pieces = [p for rec in recordings for p in rec.pieces()] if recordings else []
+    longest = max((p.n_samples for p in pieces), default=0)
+    for rec in pieces:
+        if rec.n_samples < min(longest, _SPECTRUM_SAMPLES):
+            continue  # too short for a spectrum: the longer segments decide
         rate = 1.0 / float(np.median(np.diff(np.asarray(rec.t, dtype=float))))
         floor = max(2.0, DECIMATION_PASSBAND * decimate_to) if decimate_to else 2.0
         cuts.append(choose_cutoff(np.asarray(rec.q, dtype=float), rate, min_cutoff=floor))
     return float(max(cuts))
+
+
+#: A segment shorter than this many samples does not take part in the automatic cut-off.
+_SPECTRUM_SAMPLES = 256
 
 
 def shifted_torques(rec: Any, delay: float) -> np.ndarray:
@@ -189,6 +208,9 @@ def filtered_motion(robot: rx90sym.Robot, rec: Any, cutoff: float | None = None,
                          f"{robot.name!r} has {robot.n}")
     if rec.robot and rec.robot != robot.name:
         raise ValueError(f"{rec.source}: recording is of robot {rec.robot!r}, not {robot.name!r}")
+    if getattr(rec, "n_segments", 1) > 1:
+        raise ValueError(f"{rec.source}: {rec.n_segments} segments: filter each of its pieces() "
+                         f"(filtered_motions does)")
     if cutoff is None:
         cutoff = automatic_cutoff([rec], decimate_to)
     d = derivatives(rec.t, rec.q, cutoff=cutoff)
@@ -214,6 +236,7 @@ def filtered_motion(robot: rx90sym.Robot, rec: Any, cutoff: float | None = None,
     plan = decimation_plan(d.rate, decimate_to)
     k = plan.factor
     q, dq, ddq, t = d.q, d.dq, d.ddq, d.t
+    measured = _measured_rows(getattr(rec, "measured", None), d.kept, k)
     if k > 1:
         # Parallel filtering: the same zero-phase filter on Y and on every column of W.
         Y, Phi = decimate(Y, k), decimate(Phi, k)
@@ -223,7 +246,40 @@ def filtered_motion(robot: rx90sym.Robot, rec: Any, cutoff: float | None = None,
     if not Phi.flags.owndata:  # a view of a reused workspace: the next recording overwrites it
         Phi = Phi.copy()
     return FilteredMotion(t, q, dq, ddq, Y, Phi, d.cutoff, plan.rate, rec.source, moving, usable,
-                          k, d.kept, extra, plan.note)
+                          k, d.kept, extra, plan.note, measured)
+
+
+def _measured_rows(measured: np.ndarray | None, kept: slice, factor: int) -> np.ndarray | None:
+    """(S,) measured flags after decimation by ``factor``: a decimated sample is measured when no
+    bridged sample lies within ± ``factor`` samples of it (its decimation filter's main lobe)."""
+    if measured is None:
+        return None
+    bad = ~np.asarray(measured, dtype=bool)[kept]
+    if factor > 1:
+        bad = np.convolve(bad.astype(float), np.ones(2 * factor + 1), mode="same") > 0.5
+        bad = bad[::factor]
+    return ~bad
+
+
+def filtered_motions(robot: rx90sym.Robot, recordings: Sequence[Any], cutoff: float,
+                     *args: Any, **options: Any) -> tuple[list[FilteredMotion], tuple[str, ...], list[Any]]:
+    """:func:`filtered_motion` of every segment of every recording (same arguments after
+    ``cutoff``, which must be given): the motions, notes naming each segment left out because it
+    is too short for the filters' edges, and the segments used (one per motion)."""
+    motions, notes, used = [], [], []
+    for rec in recordings:
+        for piece in rec.pieces():
+            rate = 1.0 / float(np.median(np.diff(piece.t))) if piece.n_samples > 1 else 0.0
+            edge = max(2, int(np.ceil(EDGE_PERIODS * rate / cutoff))) if rate else 0
+            if rec.n_segments > 1 and piece.n_samples < 2 * edge + 5:
+                notes.append(f"{piece.source}: segment of {piece.n_samples} samples left out (shorter than "
+                             f"the {2 * edge + 5} the filter's edges need at {cutoff:.3g} Hz)")
+                continue
+            motions.append(filtered_motion(robot, piece, cutoff, *args, **options))
+            used.append(piece)
+    if not motions:
+        raise ValueError("no segment is long enough to filter: " + "; ".join(notes))
+    return motions, tuple(notes), used
 
 
 def stack_rows(blocks: Sequence[np.ndarray], Ys: Sequence[np.ndarray], min_velocity: float | None = None,
@@ -294,9 +350,9 @@ def observation_matrix(robot: rx90sym.Robot, recordings: Sequence[Any], cutoff: 
         raise ValueError("observation_matrix: no recordings given")
     names, regressor = column_regressor(robot, base, columns)
     cutoff = cutoff if cutoff is not None else automatic_cutoff(recordings, decimate_to)
-    motions = [filtered_motion(robot, rec, cutoff, decimate_to, spring, regressor, names, min_velocity,
-                               rest, delay) for rec in recordings]  # one filtering for every recording
-    keep = [m.usable for m in motions] if (min_velocity is not None and rest == "drop") else None
+    motions, skipped, _ = filtered_motions(robot, recordings, cutoff, decimate_to, spring, regressor, names,
+                                        min_velocity, rest, delay)  # one filtering for every segment
+    keep = [m.rows(min_velocity is not None and rest == "drop") for m in motions]
     W, Y, joint, samples = stack_rows([m.Phi for m in motions], [m.Y for m in motions], masks=keep)
     rates = tuple(m.rate for m in motions)
     if max(rates) > min(rates) * (1 + 1e-3):
@@ -305,5 +361,5 @@ def observation_matrix(robot: rx90sym.Robot, recordings: Sequence[Any], cutoff: 
     moving = np.concatenate([m.moving for m in motions])
     return Observation(W, Y, joint, names, samples, tuple(m.cutoff for m in motions), rates,
                        rates[0], tuple(m.source for m in motions), sum(len(m.Y) for m in motions),
-                       tuple(m.note for m in motions), min_velocity, rest,
+                       tuple(m.note for m in motions) + skipped, min_velocity, rest,
                        moving.mean(axis=0) if min_velocity is not None else None)

@@ -3,7 +3,8 @@
 Log form (docs/real-logs.md)::
 
     rx90 convert LOG.csv --robot R --columns SPEC [--no-header] [--rows FIRST:LAST]
-                 [--from S] [--to S] [--resample HZ] [--gains LIST|FILE] [--convention C] --out REC.csv
+                 [--from S] [--to S] [--resample HZ] [--max-gap S] [--no-segments] [--gains LIST|FILE]
+                 [--convention C] --out REC.csv
 
 Motor form (Stäubli CS8 / TX40 files)::
 
@@ -15,11 +16,12 @@ import argparse
 from typing import Any
 
 from identify.io.logs import read_log
+from identify.signal.gaps import DEFAULT_MAX_GAP
 from identify.io.recordings import read_motor_recording, write_recording
 
 from ..common import UsageError, check_output, convention_option, load_robot, progress, robot_option
 
-_LOG_OPTIONS = ("columns", "no_header", "rows", "t_from", "t_to", "resample", "gains")
+_LOG_OPTIONS = ("columns", "no_header", "rows", "t_from", "t_to", "resample", "gains", "max_gap", "no_segments")
 _MOTOR_OPTIONS = ("motor_positions", "motor_torques", "period")
 
 
@@ -42,6 +44,11 @@ def register(sub: Any) -> None:
     sp.add_argument("--to", dest="t_to", type=float, metavar="S", help="keep rows up to this time, s")
     sp.add_argument("--resample", type=float, metavar="HZ",
                     help="put every signal on a uniform grid at HZ (needed for irregular time stamps)")
+    sp.add_argument("--max-gap", type=float, metavar="S",
+                    help=f"longest gap of lost packets bridged by --resample, s (default "
+                         f"{DEFAULT_MAX_GAP:g}); a longer gap starts a new segment")
+    sp.add_argument("--no-segments", action="store_true",
+                    help="refuse a gap longer than --max-gap instead of splitting the log into segments")
     sp.add_argument("--gains", metavar="LIST|FILE",
                     help="drive gains turning currents into joint torques: K1,...,Kn (N m/A, joint "
                          "side) or the JSON of rx90 gains; without them the file keeps currents")
@@ -78,11 +85,21 @@ def run(args: argparse.Namespace) -> int:
     robot = load_robot(args)
     check_output(args.out)
     progress(f"reading the log {args.log}")
+    if args.max_gap is not None and not args.max_gap > 0:
+        raise UsageError(f"--max-gap must be a positive time in s, got {args.max_gap:g}")
     rec = read_log(args.log, robot, args.columns, header=not args.no_header, rows=_rows(args.rows),
                    t_from=args.t_from, t_to=args.t_to, resample=args.resample, gains=args.gains,
-                   convention=args.convention)
+                   convention=args.convention, max_gap=args.max_gap or DEFAULT_MAX_GAP,
+                   segments=not args.no_segments)
     write_recording(args.out, rec, robot, convention="controller")
     log = rec.meta["log"]
+    print(_print_log(args.log, rec, log))
+    print(f"converted {rec.n_samples} samples -> {args.out}")
+    return 0
+
+
+def _print_log(name: str, rec: Any, log: dict) -> str:
+    """What the reader did, in the user's words: rows, rate, stale rows, gaps, grid, torques."""
     steps = (f"rate {log['rate_hz']:.6g} Hz (1 / mean step; median step {log['median_step_s']:g} s, "
              f"{log['irregular_steps']} steps off by more than 1 %)")
     grid = (f"resampled to {log['resampled_hz']:g} Hz: {log['samples']} samples"
@@ -90,11 +107,27 @@ def run(args: argparse.Namespace) -> int:
     what = (f"gains {log['gains']}: joint torques from the currents" if log["gains"] else
             "torques as logged" if rec.current is None else "no gains: the file keeps currents (give "
             "--gains to identify with it)")
-    print(f"read lines {log['lines'][0]}..{log['lines'][1]} of {args.log}: {log['rows']} rows, {steps}")
-    print(f"largest step {log['largest_gap_s']:g} s (lines {log['largest_gap_lines'][0]}-"
-          f"{log['largest_gap_lines'][1]}); {grid}; {what}")
-    print(f"converted {rec.n_samples} samples -> {args.out}")
-    return 0
+    gaps = log["gaps"]
+    lines = [f"read lines {log['lines'][0]}..{log['lines'][1]} of {name}: {log['rows']} rows, {steps}",
+             f"largest step {log['largest_gap_s']:g} s (lines {log['largest_gap_lines'][0]}-"
+             f"{log['largest_gap_lines'][1]}); {grid}; {what}"]
+    if log["stale_rows"]:
+        shown = ", ".join(map(str, log["stale_lines"]))
+        lines.append(f"stale rows dropped (exact repeats of the previous row): {log['stale_rows']} (lines "
+                     f"{shown}{', ...' if log['stale_rows'] > len(log['stale_lines']) else ''})")
+    if gaps["gaps"]:
+        lines.append(f"lost packets: {len(gaps['gaps'])} gaps; {gaps['bridged_gaps']} up to {gaps['max_gap_s']:g} s "
+                     f"bridged ({log['bridged_samples']} samples interpolated, never used as measurements), "
+                     f"{gaps['segments']} segment(s)")
+        lines += [f"  gap of {g['duration_s']:g} s ({g['periods']:.3g} steps) between lines {g['lines'][0]} and "
+                  f"{g['lines'][1]}: {'bridged' if g['bridged'] else 'new segment'}" for g in gaps["gaps"][:_GAPS_SHOWN]]
+        if len(gaps["gaps"]) > _GAPS_SHOWN:
+            lines.append(f"  ... and {len(gaps['gaps']) - _GAPS_SHOWN} more gaps")
+    return "\n".join(lines)
+
+
+#: How many gaps the output lists one by one.
+_GAPS_SHOWN = 10
 
 
 def _run_motor(args: argparse.Namespace) -> int:
