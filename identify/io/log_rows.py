@@ -30,13 +30,29 @@ class _Lines:
     text: list[str]
 
 
-def _data_lines(path: Path, header: bool, n_cols: int) -> _Lines:
-    source = path.name
+def _file_lines(path: Path) -> list[str]:
+    """The lines of a text file, numbered as editors and ``sed -n`` do, trailing blanks dropped."""
     try:
         raw = path.read_text(encoding="utf-8-sig")
     except UnicodeDecodeError as exc:
-        raise RecordingError(f"{source}: not a UTF-8 text file ({exc})") from None
-    lines = [line.rstrip("\r") for line in raw.split("\n")]  # the numbering of editors and sed -n
+        raise RecordingError(f"{path.name}: not a UTF-8 text file ({exc})") from None
+    return [line.rstrip("\r") for line in raw.split("\n")]
+
+
+def header_cells(path: Path) -> tuple[list[str], bool]:
+    """The first non-comment line's cells, and whether they are separated by blanks (no comma)."""
+    for line in _file_lines(path):
+        if line.strip() and not line.lstrip().startswith("#"):
+            return (line.split(), True) if "," not in line else (line.split(","), False)
+    return [], False
+
+
+def _data_lines(path: Path, header: bool, n_cols: int, blanks: bool = False) -> _Lines:
+    """The data lines (``blanks``: cells separated by blanks, as UR's RTDE recorder writes them)."""
+    source = path.name
+    lines = _file_lines(path)
+    if blanks:
+        lines = [",".join(line.split()) if not line.lstrip().startswith("#") else line for line in lines]
     while lines and not lines[-1].strip():  # trailing blank lines are not rows
         lines.pop()
     numbers, text = [], []

@@ -57,8 +57,8 @@ import numpy as np
 import rx90sym
 from rx90sym.recording import Recording, RecordingError
 
-from identify.io.columns import ColumnMap, parse_columns
-from identify.io.log_rows import ABSURD, _bad, _data_lines, _parse, _window
+from identify.io.columns import ColumnMap, parse_columns, rtde_columns
+from identify.io.log_rows import ABSURD, _bad, _data_lines, _parse, _window, header_cells
 from identify.io.gains import DriveGains, apply_gains, read_gains
 from identify.signal.gaps import DEFAULT_MAX_GAP, LogGaps, find_gaps, stale_rows
 from identify.signal.resampling import resample as resample_recording
@@ -197,7 +197,7 @@ def _round_rate(rate: float) -> float:
 
 
 def read_log(
-    path: str | os.PathLike[str], robot: rx90sym.Robot, columns: str | Sequence[str],
+    path: str | os.PathLike[str], robot: rx90sym.Robot, columns: str | Sequence[str] | None,
     header: bool = False, rows: tuple[int, int] | None = None, t_from: float | None = None,
     t_to: float | None = None, resample: float | None = None, gains: DriveGains | str | None = None,
     convention: str | None = None, max_gap: float = DEFAULT_MAX_GAP, segments: bool = True,
@@ -207,7 +207,9 @@ def read_log(
     Args:
         path: the log, comma separated; lines starting with ``#`` are skipped.
         robot: the robot the log belongs to.
-        columns: the column map (module docstring), a string or a list of names.
+        columns: the column map (module docstring), a string or a list of names; None for a log
+            whose header names its columns (UR's RTDE recorder: :func:`identify.io.columns.rtde_columns`;
+            cells separated by commas or blanks).
         header: the first non-comment line is a header (skipped; its cell count is checked).
         rows: ``(FIRST, LAST)`` 1-based line numbers of the file, inclusive.
         t_from, t_to: window in seconds of the log's clock (not with ``rows``).
@@ -237,24 +239,42 @@ def read_log(
     p = Path(path)
     if rows is not None and (t_from is not None or t_to is not None):
         raise ValueError("give rows or t_from/t_to (--rows or --from/--to), not both")
+    blanks = False
+    if columns is None:
+        cells, blanks = header_cells(p)
+        columns = rtde_columns(cells, robot) if header else None
+        if columns is None:
+            raise ValueError(f"{p.name}: give the column map (columns=, --columns): the first line is not a "
+                             f"header this reader knows (UR RTDE: timestamp, actual_q_0..actual_q_{robot.n - 1})")
     cmap = parse_columns(columns, robot)
     conv = _normalise_convention(convention, p.name) or "controller"
+    lines = _data_lines(p, header, len(cmap.names), blanks)
+    a, b = _window(lines, rows, t_from, t_to, cmap.t)
+    values = _parse(lines, a, b, cmap)
+    rec = rows_to_recording(p.name, values, lines.numbers[a:b], cmap, robot, conv, gains=gains,
+                            max_gap=max_gap, segments=segments, resample=resample)
+    rec.meta["log"]["columns"] = ",".join(cmap.names)
+    return rec
+
+
+def rows_to_recording(source: str, values: np.ndarray, numbers: Sequence[int], cmap: ColumnMap,
+                      robot: rx90sym.Robot, convention: str, gains: DriveGains | str | None = None,
+                      max_gap: float = DEFAULT_MAX_GAP, segments: bool = True,
+                      resample: float | None = None) -> Recording:
+    """The rows of a log (``values`` (N, columns) as ``cmap`` names them, ``numbers`` their line or
+    message numbers) as a recording, by the rules of :func:`read_log`: stale rows dropped, time,
+    gaps, positions and velocities checked, resampled, currents through the gains."""
     if gains is not None and not cmap.i:
         raise ValueError(f"drive gains given, but the column map names no motor currents (i1..i{robot.n})")
     if gains is not None and cmap.tau:
         raise ValueError("drive gains given, but the log already holds joint torques (tau1..): "
                          "the gains would replace them; map the torques as x:NAME to keep both")
     drive = read_gains(gains, robot) if isinstance(gains, (str, os.PathLike)) else gains
-
-    lines = _data_lines(p, header, len(cmap.names))
-    a, b = _window(lines, rows, t_from, t_to, cmap.t)
-    values = _parse(lines, a, b, cmap)
-    numbers = lines.numbers[a:b]
     stale = stale_rows(values, cmap.t, [c for c, name in enumerate(cmap.names) if name != "_"])
     report = {"lines": [numbers[0], numbers[-1]], "rows": int(len(numbers)), "stale_rows": int(stale.sum()),
               "stale_lines": [int(numbers[k]) for k in np.flatnonzero(stale)[:_LISTED]]}
     values, numbers = values[~stale], [n for n, s in zip(numbers, stale) if not s]
-    rec = _recording(p.name, values, numbers, cmap, robot, conv, report, max_gap, segments, resample)
+    rec = _recording(source, values, numbers, cmap, robot, convention, report, max_gap, segments, resample)
     if drive is not None:
         rec = apply_gains(rec, drive, robot)
         rec.meta["log"]["gains"] = (drive.source if drive.source not in ("--gains", "<memory>") else

@@ -249,16 +249,22 @@ def filtered_motion(robot: rx90sym.Robot, rec: Any, cutoff: float | None = None,
                           k, d.kept, extra, plan.note, measured)
 
 
+#: A decimated sample gives a row only when at most this share of the samples its decimation
+#: filter spans (± the factor) were bridged over lost packets (scattered stale rows pass, a burst
+#: of lost packets does not).
+BRIDGED_SHARE = 0.25
+
+
 def _measured_rows(measured: np.ndarray | None, kept: slice, factor: int) -> np.ndarray | None:
-    """(S,) measured flags after decimation by ``factor``: a decimated sample is measured when no
-    bridged sample lies within ± ``factor`` samples of it (its decimation filter's main lobe)."""
+    """(S,) measured flags after decimation by ``factor``: the sample itself was measured and at
+    most :data:`BRIDGED_SHARE` of the 2·factor + 1 samples around it were bridged."""
     if measured is None:
         return None
-    bad = ~np.asarray(measured, dtype=bool)[kept]
+    ok = np.asarray(measured, dtype=bool)[kept]
     if factor > 1:
-        bad = np.convolve(bad.astype(float), np.ones(2 * factor + 1), mode="same") > 0.5
-        bad = bad[::factor]
-    return ~bad
+        share = np.convolve((~ok).astype(float), np.ones(2 * factor + 1) / (2 * factor + 1), mode="same")
+        ok = (ok & (share <= BRIDGED_SHARE))[::factor]
+    return ok
 
 
 def filtered_motions(robot: rx90sym.Robot, recordings: Sequence[Any], cutoff: float,

@@ -6,6 +6,11 @@ Log form (docs/real-logs.md)::
                  [--from S] [--to S] [--resample HZ] [--max-gap S] [--no-segments] [--gains LIST|FILE]
                  [--convention C] --out REC.csv
 
+ROS bag form (joint_states; ROS 1, ROS 2 sqlite3 or MCAP; needs the ``ros`` extra)::
+
+    rx90 convert BAG --topic /joint_states --robot R [--effort torque|current] [--gains ...]
+                 [--resample HZ] [--max-gap S] [--no-segments] --out REC.csv
+
 Motor form (Stäubli CS8 / TX40 files)::
 
     rx90 convert --robot tx40 --motor-positions P.csv --motor-torques T.csv --period S --out REC.csv
@@ -15,6 +20,7 @@ from __future__ import annotations
 import argparse
 from typing import Any
 
+from identify.io.bags import MissingExtra, is_bag, read_bag
 from identify.io.logs import read_log
 from identify.signal.gaps import DEFAULT_MAX_GAP
 from identify.io.recordings import read_motor_recording, write_recording
@@ -23,6 +29,8 @@ from ..common import UsageError, check_output, convention_option, load_robot, pr
 
 _LOG_OPTIONS = ("columns", "no_header", "rows", "t_from", "t_to", "resample", "gains", "max_gap", "no_segments")
 _MOTOR_OPTIONS = ("motor_positions", "motor_torques", "period")
+_BAG_OPTIONS = ("topic", "effort")
+_CSV_ONLY = ("columns", "no_header", "rows", "t_from", "t_to")
 
 
 def register(sub: Any) -> None:
@@ -31,7 +39,12 @@ def register(sub: Any) -> None:
     sp = sub.add_parser("convert", help=text, description=text + "; see docs/real-logs.md")
     sp.set_defaults(func=run)
     robot_option(sp)
-    sp.add_argument("log", nargs="?", metavar="LOG.csv", help="controller log (comma separated)")
+    sp.add_argument("log", nargs="?", metavar="LOG.csv|BAG",
+                    help="controller log (comma separated), or a ROS bag (.bag, ROS 2 directory, .db3, .mcap)")
+    sp.add_argument("--topic", help="bag form: the sensor_msgs/JointState topic (e.g. /joint_states)")
+    sp.add_argument("--effort", choices=("torque", "current"),
+                    help="bag form: what the messages' effort holds (default torque; current needs --gains "
+                         "to become torques)")
     sp.add_argument("--columns", metavar="SPEC",
                     help="what each column of the log holds, in order: t, q1..qn, qd1..qdn (recorded "
                          "velocities), tau1..taun, i1..in (motor currents, A), _ (ignored), x:NAME "
@@ -80,19 +93,49 @@ def run(args: argparse.Namespace) -> int:
     mixed = _given(args, _MOTOR_OPTIONS)
     if mixed:
         raise UsageError(f"{', '.join(mixed)} belong to the motor form, not to a LOG.csv")
-    if args.columns is None:
-        raise UsageError("a LOG.csv needs --columns SPEC (e.g. t,q1..q6,qd1..qd6,i1..i6)")
+    if args.max_gap is not None and not args.max_gap > 0:
+        raise UsageError(f"--max-gap must be a positive time in s, got {args.max_gap:g}")
+    if is_bag(args.log) or args.topic is not None:
+        return _run_bag(args)
+    extra = _given(args, _BAG_OPTIONS)
+    if extra:
+        raise UsageError(f"{', '.join(extra)} belong to the bag form (a .bag, .db3, .mcap or ROS 2 bag directory)")
+    if args.columns is None and args.no_header:
+        raise UsageError("a LOG.csv without header needs --columns SPEC (e.g. t,q1..q6,qd1..qd6,i1..i6)")
     robot = load_robot(args)
     check_output(args.out)
     progress(f"reading the log {args.log}")
-    if args.max_gap is not None and not args.max_gap > 0:
-        raise UsageError(f"--max-gap must be a positive time in s, got {args.max_gap:g}")
     rec = read_log(args.log, robot, args.columns, header=not args.no_header, rows=_rows(args.rows),
                    t_from=args.t_from, t_to=args.t_to, resample=args.resample, gains=args.gains,
                    convention=args.convention, max_gap=args.max_gap or DEFAULT_MAX_GAP,
                    segments=not args.no_segments)
     write_recording(args.out, rec, robot, convention="controller")
     log = rec.meta["log"]
+    print(_print_log(args.log, rec, log))
+    print(f"converted {rec.n_samples} samples -> {args.out}")
+    return 0
+
+
+def _run_bag(args: argparse.Namespace) -> int:
+    wrong = _given(args, _CSV_ONLY)
+    if wrong:
+        raise UsageError(f"{', '.join(wrong)} belong to the LOG.csv form, not to a bag")
+    if args.topic is None:
+        raise UsageError("a bag needs --topic (the sensor_msgs/JointState topic, e.g. /joint_states)")
+    robot = load_robot(args)
+    check_output(args.out)
+    progress(f"reading the bag {args.log}, topic {args.topic}")
+    try:
+        rec = read_bag(args.log, robot, args.topic, effort=args.effort or "torque", gains=args.gains,
+                       resample=args.resample, convention=args.convention or "controller",
+                       max_gap=args.max_gap or DEFAULT_MAX_GAP, segments=not args.no_segments)
+    except MissingExtra as exc:
+        raise UsageError(str(exc)) from None
+    write_recording(args.out, rec, robot, convention="controller")
+    log = rec.meta["log"]
+    print(f"topic {log['topic']}: {log['messages']} messages, {log['reordered']} out of stamp order (sorted), "
+          f"{log['duplicate_stamps']} with a repeated stamp (dropped), {log['incomplete_messages']} missing joints "
+          f"(dropped), {log['other_joint_messages']} of other joints (skipped); velocities {log['velocities']}")
     print(_print_log(args.log, rec, log))
     print(f"converted {rec.n_samples} samples -> {args.out}")
     return 0
@@ -131,9 +174,9 @@ _GAPS_SHOWN = 10
 
 
 def _run_motor(args: argparse.Namespace) -> int:
-    extra = _given(args, _LOG_OPTIONS)
+    extra = _given(args, _LOG_OPTIONS + _BAG_OPTIONS)
     if extra:
-        raise UsageError(f"{', '.join(extra)} belong to the log form (give LOG.csv)")
+        raise UsageError(f"{', '.join(extra)} belong to the log form (give LOG.csv or a bag)")
     missing = [f for f, v in (("--motor-positions", args.motor_positions), ("--motor-torques", args.motor_torques),
                               ("--period", args.period)) if v is None]
     if missing:
