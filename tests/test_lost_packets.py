@@ -3,6 +3,8 @@ dropped and counted, gaps bridged and marked, long gaps split into segments, bri
 in W, and the identification as good as on the clean log."""
 from __future__ import annotations
 
+import json
+
 import numpy as np
 import pytest
 
@@ -93,6 +95,12 @@ def test_a_long_gap_splits_the_log_unless_segments_are_refused(tmp_path, capsys,
     np.testing.assert_array_equal(back.measured_mask, rec.measured_mask)
     obs = observation_matrix(panda, [back], decimate_to=50.0, base=panda_base)
     assert obs.rows > 0 and len(obs.sources) == 2
+    report = tmp_path / "id.json"
+    assert main(["identify", str(out), "--robot", "panda", "--json", str(report)]) == 0
+    layout = json.loads(report.read_text())["recordings"][0]
+    assert layout == {"source": "rec.csv", "samples": rec.n_samples, "segments": 2,
+                      "bridged_samples": int(np.sum(~rec.measured_mask)), "stale_rows": rec.meta["log"]["stale_rows"]}
+    assert "2 segment(s)" in capsys.readouterr().out
     with pytest.raises(RecordingError, match="gap of 0.2"):
         read_log(path, panda, cols, resample=1000.0, convention="model", segments=False)
     bad = tmp_path / "bad.csv"

@@ -64,6 +64,7 @@ __all__ = [
     "read_motor_recording",
     "recording_from_arrays",
     "split",
+    "layout_summary",
     "TIME_RTOL",
     "JUMP_SAFETY",
     "JUMP_ATOL",
@@ -281,6 +282,14 @@ def _layout(rec: Recording) -> dict[str, np.ndarray]:
     if rec.segment is not None:
         out["segment"] = rec.segment
     return out
+
+
+def layout_summary(rec: Recording) -> dict[str, Any]:
+    """What a recording holds beyond its samples, for reports and JSON: ``source``, ``samples``,
+    ``bridged_samples`` (interpolated over lost packets, never measurements), ``segments`` and
+    ``stale_rows`` (dropped when the log was read; None when not known)."""
+    return {"source": rec.source, "samples": rec.n_samples, "bridged_samples": int(np.sum(~rec.measured_mask)),
+            "segments": rec.n_segments, "stale_rows": rec.meta.get("log", {}).get("stale_rows")}
 
 
 def split(rec: Recording, fraction: float) -> tuple[Recording, Recording]:

@@ -17,6 +17,7 @@ from identify import essential_parameters, predict, read_recording, validate
 from identify.estimation.bootstrap import segment_bootstrap_std
 from identify.fit_model import FitModel
 from identify.io.gains import apply_gains, read_gains
+from identify.io.recordings import layout_summary
 from identify.observation.matrix import DEFAULT_MIN_VELOCITY, DEFAULT_REST, REST_POLICIES
 from identify.real_fit import fit_recordings
 
@@ -147,6 +148,11 @@ def run(args: argparse.Namespace) -> int:
     decimate_to = None if (args.no_decimate or args.decimate_to == 0) else args.decimate_to
     min_velocity = args.min_velocity or None
     base = sb if sb is not None else rx90sym.base_parameters(robot)
+    layouts = [layout_summary(r) for r in recs]
+    for lay in layouts:
+        if lay["bridged_samples"] or lay["segments"] > 1 or lay["stale_rows"]:
+            print(f"{lay['source']}: {lay['segments']} segment(s), {lay['bridged_samples']} samples bridged over lost "
+                  f"packets (not fitted), {lay['stale_rows'] or 0} stale rows dropped when read")
     progress(f"identifying ({args.method}) on {sum(len(r.t) for r in recs)} samples")
     fit = fit_recordings(robot, recs, method=args.method, base=base, cutoff=args.cutoff,
                          decimate_to=decimate_to, min_velocity=min_velocity, rest=args.rest,
@@ -186,7 +192,7 @@ def run(args: argparse.Namespace) -> int:
                "bootstrap": {"block_s": block / obs.rate, "draws": BOOTSTRAP_DRAWS, "seed": args.bootstrap_seed},
                "cutoff_hz": obs.cutoffs[0], "decimate_to_hz": decimate_to,
                "delay_estimate_s": estimate.delay, "model": model.to_dict(),
-               "essential": ess.to_dict() if ess is not None else {},
+               "essential": ess.to_dict() if ess is not None else {}, "recordings": layouts,
                "validation": val.to_dict() if val is not None else {}}
         write_json(args.json, out)
     if args.report:
