@@ -64,7 +64,7 @@ def main() -> None:
     import warnings
 
     rx90 = rx90sym.load_robot("rx90")
-    chi = rx90.parameter_vector(rx90sym.nominal_parameters(rx90))
+    chi = rx90.parameter_vector(rx90sym.default_parameters(rx90))
     for seed in (0, 10, 20):
         print(spring(rx90, chi, seed), flush=True)
     with tempfile.TemporaryDirectory() as tmp, warnings.catch_warnings():

@@ -71,6 +71,8 @@ class Robot:
     urdf: for a robot imported from a URDF, its chain (rx90sym.urdf.UrdfChain), else None.
     joint_names: the joints' names in ROS messages (robot file ``joint_names``; a URDF robot's
         are its URDF joint names, :meth:`ros_joint_names`), or () when the file gives none.
+    nominal: the robot file's [nominal] table (rx90sym.nominal_table.NominalTable), else None.
+    flange: 4x4 pose of the maker's tool flange frame in frame n (robot file's [flange]), else None.
     """
 
     name: str
@@ -95,6 +97,8 @@ class Robot:
     source: str = ""
     urdf: Any = None
     joint_names: tuple[str, ...] = ()
+    nominal: Any = None
+    flange: np.ndarray | None = None
 
     @property
     def gravity_vector(self) -> np.ndarray:

@@ -1,13 +1,18 @@
 """Nominal standard parameters of any robot: from a file, from its URDF, or the twin's set.
 
 ``nominal_parameters(robot, source)`` is the one place the toolkit asks "what are this robot's
-parameters, roughly?" (torque limits of an excitation, the twin's true parameters):
+parameters, roughly?" (torque limits of an excitation, plausibility checks, the prior of the
+consistent fit, the twin of robots other than the RX90):
 
 1. ``source`` given: a JSON parameter file (see :func:`read_parameter_file`);
 2. a robot loaded from a URDF: its inertials (``rx90sym.urdf_parameters``, when available);
-3. the bundled RX90 robot file (recognised by the file itself, not by the name "rx90"): the
-   twin's physically consistent set (``rx90sym/data/rx90_true_params.json``);
+3. a robot file with a ``[nominal]`` table (every bundled robot: published values with their
+   sources, derived ones named as derived; rx90sym.nominal_table);
 4. otherwise ``None``: the caller must say so (no silent defaults).
+
+The RX90 twin's true parameters (``rx90sym/data/rx90_true_params.json``) are NOT the RX90's
+nominal parameters: they are the twin's, reached through :func:`twin_parameter_file` and
+``rx90sym.twin.default_parameters``.
 """
 from __future__ import annotations
 
@@ -16,6 +21,7 @@ from pathlib import Path
 from typing import Any, Mapping
 
 from .description import Robot
+from .nominal_table import NominalError, nominal_values
 from .parameters import checked_values, split_name
 from .robot_file import ROBOTS_DIR
 
@@ -48,7 +54,7 @@ def nominal_parameters(robot: Robot, source: str | Path | Mapping[str, float] | 
     """Standard parameters name -> value [SI] for ``robot``, or None when none are known.
 
     source: a JSON parameter file (path) or a name -> value mapping. Without it: the robot's
-    URDF inertials, then the twin's set for the bundled RX90 file only, then None.
+    URDF inertials, then its robot file's [nominal] table, then None.
     Raises ValueError naming the file and the field on a malformed source.
     """
     if isinstance(source, Mapping):
@@ -62,9 +68,11 @@ def nominal_parameters(robot: Robot, source: str | Path | Mapping[str, float] | 
             urdf_parameters = None
         if urdf_parameters is not None:
             return _complete(robot, dict(urdf_parameters(robot)), f"{robot.source} (inertials)")
-    twin_file = twin_parameter_file(robot)
-    if twin_file is not None:
-        return read_parameter_file(robot, twin_file)
+    if robot.nominal is not None:
+        try:
+            return nominal_values(robot, robot.nominal)
+        except NominalError as exc:
+            raise ValueError(f"{robot.source or robot.name}: {exc}") from None
     return None
 
 

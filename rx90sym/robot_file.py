@@ -15,6 +15,7 @@ from typing import Any
 import numpy as np
 
 from .description import Coupling, Limits, Robot
+from .nominal_table import FLANGE_KEYS, NOMINAL_KEYS, NominalError, parse_flange, parse_nominal
 from .spring import Spring, read_spring_table
 from .toml_lines import Lines, scan
 
@@ -35,6 +36,8 @@ SCHEMA: dict[str, tuple[str, ...]] = {
     "coupling": ("joints", "coulomb_sign"),
     "friction": ("asymmetric_coulomb",),
     "spring": ("joint", "k", "a", "b", "L0", "angle_offset", "angle_offset_deg", "table", "placeholder"),
+    "nominal": NOMINAL_KEYS,     # prior parameters with their sources (rx90sym.nominal_table)
+    "flange": FLANGE_KEYS,       # frame n -> the maker's tool flange
 }
 SPRING_CONSTANTS = ("k", "a", "b", "L0", "angle_offset")
 
@@ -281,11 +284,17 @@ def parse_robot(data: dict, source: str, lines: Lines | None = None) -> Robot:
                              f"joint names (the names a ROS joint_states message uses)")
     friction = data.get("friction", {})
     asym = _joint_numbers(friction.get("asymmetric_coulomb", []), n, where("friction", "asymmetric_coulomb"))
+    try:
+        nominal = (parse_nominal(data["nominal"], n, lambda key: where("nominal", key or None))
+                   if "nominal" in data else None)
+        flange = parse_flange(data["flange"], lambda key: where("flange", key or None)) if "flange" in data else None
+    except NominalError as exc:
+        raise RobotFileError(str(exc)) from None
     return Robot(name=name, sigma=cols[0], alpha=cols[1], d=cols[2], theta=cols[3], r=cols[4],
                  limits=limits, d_labels=tuple(d_labels), r_labels=tuple(r_labels),
                  staubli_offsets=offsets, gear_ratios=gear, Rq=Rq, Rt=Rt, spring=spring,
                  coupling=coupling, asymmetric_coulomb=asym, description=str(data.get("description", "")),
-                 source=source, joint_names=tuple(names))
+                 source=source, nominal=nominal, flange=flange, joint_names=tuple(names))
 
 
 def _parse_limits(table: dict, n: int, controller_offsets: np.ndarray, where: Any) -> Limits:

@@ -48,17 +48,19 @@ CHUNK_SAMPLES = 250
 def default_parameters(robot: Robot, path: str | Path | None = None) -> dict[str, float]:
     """True standard parameters of the twin, name -> value [SI].
 
-    Without ``path``: the robot's nominal parameters (rx90sym.nominal_parameters: its URDF
-    inertials, or for the bundled RX90 file the twin's physically consistent set reproducing
-    Table 3, made by scripts/make_rx90_params.py); a robot with none is refused. With ``path``:
-    a JSON parameter file (see rx90sym.nominal.read_parameter_file).
+    Without ``path``: for the bundled RX90 file the twin's physically consistent set reproducing
+    Table 3 (made by scripts/make_rx90_params.py; NOT the file's [nominal] table), otherwise the
+    robot's nominal parameters (rx90sym.nominal_parameters: URDF inertials or the robot file's
+    [nominal] table); a robot with none is refused. With ``path``: a JSON parameter file (see
+    rx90sym.nominal.read_parameter_file).
     """
-    from .nominal import nominal_parameters
+    from .nominal import nominal_parameters, read_parameter_file, twin_parameter_file
 
-    values = nominal_parameters(robot, path)
+    twin_file = twin_parameter_file(robot) if path is None else None
+    values = read_parameter_file(robot, twin_file) if twin_file is not None else nominal_parameters(robot, path)
     if values is None:
         raise ValueError(f"no default parameters for robot {robot.name!r} ({robot.source or 'built in code'}): "
-                         f"only the bundled RX90 file and URDF robots have nominal ones; pass a parameter file "
+                         f"it has neither a [nominal] table nor URDF inertials; pass a parameter file "
                          f"(JSON name -> value, or the JSON of 'rx90 identify --method consistent')")
     return values
 

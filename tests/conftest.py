@@ -2,6 +2,7 @@
 from __future__ import annotations
 
 import importlib.util
+import re
 from pathlib import Path
 
 import numpy as np
@@ -19,6 +20,17 @@ def benchmark_module(name: str):
     module = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(module)
     return module
+
+
+def robot_file_without(path, name: str, *tables: str):
+    """A copy of bundled robot ``name`` at ``path`` without the given [tables] (e.g. "nominal")."""
+    from rx90sym.robot_file import ROBOTS_DIR
+
+    text = (ROBOTS_DIR / f"{name}.toml").read_text()
+    for table in tables:
+        text = re.sub(rf"(?ms)^\[{table}\]$.*?(?=^\[|\Z)", "", text)
+    path.write_text(text)
+    return path
 
 
 def random_body(rng: np.random.Generator) -> np.ndarray:

@@ -8,6 +8,7 @@ import numpy as np
 import pytest
 
 from excitation.constraints import TORQUE_UNCHECKED, check_limits
+from conftest import robot_file_without
 from test_cli import RX90, run
 from test_excitation import toy_model
 
@@ -38,7 +39,8 @@ def test_two_runs_with_the_same_seed_in_separate_processes_write_identical_files
 @pytest.mark.slow
 def test_robot_without_nominal_parameters_does_not_claim_torque_feasibility(tmp_path):
     # --no-self-collision: this test is about torques (collisions: test_excitation_collision.py)
-    proc = run(*SMALL[:-1], "1", "--robot", "tx40", "--no-self-collision", "--out", str(tmp_path / "t.csv"),
+    bare = robot_file_without(tmp_path / "tx40.toml", "tx40", "nominal")
+    proc = run(*SMALL[:-1], "1", "--robot", str(bare), "--no-self-collision", "--out", str(tmp_path / "t.csv"),
                "--json", str(tmp_path / "t.json"))
     assert proc.returncode == 0, proc.stderr
     assert "NOT checked against the torque limits" in proc.stderr and "--params" in proc.stderr

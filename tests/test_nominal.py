@@ -2,7 +2,6 @@
 from __future__ import annotations
 
 import json
-import shutil
 import subprocess
 import sys
 from pathlib import Path
@@ -12,25 +11,24 @@ import pytest
 
 import excitation
 import rx90sym
-from rx90sym.robot_file import ROBOTS_DIR
 
-from conftest import random_chi
+from conftest import random_chi, robot_file_without
 
 RX90 = str(Path(sys.executable).parent / "rx90")
 
 
 @pytest.fixture()
 def own_rx90(tmp_path) -> Path:
-    """A user's own copy of the RX90 file, still named "rx90"."""
-    path = tmp_path / "rx90.toml"
-    shutil.copy(ROBOTS_DIR / "rx90.toml", path)
-    return path
+    """A user's own copy of the RX90 file, still named "rx90", without a [nominal] table."""
+    return robot_file_without(tmp_path / "rx90.toml", "rx90", "nominal")
 
 
 def test_only_the_bundled_file_gets_the_twin_parameters(own_rx90):
     bundled = rx90sym.load_robot("rx90")
     twin = json.loads((Path(rx90sym.__file__).parent / "data" / "rx90_true_params.json").read_text())
-    assert rx90sym.nominal_parameters(bundled) == pytest.approx(twin["parameters"], rel=0, abs=0)
+    assert rx90sym.default_parameters(bundled) == pytest.approx(twin["parameters"], rel=0, abs=0)
+    # The nominal parameters are the file's [nominal] table, not the twin's truth.
+    assert rx90sym.nominal_parameters(bundled) != twin["parameters"]
     mine = rx90sym.load_robot(own_rx90)
     assert mine.name == "rx90"
     assert rx90sym.nominal_parameters(mine) is None

@@ -42,7 +42,7 @@ def test_the_first_harmonic_is_grouped_with_the_gravity_parameters(rx90, rx90_ba
 def unknown_spring_runs(rx90):
     """Four training motions and one held-out motion of a twin with the UNKNOWN spring."""
     twin_robot = rx90.with_options(spring=UNKNOWN)
-    chi = rx90.parameter_vector(rx90sym.nominal_parameters(rx90))
+    chi = rx90.parameter_vector(rx90sym.default_parameters(rx90))
     runs = [rx90sym.twin.simulate(twin_robot, multisine(rx90, s), params=chi, duration=20.0, seed=s)
             for s in (0, 1, 2, 3, 50)]
     return twin_robot, runs[:4], runs[4]
@@ -92,7 +92,7 @@ def test_spring_in_the_basis_coefficients_within_3_sigma(rx90, rx90_base):
     grid = np.linspace(-np.pi, np.pi, 4001)
     table = (grid, SpringBasis(1, (1, 2, 3)).torque(coefficients, grid))
     twin_robot = rx90.with_options(spring=Spring(joint=1, table=table))
-    chi = rx90.parameter_vector(rx90sym.nominal_parameters(rx90))
+    chi = rx90.parameter_vector(rx90sym.default_parameters(rx90))
     train = [rx90sym.twin.simulate(twin_robot, multisine(rx90, s), params=chi, duration=20.0, seed=s)
              for s in (10, 11, 12, 13)]
     no_spring = rx90.with_options(spring=None)

@@ -24,7 +24,7 @@ def gearless(tmp_path_factory) -> rx90sym.Robot:
 
 
 def z_scores(robot: rx90sym.Robot, noise: rx90sym.twin.NoiseProfile, seeds: range) -> np.ndarray:
-    chi = robot.parameter_vector(rx90sym.nominal_parameters(rx90sym.load_robot("rx90")))
+    chi = robot.parameter_vector(rx90sym.default_parameters(rx90sym.load_robot("rx90")))
     base = rx90sym.base_parameters(robot)
     recs = [rx90sym.twin.simulate(robot, multisine(robot, s), params=chi, duration=20.0, noise=noise, seed=s)
             for s in seeds]

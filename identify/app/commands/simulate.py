@@ -18,8 +18,8 @@ def register(sub: Any) -> None:
     sp.add_argument("trajectory", help="trajectory CSV written by rx90 excite")
     robot_option(sp)
     sp.add_argument("--params", help="the twin's true standard parameters: JSON name -> value, or the "
-                    "JSON of 'rx90 identify --method consistent' (default: the robot's nominal "
-                    "parameters; only the bundled RX90 and URDF robots have them)")
+                    "JSON of 'rx90 identify --method consistent' (default: the bundled RX90's twin "
+                    "set, else the robot's nominal parameters: its [nominal] table or URDF inertials)")
     sp.add_argument("--payload", help="bundled payload name (tables_4, tables_5) or JSON file")
     sp.add_argument("--noise", choices=("ideal", "realistic"), default="realistic")
     sp.add_argument("--seed", type=int, default=0)
@@ -29,12 +29,11 @@ def register(sub: Any) -> None:
 def run(args: argparse.Namespace) -> int:
     robot = load_robot(args)
     check_output(args.out)
-    params = rx90sym.nominal_parameters(robot, args.params)
-    if params is None:
-        raise UsageError(f"robot {robot.name!r} has no nominal parameters (only the bundled RX90 "
-                         f"and URDF robots do): pass --params FILE, a JSON object of standard "
-                         f"parameters name -> value in SI units (the names: \"parameters\" of rx90 model --robot "
-                         f"{args.robot} --json F), or the JSON of rx90 identify --method consistent on this robot")
+    try:  # the twin's truth: the bundled RX90's own set, else the robot's nominal parameters
+        params = rx90sym.default_parameters(robot, args.params)
+    except ValueError as exc:
+        raise UsageError(f"{exc}: pass --params FILE (the names: \"parameters\" of rx90 model --robot "
+                         f"{args.robot} --json F)") from None
     spring_notice(robot)
     trajectory = read_trajectory(args.trajectory, robot)
     progress(f"simulating {trajectory[0][-1] - trajectory[0][0]:.1f} s ({args.noise})")
