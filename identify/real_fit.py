@@ -40,7 +40,7 @@ class Fit:
     def filtering(self, spring: bool = True) -> dict[str, Any]:
         """Keyword arguments of :func:`identify.predict` that reuse this fit's processing."""
         return {"cutoff": self.cutoff, "decimate_to": self.decimate_to, "min_velocity": self.min_velocity,
-                "delay": self.delay, "spring": spring}
+                "delay": self.delay, "spring": spring, "rest": self.rest}
 
 
 def fit_recordings(robot: rx90sym.Robot, recordings: Sequence[Any], method: str = "wls", base: Any = None,

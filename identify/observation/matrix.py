@@ -6,7 +6,9 @@ decimated by the same zero-phase filter (parallel filtering), and rows grouped p
 
 Rest phases: a joint whose speed is below ``min_velocity`` (rad/s) is at rest; the sign of its
 Coulomb term is then the sign of noise. ``rest="drop"`` leaves those rows out of the fit,
-``rest="zero-coulomb"`` keeps them with the Coulomb entries set to 0 (see :func:`coulomb_terms`).
+``rest="zero-coulomb"`` keeps them with the Coulomb entries set to 0 (see :func:`coulomb_terms`),
+``rest="presliding"`` with the presliding state of the position history
+(:mod:`identify.observation.friction`).
 The speed is the recorded one when the recording has it (``Recording.dq``), else the filtered
 derivative; it decides the mask only, W keeps the filtered derivatives.
 
@@ -24,6 +26,7 @@ import numpy as np
 
 import rx90sym
 
+from identify.observation.friction import presliding_state
 from identify.signal.filtering import EDGE_PERIODS, choose_cutoff, decimate, decimation_plan, derivatives
 
 __all__ = ["DECIMATION_PASSBAND", "automatic_cutoff", "DEFAULT_MIN_VELOCITY", "DEFAULT_REST", "REST_POLICIES", "CoulombTerm", "FilteredMotion", "Observation",
@@ -32,7 +35,7 @@ __all__ = ["DECIMATION_PASSBAND", "automatic_cutoff", "DEFAULT_MIN_VELOCITY", "D
 #: Rest threshold of the CLI, rad/s (measured on the TX40 and the twin: docs/real-data-identification.md).
 DEFAULT_MIN_VELOCITY = 0.05
 #: How the fit treats rest samples, and the default (measured on the TX40: docs/real-data-identification.md).
-REST_POLICIES = ("drop", "zero-coulomb")
+REST_POLICIES = ("drop", "zero-coulomb", "presliding")
 DEFAULT_REST = "zero-coulomb"
 
 
@@ -232,6 +235,9 @@ def filtered_motion(robot: rx90sym.Robot, rec: Any, cutoff: float | None = None,
             usable[:, term.row] &= driver_moving
             if rest == "zero-coulomb":
                 Phi[~driver_moving, term.row, term.column] = 0.0
+            elif rest == "presliding":  # the state of the position history, not the torque
+                z = presliding_state(d.q @ np.asarray(term.driver))
+                Phi[~driver_moving, term.row, term.column] = z[~driver_moving]
         usable &= moving
     plan = decimation_plan(d.rate, decimate_to)
     k = plan.factor

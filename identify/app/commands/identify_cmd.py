@@ -80,7 +80,8 @@ def register(sub: Any) -> None:
                     help=f"rest threshold: a joint slower than this is at rest [rad/s] "
                          f"(default {DEFAULT_MIN_VELOCITY:g}; 0: no rest handling)")
     sp.add_argument("--rest", choices=REST_POLICIES, default=DEFAULT_REST,
-                    help=f"rest samples: drop their rows, or keep them with Coulomb = 0 (default {DEFAULT_REST})")
+                    help=f"rest samples: drop their rows, keep them with Coulomb = 0, or with the presliding state "
+                         f"of the position history (default {DEFAULT_REST})")
     sp.add_argument("--delay", type=_delay, default=0.0,
                     help="torque lag behind the positions: 'auto' (estimated) or seconds (default 0; "
                          "the estimate is always reported)")
