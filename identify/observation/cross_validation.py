@@ -33,7 +33,6 @@ import numpy as np
 
 import rx90sym
 
-from identify.estimation.least_squares import weighted_least_squares
 from identify.observation.matrix import (DECIMATION_PASSBAND, DEFAULT_MIN_VELOCITY, automatic_cutoff, column_regressor,
                                          filtered_motions, stack_rows)
 from identify.signal.filtering import choose_cutoff, lowpass
@@ -130,6 +129,43 @@ def _blocks_of(t: np.ndarray, start: float, span: float, blocks: int) -> np.ndar
     return np.minimum((blocks * (t - start) / span).astype(int), blocks - 1)
 
 
+def _compressed_blocks(motions: Sequence[Any], ids: Sequence[np.ndarray], blocks: int, drop: bool,
+                       n: int) -> dict[tuple[int, int], tuple[np.ndarray, int]]:
+    """(block, joint) -> (the triangular factor of [W | Y] over the block's rows of that joint,
+    their number)."""
+    out = {}
+    for b in range(blocks):
+        rows = [m.rows(drop) & (i == b)[:, None] for m, i in zip(motions, ids)]
+        W, Y, joint, _ = stack_rows([m.Phi for m in motions], [m.Y for m in motions], masks=rows)
+        for j in range(n):
+            A = np.column_stack([W[joint == j], Y[joint == j]])
+            if A.shape[0]:
+                out[(b, j)] = (np.linalg.qr(A, mode="r"), A.shape[0])
+    return out
+
+
+def _fold_wls(factors: dict[tuple[int, int], tuple[np.ndarray, int]], held: int, n: int) -> np.ndarray | None:
+    """WLS (each joint weighted by 1 / its residual standard deviation, as the fit does) on every
+    block but ``held``, from the compressed blocks; None when a joint has too few rows."""
+    systems = []
+    for j in range(n):
+        parts = [f for (b, jj), f in factors.items() if jj == j and b != held]
+        if not parts:
+            return None
+        stacked = np.vstack([R for R, _ in parts])  # the same norms as the rows it compresses
+        rows = sum(count for _, count in parts)
+        c = stacked.shape[1] - 1
+        x, *_ = np.linalg.lstsq(stacked[:, :c], stacked[:, c], rcond=None)
+        resid = np.linalg.norm(stacked[:, :c] @ x - stacked[:, c])
+        if rows <= c or resid == 0:
+            return None
+        systems.append(stacked / (resid / np.sqrt(rows - c)))  # sigma_j as in eq. 12, per joint
+    R = np.vstack(systems)
+    c = R.shape[1] - 1
+    beta, *_ = np.linalg.lstsq(R[:, :c], R[:, c], rcond=None)
+    return beta
+
+
 def _score(robot: rx90sym.Robot, recordings: Sequence[Any], cand: Candidate, base: Any, reference: float,
            blocks: int, options: dict) -> tuple[float, tuple[float, ...]]:
     names, regressor = column_regressor(robot, base)
@@ -142,13 +178,13 @@ def _score(robot: rx90sym.Robot, recordings: Sequence[Any], cand: Candidate, bas
     ids = [_blocks_of(m.t, start, span, blocks) for m in motions]
     drop = min_velocity is not None and rest == "drop"
     n = robot.n
+    # One compression per (block, joint): [R | z] of the QR of [W | Y] (eq. 10 on few rows).
+    blocks_R = _compressed_blocks(motions, ids, blocks, drop, n)
     err2, ref2 = np.zeros(n), np.zeros(n)
     for b in range(blocks):
-        train = [m.rows(drop) & (i != b)[:, None] for m, i in zip(motions, ids)]
-        W, Y, joint, _ = stack_rows([m.Phi for m in motions], [m.Y for m in motions], masks=train)
-        if not all(np.any(joint == j) for j in range(n)):
+        beta = _fold_wls(blocks_R, b, n)
+        if beta is None:
             continue
-        beta = weighted_least_squares(W, Y, joint, names).values
         for m, i in zip(motions, ids):
             held = np.flatnonzero(i == b)
             if held.size < 16:  # too short for the reference filter
