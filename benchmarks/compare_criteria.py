@@ -27,7 +27,7 @@ def group_medians(robot, bp, traj, seed: int, reference: np.ndarray) -> dict[str
     from excitation.objective import parameter_group
 
     rec = rx90sym.twin.simulate(robot, traj, noise="realistic", seed=seed)
-    res = identify.identify(robot, [rec], base=bp, min_velocity=0.1)
+    res = identify.fit(robot, [rec], identify.Processing(min_velocity=0.1, rest="drop", estimate_delay=False), base=bp).result
     index = {n: i for i, n in enumerate(bp.names)}
     groups: dict[str, list[float]] = {}
     for name, std in zip(res.names, res.std):

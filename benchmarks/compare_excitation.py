@@ -32,7 +32,7 @@ def compare(seed: int = 0, duration: float = 20.0, harmonics: int = 5, starts: i
     out = {}
     for label, traj in (("optimised", opt), ("random", rnd)):
         rec = rx90sym.twin.simulate(robot, traj, noise="realistic", seed=seed)
-        res = identify.identify(robot, [rec], base=bp, min_velocity=0.1)
+        res = identify.fit(robot, [rec], identify.Processing(min_velocity=0.1, rest="drop", estimate_delay=False), base=bp).result
         groups: dict[str, list[float]] = {}
         for n, r in zip(res.names, res.rel_std_pct):
             groups.setdefault(group_of(n), []).append(r)

@@ -23,7 +23,7 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path[:0] = [str(ROOT), str(ROOT / "benchmarks"), str(ROOT / "tests")]
 
 import rx90sym  # noqa: E402
-from identify import fit_recordings, predict, split  # noqa: E402
+from identify import Processing, fit, predict, split  # noqa: E402
 from identify.observation.cross_validation import choose_processing  # noqa: E402
 from motions import multisine, panda_truth  # noqa: E402
 from plain_ls import plain_ls, plain_prediction  # noqa: E402
@@ -35,10 +35,11 @@ def relative(pred: np.ndarray, truth: np.ndarray) -> np.ndarray:
 
 
 def held_out_error(robot, base, fit_part, test_clean, cutoff, decimate_to, rest) -> np.ndarray:
-    fit = fit_recordings(robot, [fit_part], base=base, cutoff=cutoff, decimate_to=decimate_to,
-                         min_velocity=0.05 if rest else None, rest=rest or "zero-coulomb")
-    val = predict(robot, fit.result, test_clean, base=base, cutoff=cutoff, decimate_to=None,
-                  min_velocity=fit.min_velocity, rest=fit.rest)
+    fit_ = fit(robot, [fit_part], Processing(cutoff=cutoff, decimate_to=decimate_to, rest=rest or "zero-coulomb",
+                                            min_velocity=0.05 if rest else None, estimate_delay=False),
+               base=base)
+    val = predict(robot, fit_.result, test_clean, base=base, cutoff=cutoff, decimate_to=None,
+                  min_velocity=fit_.min_velocity, rest=fit_.rest)
     return relative(val.predicted, val.measured)
 
 

@@ -20,14 +20,14 @@ sys.path[:0] = [str(ROOT), str(ROOT / "tests")]  # run from a checkout; the twin
 
 import rx90sym  # noqa: E402
 from identify import read_log  # noqa: E402
-from identify.real_fit import fit_recordings  # noqa: E402
+from identify import Processing, fit  # noqa: E402
 from motions import multisine, panda_truth  # noqa: E402
 from rx90sym.host_log import HostFaults, host_log, write_host_log  # noqa: E402
 
 
 def within_3_sigma(robot: rx90sym.Robot, base, truth: np.ndarray, rec) -> float:
     """Share of the base parameters whose WLS estimate lies within 3 sigma of the truth."""
-    res = fit_recordings(robot, [rec], base=base).result
+    res = fit(robot, [rec], Processing(estimate_delay=False), base=base).result
     values, std = dict(zip(res.names, res.values)), dict(zip(res.names, res.std))
     return float(np.mean([abs(values[n] - v) <= 3 * std[n] for n, v in zip(base.names, truth)]))
 

@@ -33,13 +33,13 @@ def spring(rx90: rx90sym.Robot, chi: np.ndarray, first_seed: int) -> str:
             for s in range(first_seed, first_seed + 4)]
     held = rx90sym.twin.simulate(twin_robot, multisine(rx90, first_seed + 50), params=chi, duration=20.0,
                                  seed=first_seed + 50)
-    known = identify.identify(twin_robot, runs, base=base, min_velocity=0.1)
+    known = identify.fit(twin_robot, runs, identify.Processing(min_velocity=0.1, rest="drop", estimate_delay=False), base=base).result
     rms_known = identify.validate(twin_robot, known, held, base=base).rms_error
     sk = spring_base(bare, SpringStiffness(UNKNOWN), base)
-    res_k = identify.identify(bare, runs, base=sk, spring=False, min_velocity=0.1)
+    res_k = identify.fit(bare, runs, identify.Processing(min_velocity=0.1, spring=False, rest="drop", estimate_delay=False), base=sk).result
     i = res_k.names.index("KS_2")
     sb = spring_base(bare, SpringBasis(1), base)
-    res = identify.identify(bare, runs, base=sb, spring=False, min_velocity=0.1)
+    res = identify.fit(bare, runs, identify.Processing(min_velocity=0.1, spring=False, rest="drop", estimate_delay=False), base=sb).result
     ratio = identify.validate(bare, res, held, base=sb, spring=False).rms_error / rms_known
     return (f"spring, seeds {first_seed}-{first_seed + 3}, held-out {first_seed + 50}: k = "
             f"{res_k.values[i]:.1f} +- {res_k.std[i]:.1f} (z {(res_k.values[i] - UNKNOWN.k) / res_k.std[i]:+.2f}); "
@@ -53,7 +53,7 @@ def ripple(chi: np.ndarray, first_seed: int, tmp: Path) -> str:
     base = rx90sym.base_parameters(robot)
     runs = [rx90sym.twin.simulate(robot, multisine(robot, s), params=chi, duration=20.0, seed=s)
             for s in range(first_seed, first_seed + 4)]
-    res = identify.identify(robot, runs, base=base, min_velocity=0.1)
+    res = identify.fit(robot, runs, identify.Processing(min_velocity=0.1, rest="drop", estimate_delay=False), base=base).result
     z = (res.values - base.beta(chi)) / res.std
     return (f"ripple without gears, seeds {first_seed}-{first_seed + 3}: {int(np.sum(np.abs(z) <= 3))}/{len(z)} "
             f"within 3 sigma, max |z| {np.max(np.abs(z)):.1f}")

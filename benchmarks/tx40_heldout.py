@@ -28,7 +28,7 @@ from pathlib import Path
 import numpy as np
 
 import rx90sym
-from identify import fit_recordings, predict, read_motor_recording
+from identify import Processing, fit, read_motor_recording
 
 FIGAROH_WLS = np.array([1.82, 1.76, 1.13, 0.61, 1.06, 0.74])  # N·m, held-out RMS while moving
 PERIOD = 0.2e-3   # s (5 kHz)
@@ -47,9 +47,9 @@ def load(data: Path | None, robot: rx90sym.Robot):
 def heldout(robot: rx90sym.Robot, rec, **options) -> tuple[np.ndarray, np.ndarray, object]:
     """(RMS moving, RMS all, fit) of a fit on the first 6 s predicting the rest."""
     k = int(round(FIT_SECONDS / PERIOD))
-    fit = fit_recordings(robot, [rec.select(slice(0, k))], **options)
-    val = predict(robot, fit.result, rec.select(slice(k, None)), **fit.filtering())
-    return val.rms_error_moving, val.rms_error, fit
+    f = fit(robot, [rec.select(slice(0, k))], Processing(estimate_delay=False, **options))
+    val = f.predict(rec.select(slice(k, None)))
+    return val.rms_error_moving, val.rms_error, f
 
 
 def cross_validate(data: Path | None, form: str, **options) -> float:
@@ -61,8 +61,8 @@ def cross_validate(data: Path | None, form: str, **options) -> float:
     blocks = [rec.select(slice(a, b)) for a, b in zip(edges[:-1], edges[1:])]
     total = []
     for i, test in enumerate(blocks):
-        fit = fit_recordings(robot, [b for j, b in enumerate(blocks) if j != i], **options)
-        val = predict(robot, fit.result, test, **fit.filtering())
+        f = fit(robot, [b for j, b in enumerate(blocks) if j != i], Processing(estimate_delay=False, **options))
+        val = f.predict(test)
         scale = np.sqrt(np.mean(val.measured ** 2, axis=0))
         total.append(float(np.sum(val.rms_error_moving / scale)))
     return float(np.mean(total))
@@ -102,10 +102,10 @@ def main() -> None:
     runs = (("a", "rx90 identify's defaults: delay 0", {}), ("b", "--delay auto", {"delay": "auto"}),
             ("c", "part 1's choice", {"delay": delay, "rest": rest}))
     for tag, label, opts in runs:
-        moving, every, fit = split(shipped.coupling.coulomb_sign, **opts)
+        moving, every, f = split(shipped.coupling.coulomb_sign, **opts)
         print(f"\n2{tag}. Held-out (t > {FIT_SECONDS:g} s) RMS error per joint [N·m], bundled robot file, "
-              f"offsets, {label} (delay {1e3 * fit.delay:.3g} ms), rest {fit.rest} below "
-              f"{fit.min_velocity:g} rad/s, cut-off {fit.cutoff:.4g} Hz, decimation to {fit.decimate_to:g} Hz")
+              f"offsets, {label} (delay {1e3 * f.delay:.3g} ms), rest {f.rest} below "
+              f"{f.min_velocity:g} rad/s, cut-off {f.cutoff:.4g} Hz, decimation to {f.decimate_to:g} Hz")
         print(f"{'':<34}" + "".join(f"{'j' + str(j + 1):>8}" for j in range(6)))
         print(row("ours, while moving", moving))
         print(row("FIGAROH WLS, while moving", FIGAROH_WLS))

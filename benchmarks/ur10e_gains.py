@@ -28,7 +28,7 @@ from pathlib import Path
 import numpy as np
 
 import rx90sym
-from identify import identify
+from identify import Processing, fit
 from identify.drive_gains import drive_gains
 from identify.io.gains import DriveGains, apply_gains
 from identify.io.logs import read_log
@@ -104,7 +104,8 @@ def figures(data: Path = DATA, split: float = 25.0) -> dict:
         out["mass"][name] = held_out_mass(robot, k, *rest)
     g = DriveGains(out["whole"]["global"].gains.gains, side="joint")
     rob = robot.with_options(offsets=True)
-    out["friction"] = [identify(rob, [apply_gains(r, g, robot)], min_velocity=MIN_VELOCITY) for r in (e, l)]
+    out["friction"] = [fit(rob, [apply_gains(r, g, robot)], Processing(min_velocity=MIN_VELOCITY, rest="drop", estimate_delay=False)).result
+                       for r in (e, l)]
     return out
 
 

@@ -6,7 +6,7 @@ benchmarks/ur10e_gains.py (uniform 100 Hz grid). Currents become torques with th
 (README: 10.0, 10.70, 8.46, 9.00, 9.48, 10.12 N·m/A, joint side).
 
 Printed:
-1. fit on rows 195..4966 of the empty run with ``identify.fit_recordings`` and the defaults of
+1. fit on rows 195..4966 of the empty run with ``identify.fit`` and the defaults of
    ``rx90 identify`` (rest threshold 0.05 rad/s, rest policy zero-coulomb, automatic cut-off,
    decimation to 50 Hz, no delay compensation: the estimate is printed), validated on the whole
    ``ur-20_01_17-p4.csv``. That file is 9.5 s of the robot holding still (recorded velocities 0 on
@@ -34,7 +34,7 @@ from types import ModuleType
 import numpy as np
 
 import rx90sym
-from identify import fit_recordings, predict
+from identify import Processing, fit
 from identify.io.gains import DriveGains, apply_gains
 
 
@@ -71,8 +71,9 @@ def robots() -> dict[bool, rx90sym.Robot]:
 
 def held_out(robot: rx90sym.Robot, fit_rec, val_rec, **options):
     """(fit, validation) of ``fit_rec`` predicting ``val_rec`` with the fit's processing."""
-    fit = fit_recordings(robot, [fit_rec], **options)
-    return fit, predict(robot, fit.result, val_rec, **fit.filtering())
+    options = {"estimate_delay": False, **options}
+    f = fit(robot, [fit_rec], Processing(**options))
+    return f, f.predict(val_rec)
 
 
 def policy_table(data: Path, fit_rows: tuple[int, int], val: tuple[str, tuple[int, int]]) -> dict:
@@ -137,7 +138,7 @@ def main(argv: list[str] | None = None) -> int:
     start = time.perf_counter()
     robot = robots()[False]
     fit, val = held_out(robot, torques(args.data / EMPTY[0], EMPTY[1], robot),
-                        torques(args.data / HELD_OUT[0], HELD_OUT[1], robot), estimate=True)
+                        torques(args.data / HELD_OUT[0], HELD_OUT[1], robot), estimate_delay=True)
     print(f"1. Fit: rows {EMPTY[1][0]}..{EMPTY[1][1]} of {EMPTY[0]}, source gains, rx90 identify defaults")
     print(f"   {fit.observation.summary()}".replace("\n", "\n   "))
     print(f"   cut-off {fit.cutoff:.4g} Hz, rate {fit.observation.rate:g} Hz, "

@@ -13,7 +13,9 @@ collision_model(robot, obstacles) (link capsules, boxes); ``client=`` a Dask cli
 parameters. Generic level (any CasADi model): ExcitationModel + FourierSeries / ViaPointSpline +
 optimise_model / random_feasible; condition_number for any samples. See docs/excitation.md.
 """
-from .api import collision_model, make_objective, optimise, optimise_payload, random_trajectory
+from . import envelope
+from .api import collision_model, make_objective, optimise, optimise_payload, random_trajectory, safe_model
+from .envelope import Envelope, summary_lines as envelope_lines
 from .collision import Box, CollisionModel
 from .constraints import LimitReport, Margins, check_limits
 from .criterion import condition_number, observation_matrix
@@ -34,5 +36,5 @@ __all__ = [
     "FourierSeries", "ViaPointSpline", "Trajectory", "SolveInfo", "OptimiserOptions", "Margins",
     "LimitReport", "check_limits", "read_trajectory", "ExcitationModel", "JointLimits", "model_from_robot",
     "optimise_model", "random_feasible", "plot_trajectory", "plot_limit_usage",
-    "collision_model", "optimise_payload", "Box", "CollisionModel", "DEFAULT_CRITERION", "FALLBACK_CRITERION", "make_objective", "dask_client", "OBJECTIVES", "Objective", "reference_magnitudes",
+    "collision_model", "optimise_payload", "Envelope", "envelope", "envelope_lines", "safe_model", "Box", "CollisionModel", "DEFAULT_CRITERION", "FALLBACK_CRITERION", "make_objective", "dask_client", "OBJECTIVES", "Objective", "reference_magnitudes",
 ]

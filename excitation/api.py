@@ -10,6 +10,7 @@ import numpy as np
 import rx90sym
 
 from .collision import Box, CollisionModel, arm_capsules, without_pairs_touching_at
+from .envelope import Envelope
 from .complement import prior_information
 from .fourier import FourierSeries
 from .model import ExcitationModel, model_from_robot
@@ -61,9 +62,14 @@ def optimise(robot: rx90sym.Robot, duration: float = 20.0, harmonics: int = 5, s
              options: OptimiserOptions | None = None, criterion: str | None = None,
              noise_std: Any = None, select: Sequence[str] | None = None,
              complement: Sequence[tuple[np.ndarray, ...]] = (), client: Any = None,
-             collision: CollisionModel | None = None,
+             collision: CollisionModel | None = None, envelope: Envelope | None = None,
              progress: bool | TextIO = True) -> Trajectory:
     """Optimal excitation trajectory for ``robot``.
+
+    envelope: the safety envelope (envelope.Envelope(): heights above the mounting plane,
+    experiment limits, Cartesian speeds, the robot's own capsules, a centre pose inside it); with
+    it ``collision`` defaults to :func:`collision_model` and ``z_min`` is the envelope's floor. The
+    command line always passes one; the trajectory's ``envelope`` describes what was applied.
 
     duration [s], harmonics: Fourier series with base frequency 2 pi / duration. via_points: if
     given, optimise that many equally spaced via points (quintic spline) instead.
@@ -79,9 +85,13 @@ def optimise(robot: rx90sym.Robot, duration: float = 20.0, harmonics: int = 5, s
     :func:`collision_model`). See OptimiserOptions.
     """
     base = base if base is not None else rx90sym.base_parameters(robot)
-    model = dataclasses.replace(model_from_robot(robot, chi_nominal, base, z_min, tool_point),
-                                collision=collision)
     options = options or OptimiserOptions()
+    described = None
+    if envelope is not None:
+        model, described = safe_model(robot, chi_nominal, base, envelope, collision, options.margins)
+    else:
+        model = dataclasses.replace(model_from_robot(robot, chi_nominal, base, z_min, tool_point),
+                                    collision=collision)
     if criterion is None:
         criterion = DEFAULT_CRITERION if chi_nominal is not None else FALLBACK_CRITERION
     nominal = None
@@ -98,8 +108,27 @@ def optimise(robot: rx90sym.Robot, duration: float = 20.0, harmonics: int = 5, s
     options = dataclasses.replace(options, criterion=objective)
     form = (FourierSeries(duration, harmonics) if via_points is None
             else ViaPointSpline.uniform(duration, via_points))
-    return optimise_model(model, form, seed=seed, starts=starts, time_budget=time_budget,
+    traj = optimise_model(model, form, seed=seed, starts=starts, time_budget=time_budget,
                           options=options, progress=progress, client=client)
+    return traj if described is None else dataclasses.replace(traj, envelope=described)
+
+
+def safe_model(robot: rx90sym.Robot, chi_nominal: Any, base: Any, envelope: Envelope,
+               collision: CollisionModel | None = None, margins: Any = None
+               ) -> tuple[ExcitationModel, dict[str, Any]]:
+    """The ExcitationModel of ``robot`` inside ``envelope`` (see envelope.py) and the envelope's
+    description; collision: capsules and boxes (default :func:`collision_model`: the robot's own
+    capsules, no boxes). Raises ValueError when no pose lies inside the envelope or a given centre
+    pose breaks it."""
+    from .constraints import Margins
+    from .envelope import describe_robot, envelope_model
+    from .robot_geometry import arm_geometry
+
+    geometry = arm_geometry(robot)
+    collision = collision if collision is not None else collision_model(robot)
+    model = envelope_model(model_from_robot(robot, chi_nominal, base), robot, envelope, geometry,
+                           collision, margins or Margins())
+    return model, describe_robot(envelope, geometry, model, robot)
 
 
 def random_trajectory(robot: rx90sym.Robot, duration: float = 20.0, harmonics: int = 5, seed: int = 0, *,
@@ -116,9 +145,16 @@ def random_trajectory(robot: rx90sym.Robot, duration: float = 20.0, harmonics: i
 def collision_model(robot: rx90sym.Robot, obstacles: Sequence[Box | str] = (), self_collision: bool = True,
                     radii: Sequence[float] | None = None,
                     tool_point: Sequence[float] = (0.0, 0.0, 0.1)) -> CollisionModel:
-    """Link capsules of ``robot`` (radii [m], default collision.DEFAULT_RADII) kept apart and out
-    of the obstacle boxes (Box or 'xmin,ymin,zmin,xmax,ymax,zmax' [m], frame 0)."""
+    """Link capsules of ``robot`` kept apart and out of the obstacle boxes (Box or
+    'xmin,ymin,zmin,xmax,ymax,zmax' [m], frame 0): the robot's own capsules (robot file
+    [[capsules]], URDF <collision>, robot_geometry.py) unless ``radii`` [m] are given; else the
+    segments between frame origins (collision.DEFAULT_RADII)."""
     boxes = tuple(b if isinstance(b, Box) else Box.parse(b) for b in obstacles)
+    from .robot_geometry import arm_geometry, capsule_set
+
+    geometry = arm_geometry(robot)
+    if geometry.capsules and radii is None:  # the robot's own capsules (robot file or URDF)
+        return CollisionModel(capsule_set(robot, geometry), boxes, self_collision)
     capsules = arm_capsules(robot, tool_point, radii=radii)
     if self_collision:
         lim = robot.limits
@@ -137,7 +173,7 @@ def optimise_payload(robot: rx90sym.Robot, duration: float = 10.0, via_points: i
                      payload: Any = "tables_4", noise_std: Any = None, starts: int = 4,
                      time_budget: float | None = None, z_min: float | None = None, base: Any = None,
                      options: OptimiserOptions | None = None, client: Any = None,
-                     collision: CollisionModel | None = None,
+                     collision: CollisionModel | None = None, envelope: Envelope | None = None,
                      progress: bool | TextIO = True) -> Trajectory:
     """A short motion for the ten payload parameters (criterion "sigma" on Wc, eq. 21).
 
@@ -147,6 +183,16 @@ def optimise_payload(robot: rx90sym.Robot, duration: float = 10.0, via_points: i
     """
     base = base if base is not None else rx90sym.base_parameters(robot)
     model = dataclasses.replace(payload_model(robot, base, chi_nominal, payload, z_min), collision=collision)
+    described = None
+    if envelope is not None:  # the same envelope as optimise (see safe_model)
+        from .envelope import describe_robot, envelope_model
+        from .robot_geometry import arm_geometry
+
+        geometry = arm_geometry(robot)
+        collision = collision if collision is not None else collision_model(robot)
+        model = envelope_model(dataclasses.replace(model, heights=None, z_min=None), robot, envelope,
+                               geometry, collision)
+        described = describe_robot(envelope, geometry, model, robot)
     noise = default_noise(model.limits) if noise_std is None else np.asarray(noise_std, dtype=float)
     # Short, fast motions press on the torque limits: imposed from the start (20 Hz grid), since
     # the lazy repairs of optimiser.py failed on the RX90 at 10 s.
@@ -154,5 +200,6 @@ def optimise_payload(robot: rx90sym.Robot, duration: float = 10.0, via_points: i
     options = dataclasses.replace(options, criterion=payload_objective(payload, noise, options.cond_rate))
     form = (FourierSeries(duration, harmonics) if via_points is None
             else ViaPointSpline.uniform(duration, via_points))
-    return optimise_model(model, form, seed=seed, starts=starts, time_budget=time_budget,
+    traj = optimise_model(model, form, seed=seed, starts=starts, time_budget=time_budget,
                           options=options, progress=progress, client=client)
+    return traj if described is None else dataclasses.replace(traj, envelope=described)

@@ -18,11 +18,13 @@ links) self-collision is not checked, and this is reported (:func:`without_pairs
 no capsule may enter an obstacle box.
 
 For IPOPT each capsule is covered by balls on its segment (at least ``spheres``, and at most one
-radius r apart), radius sqrt(r^2 + (spacing/2)^2) so that the balls contain the capsule: clearances (m, >= 0 required) are ball-centre distances
-minus the inflated radii, and the box's signed distance minus the inflated radius. They are
-smooth except on measure-zero sets. The optimiser imposes them lazily, like torques (where the
-fine-grid check finds a violation); :func:`capsule_clearances` gives the exact distances for the
-check (segment-segment distance, box distance by a fine sampling of the segment).
+radius r apart), radius sqrt(r^2 + (spacing/2)^2) so that the balls contain the capsule; each
+pair of capsules (and each capsule and box) gives ONE smooth row, the soft minimum
+-k log sum exp(-d/k) (k = SOFT_MIN) of its ball-pair clearances d (ball-centre distance minus
+the inflated radii, or the box's signed distance minus the inflated radius): never above the true
+minimum, so never optimistic. The optimiser imposes these rows on its constraint grid from the
+start (constraints.kinematic_constraints); :func:`capsule_clearances` gives the exact distances
+for the check (segment-segment distance, box distance by a fine sampling of the segment).
 """
 from __future__ import annotations
 
@@ -80,6 +82,8 @@ class CapsuleSet:
     names: tuple[str, ...]
     pairs: tuple[tuple[int, int], ...]
     ignored: tuple[tuple[int, int], ...] = ()
+    links: tuple[int, ...] = ()  # Khalil frame each capsule is fixed in (0: base); () unknown
+    never: tuple[tuple[int, int], ...] = ()  # pairs never near in random poses: checked exactly, not in IPOPT's cover
 
     def pair_names(self, pairs: Sequence[tuple[int, int]]) -> list[str]:
         """'a / b' for each pair of capsule indices."""
@@ -107,7 +111,7 @@ def without_pairs_touching_at(capsules: CapsuleSet, q: Sequence[float], every: b
         touching = list(capsules.pairs)
     kept = tuple(p for p in capsules.pairs if p not in touching)
     return CapsuleSet(capsules.segments, capsules.radii, capsules.names, kept,
-                      capsules.ignored + tuple(touching))
+                      capsules.ignored + tuple(touching), capsules.links)
 
 
 def arm_capsules(robot: rx90sym.Robot, tool_point: Sequence[float] = (0.0, 0.0, 0.1), base_length: float = 0.5,
@@ -125,9 +129,11 @@ def arm_capsules(robot: rx90sym.Robot, tool_point: Sequence[float] = (0.0, 0.0, 
             kept.append(j)
     points = [ca.DM([0.0, 0.0, -base_length]), ca.DM.zeros(3)] + [origins[:, j] for j in kept]
     names = ["base"] + [f"link to frame {j + 1}" for j in kept]
+    links = [0] + kept  # O_j+1 is fixed in frame j, and so is the previous kept origin
     tool = ca.mtimes(t0n, ca.DM([*tool_point, 1.0]))[:3]
     points.append(tool)
     names.append("wrist and tool")
+    links.append(n)
     k = len(points) - 1
     ends = ca.horzcat(*[ca.horzcat(points[i], points[i + 1]) for i in range(k)])
     if radii is None:
@@ -139,7 +145,8 @@ def arm_capsules(robot: rx90sym.Robot, tool_point: Sequence[float] = (0.0, 0.0, 
     if len(radii) != k or any(r <= 0 for r in radii):
         raise ValueError(f"capsules: {k} positive radii needed ({', '.join(names)}), got {radii}")
     pairs = tuple((i, j) for i in range(k) for j in range(i + 2, k))
-    return CapsuleSet(ca.Function("capsules", [q], [ends], ["q"], ["ends"]), radii, tuple(names), pairs)
+    return CapsuleSet(ca.Function("capsules", [q], [ends], ["q"], ["ends"]), radii, tuple(names), pairs,
+                      links=tuple(links))
 
 
 def _box_distance(p: Any, box: Box) -> Any:
@@ -179,14 +186,28 @@ def clearance_function(capsules: CapsuleSet, boxes: Sequence[Box] = (), self_col
     rows = []
     if self_collision:
         for i, j in capsules.pairs:
+            if (i, j) in capsules.never:
+                continue
             (ci, ri), (cj, rj) = balls[i], balls[j]
-            rows += [ca.norm_2(x - y) - ri - rj for x in ci for y in cj]
+            rows.append(_soft_min([ca.norm_2(x - y) - ri - rj for x in ci for y in cj]))
     for box in boxes:
         for centres, r in balls:
-            rows += [_box_distance(c, box) - r for c in centres]
+            rows.append(_soft_min([_box_distance(c, box) - r for c in centres]))
     if not rows:
         return None
     return ca.Function("clearances", [q], [ca.vertcat(*rows)], ["q"], ["clearance"])
+
+
+SOFT_MIN = 0.002  # [m] temperature of the smooth minimum over ball pairs
+
+
+def _soft_min(values: list) -> ca.SX:
+    """Smooth minimum -k log sum exp(-v / k) (k = SOFT_MIN): one smooth row per capsule pair,
+    never above the true minimum (so never optimistic) and at most k log(count) below it."""
+    if len(values) == 1:
+        return values[0]
+    v = ca.vertcat(*values)
+    return -SOFT_MIN * ca.logsumexp(-v / SOFT_MIN)
 
 
 def _segment_distance(p1: np.ndarray, q1: np.ndarray, p2: np.ndarray, q2: np.ndarray) -> np.ndarray:
@@ -234,7 +255,7 @@ class CollisionModel:
     capsules: CapsuleSet
     boxes: tuple[Box, ...] = ()
     self_collision: bool = True
-    spheres: int = 5
+    spheres: int = 3  # at least 3 balls per capsule: half the instructions of 5, a few mm of clearance less
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "boxes", tuple(self.boxes))

@@ -58,12 +58,12 @@ def approach_samples(q_from: np.ndarray, q_to: np.ndarray, duration: float, rate
     return t, q_from + d * s, d * sd, d * sdd
 
 
-def export_for_controller(trajectory: Any, path: str | os.PathLike, controller: str | Controller,
-                          limits: Any, start_pose: Any = None) -> Path:
-    """Write ``trajectory`` at the controller's rate, after an approach move from ``start_pose``
-    (controller angles [rad], None: no approach; the robot must then be at the trajectory's start).
-    limits: qd_max, qdd_max (n,) [rad/s, rad/s^2] for the approach. Raises ValueError naming the
-    joint and the time when the controller's jerk limit is exceeded (nothing is written)."""
+def controller_samples(trajectory: Any, controller: str | Controller, limits: Any, start_pose: Any = None
+                       ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """(t, q, qd, qdd) at the controller's rate in controller angles, after an approach move from
+    ``start_pose`` (controller angles [rad], None: no approach; the robot must then be at the
+    trajectory's start). limits: qd_max, qdd_max (n,) [rad/s, rad/s^2] for the approach. Raises
+    ValueError naming the joint and the time when the controller's jerk limit is exceeded."""
     ctrl = CONTROLLERS[controller] if isinstance(controller, str) else controller
     offsets = trajectory.staubli_offsets
     t, q, qd, qdd = trajectory.sample(ctrl.rate, closed=True)
@@ -86,7 +86,18 @@ def export_for_controller(trajectory: Any, path: str | os.PathLike, controller: 
         if ratio[k, j] > 1.0:
             raise ValueError(f"{ctrl.name} export: joint {j + 1} jerk {jerk[k, j]:.6g} rad/s^3 at "
                              f"t = {t[k]:.4g} s exceeds the limit {ctrl.jerk_max[j]:g} rad/s^3")
-    n = trajectory.n
+    return t, q, qd, qdd
+
+
+def write_samples(path: str | os.PathLike, t: np.ndarray, q: np.ndarray, qd: np.ndarray, qdd: np.ndarray) -> Path:
+    """CSV t, q1..qn, dq1..dqn, ddq1..ddqn (s, rad, rad/s, rad/s^2), atomically."""
+    n = q.shape[1]
     header = (["t"] + [f"q{j}" for j in range(1, n + 1)] + [f"dq{j}" for j in range(1, n + 1)]
               + [f"ddq{j}" for j in range(1, n + 1)])
     return write_csv(path, header, np.hstack([t[:, None], q, qd, qdd]))
+
+
+def export_for_controller(trajectory: Any, path: str | os.PathLike, controller: str | Controller,
+                          limits: Any, start_pose: Any = None) -> Path:
+    """Write :func:`controller_samples` as CSV (nothing is written when they are refused)."""
+    return write_samples(path, *controller_samples(trajectory, controller, limits, start_pose))

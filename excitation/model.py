@@ -75,6 +75,10 @@ class ExcitationModel:
     heights: casadi.Function (q) -> (k,) heights [m] of points that must stay above z_min, or None.
     staubli_offsets: q_staubli = q_khalil + staubli_offsets [rad], for exports.
     collision: a collision.CollisionModel (self-collision of link capsules, obstacle boxes), or None.
+    speeds: casadi.Function (q, qd) -> (k,) squared Cartesian speeds [m^2/s^2] of points that must
+    stay below speed_max [m/s], or None. centre: the pose [rad] random starts are drawn about
+    (None: the centre of the joint ranges); point_names: names of the heights' points then the
+    speeds' points (messages). See envelope.py.
     """
 
     regressor: ca.Function
@@ -86,6 +90,10 @@ class ExcitationModel:
     staubli_offsets: np.ndarray = field(default_factory=lambda: np.zeros(0))
     name: str = "robot"
     collision: Any = None  # excitation.collision.CollisionModel: capsules and obstacle boxes
+    speeds: ca.Function | None = None
+    speed_max: float | None = None
+    centre: np.ndarray | None = None
+    point_names: tuple[tuple[str, ...], tuple[str, ...]] = ((), ())
 
     def __post_init__(self) -> None:
         n = self.limits.n
@@ -102,6 +110,14 @@ class ExcitationModel:
         object.__setattr__(self, "staubli_offsets", offsets)
         if (self.z_min is None) != (self.heights is None):
             raise ValueError(f"model {self.name!r}: give both heights and z_min, or neither")
+        if (self.speed_max is None) != (self.speeds is None):
+            raise ValueError(f"model {self.name!r}: give both speeds and speed_max, or neither")
+        if self.centre is not None:
+            centre = np.array(self.centre, dtype=float).reshape(-1)
+            if centre.shape != (n,):
+                raise ValueError(f"model {self.name!r}: centre must have {n} entries")
+            centre.setflags(write=False)
+            object.__setattr__(self, "centre", centre)
 
     @property
     def n(self) -> int:

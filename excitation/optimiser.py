@@ -264,7 +264,10 @@ def initial_free(model: ExcitationModel, form: Form, rng: np.random.Generator,
     motion = form.random_free(rng, n)
     scales = kinematic_room(model, form, motion, q_ref, times, margins)
     scales *= rng.uniform(*fraction, n)
-    return form.constant(q_ref) + motion * scales
+    z = form.constant(q_ref) + motion * scales
+    from .envelope import shrink_to_envelope  # a start inside the envelope: IPOPT keeps it there
+
+    return shrink_to_envelope(model, form, z, form.constant(centre), times, margins)
 
 
 def kinematic_room(model: ExcitationModel, form: Form, motion: np.ndarray, q_ref: np.ndarray,

@@ -56,6 +56,7 @@ class Trajectory:
     info: SolveInfo
     cond_rate: float = 250.0
     parameter_names: tuple[str, ...] | None = field(default=None)
+    envelope: dict[str, Any] | None = field(default=None)  # the safety envelope applied (envelope.describe)
 
     def __post_init__(self) -> None:
         for name in ("coefficients", "staubli_offsets"):
@@ -119,8 +120,9 @@ class Trajectory:
     def summary(self) -> dict[str, Any]:
         """JSON-ready description: form, coefficients, criterion, cond, limit usage, optimiser."""
         out: dict[str, Any] = dict(self.form.describe())
-        out["angle_convention"] = "khalil"
-        out["staubli_offsets_rad"] = self.staubli_offsets.tolist()
+        # Neutral words: the model's angles (Khalil) and the controller's = model + controller offsets.
+        out["angles"] = "model"
+        out["controller_offsets_rad"] = self.staubli_offsets.tolist()
         if isinstance(self.form, FourierSeries):
             parts = self.form.split(self.coefficients)
             out["coefficients"] = {
@@ -137,6 +139,8 @@ class Trajectory:
         if self.parameter_names is not None:
             out["base_parameters"] = len(self.parameter_names)
         out["limits_usage"] = self.usage.to_dict()
+        if self.envelope is not None:
+            out["envelope"] = self.envelope
         info = {k: (list(v) if isinstance(v, tuple) else v) for k, v in vars(self.info).items()}
         out["optimiser"] = {k: (None if isinstance(v, float) and not np.isfinite(v) else v)
                             for k, v in info.items()}

@@ -11,16 +11,20 @@ from identify.estimation.bootstrap import segment_bootstrap_std
 from identify.signal.delay import DelayEstimate, estimate_delay
 from identify.drive_gains import DriveGainsResult, drive_gains
 from identify.estimation.essential import essential_parameters
-from identify.fit_model import FitModel
+from identify.fit_file import FitModel
+from identify.fitting import Bootstrap, Fit, fit, load_fit
+from identify.observation.processing import Processing
 from identify.signal.filtering import (DecimationPlan, Derivatives, choose_cutoff, decimate, decimation_factor,
                         decimation_plan, derivatives, lowpass)
-from identify.identification import ConsistentResult, Validation, consistent_fit, identify, predict, validate
+from identify.estimation.consistent_fit import ConsistentResult, consistent_fit
+from identify.identification import identify  # deprecated: fit
+from identify.validation import Validation, predict, validate
 from identify.io.columns import ColumnMap, parse_columns
 from identify.io.logs import read_log
 from identify.signal.resampling import resample
 from identify.estimation.least_squares import CompressedSystem, IdentificationError, compress, weighted_least_squares
 from identify.observation.matrix import DEFAULT_MIN_VELOCITY, DEFAULT_REST, Observation, observation_matrix
-from identify.real_fit import Fit, fit_recordings
+from identify.real_fit import fit_recordings  # deprecated: fit
 from identify.signal.pairing import PairedRuns, pair_runs
 from identify.payload import PayloadMonitor, PayloadResult, grouping_relations, payload
 from identify.io.recordings import (Recording, RecordingError, read_motor_recording, read_recording,
@@ -36,7 +40,7 @@ __all__ = [
     "observation_matrix", "Recording", "RecordingError", "read_motor_recording",
     "read_recording", "recording_from_arrays", "split", "write_recording", "EliminationStep",
     "IdentificationResult", "DecimationPlan", "decimation_plan", "DelayEstimate", "estimate_delay",
-    "segment_bootstrap_std", "FitModel", "Fit", "fit_recordings", "DEFAULT_MIN_VELOCITY", "DEFAULT_REST",
+    "segment_bootstrap_std", "FitModel", "Fit", "fit", "load_fit", "Processing", "Bootstrap", "fit_recordings", "DEFAULT_MIN_VELOCITY", "DEFAULT_REST",
     "PayloadMonitor", "PayloadResult", "grouping_relations", "payload",
     "DriveGainsResult", "drive_gains", "PairedRuns", "pair_runs",
 ]

@@ -32,18 +32,24 @@ from rx90sym.recording import Recording, RecordingError
 
 from identify.signal.filtering import choose_cutoff
 from identify.io.gains import DriveGains, apply_gains
+from identify.estimation.bootstrap import bootstrap_std
 from identify.estimation.least_squares import weighted_least_squares
 from identify.observation.matrix import FilteredMotion, filtered_motion, stack_rows
 from identify.signal.pairing import POSITION_TOLERANCE, PairedRuns, pair_runs
 from identify.estimation.results import IdentificationResult, json_number
+from identify.plausibility import gain_flags, raise_errors
 
-__all__ = ["DriveGainsResult", "drive_gains", "GAIN_METHODS", "FLAG_PCT"]
+__all__ = ["DriveGainsResult", "drive_gains", "GAIN_METHODS", "DEFAULT_METHOD", "FLAG_PCT"]
 
 GAIN_METHODS = ("same-motion", "global")
+#: The default method, chosen on the UR10e pair (docs/drive-gains.md, benchmarks/ur10e_windows.py).
+DEFAULT_METHOD = "same-motion"
 # A gain scales every parameter identified on its joint. Where the payload acts on a joint through
-# its (known) mass, the gain comes out within 0.1-0.8 % (twin, UR10e); a gain worse than 1.5 % is
-# seen only through the payload's unknown inertia (joint 1 of the UR10e: 2-3 %): flag it.
-FLAG_PCT = 1.5
+# its (known) mass, the gain's relative sigma (the larger of eq. 13's and the segment bootstrap's)
+# is 0.1-0.8 % on the twin and 1.4-3 % on half of the UR10e pair (benchmarks/ur10e_windows.py); a
+# gain worse than 5 % is seen only through the payload's unknown inertia (joint 1 of the UR10e:
+# 11-13 % on half the pair): flag it.
+FLAG_PCT = 5.0
 # Instrumental-variable iterations (IDIM-IV, see _fit): at most this many, until no unknown moves
 # by more than IV_TOLERANCE of its sigma (the twin's weak motor 6 needs ~8; the others 2).
 IV_ITERATIONS = 30
@@ -56,8 +62,8 @@ class DriveGainsResult:
     """Identified drive gains.
 
     gains: the :class:`DriveGains` (std includes the weighing error; its JSON is the file format);
-    rel_std_pct: (n,) total relative sigma, % (nan where fixed); rel_std_ls_pct: its least-squares
-    part; flagged / fixed: joint numbers (1-based); method; mass, mass_std: kg; flag_pct: %;
+    rel_std_pct: (n,) total relative sigma, % (nan where fixed): the larger of eq. 13's
+    (rel_std_ls_pct) and the segment bootstrap's (rel_std_boot_pct), with the weighing error; flagged / fixed: joint numbers (1-based); method; mass, mass_std: kg; flag_pct: %;
     payload: the nine other payload parameters (SI); fit: the least-squares result of all unknowns;
     robot: base parameters of the robot (``global``), else None; pairs: the paired runs
     (``same-motion``).
@@ -76,6 +82,7 @@ class DriveGainsResult:
     fit: IdentificationResult = field(repr=False)
     robot: IdentificationResult | None = field(default=None, repr=False)
     pairs: tuple[PairedRuns, ...] = field(default=(), repr=False)
+    rel_std_boot_pct: np.ndarray | None = None
 
     def to_dict(self) -> dict:
         """The drive-gain JSON (identify.io.gains), read back by :func:`identify.io.gains.read_gains`."""
@@ -85,12 +92,13 @@ class DriveGainsResult:
         """One line per gain: value, sigma, relative sigma (total and LS part), flag."""
         unit = "N·m/A, " + ("motor side" if self.gains.side == "motor" else "joint side")
         lines = [f"Drive gains ({self.method}, Mc = {self.mass:g} ± {self.mass_std:g} kg; {unit})",
-                 f"{'motor':>5s} {'gain':>10s} {'σ':>9s} {'σr %':>7s} {'σr LS %':>8s}  note"]
-        for j, (k, s, r, rl) in enumerate(zip(self.gains.gains, self.gains.std, self.rel_std_pct,
-                                                self.rel_std_ls_pct), start=1):
+                 f"{'motor':>5s} {'gain':>10s} {'σ':>9s} {'σr %':>7s} {'σr eq.13 %':>10s} {'σr boot %':>9s}  note"]
+        boot = self.rel_std_boot_pct if self.rel_std_boot_pct is not None else np.full(len(self.gains.gains), np.nan)
+        for j, (k, s, r, rl, rb) in enumerate(zip(self.gains.gains, self.gains.std, self.rel_std_pct,
+                                                    self.rel_std_ls_pct, boot), start=1):
             note = ("fixed" if j in self.fixed else
                     f"flagged (σr > {self.flag_pct:g} %)" if j in self.flagged else "")
-            lines.append(f"{j:5d} {k:10.5g} {s:9.3g} {r:7.3g} {rl:8.3g}  {note}")
+            lines.append(f"{j:5d} {k:10.5g} {s:9.3g} {r:7.3g} {rl:10.3g} {rb:9.3g}  {note}")
         if self.mass_std > 0:
             lines.append(f"the weighing error ({100 * self.mass_std / self.mass:.3g} %) is common to all "
                          "gains (fully correlated)")
@@ -147,12 +155,12 @@ def _check_inputs(robot: rx90sym.Robot, empty: Sequence[Recording], loaded: Sequ
 
 
 def drive_gains(robot: rx90sym.Robot, empty: Sequence[Recording], loaded: Sequence[Recording], mass: float,
-                method: str = "same-motion", fix: Mapping[int, float] | None = None, mass_std: float = 0.0,
+                method: str = DEFAULT_METHOD, fix: Mapping[int, float] | None = None, mass_std: float = 0.0,
                 side: str | None = None, offsets: bool = True, flag_pct: float = FLAG_PCT,
                 position_tol: float = POSITION_TOLERANCE, base: rx90sym.BaseParameters | None = None,
                 cutoff: float | None = None, decimate_to: float | None = 50.0,
                 min_velocity: float | None = None, spring: bool = True,
-                iterations: int = IV_ITERATIONS) -> DriveGainsResult:
+                iterations: int = IV_ITERATIONS, bootstrap_seed: int = 0) -> DriveGainsResult:
     """Identify the drive gains from current recordings and a payload of known mass.
 
     Args:
@@ -173,9 +181,13 @@ def drive_gains(robot: rx90sym.Robot, empty: Sequence[Recording], loaded: Sequen
         cutoff, decimate_to, min_velocity, spring: filtering as in :func:`identify.identify`.
         iterations: at most this many instrumental-variable iterations (0: least squares, biased
             toward zero gains by the current noise).
+        bootstrap_seed: seed of the segment bootstrap (identify.estimation.bootstrap) whose sigma,
+            when larger than eq. 13's, is the gain's (coloured residuals, window-to-window spread).
 
     Raises:
         ValueError: bad arguments, recordings without currents, runs that do not pair.
+        PlausibilityError: most gains negative (empty and loaded swapped), or a gain of the wrong
+            sign with a sigma larger than itself (not identified: never returned).
         IdentificationError: the system is rank deficient (names the unexcited unknowns).
     """
     empty, loaded = list(empty), list(loaded)
@@ -191,29 +203,33 @@ def drive_gains(robot: rx90sym.Robot, empty: Sequence[Recording], loaded: Sequen
     if int(iterations) != iterations or iterations < 0:
         raise ValueError(f"drive_gains: iterations must be an integer >= 0, got {iterations!r}")
     opts = dict(robot=robot, Rt=Rt, mass=mass, free=free, k_fixed=k_fixed, cutoff=cutoff,
-                decimate_to=decimate_to, min_velocity=min_velocity, spring=spring, iterations=int(iterations))
+                decimate_to=decimate_to, min_velocity=min_velocity, spring=spring, iterations=int(iterations),
+                rate=decimate_to or empty[0].rate, seed=bootstrap_seed)
     if method == "same-motion":
-        fit, pairs, robot_fit, i0 = _same_motion(empty, loaded, position_tol, **opts)
+        (fit, boot), pairs, robot_fit, i0 = _same_motion(empty, loaded, position_tol, **opts)
     else:
-        fit, robot_fit, i0 = _global(empty, loaded, offsets, base, **opts)
+        (fit, boot), robot_fit, i0 = _global(empty, loaded, offsets, base, **opts)
         pairs = ()
     k = k_fixed.copy()
-    std_ls = np.full(robot.n, np.nan)
+    std_ls, std_boot = np.full(robot.n, np.nan), np.full(robot.n, np.nan)
     for j in free:
         i = fit.names.index(gain_names[j])
-        k[j], std_ls[j] = fit.values[i], fit.std[i]
-    rel_ls = 100 * std_ls / np.abs(k)
-    rel = np.hypot(rel_ls, 100 * mass_std / mass)  # every estimate scales with the mass
+        k[j], std_ls[j], std_boot[j] = fit.values[i], fit.std[i], boot[i]
+    rel_ls, rel_boot = 100 * std_ls / np.abs(k), 100 * std_boot / np.abs(k)
+    # The larger of eq. 13's and the bootstrap's sigma; every estimate scales with the mass.
+    rel = np.hypot(np.fmax(rel_ls, rel_boot), 100 * mass_std / mass)
+    raise_errors(gain_flags(k, np.abs(k) * rel / 100, tuple(sorted(fix))))
     flagged = tuple(j + 1 for j in free if not rel[j] <= flag_pct)
     gains = DriveGains(k, side=side, current_offsets=_current_offsets(i0, k, Rt),
                        std=np.abs(k) * rel / 100, robot=robot.name, source=f"drive_gains:{method}",
                        extra={"method": method, "mass": float(mass), "mass_std": float(mass_std),
                               "rel_std_pct": [json_number(r) for r in rel],
                               "rel_std_ls_pct": [json_number(r) for r in rel_ls],
+                              "rel_std_bootstrap_pct": [json_number(r) for r in rel_boot],
                               "flagged": list(flagged), "fixed": sorted(fix), "flag_pct": float(flag_pct)})
     payload = {n: float(fit.values[fit.names.index(n)]) for n in _OTHER_PAYLOAD}
     return DriveGainsResult(gains, rel, rel_ls, flagged, tuple(sorted(fix)), method, float(mass),
-                            float(mass_std), float(flag_pct), payload, fit, robot_fit, tuple(pairs))
+                            float(mass_std), float(flag_pct), payload, fit, robot_fit, tuple(pairs), rel_boot)
 
 
 def _current_offsets(torque_offsets: np.ndarray | None, k: np.ndarray, Rt: np.ndarray) -> np.ndarray | None:
@@ -242,12 +258,12 @@ def _system(motions: Sequence[_Motion], currents: Sequence[np.ndarray], Rt: np.n
     """Rows (grouped per joint) of [G(currents)_free, -X] and of the right-hand side."""
     blocks = [np.concatenate([_current_columns(c, Rt)[:, :, free], -m.X], axis=2) for m, c in zip(motions, currents)]
     Ys = [m.Kn - _current_columns(m.I, Rt) @ k_fixed for m in motions]
-    W, Y, joint, _ = stack_rows(blocks, Ys, min_velocity, [m.dq for m in motions])
-    return W, Y, joint
+    return stack_rows(blocks, Ys, min_velocity, [m.dq for m in motions])
 
 
 def _fit(motions: Sequence[_Motion], names: Sequence[str], Rt: np.ndarray, free: list[int],
-         k_fixed: np.ndarray, min_velocity: float | None, method: str, iterations: int) -> IdentificationResult:
+         k_fixed: np.ndarray, min_velocity: float | None, method: str, iterations: int, rate: float,
+         seed: int) -> tuple[IdentificationResult, np.ndarray]:
     """WLS, then instrumental variables with the model's predicted currents (IDIM-IV).
 
     The currents are regressors here, so their noise biases plain LS toward zero gains (errors in
@@ -256,8 +272,10 @@ def _fit(motions: Sequence[_Motion], names: Sequence[str], Rt: np.ndarray, free:
     until no unknown moves by more than IV_TOLERANCE of its sigma (at most ``iterations`` times).
     Each joint's rows are weighted by 1/sigma of its residual (the usual per-joint block fit,
     eqs. 12-13, fails: a joint whose rows carry no known-mass term has a homogeneous block).
+    Returns the fit and the segment-bootstrap sigma of its unknowns (same instruments; rate: the
+    rows' sample rate, Hz; seed: the bootstrap's).
     """
-    W, Y, joint = _system(motions, [m.I for m in motions], Rt, free, k_fixed, min_velocity)
+    W, Y, joint, samples = _system(motions, [m.I for m in motions], Rt, free, k_fixed, min_velocity)
     ols = weighted_least_squares(W, Y, joint, names, weighted=False)  # rank check names the unknowns
     x = ols.values
     n_f = len(free)
@@ -271,7 +289,7 @@ def _fit(motions: Sequence[_Motion], names: Sequence[str], Rt: np.ndarray, free:
             raise ValueError("drive gains: a gain came out as 0; the runs do not excite it")
         gain = Rt @ np.diag(k)
         predicted = [np.linalg.solve(gain, (np.einsum("snc,c->sn", m.X, x[n_f:]) + m.Kn).T).T for m in motions]
-        Z, _, _ = _system(motions, predicted, Rt, free, k_fixed, min_velocity)
+        Z, _, _, _ = _system(motions, predicted, Rt, free, k_fixed, min_velocity)
         w = 1.0 / sigma[joint]
         Aw, Zw = W * w[:, None], Z * w[:, None]
         x_new = np.linalg.solve(Zw.T @ Aw, Zw.T @ (Y * w))
@@ -283,9 +301,10 @@ def _fit(motions: Sequence[_Motion], names: Sequence[str], Rt: np.ndarray, free:
     std = np.sqrt(np.diag(cov))                                                   # eq. 14
     res = Y - W @ x
     rms = np.array([np.sqrt(np.mean(res[joint == j] ** 2)) for j in range(nj)])
+    boot = bootstrap_std(W, Y, joint, samples, 1.0 / sigma, rate, seed, instruments=Z)
     return IdentificationResult(tuple(names), x, std, 100 * std / np.abs(x), sigma_rho,
                                 _cond(W / sigma[joint][:, None]), ols.cond_unweighted, rms, 1.0 / sigma,
-                                len(Y), f"drive-gains-{method}-iv", cov)
+                                len(Y), f"drive-gains-{method}-iv", cov), boot
 
 
 def _iv_covariance(W: np.ndarray, Z: np.ndarray, Y: np.ndarray, x: np.ndarray, joint: np.ndarray,
@@ -313,7 +332,7 @@ def _joint_sigma(r: np.ndarray, joint: np.ndarray, nj: int, c: int) -> np.ndarra
 
 
 def _same_motion(empty, loaded, position_tol, *, robot, Rt, mass, free, k_fixed, cutoff, decimate_to,
-                 min_velocity, spring, iterations):
+                 min_velocity, spring, iterations, rate, seed):
     pairs = [pair_runs(e, l, position_tol) for e, l in zip(empty, loaded)]
     # One cut-off for both runs of a pair, so that the same samples are kept and compared.
     cutoff = cutoff or max(choose_cutoff(np.asarray(p.loaded.q), p.loaded.rate) for p in pairs)
@@ -324,11 +343,11 @@ def _same_motion(empty, loaded, position_tol, *, robot, Rt, mass, free, k_fixed,
     motions = [_Motion(a.Y - b.Y, a.Phi[:, :, :9], a.Phi[:, :, 9] * mass - (a.Phi[:, :, 10] - b.Phi[:, :, 10]), a.dq)
                for a, b in zip(m_l, m_e)]
     names = tuple(f"K{j + 1}" for j in free) + _OTHER_PAYLOAD
-    return _fit(motions, names, Rt, free, k_fixed, min_velocity, "same-motion", iterations), pairs, None, None
+    return _fit(motions, names, Rt, free, k_fixed, min_velocity, "same-motion", iterations, rate, seed), pairs, None, None
 
 
 def _global(empty, loaded, offsets, base, *, robot, Rt, mass, free, k_fixed, cutoff, decimate_to,
-            min_velocity, spring, iterations):
+            min_velocity, spring, iterations, rate, seed):
     if offsets and not robot.offsets:
         robot = robot.with_options(offsets=True)
         if base is not None and "OFF1" not in base.names:
@@ -345,7 +364,7 @@ def _global(empty, loaded, offsets, base, *, robot, Rt, mass, free, k_fixed, cut
         system.append(_Motion(m.Y, np.concatenate([m.Phi[:, :, :nb], Wc[:, :, :9]], axis=2),
                               Wc[:, :, 9] * mass - m.Phi[:, :, nb + 10], m.dq))
     names = tuple(f"K{j + 1}" for j in free) + tuple(base.names) + _OTHER_PAYLOAD
-    fit = _fit(system, names, Rt, free, k_fixed, min_velocity, "global", iterations)
+    fit, boot = _fit(system, names, Rt, free, k_fixed, min_velocity, "global", iterations, rate, seed)
     idx = [fit.names.index(n) for n in base.names]
     cov = fit.covariance[np.ix_(idx, idx)] if fit.covariance is not None else None
     robot_fit = IdentificationResult(tuple(base.names), fit.values[idx], fit.std[idx], fit.rel_std_pct[idx],
@@ -356,4 +375,4 @@ def _global(empty, loaded, offsets, base, *, robot, Rt, mass, free, k_fixed, cut
         off = [f"OFF{j}" for j in range(1, robot.n + 1)]
         # tau_model = W beta includes +OFFj; with raw currents G k = tau + Rt diag(k) i0.
         torque_offsets = np.array([robot_fit[n] if n in robot_fit.names else 0.0 for n in off])
-    return fit, robot_fit, torque_offsets
+    return (fit, boot), robot_fit, torque_offsets

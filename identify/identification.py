@@ -1,57 +1,23 @@
-"""Identification of a robot's base parameters from recordings (paper sections II-B and III).
+"""Deprecated entry point: use :func:`identify.fit` (one Processing, one Fit).
 
-Wires the pieces: observation matrix (eqs. 6-8) -> (weighted) least squares (eqs. 9-15) ->
-optionally essential parameters or the physically consistent fit. Validation on a motion that
-was not used for fitting: identify.validation (re-exported here).
+``identify.identify`` is kept for one release as a thin wrapper with its former defaults
+(``min_velocity=None, rest="drop"``); ConsistentResult and consistent_fit live in
+identify.estimation.consistent_fit.
 """
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+import warnings
 from typing import Any, Sequence
-
-import numpy as np
 
 import rx90sym
 
-from identify.estimation.consistency import ConsistentSolution, consistency_margin, consistent_least_squares
-from identify.observation.matrix import Observation, observation_matrix
+from identify.estimation.consistent_fit import ConsistentResult, consistent_fit  # noqa: F401 (re-exported)
 from identify.estimation.results import IdentificationResult
-from identify.estimation.least_squares import weighted_least_squares
+from identify.observation.matrix import Observation
+from identify.observation.processing import Processing
 from identify.validation import Validation, predict, validate  # noqa: F401 (re-exported)
 
-METHODS = ("ols", "wls", "consistent")
-
-
-@dataclass(frozen=True, eq=False)
-class ConsistentResult(IdentificationResult):
-    """A physically consistent identification: base values beta = K chi of a consistent chi.
-
-    std / rel_std_pct are those of the unconstrained WLS fit (the constraints only shrink the
-    feasible set; they are reported as the data's information on each parameter).
-    standard: the standard parameters chi found (dict name -> value);
-    cost, wls_cost: weighted residual sum of squares of the consistent and of the WLS fit;
-    wls_was_consistent: whether the WLS estimate itself admits a consistent chi (then both costs
-    agree to the solver's accuracy).
-    """
-
-    standard: dict = field(default_factory=dict)
-    cost: float = float("nan")
-    wls_cost: float = float("nan")
-    wls_was_consistent: bool = False
-    solution: ConsistentSolution | None = field(default=None, repr=False)
-
-    @property
-    def cost_increase_pct(self) -> float:
-        """How much the constraints cost in residual, % of the WLS residual sum of squares."""
-        return 100.0 * (self.cost - self.wls_cost) / self.wls_cost
-
-    def to_dict(self) -> dict[str, Any]:
-        d = super().to_dict()
-        d.update({"standard": {k: float(v) for k, v in self.standard.items()},
-                  "cost": self.cost, "wls_cost": self.wls_cost,
-                  "cost_increase_pct": self.cost_increase_pct,
-                  "wls_was_consistent": self.wls_was_consistent})
-        return d
+__all__ = ["ConsistentResult", "consistent_fit", "identify"]
 
 
 def identify(robot: rx90sym.Robot, recordings: Sequence[Any], method: str = "wls", base: Any = None,
@@ -59,49 +25,12 @@ def identify(robot: rx90sym.Robot, recordings: Sequence[Any], method: str = "wls
              min_velocity: float | None = None, spring: bool = True,
              observation: Observation | None = None, rest: str = "drop", delay: float = 0.0,
              **consistent_options: Any) -> IdentificationResult:
-    """Identify the base parameters of ``robot`` from recordings.
+    """Deprecated: ``identify.fit(robot, recordings, Processing(...), method).result``."""
+    warnings.warn("identify.identify is deprecated: use identify.fit(robot, recordings, Processing(...), "
+                  "method).result", DeprecationWarning, stacklevel=2)
+    from identify.fitting import fit
 
-    method: "ols", "wls" (paper: each joint's rows weighted by 1/sigma of its own residual) or
-    "consistent" (WLS data, physically consistent standard parameters through cvxpy; extra
-    keyword arguments go to identify.estimation.consistency.consistent_least_squares, e.g. prior,
-    prior_weight, total_mass, mass_bounds, com_boxes, solver).
-    cutoff [Hz], decimate_to [Hz], min_velocity [rad/s], rest ("drop" | "zero-coulomb"),
-    delay [s], spring: see observation_matrix.
-    observation: an already built observation matrix (the recordings are then not read).
-    """
-    if method not in METHODS:
-        raise ValueError(f"identify: method must be one of {METHODS}, got {method!r}")
-    base = base if base is not None else rx90sym.base_parameters(robot)
-    obs = observation if observation is not None else observation_matrix(
-        robot, recordings, cutoff=cutoff, decimate_to=decimate_to, base=base, spring=spring,
-        min_velocity=min_velocity, rest=rest, delay=delay)
-    result = weighted_least_squares(obs.W, obs.Y, obs.joint, obs.names, weighted=method != "ols")
-    if method != "consistent":
-        return result
-    return consistent_fit(robot, result, base, **consistent_options)
-
-
-def consistent_fit(robot: rx90sym.Robot, wls: IdentificationResult, base: Any, **options: Any) -> ConsistentResult:
-    """Physically consistent refit of a (W)LS result on its compressed weighted system."""
-    system = wls.system
-    if system is None:
-        raise ValueError("consistent fit needs a result that still holds its compressed system "
-                         "(not one loaded from JSON)")
-    if tuple(wls.names) != tuple(base.names):
-        raise ValueError("consistent fit needs a result on the full base parameter set")
-    sol = consistent_least_squares(system.R, system.z, base.K, robot.parameter_names,
-                                   rss_outside=system.rss_outside, rows=system.rows, **options)
-    wls_cost = system.rss(wls.values)
-    c = len(wls.names)
-    sigma_rho = float(np.sqrt(sol.cost / max(system.rows - c, 1)))
-    residual_rms = np.array([np.sqrt(js.rss(sol.beta) / js.rows) for js in wls.joint_systems])
-    # Exact test: does some consistent chi reproduce the WLS beta? (margin > 0)
-    was_consistent = bool(consistency_margin(wls.values, base.K, robot.parameter_names)[0] > 0)
-    return ConsistentResult(
-        names=wls.names, values=sol.beta, std=wls.std,
-        rel_std_pct=100 * wls.std / np.where(sol.beta == 0, np.nan, np.abs(sol.beta)),
-        sigma_rho=sigma_rho, cond=wls.cond, cond_unweighted=wls.cond_unweighted,
-        residual_rms=residual_rms, weights=wls.weights, rows=wls.rows, method="consistent",
-        covariance=wls.covariance, system=system, joint_systems=wls.joint_systems,
-        standard=dict(zip(robot.parameter_names, sol.chi)), cost=sol.cost, wls_cost=wls_cost,
-        wls_was_consistent=was_consistent, solution=sol)
+    processing = Processing(cutoff=cutoff, decimate_to=decimate_to, min_velocity=min_velocity, rest=rest,
+                            delay=delay, estimate_delay=False, spring=spring)
+    return fit(robot, recordings, processing, method, base=base, observation=observation,
+               **consistent_options).result

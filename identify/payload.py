@@ -25,7 +25,9 @@ import rx90sym
 from rx90sym.parameters import PAYLOAD_NAMES
 
 from identify.estimation.consistency import ConsistencyError, pseudo_inertia
+from identify.estimation.bootstrap import bootstrap_std
 from identify.estimation.least_squares import compress, solve_system, stack_systems, weighted_least_squares
+from identify.observation.processing import Processing
 from identify.signal.filtering import choose_cutoff
 from identify.observation.matrix import filtered_motion, stack_rows
 from identify.signal.pairing import POSITION_TOLERANCE, PairedRuns, pair_runs
@@ -43,7 +45,8 @@ class PayloadResult:
     robot: the identified robot base parameters (methods 2 and 4), else None;
     a_priori: reference values (CAD) when given; constrained: whether the PSD/mass constraints
     were imposed; fit: the underlying least-squares result; pairs: method 3's paired runs (lag,
-    position gap).
+    position gap); bootstrap_std: the segment-bootstrap sigma (coloured residuals) beside eq. 13's
+    ``std``, or None (method 2).
     """
 
     method: int
@@ -56,6 +59,7 @@ class PayloadResult:
     a_priori: dict | None = None
     constrained: bool = False
     pairs: tuple[PairedRuns, ...] = field(default=(), repr=False)
+    bootstrap_std: np.ndarray | None = None
 
     def __getitem__(self, name: str) -> float:
         return float(self.values[self.names.index(name)])
@@ -65,8 +69,10 @@ class PayloadResult:
 
     def to_dict(self) -> dict[str, Any]:
         return {"method": self.method, "constrained": self.constrained,
-                "payload": [{"name": n, "value": json_number(v), "std": json_number(s), "rel_std_pct": json_number(p)}
-                            for n, v, s, p in zip(self.names, self.values, self.std, self.rel_std_pct)],
+                "payload": [{"name": n, "value": json_number(v), "std": json_number(s), "rel_std_pct": json_number(p),
+                             "bootstrap_std": None if self.bootstrap_std is None else json_number(b)}
+                            for n, v, s, p, b in zip(self.names, self.values, self.std, self.rel_std_pct,
+                                                     self._boot())],
                 "a_priori": self.a_priori,
                 # The robot's base parameters identified with the payload (methods 2 and 4).
                 "robot": None if self.robot is None else self.robot.to_dict(),
@@ -74,17 +80,22 @@ class PayloadResult:
                              "position_gap_rad": p.gap, "position_gap_joint": p.gap_joint,
                              "common_samples": p.empty.n_samples} for p in self.pairs]}
 
+    def _boot(self) -> np.ndarray:
+        return np.full(len(self.names), np.nan) if self.bootstrap_std is None else self.bootstrap_std
+
     def table(self) -> str:
-        """Like Tables 4-7: Parameter, A priori, Identified, 2 sigma, sigma_r %."""
+        """Like Tables 4-7: Parameter, A priori, Identified, 2 sigma (eq. 13), sigma_r %, and the
+        segment bootstrap's 2 sigma."""
         lines = [f"Payload, method {self.method}{' (constrained)' if self.constrained else ''}",
-                 f"{'Parameter':10s} {'A priori':>10s} {'Identified':>11s} {'2σ':>9s} {'σr %':>9s}"]
+                 f"{'Parameter':10s} {'A priori':>10s} {'Identified':>11s} {'2σ eq.13':>9s} {'σr %':>9s} "
+                 f"{'2σ boot':>9s}"]
         if self.robot is not None:
             for n, v, s, p in zip(self.robot.names, self.robot.values, self.robot.std, self.robot.rel_std_pct):
                 if n not in self.names:
                     lines.append(f"{n:10s} {'':>10s} {v:11.4g} {2 * s:9.3g} {p:9.3f}")
-        for n, v, s, p in zip(self.names, self.values, self.std, self.rel_std_pct):
+        for n, v, s, p, b in zip(self.names, self.values, self.std, self.rel_std_pct, self._boot()):
             ap = "" if not self.a_priori or n not in self.a_priori else f"{self.a_priori[n]:.4g}"
-            lines.append(f"{n:10s} {ap:>10s} {v:11.4g} {2 * s:9.3g} {p:9.3f}")
+            lines.append(f"{n:10s} {ap:>10s} {v:11.4g} {2 * s:9.3g} {p:9.3f} {2 * b:9.3g}")
         lines += [p.summary() for p in self.pairs]
         return "\n".join(lines)
 
@@ -153,7 +164,7 @@ def _robot_vector(robot: rx90sym.Robot, base: Any, robot_params: Any) -> np.ndar
 def payload(robot: rx90sym.Robot, method: int, empty: Sequence[Any] = (), loaded: Sequence[Any] = (),
             robot_params: Any = None, base: Any = None, a_priori: Mapping[str, float] | str | None = None,
             constrained: bool = False, mass: float | None = None, mass_tol: float = 0.05,
-            position_tol: float = POSITION_TOLERANCE, **options: Any) -> PayloadResult:
+            position_tol: float = POSITION_TOLERANCE, bootstrap_seed: int | None = 0, **options: Any) -> PayloadResult:
     """Identify the payload by method 1, 2, 3 or 4 of section IV.
 
     empty / loaded: recordings without / with the payload; robot_params: the robot's base (or
@@ -163,7 +174,8 @@ def payload(robot: rx90sym.Robot, method: int, empty: Sequence[Any] = (), loaded
     pairs each empty run with its loaded run in time (identify.signal.pairing: lag, common part) and
     refuses pairs whose positions still differ by more; options: cutoff, decimate_to, spring,
     min_velocity, delay (see identify.observation_matrix; an identification's are
-    ``FitModel.filtering()``).
+    ``FitModel.filtering()``); bootstrap_seed: seed of the segment bootstrap beside eq. 13's sigma
+    (identify.estimation.bootstrap; methods 1, 3 and 4; None: no bootstrap).
     """
     if method not in METHODS:
         raise ValueError(f"payload: method must be 1, 2, 3 or 4, got {method!r}")
@@ -191,15 +203,19 @@ def payload(robot: rx90sym.Robot, method: int, empty: Sequence[Any] = (), loaded
     if method == 3:
         empty, loaded, pairs = _paired(empty, loaded, position_tol)
     solve = {1: _method_1, 2: _method_2, 3: _method_3, 4: _method_4}[method]
-    fit, robot_fit = solve(robot, base, empty, loaded, robot_params=robot_params, options=options)
+    fit, robot_fit, rows = solve(robot, base, empty, loaded, robot_params=robot_params, options=options)
     values, std, rel = _payload_part(fit)
+    boot = None
+    if rows is not None and bootstrap_seed is not None:
+        rate = options.get("decimate_to", 50.0) or loaded[0].rate
+        boot = bootstrap_std(*rows, fit.weights, rate, bootstrap_seed)[[fit.names.index(n) for n in PAYLOAD_NAMES]]
     if constrained:
         values = _constrained(fit, mass, mass_tol)
         rel = 100 * std / np.abs(values)
     if robot.urdf is not None:
         values, std, rel = _in_tip_frame(robot, fit, values, std)
     return PayloadResult(method, PAYLOAD_NAMES, values, std, rel, fit, robot_fit,
-                         dict(a_priori) if a_priori else None, constrained, tuple(pairs))
+                         dict(a_priori) if a_priori else None, constrained, tuple(pairs), boot)
 
 
 def _in_tip_frame(robot: rx90sym.Robot, fit: IdentificationResult, values: np.ndarray, std: np.ndarray
@@ -223,8 +239,8 @@ def _method_1(robot, base, empty, loaded, robot_params, options, **_):
     nb = base.nb
     # eq. 22: the robot's known part is moved to the left-hand side.
     Y = [m.Y - m.Phi[:, :, :nb] @ beta for m in motions]
-    W, Yr, joint, _ = _rows([m.Phi[:, :, nb:] for m in motions], Y, motions, options)
-    return weighted_least_squares(W, Yr, joint, PAYLOAD_NAMES), None
+    W, Yr, joint, samples = _rows([m.Phi[:, :, nb:] for m in motions], Y, motions, options)
+    return weighted_least_squares(W, Yr, joint, PAYLOAD_NAMES), None, (W, Yr, joint, samples)
 
 
 def _paired(empty, loaded, position_tol):
@@ -244,8 +260,8 @@ def _method_3(robot, base, empty, loaded, options, **_):
     m_l = _motions(robot, loaded, cols, same)
     m_e = _motions(robot, empty, cols, same)
     # eq. 28: the empty run's torques replace W chi.
-    W, Y, joint, _ = _rows([m.Phi for m in m_l], [a.Y - b.Y for a, b in zip(m_l, m_e)], m_l, options)
-    return weighted_least_squares(W, Y, joint, PAYLOAD_NAMES), None
+    W, Y, joint, samples = _rows([m.Phi for m in m_l], [a.Y - b.Y for a, b in zip(m_l, m_e)], m_l, options)
+    return weighted_least_squares(W, Y, joint, PAYLOAD_NAMES), None, (W, Y, joint, samples)
 
 
 def _global_rows(robot, base, empty, loaded, options):
@@ -260,10 +276,10 @@ def _global_rows(robot, base, empty, loaded, options):
 
 
 def _method_4(robot, base, empty, loaded, options, **_):
-    W, Y, joint, _ = _global_rows(robot, base, empty, loaded, options)
+    W, Y, joint, samples = _global_rows(robot, base, empty, loaded, options)
     names = tuple(base.names) + PAYLOAD_NAMES
     fit = weighted_least_squares(W, Y, joint, names)
-    return fit, _subset(fit, base.names)
+    return fit, _subset(fit, base.names), (W, Y, joint, samples)
 
 
 def _subset(fit: IdentificationResult, names: Sequence[str]) -> IdentificationResult:
@@ -282,11 +298,12 @@ def grouping_relations(robot: rx90sym.Robot, base: Any) -> np.ndarray:
 
 
 def _method_2(robot, base, empty, loaded, options, **_):
-    kw = {k: options[k] for k in ("cutoff", "decimate_to", "spring", "min_velocity") if k in options}
-    from identify.identification import identify
+    from identify.fitting import fit
 
-    fit_v = identify(robot, empty, method="wls", base=base, **kw)
-    fit_t = identify(robot, loaded, method="wls", base=base, **kw)
+    kw = {k: options[k] for k in ("cutoff", "decimate_to", "spring", "min_velocity", "delay") if k in options}
+    processing = Processing(**{"min_velocity": None, "rest": "drop", "estimate_delay": False, **kw})
+    fit_v = fit(robot, empty, processing, base=base).result
+    fit_t = fit(robot, loaded, processing, base=base).result
     delta = fit_t.values - fit_v.values                    # eq. 23
     cov = fit_t.covariance + fit_v.covariance
     Kc = grouping_relations(robot, base)
@@ -307,7 +324,7 @@ def _method_2(robot, base, empty, loaded, options, **_):
     fit = IdentificationResult(PAYLOAD_NAMES, sol.values, std, 100 * std / np.abs(sol.values),
                                sol.sigma_rho, sol.cond, sol.cond_unweighted, np.zeros(0), np.zeros(0),
                                len(rows), "payload-2", covc)
-    return fit, fit_t
+    return fit, fit_t, None  # no rows: a combination of two fits (their bootstrap is not pooled here)
 
 
 def _constrained(fit: IdentificationResult, mass: float | None, mass_tol: float) -> np.ndarray:

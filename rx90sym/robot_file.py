@@ -38,7 +38,11 @@ SCHEMA: dict[str, tuple[str, ...]] = {
     "spring": ("joint", "k", "a", "b", "L0", "angle_offset", "angle_offset_deg", "table", "placeholder"),
     "nominal": NOMINAL_KEYS,     # prior parameters with their sources (rx90sym.nominal_table)
     "flange": FLANGE_KEYS,       # frame n -> the maker's tool flange
+    # Read by the excitation's safety envelope (excitation/robot_geometry.py), not by the model.
+    "excitation": ("mounting_plane_z", "tool_point"),
+    "capsules": ("name", "frame", "a", "b", "radius"),
 }
+ARRAY_TABLES = ("joints", "capsules")  # [[...]] arrays of tables
 SPRING_CONSTANTS = ("k", "a", "b", "L0", "angle_offset")
 
 
@@ -161,11 +165,11 @@ def check_schema(data: dict, where: _Where) -> None:
                 raise RobotFileError(f"{place}: unknown section [{key}]{hint} (valid sections: {valid})")
             raise RobotFileError(f"{where('', key)}: unknown key {key!r}{hint} (valid top-level keys: "
                                  f"{', '.join(SCHEMA[''])}; sections: {valid})")
-        tables = value if key == "joints" and isinstance(value, list) else [value]
+        tables = value if key in ARRAY_TABLES and isinstance(value, list) else [value]
         for index, table in enumerate(tables):
             if not isinstance(table, dict):
                 raise RobotFileError(f"{where(key, index=index)}: {key!r} must be a "
-                                     f"{'[[joints]] table' if key == 'joints' else '[' + key + '] table'}")
+                                     f"{'[[' + key + ']] table' if key in ARRAY_TABLES else '[' + key + '] table'}")
             for field_name in table:
                 if field_name not in SCHEMA[key]:
                     near = _nearest(field_name, SCHEMA[key])

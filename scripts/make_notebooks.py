@@ -81,7 +81,8 @@ NOTEBOOKS = {
         ("code", MOTION),
         ("code", 'robot = rx90sym.load_robot("rx90"); bp = rx90sym.base_parameters(robot)\n'
                  'recs = [rx90sym.twin.simulate(robot, multisine(robot, s), duration=20.0, seed=s) for s in range(3)]\n'
-                 'res = identify.identify(robot, recs, method="wls", base=bp, min_velocity=0.1)\nprint(res.table())'),
+                 'drop = identify.Processing(min_velocity=0.1, rest="drop", estimate_delay=False)  # rest rows dropped\n'
+                 'res = identify.fit(robot, recs, drop, base=bp).result\nprint(res.table())'),
         ("code", 'truth = dict(zip(bp.names, bp.beta(robot.parameter_vector(rx90sym.default_parameters(robot)))))\n'
                  'z = np.array([(v - truth[n]) / s for n, v, s in zip(res.names, res.values, res.std)])\n'
                  'print("parameters within 3 sigma of the truth:", int(np.sum(np.abs(z) < 3)), "of", len(z))'),
@@ -97,7 +98,8 @@ NOTEBOOKS = {
         ("code", 'robot = rx90sym.load_robot("rx90"); bp = rx90sym.base_parameters(robot)\n'
                  'noisy = rx90sym.twin.NoiseProfile("noisy", "large torque noise", torque_noise=0.3)\n'
                  'rec = rx90sym.twin.simulate(robot, multisine(robot, 9, 6.0, 0.15), duration=6.0, noise=noisy, seed=3)\n'
-                 'con = identify.identify(robot, [rec], method="consistent", base=bp, decimate_to=None)\n'
+                 'con = identify.fit(robot, [rec], identify.Processing(decimate_to=None, min_velocity=None, estimate_delay=False),\n'
+                 '                   "consistent", base=bp).result\n'
                  'print("WLS estimate consistent?", con.wls_was_consistent)\n'
                  'print("cost of the constraints: %.2f %% of the WLS residual" % con.cost_increase_pct)'),
         ("code", 'chi = np.array([con.standard[n] for n in robot.parameter_names])\n'
@@ -112,7 +114,8 @@ NOTEBOOKS = {
                  'trajs = [multisine(robot, s) for s in range(2)]\n'
                  'empty = [rx90sym.twin.simulate(robot, tr, duration=20.0, seed=10 + i) for i, tr in enumerate(trajs)]\n'
                  'loaded = [rx90sym.twin.simulate(robot, tr, duration=20.0, payload="tables_5", seed=20 + i) for i, tr in enumerate(trajs)]\n'
-                 'res = identify.identify(robot, empty, base=bp, min_velocity=0.1)'),
+                 'res = identify.fit(robot, empty, identify.Processing(min_velocity=0.1, rest="drop", estimate_delay=False),\n'
+                 '                   base=bp).result'),
         ("code", 'for m in (1, 2, 3, 4):\n    p = identify.payload(robot, m, empty=empty if m != 1 else [], loaded=loaded,\n'
                  '                         robot_params=res if m == 1 else None, '
                  'a_priori="tables_5", base=bp, min_velocity=0.1)\n    print(p.table() if m == 3 else '
@@ -130,8 +133,9 @@ NOTEBOOKS = {
                  'data = rx90sym.datasets.tx40()\nprint(data.positions.parent)'),
         ("code", 'tx = rx90sym.load_robot("tx40", offsets=True)\n'
                  'rec = identify.read_motor_recording(data.positions, data.torques, tx, period=data.period)\n'
-                 'fit, held = identify.split(rec, 2 / 3)\nobs = identify.observation_matrix(tx, [fit], decimate_to=100.0)\nprint(obs.summary())'),
-        ("code", 'res = identify.identify(tx, [fit], observation=obs)\nprint(res.table())'),
+                 'fit, held = identify.split(rec, 2 / 3)\nobs = identify.observation_matrix(tx, [fit], decimate_to=100.0, min_velocity=None)\nprint(obs.summary())'),
+        ("code", 'processing = identify.Processing(decimate_to=100.0, min_velocity=None, estimate_delay=False)  # that of obs\n'
+                 'res = identify.fit(tx, [fit], processing, observation=obs).result\nprint(res.table())'),
         ("code", 'val = identify.validate(tx, res, held, decimate_to=100.0)\nprint(val.table())\n'
                  'fig, axes = plt.subplots(6, 1, figsize=(9, 10), sharex=True)\n'
                  'for j, ax in enumerate(axes):\n    ax.plot(val.t, val.measured[:, j], lw=0.7); ax.plot(val.t, val.predicted[:, j], lw=0.7)'),

@@ -26,12 +26,12 @@ def one_set(robot, bp, truth, k: int) -> dict[str, float]:
     seeds = [10 * k + s for s in range(4)]
     sim = rx90sym.twin.simulate
     empty = [sim(robot, multisine(robot, s), duration=20.0, noise="realistic", seed=s) for s in seeds]
-    wls = identify.identify(robot, empty, base=bp, min_velocity=0.1)
+    wls = identify.fit(robot, empty, identify.Processing(min_velocity=0.1, rest="drop", estimate_delay=False), base=bp).result
     tv = np.array([truth[n] for n in wls.names])
     z = (wls.values - tv) / wls.std
     good = wls.rel_std_pct < 5.0
     ess = identify.essential_parameters(wls)
-    raw = identify.identify(robot, empty, base=bp)
+    raw = identify.fit(robot, empty, identify.Processing(min_velocity=None, estimate_delay=False), base=bp).result
     zr = {n: (v - truth[n]) / s for n, v, s in zip(raw.names, raw.values, raw.std)}
     other = sim(robot, multisine(robot, 42 + 10 * k), duration=20.0, noise="realistic", seed=42 + 10 * k)
     val = identify.validate(robot, wls, other, base=bp)

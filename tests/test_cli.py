@@ -140,7 +140,7 @@ def test_convert_the_tx40_files_then_identify(tmp_path):
 
 @pytest.mark.parametrize("args, needle", [
     (("identify", "missing.csv", "--json", "out.json"), "missing.csv"),
-    (("identify", "corrupt.csv", "--json", "out.json"), "corrupt.csv"),
+    (("identify", "corrupt.csv", "--robot", "rx90", "--json", "out.json"), "corrupt.csv"),
     (("identify", "empty.csv", "--robot", "rx91", "--json", "out.json"), "unknown robot 'rx91'"),
     (("identify", "empty.csv", "--method", "consistent", "--essential", "--json", "out.json"), "conflicting options"),
     (("payload", "--method", "3", "--loaded", "loaded.csv", "--mass", "7", "--json", "out.json"), "conflicting options"),

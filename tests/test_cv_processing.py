@@ -8,17 +8,18 @@ import numpy as np
 import pytest
 
 import rx90sym
-from identify import fit_recordings, predict, split
+from identify import Processing, fit, predict, split
 from identify.observation.cross_validation import Candidate, choose_processing
 from motions import multisine
 
 
 def _held_out(robot, base, fit_part, clean_test, cand: Candidate) -> float:
     """Mean relative error (%) of the held-out prediction against the noise-free torques."""
-    fit = fit_recordings(robot, [fit_part], base=base, cutoff=cand.cutoff, decimate_to=cand.decimate_to,
-                         min_velocity=0.05 if cand.rest else None, rest=cand.rest or "zero-coulomb")
-    val = predict(robot, fit.result, clean_test, base=base, cutoff=cand.cutoff, decimate_to=None,
-                  min_velocity=fit.min_velocity, rest=fit.rest)
+    fit_ = fit(robot, [fit_part], Processing(cutoff=cand.cutoff, decimate_to=cand.decimate_to, rest=cand.rest or "zero-coulomb",
+                                            min_velocity=0.05 if cand.rest else None, estimate_delay=False),
+               base=base)
+    val = predict(robot, fit_.result, clean_test, base=base, cutoff=cand.cutoff, decimate_to=None,
+                  min_velocity=fit_.min_velocity, rest=fit_.rest)
     return float(np.mean(100 * np.linalg.norm(val.predicted - val.measured, axis=0)
                          / np.linalg.norm(val.measured, axis=0)))
 

@@ -18,7 +18,7 @@ TABLE_3 = ["ZZ1R", "FV1", "FS1", "XX2R", "XZ2R", "ZZ2R", "MX2R", "FV2", "FS2", "
 def wls(rx90, rx90_base, twin_empty):
     # Samples where a joint is nearly at rest are dropped for that joint: the twin's realistic
     # profile has Stribeck friction there, which the model (eq. 5) does not contain.
-    return identify.identify(rx90, twin_empty, method="wls", base=rx90_base, min_velocity=0.1)
+    return identify.fit(rx90, twin_empty, identify.Processing(min_velocity=0.1, rest="drop", estimate_delay=False), base=rx90_base).result
 
 
 def test_well_identified_parameters_lie_within_3_sigma_of_the_truth(wls, rx90_truth):
@@ -32,7 +32,7 @@ def test_well_identified_parameters_lie_within_3_sigma_of_the_truth(wls, rx90_tr
 
 def test_without_removing_rest_samples_the_stribeck_mismatch_biases_friction(rx90, rx90_base, twin_empty, rx90_truth):
     """The reason for min_velocity: the same data without it puts FS/FV out of their 3 sigma."""
-    res = identify.identify(rx90, twin_empty, method="wls", base=rx90_base)
+    res = identify.fit(rx90, twin_empty, identify.Processing(min_velocity=None, estimate_delay=False), base=rx90_base).result
     z = {n: (v - rx90_truth[n]) / s for n, v, s in zip(res.names, res.values, res.std)}
     assert max(abs(z[f"FS{j}"]) for j in range(1, 7)) > 3
 
@@ -75,13 +75,13 @@ def test_rank_deficient_data_names_the_parameters_not_excited(rx90, rx90_base):
 
     rec = rx90sym.twin.simulate(rx90, frozen, duration=10.0, noise="ideal", seed=0)
     with pytest.raises(identify.IdentificationError) as err:
-        identify.identify(rx90, [rec], base=rx90_base)
+        identify.fit(rx90, [rec], identify.Processing(min_velocity=None, estimate_delay=False), base=rx90_base).result
     assert "FV6" in str(err.value) or "FS6" in str(err.value)
 
 
 @pytest.mark.slow
 def test_consistent_fit_is_consistent_and_costs_little(rx90, rx90_base, twin_empty, wls):
-    con = identify.identify(rx90, twin_empty, method="consistent", base=rx90_base, min_velocity=0.1)
+    con = identify.fit(rx90, twin_empty, identify.Processing(min_velocity=0.1, rest="drop", estimate_delay=False), "consistent", base=rx90_base).result
     chi = np.array([con.standard[n] for n in rx90.parameter_names])
     for j in range(6):
         J = identify.pseudo_inertia(chi[13 * j:13 * j + 10])
@@ -95,7 +95,7 @@ def test_consistent_fit_stays_consistent_where_ols_does_not(rx90, rx90_base):
     rec = rx90sym.twin.simulate(rx90, multisine(rx90, 9, duration=6.0, fraction=0.15), duration=6.0,
                                 noise=rx90sym.twin.NoiseProfile("noisy", "large torque noise",
                                                                 torque_noise=0.3), seed=3)
-    con = identify.identify(rx90, [rec], method="consistent", base=rx90_base, decimate_to=None)
+    con = identify.fit(rx90, [rec], identify.Processing(decimate_to=None, min_velocity=None, estimate_delay=False), "consistent", base=rx90_base).result
     assert not con.wls_was_consistent
     chi = np.array([con.standard[n] for n in rx90.parameter_names])
     report = identify.consistency_report(chi, rx90.parameter_names)
@@ -108,7 +108,8 @@ def test_tx40_real_data_identify_and_validate():
     rec = identify.read_motor_recording(data.positions, data.torques, tx, period=data.period)
     fit, held = identify.split(rec, 2 / 3)
     obs = identify.observation_matrix(tx, [fit], decimate_to=100.0)
-    res = identify.identify(tx, [fit], observation=obs)
+    res = identify.fit(tx, [fit], identify.Processing(decimate_to=100.0, min_velocity=None, estimate_delay=False),
+                       observation=obs).result
     # Physical sense without ground truth: inertia about axis 1 and gravity moment positive,
     # friction positive and well identified.
     assert res["ZZ1R"] > 0 and res["MX2R"] > 0

@@ -251,7 +251,7 @@ def test_the_rx90_script_exits_2_with_one_line(tmp_path):
                            str(ur10e_toml(tmp_path)), "--columns", COLUMNS, "--no-header", "--out", str(out)],
                           capture_output=True, text=True)
     lines_err = proc.stderr.strip().splitlines()
-    assert proc.returncode == 2 and needle in lines_err[-1] and len(lines_err) == 2 and not out.exists()
+    assert proc.returncode == 2 and needle in lines_err[-1] and len(lines_err) == 3 and "robot" in lines_err[0] and not out.exists()
 
 
 # --------------------------------------------------------------------------------------------

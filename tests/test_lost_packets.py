@@ -13,7 +13,7 @@ from identify.app.cli import main
 from identify.io.logs import read_log
 from identify.io.recordings import read_recording, write_recording
 from identify.observation.matrix import observation_matrix
-from identify.real_fit import fit_recordings
+from identify import Processing, fit
 from motions import multisine, panda_truth
 from rx90sym.host_log import HostFaults, host_log, write_host_log
 from rx90sym.recording import Recording, RecordingError
@@ -113,7 +113,7 @@ def test_a_long_gap_splits_the_log_unless_segments_are_refused(tmp_path, capsys,
 
 
 def _within(robot, base, truth, rec) -> float:
-    res = fit_recordings(robot, [rec], base=base).result
+    res = fit(robot, [rec], Processing(estimate_delay=False), base=base).result
     values, std = dict(zip(res.names, res.values)), dict(zip(res.names, res.std))
     return float(np.mean([abs(values[n] - v) <= 3 * std[n] for n, v in zip(base.names, truth)]))
 

@@ -15,7 +15,7 @@ PAYLOADS = ("tables_4", "tables_5")
 
 @pytest.fixture(scope="module")
 def robot_fit(rx90, rx90_base, twin_empty):
-    return identify.identify(rx90, twin_empty, base=rx90_base, min_velocity=0.1)
+    return identify.fit(rx90, twin_empty, identify.Processing(min_velocity=0.1, rest="drop", estimate_delay=False), base=rx90_base).result
 
 
 @pytest.fixture(scope="module")

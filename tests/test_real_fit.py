@@ -30,7 +30,7 @@ def test_rest_handling_predicts_rest_phases_better(rx90, rx90_base, stop_go):
     fit_rec, held = stop_go
     errors = {}
     for label, mv in (("none", None), ("rest", 0.005)):
-        fit = identify.fit_recordings(rx90, [fit_rec], base=rx90_base, min_velocity=mv)
+        fit = identify.fit(rx90, [fit_rec], identify.Processing(min_velocity=mv, estimate_delay=False), base=rx90_base)
         val = identify.predict(rx90, fit.result, held, base=rx90_base, **fit.filtering())
         phase = np.mod(val.t, 4.0)
         rest = (phase > 2.1) & (phase < 3.9)
@@ -43,7 +43,7 @@ def test_rest_handling_predicts_rest_phases_better(rx90, rx90_base, stop_go):
 
 def test_rest_mask_and_moving_metrics(rx90, rx90_base, stop_go):
     fit_rec, held = stop_go
-    fit = identify.fit_recordings(rx90, [fit_rec], base=rx90_base, rest="drop")
+    fit = identify.fit(rx90, [fit_rec], identify.Processing(rest="drop", estimate_delay=False), base=rx90_base)
     val = identify.predict(rx90, fit.result, held, base=rx90_base, **fit.filtering())
     # Half of the time at rest by construction; a joint is also slow near its turning points.
     assert np.all((val.moving_fraction > 0.3) & (val.moving_fraction < 0.55)), val.moving_fraction
@@ -75,7 +75,7 @@ def test_coupled_coulomb_rest_is_per_motor(tx40):
 def test_prediction_with_the_fits_filtering_reproduces_the_fit(rx90, rx90_base, stop_go):
     """predict() given the fit's filtering rebuilds exactly the fitted rows: its residual on the
     fitted recording is the fit's own residual (zero-coulomb keeps every row)."""
-    fit = identify.fit_recordings(rx90, [stop_go[0]], base=rx90_base, rest="zero-coulomb")
+    fit = identify.fit(rx90, [stop_go[0]], identify.Processing(rest="zero-coulomb", estimate_delay=False), base=rx90_base)
     val = identify.predict(rx90, fit.result, stop_go[0], base=rx90_base, **fit.filtering())
     np.testing.assert_allclose(val.rms_error, fit.result.residual_rms, rtol=1e-9)
     assert val.cutoff == fit.cutoff
@@ -86,7 +86,7 @@ def test_prediction_with_the_fits_filtering_reproduces_the_fit(rx90, rx90_base, 
 
 
 def test_time_axis_is_the_recordings(rx90, rx90_base, stop_go):
-    fit = identify.fit_recordings(rx90, [stop_go[0]], base=rx90_base)
+    fit = identify.fit(rx90, [stop_go[0]], identify.Processing(estimate_delay=False), base=rx90_base)
     val = identify.predict(rx90, fit.result, stop_go[1], base=rx90_base, **fit.filtering())
     edge = identify.signal.filtering.EDGE_PERIODS / fit.cutoff
     assert val.t[0] == pytest.approx(stop_go[1].t[0] + edge, abs=2 / stop_go[1].rate)
@@ -206,7 +206,7 @@ def test_tx40_heldout_at_figaroh_level():
     pipeline (benchmarks/tx40_heldout.py)."""
     robot = rx90sym.load_robot("tx40", offsets=True)
     rec = identify.read_motor_recording(TX40 / "pos_read_data.csv", TX40 / "curr_data.csv", robot, 2e-4)
-    fit = identify.fit_recordings(robot, [rec.select(slice(0, 30000))])
+    fit = identify.fit(robot, [rec.select(slice(0, 30000))], identify.Processing(estimate_delay=False))
     val = identify.predict(robot, fit.result, rec.select(slice(30000, None)), **fit.filtering())
     ratio = val.rms_error_moving / FIGAROH_WLS
     print("\nTX40 held-out RMS moving / FIGAROH WLS:", np.round(ratio, 3))

@@ -5,11 +5,12 @@ import argparse
 import json
 import sys
 from pathlib import Path
-from typing import Any
+from typing import Any, Sequence
 
 import numpy as np
 
 import rx90sym
+from identify.io.recordings import declared_robot
 
 PROG = "rx90"
 
@@ -42,10 +43,33 @@ def floats(text: str, what: str, count: int | None = None) -> np.ndarray:
     return values
 
 
-def load_robot(args: argparse.Namespace, offsets: bool = False) -> rx90sym.Robot:
+def load_robot(args: argparse.Namespace, offsets: bool = False, recordings: Sequence[str] = ()) -> rx90sym.Robot:
+    """The robot of ``--robot``, else the one the recordings' headers name (all the same), else a
+    UsageError: no command that reads recordings guesses a robot. Prints the robot it uses."""
     acceleration = getattr(args, "acceleration", None)
-    return rx90sym.load_robot(args.robot, offsets=offsets, tip=getattr(args, "tip", None),
-                              acceleration=None if acceleration is None else floats(acceleration, "--acceleration"))
+    spec = args.robot
+    if spec is None:
+        names = {p: declared_robot(p) for p in recordings}
+        named = sorted({n for n in names.values() if n is not None})
+        if len(named) > 1:
+            raise UsageError("the recordings name different robots (" + ", ".join(
+                f"{Path(p).name}: {n}" for p, n in names.items() if n) + "): give --robot")
+        if not named:
+            raise UsageError("no robot: give --robot NAME|FILE.toml|FILE.urdf (the recordings name none "
+                             "in a '# robot: NAME' line; the toolkit does not guess one)")
+        spec = named[0]
+        if spec not in rx90sym.bundled_robots():
+            raise UsageError(f"the recordings name robot {spec!r}, which is not a bundled robot: give its "
+                             f"file with --robot FILE.toml|FILE.urdf")
+    robot = rx90sym.load_robot(spec, offsets=offsets, tip=getattr(args, "tip", None),
+                               acceleration=None if acceleration is None else floats(acceleration, "--acceleration"))
+    announce_robot(robot, "from --robot" if args.robot is not None else "named by the recordings")
+    return robot
+
+
+def announce_robot(robot: rx90sym.Robot, how: str) -> None:
+    """One line on stderr: the robot used (name, file, joint count) and where its choice came from."""
+    progress(f"robot {robot.name} ({robot.source or 'built in'}; {robot.n} joints; {how})")
 
 
 SPRING_MODES = ("default", "none", "identify", "identify-k")
@@ -70,12 +94,12 @@ def spring_notice(robot: rx90sym.Robot) -> None:
                  f"--spring identify")
 
 
-def robot_with_spring(args: argparse.Namespace) -> tuple[rx90sym.Robot, Any]:
+def robot_with_spring(args: argparse.Namespace, recordings: Sequence[str] = ()) -> tuple[rx90sym.Robot, Any]:
     """The robot with the spring the options ask for, and the spring model to identify (a
     SpringBasis / SpringStiffness) or None. Conflicting options are a UsageError."""
     from rx90sym.spring import SpringBasis, SpringStiffness, read_spring_table
 
-    robot = load_robot(args, offsets=args.offsets)
+    robot = load_robot(args, offsets=args.offsets, recordings=recordings)
     mode = args.spring if args.spring in SPRING_MODES else "file"
     if args.spring_joint is not None and mode in ("default", "none"):
         raise UsageError(f"--spring-joint goes with --spring FILE.csv or identify, not --spring {args.spring}")
@@ -141,11 +165,29 @@ def convention_option(sp: argparse.ArgumentParser) -> None:
                          "default: the file's header, else controller")
 
 
-def robot_option(sp: argparse.ArgumentParser) -> None:
-    """``--robot``: a bundled robot name, a robot file or a URDF; ``--tip``: a URDF's end link."""
-    sp.add_argument("--robot", default="rx90", help="bundled robot name, robot file or URDF (default rx90)")
+def robot_option(sp: argparse.ArgumentParser, default: str | None = "rx90", source: str = "") -> None:
+    """``--robot``: a bundled robot name, a robot file or a URDF; ``--tip``: a URDF's end link.
+    ``default`` None: no default robot (``source`` says where the robot is taken from instead)."""
+    text = (f"(default {default})" if default is not None else
+            f"(default: {source})" if source else "(required)")
+    sp.add_argument("--robot", default=default, help=f"bundled robot name, robot file or URDF {text}")
     sp.add_argument("--tip", help="with a URDF --robot: the link ending the chain from the URDF root "
                                   "(default: the only leaf link)")
     sp.add_argument("--acceleration", metavar="A|A1,..,An",
                     help="with a URDF --robot: joint acceleration limits [rad/s^2; m/s^2 prismatic], one "
                          "number or one per joint (a URDF has none; default 10 rad/s^2, 2 m/s^2)")
+
+
+def read_recordings(paths: list[str], robot: rx90sym.Robot, convention: str | None, gains: Any) -> list:
+    """The recordings of ``paths``, current recordings turned into torques with ``gains``."""
+    from identify.io.gains import apply_gains
+    from identify.io.recordings import read_recording
+
+    from identify.io.units import check_units
+
+    recs = [read_recording(p, robot, convention=convention) for p in paths]
+    for r in recs:  # degrees, swapped q/qd groups, positions out of the robot's range
+        check_units(r.t, r.q, r.dq, robot, r.source)
+    if gains is None:
+        return recs
+    return [apply_gains(r, gains, robot) if r.current is not None else r for r in recs]

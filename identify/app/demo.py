@@ -38,10 +38,11 @@ def run_demo(out: str | Path = "demo-output", quick: bool = False) -> int:
     import excitation
     import rx90sym
 
-    from identify import (consistent_fit, essential_parameters, identify, predict, read_motor_recording, split,
-                   validate, write_recording)
+    from identify import (Processing, consistent_fit, essential_parameters, fit, predict, read_motor_recording,
+                          split, validate, write_recording)
     from identify.payload import payload
-    from .report import Section, identification_sections, parameter_figure, write_report
+    from .report.demo_page import demo_page
+    from .report.page import write_page
 
     t_start = time.perf_counter()
     out = Path(out)
@@ -51,7 +52,8 @@ def run_demo(out: str | Path = "demo-output", quick: bool = False) -> int:
     truth_std = rx90sym.twin.default_parameters(robot)
     chi = robot.parameter_vector(truth_std)
     truth = dict(zip(bp.names, bp.beta(chi)))
-    _say(f"[1/6] model: {robot.name}, {len(robot.parameter_names)} standard, {bp.nb} base parameters")
+    _say(f"[1/6] model: {robot.name} ({robot.source}; {robot.n} joints), {len(robot.parameter_names)} "
+         f"standard, {bp.nb} base parameters")
 
     duration = 10.0 if quick else 20.0
     _say(f"[2/6] optimising a {duration:g} s excitation trajectory (IPOPT, exact derivatives)...")
@@ -76,10 +78,11 @@ def run_demo(out: str | Path = "demo-output", quick: bool = False) -> int:
     # Each joint's samples below 0.1 rad/s are left out: the twin has Stribeck friction there,
     # which the model (eq. 5) does not contain.
     rest = {"min_velocity": 0.1}
-    res = identify(robot, [recs["empty"]], method="wls", base=bp, **rest)
+    drop = Processing(min_velocity=0.1, rest="drop", estimate_delay=False)
+    res = fit(robot, [recs["empty"]], drop, base=bp).result
     # The same identification on the random trajectory (the validation motion): what the
     # criterion (predicted relative sigma) buys, measured per parameter group.
-    res_random = identify(robot, [recs["validation"]], method="wls", base=bp, **rest)
+    res_random = fit(robot, [recs["validation"]], drop, base=bp).result
     groups = group_medians(res, truth), group_medians(res_random, truth)
     ess = essential_parameters(res)
     con = consistent_fit(robot, res, bp)  # on the WLS fit's compressed system: no second pass
@@ -100,29 +103,17 @@ def run_demo(out: str | Path = "demo-output", quick: bool = False) -> int:
     tx = rx90sym.load_robot("tx40", offsets=True)
     raw = read_motor_recording(data.positions, data.torques, tx, period=data.period)
     fit_part, held = split(raw, 2 / 3)
-    tx_res = identify(tx, [fit_part], decimate_to=100.0)
+    tx_res = fit(tx, [fit_part], Processing(decimate_to=100.0, min_velocity=None, estimate_delay=False)).result
     tx_val = validate(tx, tx_res, held, decimate_to=100.0)
-    tx40_section = Section("Real data: Staubli TX40 (FIGAROH record, Apache-2.0)",
-                           tx_res.table() + "\n\n" + tx_val.table(), ())
 
     excitation_text = (f"criterion {traj.criterion}: median relative σ per group, optimised / random "
-                       f"feasible trajectory of the same duration (measured on the twin):\n"
-                       + "\n".join(f"  {g}: {groups[0][g]:.3g} % / {groups[1][g]:.3g} %" for g in groups[0])
-                       + f"\ncond(W) at 250 Hz = {traj.cond:.2f} (random: {other.cond:.1f}; paper: 58 with "
-                       f"18 hand-made motions); cond is not the criterion")
-    sections = [Section("Excitation trajectory", excitation_text, ())]
-    sections += identification_sections(robot, res, [recs["empty"]], validation=val, essential=ess,
-                                        truth=truth, fit_prediction=predict(robot, res, recs["empty"], base=bp))
-    sections.append(Section("Physically consistent identification",
-                            f"cost increase vs WLS: {con.cost_increase_pct:.3f} %; WLS estimate "
-                            f"itself consistent: {con.wls_was_consistent}\n\n" + con.table(),
-                            (("fig-consistent", "Consistent estimate with WLS 2σ bars",
-                              parameter_figure(con, truth, "Consistent estimate")),)))
-    for name, results in payloads.items():
-        sections.append(Section(f"Payload {name}", "\n\n".join(r.table() for r in results), ()))
-    sections.append(tx40_section)
-    report = write_report(out / "report.html", "rx90sym demo: RX90 and its payload", sections)
-
+                       f"feasible trajectory of the same duration (measured on the twin): "
+                       + "; ".join(f"{g}: {groups[0][g]:.3g} % / {groups[1][g]:.3g} %" for g in groups[0])
+                       + f". cond(W) at 250 Hz = {traj.cond:.2f} (random: {other.cond:.1f}; paper: 58 with "
+                       f"18 hand-made motions); cond is not the criterion.")
+    page = demo_page(robot, res, truth, ess, con, val, predict(robot, res, recs["empty"], base=bp), recs["empty"],
+                     payloads, (tx_res, tx_val), excitation_text)
+    report = write_page(out / "report.html", page)
     print(f"\nReport: {report.resolve()}")
     print(f"Excitation ({traj.criterion}): median relative σ optimised / random, "
           + "; ".join(f"{g} {groups[0][g]:.2g} / {groups[1][g]:.2g} %" for g in groups[0])

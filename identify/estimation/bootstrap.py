@@ -9,11 +9,18 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["segment_bootstrap_std"]
+__all__ = ["segment_bootstrap_std", "bootstrap_std", "BLOCK_S", "DRAWS"]
+
+#: Block length, s: longer than the residual's correlation (filtered at 20-30 Hz, decimated to
+#: 50 Hz: a few samples), short enough for ~100 blocks in a 50 s run.
+BLOCK_S = 0.5
+#: Number of bootstrap refits (the sigma of a sigma estimate from 200 draws is ~5 %).
+DRAWS = 200
 
 
 def segment_bootstrap_std(W: np.ndarray, Y: np.ndarray, joint: np.ndarray, samples: np.ndarray,
-                          weights: np.ndarray, block: int, draws: int = 200, seed: int = 0) -> np.ndarray:
+                          weights: np.ndarray, block: int, draws: int = 200, seed: int = 0,
+                          instruments: np.ndarray | None = None) -> np.ndarray:
     """Standard deviation of each estimate over ``draws`` segment-bootstrap refits.
 
     Args:
@@ -21,6 +28,8 @@ def segment_bootstrap_std(W: np.ndarray, Y: np.ndarray, joint: np.ndarray, sampl
         samples: (r,) sample index of each row (rows of one sample go together).
         weights: (n,) joint weights of the fit (1 for OLS); block: samples per block (≥ 1).
         draws: number of bootstrap refits; seed: seeds the draws.
+        instruments: (r, c) instruments Z of an instrumental-variable fit (the estimate solves
+            ZᵀW x = ZᵀY, e.g. the drive gains' IDIM-IV); None: least squares (Z = W).
 
     Returns:
         (c,) standard deviations, units of the parameters (NaN where a draw was rank deficient).
@@ -29,16 +38,17 @@ def segment_bootstrap_std(W: np.ndarray, Y: np.ndarray, joint: np.ndarray, sampl
         raise ValueError(f"block must be >= 1 sample and draws >= 2, got {block} and {draws}")
     w = np.asarray(weights, dtype=float)[np.asarray(joint)]
     Ww, Yw = W * w[:, None], Y * w
+    Zw = Ww if instruments is None else np.asarray(instruments) * w[:, None]
     ids = np.asarray(samples) // block
     blocks = np.unique(ids)
     c = W.shape[1]
-    # Per-block normal equations: a draw is then a weighted sum, not a new QR.
+    # Per-block normal (or instrumental) equations: a draw is then a weighted sum, not a new QR.
     A = np.zeros((blocks.size, c, c))
     g = np.zeros((blocks.size, c))
     for k, b in enumerate(blocks):
         rows = ids == b
-        A[k] = Ww[rows].T @ Ww[rows]
-        g[k] = Ww[rows].T @ Yw[rows]
+        A[k] = Zw[rows].T @ Ww[rows]
+        g[k] = Zw[rows].T @ Yw[rows]
     rng = np.random.default_rng(seed)
     estimates = np.full((draws, c), np.nan)
     for i in range(draws):
@@ -47,3 +57,12 @@ def segment_bootstrap_std(W: np.ndarray, Y: np.ndarray, joint: np.ndarray, sampl
         if np.linalg.matrix_rank(M) == c:
             estimates[i] = np.linalg.solve(M, counts @ g)
     return np.nanstd(estimates, axis=0, ddof=1)
+
+
+def bootstrap_std(W: np.ndarray, Y: np.ndarray, joint: np.ndarray, samples: np.ndarray, weights: np.ndarray,
+                  rate: float, seed: int = 0, instruments: np.ndarray | None = None) -> np.ndarray:
+    """:func:`segment_bootstrap_std` with the toolkit's blocks of BLOCK_S seconds (``rate``: the
+    rows' sample rate, Hz) and DRAWS refits; the one bootstrap of identification, payload, drive
+    gains and the consistent fit."""
+    block = max(1, int(round(BLOCK_S * rate)))
+    return segment_bootstrap_std(W, Y, joint, samples, weights, block, DRAWS, seed, instruments)

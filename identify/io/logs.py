@@ -59,6 +59,7 @@ from rx90sym.recording import Recording, RecordingError
 
 from identify.io.columns import ColumnMap, parse_columns, rtde_columns
 from identify.io.log_rows import ABSURD, _bad, _data_lines, _parse, _window, header_cells
+from identify.io.units import check_units
 from identify.io.gains import DriveGains, apply_gains, read_gains
 from identify.signal.gaps import DEFAULT_MAX_GAP, LogGaps, find_gaps, stale_rows
 from identify.signal.resampling import resample as resample_recording
@@ -296,8 +297,10 @@ def _recording(source: str, values: np.ndarray, numbers: list[int], cmap: Column
         _refuse_splits(found, source)
     q_file = values[:, list(cmap.q)]
     q = np.asarray(robot.to_model(q_file), dtype=float) if conv == "controller" else q_file
-    _check_positions(q, t, numbers, cmap, robot, source)
     dq = values[:, list(cmap.qd)] if cmap.qd else None
+    # Degrees and swapped q/qd groups named as such, before they read as corrupt rows.
+    check_units(t, q_file, dq, robot, source, numbers, to_model=conv == "controller", ranges=False)
+    _check_positions(q, t, numbers, cmap, robot, source)
     span = np.ptp(q, axis=0)
     _check_velocities(dq, q, t, span, numbers, cmap, source)
     if np.all(span < STILL):

@@ -179,6 +179,24 @@ def _suffix(path: Path) -> str:
     return suffix
 
 
+def declared_robot(path: str | os.PathLike[str]) -> str | None:
+    """The robot a recording file names (CSV ``# robot: NAME`` comment, NPZ ``robot`` string), or
+    None when it names none. Reads only the CSV's leading comment lines."""
+    p = Path(path)
+    if _suffix(p) == ".npz":
+        with np.load(p, allow_pickle=False) as archive:
+            return _npz_string(archive, "robot", p.name)
+    with open(p, encoding="utf-8-sig") as fh:
+        for line in fh:
+            body = line.strip()
+            if body and not body.startswith("#"):
+                return None
+            key, sep, value = body.lstrip("#").partition(":")
+            if sep and key.strip().lower() == "robot" and value.strip():
+                return value.strip()
+    return None
+
+
 def read_recording(path: str | os.PathLike[str], robot: rx90sym.Robot, convention: str | None = None) -> Recording:
     """Read a recording from a CSV or NPZ file (chosen by the suffix) and validate it.
 

@@ -99,7 +99,7 @@ class ProcessingChoice:
     def to_dict(self) -> dict[str, Any]:
         return {"method": "blocked cross-validation", "blocks": self.blocks, "reference_hz": self.reference_hz,
                 "knee_hz": self.knee, "seconds": self.seconds, "chosen": self.chosen.to_dict(),
-                "candidates": [c.to_dict() for c in self.candidates]}
+                "candidates": [c.to_dict() for c in self.candidates], "table": self.table()}
 
 
 def _rate(recordings: Sequence[Any]) -> float:

@@ -27,16 +27,14 @@ import numpy as np
 import rx90sym
 
 from identify.observation.friction import presliding_state
+from identify.observation.processing import DEFAULT_MIN_VELOCITY, DEFAULT_REST, REST_POLICIES
 from identify.signal.filtering import EDGE_PERIODS, choose_cutoff, decimate, decimation_plan, derivatives
 
 __all__ = ["DECIMATION_PASSBAND", "automatic_cutoff", "DEFAULT_MIN_VELOCITY", "DEFAULT_REST", "REST_POLICIES", "CoulombTerm", "FilteredMotion", "Observation",
            "coulomb_terms", "filtered_motion", "filtered_motions", "observation_matrix", "stack_rows"]
 
-#: Rest threshold of the CLI, rad/s (measured on the TX40 and the twin: docs/real-data-identification.md).
-DEFAULT_MIN_VELOCITY = 0.05
-#: How the fit treats rest samples, and the default (measured on the TX40: docs/real-data-identification.md).
-REST_POLICIES = ("drop", "zero-coulomb", "presliding")
-DEFAULT_REST = "zero-coulomb"
+# Rest threshold and policy (measured on the TX40 and the twin: docs/real-data-identification.md):
+# defined once, with the other processing defaults, in identify.observation.processing.
 
 
 @dataclass(frozen=True)

@@ -12,7 +12,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 from functools import cached_property
-from typing import Any
+from typing import Any, Sequence
 
 import numpy as np
 
@@ -107,3 +107,30 @@ def spring_torque(result: Any, sb: SpringBase, theta: Any) -> tuple[np.ndarray, 
     tau = F @ np.asarray(result.values)[idx]
     cov = np.asarray(result.covariance)[np.ix_(idx, idx)]
     return tau, np.sqrt(np.maximum(np.einsum("ik,kl,il->i", F, cov, F), 0.0))
+
+
+def spring_summary(robot: rx90sym.Robot, sb: SpringBase | None, res: Any, recs: Sequence[Any]) -> tuple[dict, str]:
+    """JSON entry and printed lines describing the spring the identification used."""
+    if sb is None:
+        if robot.spring is None:
+            return {"mode": "none"}, "spring: none"
+        return {"mode": "given", **robot.spring.describe()}, robot.spring.label()
+    values = dict(zip(res.names, res.values))
+    stds = dict(zip(res.names, res.std))
+    coefficients = {n: {"value": float(values[n]), "std": float(stds[n])} for n in sb.kept}
+    j = sb.model.joint
+    angles = np.concatenate([r.q[:, j] for r in recs])
+    grid = np.linspace(angles.min(), angles.max(), 41)
+    tau, sigma = spring_torque(res, sb, grid)
+    entry = {"mode": "identified", "joint": j + 1, "model": type(sb.model).__name__,
+             "coefficients": coefficients, "grouped": list(sb.grouped),
+             "grouped_note": "spanned by the rigid-body model: their part of the spring torque is "
+                             "held by the base parameters (e.g. the first harmonic by MX2R/MY2)",
+             "torque_on_visited_range": {"angle_rad": grid.tolist(), "torque": tau.tolist(),
+                                         "std": sigma.tolist()}}
+    lines = [f"spring on joint {j + 1}, identified ({type(sb.model).__name__}; grouped with the "
+             f"rigid-body parameters: {', '.join(sb.grouped) or 'none'})"]
+    lines += [f"  {n:10s} {c['value']:12.5g} +- {c['std']:.3g}" for n, c in coefficients.items()]
+    lines.append(f"  torque on the visited range [{grid[0]:.3g}, {grid[-1]:.3g}] rad: max sigma "
+                 f"{sigma.max():.3g} N m (without the grouped terms)")
+    return entry, "\n".join(lines)

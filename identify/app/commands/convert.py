@@ -38,7 +38,7 @@ def register(sub: Any) -> None:
             "recording file")
     sp = sub.add_parser("convert", help=text, description=text + "; see docs/real-logs.md")
     sp.set_defaults(func=run)
-    robot_option(sp)
+    robot_option(sp, None, "")
     sp.add_argument("log", nargs="?", metavar="LOG.csv|BAG",
                     help="controller log (comma separated), or a ROS bag (.bag, ROS 2 directory, .db3, .mcap)")
     sp.add_argument("--topic", help="bag form: the sensor_msgs/JointState topic (e.g. /joint_states)")
@@ -87,6 +87,13 @@ def _rows(text: str | None) -> tuple[int, int] | None:
     return first, last
 
 
+def _robot(args: argparse.Namespace):
+    if args.robot is None:
+        raise UsageError("convert needs --robot NAME|FILE.toml|FILE.urdf: the robot the log was recorded "
+                         "on (its joint count, limits and angle offsets; written into the recording)")
+    return load_robot(args)
+
+
 def run(args: argparse.Namespace) -> int:
     if args.log is None:
         return _run_motor(args)
@@ -102,7 +109,7 @@ def run(args: argparse.Namespace) -> int:
         raise UsageError(f"{', '.join(extra)} belong to the bag form (a .bag, .db3, .mcap or ROS 2 bag directory)")
     if args.columns is None and args.no_header:
         raise UsageError("a LOG.csv without header needs --columns SPEC (e.g. t,q1..q6,qd1..qd6,i1..i6)")
-    robot = load_robot(args)
+    robot = _robot(args)
     check_output(args.out)
     progress(f"reading the log {args.log}")
     rec = read_log(args.log, robot, args.columns, header=not args.no_header, rows=_rows(args.rows),
@@ -122,7 +129,7 @@ def _run_bag(args: argparse.Namespace) -> int:
         raise UsageError(f"{', '.join(wrong)} belong to the LOG.csv form, not to a bag")
     if args.topic is None:
         raise UsageError("a bag needs --topic (the sensor_msgs/JointState topic, e.g. /joint_states)")
-    robot = load_robot(args)
+    robot = _robot(args)
     check_output(args.out)
     progress(f"reading the bag {args.log}, topic {args.topic}")
     try:
@@ -181,7 +188,7 @@ def _run_motor(args: argparse.Namespace) -> int:
                               ("--period", args.period)) if v is None]
     if missing:
         raise UsageError(f"give LOG.csv --columns SPEC, or the motor form ({', '.join(missing)} missing)")
-    robot = load_robot(args)
+    robot = _robot(args)
     check_output(args.out)
     progress("reading the motor-side files")
     rec = read_motor_recording(args.motor_positions, args.motor_torques, robot, period=args.period,

@@ -3,6 +3,7 @@ from __future__ import annotations
 
 import argparse
 import contextlib
+import dataclasses
 import sys
 from typing import Any
 
@@ -56,15 +57,40 @@ def register(sub: Any) -> None:
     sp.add_argument("--obstacle", action="append", default=[], metavar="XMIN,YMIN,ZMIN,XMAX,YMAX,ZMAX",
                     help="an obstacle box [m, base frame] the link capsules must keep out of (repeatable)")
     sp.add_argument("--no-self-collision", action="store_true",
-                    help="do not keep the link capsules apart (default: they are; radii in docs/excitation.md)")
+                    help="do not keep the link capsules apart (default: they are; the robot's own "
+                         "capsules, docs/excitation.md)")
     sp.add_argument("--floor", type=float, default=None,
-                    help="floor height z [m, base frame] the wrist centre and tool must stay above")
+                    help="floor height [m above the robot's mounting plane] no moving point may go "
+                         "below (default: the mounting margin, 0.05 m)")
     sp.add_argument("--controller", choices=("ur", "franka"), default=None,
-                    help="write --out at this controller's rate and form (UR 500 Hz; Franka 1 kHz, jerk "
-                         "checked); default 250 Hz")
+                    help="write --out at this controller's rate and form (UR e-Series 500 Hz, see "
+                         "--controller-rate; Franka 1 kHz, jerk checked); default 250 Hz")
+    sp.add_argument("--controller-rate", type=float, default=None,
+                    help="with --controller ur: servoj rate [Hz] (500 e-Series, the default; 125 CB3)")
+    sp.add_argument("--program", default=None,
+                    help="with --controller: the program the controller runs (ur: URScript with movej "
+                         "and one servoj per sample; franka: 1 kHz joint positions for libfranka)")
     sp.add_argument("--start-pose", default=None,
-                    help="with --controller: prepend an approach move from this pose (controller angles, "
-                         "rad, comma-separated)")
+                    help="with --controller: where the approach move begins (controller angles, rad, "
+                         "comma-separated); checked against the safety envelope with its path")
+    sp.add_argument("--centre-pose", default=None,
+                    help="pose the optimisation starts about (controller angles, rad, comma-separated; "
+                         "default: the centre of the ranges, or the nearest pose inside the envelope)")
+    sp.add_argument("--position-limits", default=None, metavar="MIN1:MAX1,...",
+                    help="experiment joint ranges (controller angles, rad), inside the robot's (default "
+                         "90 %% of each range about its centre)")
+    sp.add_argument("--velocity-scale", type=float, default=None,
+                    help="fraction of the robot's joint velocity limits (default 0.7)")
+    sp.add_argument("--acceleration-scale", type=float, default=None,
+                    help="fraction of the robot's joint acceleration limits (default 0.5)")
+    sp.add_argument("--max-tool-speed", type=float, default=None,
+                    help="Cartesian speed limit [m/s] of the tool point and every capsule end (default "
+                         "1.0, at most 1.5)")
+    sp.add_argument("--mounting-margin", type=float, default=None,
+                    help="clearance [m] above the robot's mounting plane (default 0.05)")
+    sp.add_argument("--report", default=None,
+                    help="HTML report of the envelope: tool path, speeds and accelerations against "
+                         "their limits, distances to the floor and between links along time")
     sp.add_argument("--out", required=True, help="trajectory CSV (controller angles, 250 Hz)")
     sp.add_argument("--json", help="coefficients and summary as JSON")
 
@@ -72,14 +98,9 @@ def register(sub: Any) -> None:
 def run(args: argparse.Namespace) -> int:
     import excitation
 
-    check_output(args.out)
-    check_output(args.json)
-    if args.workers is not None and args.scheduler is not None:
-        raise UsageError("give --workers (local cluster) or --scheduler (existing cluster), not both")
-    if args.workers is not None and args.workers < 1:
-        raise UsageError(f"--workers must be >= 1, got {args.workers}")
-    if args.seed < 0:
-        raise UsageError(f"--seed must be >= 0, got {args.seed}")
+    for path in (args.out, args.json, args.program, args.report):
+        check_output(path)
+    _check_options(args)
     robot = load_robot(args)
     params = rx90sym.nominal_parameters(robot, args.params)
     chi = None if params is None else robot.parameter_vector(params)
@@ -91,30 +112,20 @@ def run(args: argparse.Namespace) -> int:
         criterion = excitation.DEFAULT_CRITERION if chi is not None else excitation.FALLBACK_CRITERION
     elif criterion in ("cond-nominal", "sigma") and chi is None:
         raise UsageError(f"--criterion {criterion} needs nominal parameters: pass --params FILE")
-    if args.select is not None and criterion != "sigma":
-        raise UsageError("--select is for --criterion sigma")
-    if args.harmonics is not None and args.via_points is not None:
-        raise UsageError("give --harmonics (Fourier series) or --via-points, not both")
     noise = None if args.noise_std is None else floats(args.noise_std, "--noise-std", robot.n)
     if noise is not None and np.any(noise <= 0.0):
         raise UsageError("--noise-std: values must be > 0 N m")
-    if args.start_pose is not None and args.controller is None:
-        raise UsageError("--start-pose is for --controller (the approach move is part of the controller export)")
     start_pose = None if args.start_pose is None else floats(args.start_pose, "--start-pose", robot.n)
-    try:
-        collision = excitation.collision_model(robot, args.obstacle, not args.no_self_collision)
-    except ValueError as exc:
-        raise UsageError(f"--obstacle: {exc}") from None
-    if not args.no_self_collision and not collision.self_collision:
-        pairs = collision.capsules.pair_names(collision.capsules.ignored)
-        progress(f"warning: self-collision NOT checked: the default link capsules do not fit robot "
-                 f"{robot.name!r} ({len(pairs)} pairs touch at the centre of the joint ranges, e.g. "
-                 f"{pairs[0]}); obstacle boxes and the floor still are")
+    envelope = _envelope(args, robot)
+    _check_start_pose(robot, None, start_pose)
+    collision = _collision(args, robot)
     base = rx90sym.base_parameters(robot)
+    model, described = excitation.safe_model(robot, chi, base, envelope, collision)
+    _check_start_pose(robot, model, start_pose)
+    for line in excitation.envelope_lines(described):
+        progress(line)
     if args.target == "payload":
-        return _payload(args, robot, base, chi, noise, collision, start_pose)
-    if args.payload is not None:
-        raise UsageError("--payload is for --for payload")
+        return _payload(args, robot, base, chi, noise, collision, start_pose, envelope, model)
     complement = [_motion(path, robot) for path in args.complement or ()]
     with _client(args) as client:
         traj = excitation.optimise(
@@ -123,11 +134,12 @@ def run(args: argparse.Namespace) -> int:
             via_points=args.via_points, seed=args.seed, starts=args.starts, time_budget=args.time_budget,
             chi_nominal=chi, base=base, criterion=criterion, noise_std=noise,
             select=None if args.select is None else [s.strip() for s in args.select.split(",")],
-            complement=complement, client=client, collision=collision, z_min=args.floor,
+            complement=complement, client=client, collision=collision, envelope=envelope,
             progress=sys.stderr)
-    _save(args, traj, robot, start_pose)
+    _save(args, traj, robot, start_pose, model)
     if args.json:
         traj.save_json(args.json)
+    _report(args, robot, model, traj, described)
     skipped = traj.info.skipped_starts
     if skipped:
         progress(f"{len(skipped)} start(s) skipped by the time budget: {', '.join(map(str, skipped))}")
@@ -136,18 +148,149 @@ def run(args: argparse.Namespace) -> int:
     return 0
 
 
-def _save(args: argparse.Namespace, traj: Any, robot: rx90sym.Robot, start_pose: Any) -> None:
-    """--out at 250 Hz, or at the controller's rate with its approach move."""
+def _report(args: argparse.Namespace, robot: rx90sym.Robot, model: Any, traj: Any, described: dict) -> None:
+    """--report: the envelope as applied, its worst values and figures along time."""
+    if args.report is None:
+        return
+    import excitation
+    from excitation import envelope_report as er
+    from excitation.robot_geometry import arm_geometry
+
+    from ..report.excite_page import envelope_table, excite_page
+    from ..report.figures import figure
+    from ..report.page import Section, Text, write_page
+
+    series = er.along_time(robot, model, traj, arm_geometry(robot).tool_point)
+    envelope = Section("envelope", "Safety envelope along the trajectory", (
+        Text(tuple(excitation.envelope_lines(described))), envelope_table(er.worst(series)),
+        *(figure(i, caption, fig) for i, caption, fig in er.figures(series))))
+    write_page(args.report, excite_page({**traj.summary(), "robot": robot.name}, (), (envelope,)))
+
+
+def _check_options(args: argparse.Namespace) -> None:
+    """Option combinations refused before anything is computed."""
+    if args.workers is not None and args.scheduler is not None:
+        raise UsageError("give --workers (local cluster) or --scheduler (existing cluster), not both")
+    if args.workers is not None and args.workers < 1:
+        raise UsageError(f"--workers must be >= 1, got {args.workers}")
+    if args.seed < 0:
+        raise UsageError(f"--seed must be >= 0, got {args.seed}")
+    if args.select is not None and args.criterion not in (None, "sigma"):
+        raise UsageError("--select is for --criterion sigma")
+    if args.harmonics is not None and args.via_points is not None:
+        raise UsageError("give --harmonics (Fourier series) or --via-points, not both")
+    for option in ("start_pose", "program", "controller_rate"):
+        if getattr(args, option) is not None and args.controller is None:
+            raise UsageError(f"--{option.replace('_', '-')} is for --controller (the controller's program and rate)")
+    if args.controller_rate is not None and (args.controller != "ur" or args.controller_rate <= 0):
+        raise UsageError("--controller-rate is for --controller ur, a rate > 0 Hz (500 e-Series, 125 CB3)")
+    if args.payload is not None and args.target != "payload":
+        raise UsageError("--payload is for --for payload")
+
+
+def _collision(args: argparse.Namespace, robot: rx90sym.Robot) -> Any:
+    import excitation
+
+    try:
+        collision = excitation.collision_model(robot, args.obstacle, not args.no_self_collision)
+    except ValueError as exc:
+        raise UsageError(f"--obstacle: {exc}") from None
+    if args.no_self_collision:
+        progress("warning: self-collision NOT checked (--no-self-collision); obstacle boxes and the floor still are")
+    elif not collision.self_collision:
+        pairs = collision.capsules.pair_names(collision.capsules.ignored)
+        progress(f"warning: self-collision NOT checked: the default link capsules do not fit robot "
+                 f"{robot.name!r} ({len(pairs)} pairs touch at the centre of the joint ranges, e.g. "
+                 f"{pairs[0]}); give the robot's [[capsules]] (docs/robot-files.md)")
+    return collision
+
+
+def _envelope(args: argparse.Namespace, robot: rx90sym.Robot) -> Any:
+    """The safety envelope from the options (angles converted from controller to model)."""
+    import excitation
+
+    offsets = robot.controller_offsets
+    limits = None
+    if args.position_limits is not None:
+        pairs = [p.split(":") for p in args.position_limits.split(",")]
+        if len(pairs) != robot.n or any(len(p) != 2 for p in pairs):
+            raise UsageError(f"--position-limits: expected {robot.n} MIN:MAX pairs (rad, controller angles), "
+                             f"got {args.position_limits!r}")
+        values = floats(",".join(v for p in pairs for v in p), "--position-limits").reshape(-1, 2)
+        limits = tuple(map(tuple, values - offsets[:, None]))
+    centre = None if args.centre_pose is None else floats(args.centre_pose, "--centre-pose", robot.n) - offsets
+    urdf_default = robot.urdf is not None and getattr(args, "acceleration", None) is None
+    if urdf_default:
+        progress("warning: the URDF gives no acceleration limits: the excitation uses the conservative "
+                 f"default {excitation.envelope.URDF_ACCELERATION_PER_VELOCITY:g} x the velocity limit per "
+                 "second (x the acceleration scale); give --acceleration to set them")
+    given = {k: v for k, v in (("margin", args.mounting_margin), ("floor", args.floor),
+                               ("max_speed", args.max_tool_speed), ("velocity_scale", args.velocity_scale),
+                               ("acceleration_scale", args.acceleration_scale)) if v is not None}
+    try:
+        envelope = excitation.Envelope(position_limits=limits, centre=None if centre is None else tuple(centre),
+                                       urdf_acceleration=urdf_default, **given)
+        envelope.joint_limits(robot.limits)  # refuses empty or too wide ranges now, before any work
+    except ValueError as exc:
+        raise UsageError(str(exc)) from None
+    return envelope
+
+
+def _check_start_pose(robot: rx90sym.Robot, model: Any, start_pose: Any) -> None:
+    """A --start-pose must lie in the robot's ranges and (model given) inside the envelope,
+    naming the point that leaves it."""
+    from excitation.envelope import pose_violations
+
+    if start_pose is None:
+        return
+    q = np.asarray(start_pose) - robot.controller_offsets
+    lim = robot.limits
+    for j in range(robot.n):
+        if not lim.q_min[j] <= q[j] <= lim.q_max[j]:
+            raise UsageError(f"--start-pose: joint {j + 1} at {start_pose[j]:.6g} rad is outside the robot's "
+                             f"range [{lim.q_min[j] + robot.controller_offsets[j]:.6g}, "
+                             f"{lim.q_max[j] + robot.controller_offsets[j]:.6g}] rad (controller angles)")
+    if model is None:  # the ranges only (the envelope needs the model)
+        return
+    bad = [v for v in pose_violations(model, q) if "outside the experiment" not in v]
+    if bad:
+        raise UsageError(f"--start-pose is outside the safety envelope: {bad[0]}")
+
+
+def _save(args: argparse.Namespace, traj: Any, robot: rx90sym.Robot, start_pose: Any, model: Any) -> None:
+    """--out at 250 Hz, or at the controller's rate with its approach move and --program; every
+    check (approach and return paths, the controller's limits) passes before anything is written."""
     if args.controller is None:
         traj.save(args.out)
         return
-    from excitation.controller_export import export_for_controller
+    from excitation import controller_export as ce, controller_programs as cp
+    from excitation.constraints import evaluate_torque
+    from excitation.envelope import path_violations
 
-    export_for_controller(traj, args.out, args.controller, robot.limits, start_pose)
+    if start_pose is not None:  # the approach's path; the return (movej) retraces it
+        bad = path_violations(model, np.asarray(start_pose) - robot.controller_offsets, traj.start_position(),
+                              what="approach and return path from --start-pose")
+        if bad:
+            raise ValueError(f"{bad[0]}: choose another --start-pose")
+    rate = (args.controller_rate or cp.UR_RATES["e-series"]) if args.controller == "ur" else cp.FRANKA_RATE
+    controller = dataclasses.replace(ce.CONTROLLERS[args.controller], rate=rate)
+    t, q, qd, qdd = ce.controller_samples(traj, controller, model.limits, start_pose)
+    if args.controller == "franka":
+        tau = evaluate_torque(model, q - robot.controller_offsets, qd, qdd) if model.torque is not None else None
+        problems = cp.franka_check(q, tau, rate)
+        if problems:
+            raise ValueError(f"Franka export refused: {problems[0]}")
+    if args.program is not None:
+        if args.controller == "ur":
+            n_lead = len(q) - len(traj.sample(rate, closed=True)[0])  # the approach: done by movej
+            cp.write_urscript(args.program, q[n_lead:], rate, start_pose)
+        else:
+            cp.write_franka(args.program, q)
+    ce.write_samples(args.out, t, q, qd, qdd)
 
 
 def _payload(args: argparse.Namespace, robot: rx90sym.Robot, base: Any, chi: Any, noise: Any,
-             collision: Any, start_pose: Any) -> int:
+             collision: Any, start_pose: Any, envelope: Any, model: Any) -> int:
     """--for payload: optimise, save, report the predicted sigma by methods 3 and 4."""
     from excitation.api import default_noise, optimise_payload
     from excitation.payload_design import payload_sigma
@@ -163,11 +306,11 @@ def _payload(args: argparse.Namespace, robot: rx90sym.Robot, base: Any, chi: Any
                                 harmonics=args.harmonics or 3, seed=args.seed, chi_nominal=chi,
                                 payload=payload, noise_std=noise, starts=args.starts,
                                 time_budget=args.time_budget, base=base, client=client,
-                                collision=collision, z_min=args.floor, progress=sys.stderr)
+                                collision=collision, envelope=envelope, progress=sys.stderr)
     if noise is None:
         noise = default_noise(robot.limits)
     sigma = payload_sigma(robot, base.regressor, traj, noise)
-    _save(args, traj, robot, start_pose)
+    _save(args, traj, robot, start_pose, model)
     if args.json:
         write_json(args.json, {**traj.summary(), "payload_reference": str(payload),
                                "noise_std_nm": np.asarray(noise).tolist(), "payload_sigma": sigma})

@@ -8,10 +8,13 @@ import numpy as np
 
 from rx90sym.files import write_json
 from identify import read_recording
-from identify.drive_gains import FLAG_PCT, GAIN_METHODS, drive_gains
+from identify.drive_gains import DEFAULT_METHOD, FLAG_PCT, GAIN_METHODS, drive_gains
 from identify.io.gains import read_gains
 from identify.signal.pairing import POSITION_TOLERANCE
 
+from identify.plausibility import PlausibilityError, gain_flags
+
+from ..flags import checked, flag_lines, settle
 from ..common import UsageError, check_output, convention_option, load_robot, progress, robot_option
 
 
@@ -21,12 +24,13 @@ def register(sub: Any) -> None:
             "global (eq. 29: any motions; the robot's base parameters and current offsets solved too)")
     sp = sub.add_parser("gains", help="drive gains from currents and a payload of known mass", description=desc)
     sp.set_defaults(func=run)
-    robot_option(sp)
+    robot_option(sp, None, "the robot the recordings' '# robot:' line names")
     sp.add_argument("--empty", nargs="+", required=True, help="current recordings without the payload")
     sp.add_argument("--loaded", nargs="+", required=True, help="current recordings with the payload")
     sp.add_argument("--mass", type=float, required=True, help="the payload's weighed mass [kg]")
     sp.add_argument("--mass-std", type=float, default=0.0, help="standard deviation of the weighing [kg] (default 0)")
-    sp.add_argument("--method", choices=GAIN_METHODS, default="same-motion")
+    sp.add_argument("--method", choices=GAIN_METHODS, default=DEFAULT_METHOD,
+                    help=f"default {DEFAULT_METHOD} (chosen on the UR10e pair: docs/drive-gains.md)")
     sp.add_argument("--fix", nargs="+", default=[], metavar="J=VALUE",
                     help="set gain J from a datasheet instead of identifying it [N·m/A]")
     sp.add_argument("--side", choices=("motor", "joint"),
@@ -42,6 +46,7 @@ def register(sub: Any) -> None:
     sp.add_argument("--cutoff", type=float, help="Butterworth cut-off for q [Hz] (default: chosen from the data)")
     sp.add_argument("--decimate-to", type=float, default=50.0, help="rate after parallel filtering [Hz] (default 50)")
     sp.add_argument("--json", help="the gains as JSON (read by --gains of every command)")
+    sp.add_argument("--report", help="self-contained HTML report")
 
 
 def parse_fix(items: list[str], n: int) -> dict[int, float]:
@@ -67,21 +72,34 @@ def run(args: argparse.Namespace) -> int:
     if args.method == "global" and args.position_tol != POSITION_TOLERANCE:
         raise UsageError("conflicting options: --position-tol is for --method same-motion (global pairs no runs)")
     check_output(args.json)
-    robot = load_robot(args)
+    check_output(args.report)
+    robot = load_robot(args, recordings=args.empty + args.loaded)
     fix = parse_fix(args.fix, robot.n)
     reference = read_gains(args.gains, robot) if args.gains else None
     progress(f"reading {len(args.empty)} empty and {len(args.loaded)} loaded recording(s)")
-    empty = [read_recording(p, robot, convention=args.convention) for p in args.empty]
-    loaded = [read_recording(p, robot, convention=args.convention) for p in args.loaded]
+    empty = [checked(read_recording(p, robot, convention=args.convention), robot) for p in args.empty]
+    loaded = [checked(read_recording(p, robot, convention=args.convention), robot) for p in args.loaded]
     progress(f"identifying the drive gains ({args.method})")
-    res = drive_gains(robot, empty, loaded, args.mass, method=args.method, fix=fix, mass_std=args.mass_std,
-                      side=args.side, offsets=not args.no_offsets, flag_pct=args.flag_pct,
-                      position_tol=args.position_tol, cutoff=args.cutoff, decimate_to=args.decimate_to)
+    try:
+        res = drive_gains(robot, empty, loaded, args.mass, method=args.method, fix=fix, mass_std=args.mass_std,
+                          side=args.side, offsets=not args.no_offsets, flag_pct=args.flag_pct,
+                          position_tol=args.position_tol, cutoff=args.cutoff, decimate_to=args.decimate_to)
+    except PlausibilityError as exc:
+        settle(exc.flags)  # the same errors, with the options that address them
+        raise
+    flags = settle(gain_flags(res.gains.gains, res.gains.std, res.fixed, res.rel_std_pct, res.flag_pct))
     print(res.table())
+    if flags:
+        print(flag_lines(flags))
     if reference is not None:
         print(_comparison(res.gains.gains, reference, res.gains.side))
     if args.json:
-        write_json(args.json, res.to_dict())
+        write_json(args.json, {**res.to_dict(), "flags": [f.to_json() for f in flags]})
+    if args.report:
+        from ..report.writers import write_gains_report
+
+        write_gains_report(args.report, {**res.to_dict(), "flags": [f.to_json() for f in flags],
+                                         "data": {"empty": args.empty, "loaded": args.loaded}})
     return 0
 
 

@@ -1,8 +1,8 @@
 """``rx90 identify``: base parameters from recordings (WLS, OLS or consistent), validation, report.
 
-One filtering for fit and validation: the cut-off and decimation chosen on the fitted recordings
-are printed, stored in the JSON (``cutoff_hz``, ``decimate_to_hz``, and the whole ``model``
-record) and reused for ``--validate`` (and by ``rx90 predict``).
+The options make one :class:`identify.Processing` (its defaults are the library's), the library's
+:func:`identify.fit` does the work and ``--json`` writes its fit file (:meth:`identify.Fit.save`):
+one filtering for fit and validation, reused by ``rx90 predict`` through :func:`identify.load_fit`.
 """
 from __future__ import annotations
 
@@ -12,23 +12,17 @@ from typing import Any
 import numpy as np
 
 import rx90sym
-from rx90sym.files import write_json
-from identify import essential_parameters, predict, read_recording, validate
-from identify.estimation.bootstrap import segment_bootstrap_std
-from identify.fit_model import FitModel
-from identify.io.gains import apply_gains, read_gains
-from identify.io.recordings import layout_summary
-from identify.observation.matrix import DEFAULT_MIN_VELOCITY, DEFAULT_REST, REST_POLICIES
-from identify.real_fit import fit_recordings
+from identify.fitting import Fit, fit
+from identify.io.gains import read_gains
+from identify.observation.processing import DEFAULT_MIN_VELOCITY, DEFAULT_REST, REST_POLICIES, Processing
+from identify.observation.spring_fit import SpringBase, spring_summary
+from identify.plausibility import estimate_flags, residual_flags, static_gravity_flags, torque_scale_flags
 
-from ..common import (UsageError, check_output, convention_option, progress, robot_option, robot_with_spring,
-                      spring_options)
-from ..spring_output import attach_spring, spring_summary
+from ..flags import flag_lines, given_gain_flags, settle
 
-#: Segment-bootstrap block length, s, and number of draws.
-BOOTSTRAP_BLOCK_S = 0.5
-BOOTSTRAP_DRAWS = 200
-
+from ..common import (UsageError, check_output, convention_option, progress, read_recordings, robot_option,
+                      robot_with_spring, spring_options)
+from ..spring_output import attach_spring
 
 def _delay(text: str) -> str | float:
     if text == "auto":
@@ -49,19 +43,12 @@ def add_recording_options(sp: argparse.ArgumentParser) -> None:
                                     "or the JSON of rx90 gains")
 
 
-def read_recordings(paths: list[str], robot: rx90sym.Robot, convention: str | None, gains: Any) -> list:
-    recs = [read_recording(p, robot, convention=convention) for p in paths]
-    if gains is None:
-        return recs
-    return [apply_gains(r, gains, robot) if r.current is not None else r for r in recs]
-
-
 def register(sub: Any) -> None:
     sp = sub.add_parser("identify", help="identify the base parameters from recordings",
                         description="identify the base parameters from recordings")
     sp.set_defaults(func=run)
     sp.add_argument("recordings", nargs="+", help="recording CSV files")
-    robot_option(sp)
+    robot_option(sp, None, "the robot the recordings' '# robot:' line names")
     add_recording_options(sp)
     spring_options(sp)
     sp.add_argument("--offsets", action="store_true", help="add per-joint torque offsets OFF1..OFFn")
@@ -73,6 +60,10 @@ def register(sub: Any) -> None:
     sp.add_argument("--method", choices=("ols", "wls", "consistent"), default="wls")
     sp.add_argument("--essential", action="store_true", help="also compute the essential parameters")
     sp.add_argument("--cutoff", type=float, help="Butterworth cut-off for q [Hz] (default: chosen from the data)")
+    sp.add_argument("--cross-validate", action="store_true",
+                    help="choose the cut-off, the decimation and the rest policy on the torques by blocked "
+                         "cross-validation (a small grid around the position knee, capped in time; the "
+                         "candidate table is printed and saved)")
     sp.add_argument("--decimate-to", type=float, default=50.0,
                     help="rate after parallel filtering [Hz] (default 50; 0: no decimation)")
     sp.add_argument("--no-decimate", action="store_true", help="no decimation (same as --decimate-to 0)")
@@ -80,8 +71,8 @@ def register(sub: Any) -> None:
                     help=f"rest threshold: a joint slower than this is at rest [rad/s] "
                          f"(default {DEFAULT_MIN_VELOCITY:g}; 0: no rest handling)")
     sp.add_argument("--rest", choices=REST_POLICIES, default=DEFAULT_REST,
-                    help=f"rest samples: drop their rows, keep them with Coulomb = 0, or with the presliding state "
-                         f"of the position history (default {DEFAULT_REST})")
+                    help=f"rest samples: drop their rows, keep them with Coulomb = 0, or with the presliding "
+                         f"state of the position history (default {DEFAULT_REST})")
     sp.add_argument("--delay", type=_delay, default=0.0,
                     help="torque lag behind the positions: 'auto' (estimated) or seconds (default 0; "
                          "the estimate is always reported)")
@@ -94,7 +85,7 @@ def register(sub: Any) -> None:
 
 
 def _robot(args: argparse.Namespace) -> tuple[rx90sym.Robot, Any]:
-    robot, spring_model = robot_with_spring(args)
+    robot, spring_model = robot_with_spring(args, args.recordings)
     if args.coulomb_sign is not None:
         if robot.coupling is None:
             raise UsageError(f"--coulomb-sign: robot {robot.name!r} has no coupled joints")
@@ -123,9 +114,7 @@ def with_asymmetric_coulomb(robot: rx90sym.Robot, spec: str) -> rx90sym.Robot:
         raise UsageError(f"--asymmetric-coulomb: {exc}") from None
 
 
-def run(args: argparse.Namespace) -> int:
-    from ..report import Section, identification_sections, write_report
-
+def _check(args: argparse.Namespace) -> None:
     if args.essential and args.method == "consistent":
         raise UsageError("conflicting options: --essential works on the ols/wls estimate, "
                          "not with --method consistent")
@@ -138,87 +127,117 @@ def run(args: argparse.Namespace) -> int:
         raise UsageError("--urdf-out needs --method consistent (a URDF holds physical bodies only)")
     for out in (args.json, args.report, args.urdf_out):
         check_output(out)
+
+
+def processing_of(args: argparse.Namespace, spring: bool) -> Processing:
+    """The Processing the options ask for (the library's defaults where they say nothing)."""
+    return Processing(cutoff=args.cutoff, decimate_to=None if args.no_decimate else args.decimate_to,
+                      min_velocity=args.min_velocity, rest=args.rest, delay=args.delay,
+                      estimate_delay=True, spring=spring, cross_validate=args.cross_validate)
+
+
+def run(args: argparse.Namespace) -> int:
+    _check(args)
     robot, spring_model = _robot(args)
     if args.urdf_out and robot.urdf is None:
         raise UsageError(f"--urdf-out needs a URDF robot (--robot FILE.urdf), not {args.robot!r}")
     sb = attach_spring(robot, spring_model, args.validate, args.method)
     gains = read_gains(args.gains, robot) if args.gains else None
     progress(f"reading {len(args.recordings)} recording(s)")
+    flags = given_gain_flags(gains) if gains is not None else []
     recs = read_recordings(args.recordings, robot, args.convention, gains)
+    flags += settle(torque_scale_flags([r.tau for r in recs if r.tau is not None], robot))
+    flags += settle(static_gravity_flags(recs, robot, rx90sym.nominal_parameters(robot)))
     val_rec = read_recordings([args.validate], robot, args.convention, gains)[0] if args.validate else None
-    decimate_to = None if (args.no_decimate or args.decimate_to == 0) else args.decimate_to
-    min_velocity = args.min_velocity or None
-    base = sb if sb is not None else rx90sym.base_parameters(robot)
-    layouts = [layout_summary(r) for r in recs]
-    for lay in layouts:
-        if lay["bridged_samples"] or lay["segments"] > 1 or lay["stale_rows"]:
-            print(f"{lay['source']}: {lay['segments']} segment(s), {lay['bridged_samples']} samples bridged over lost "
-                  f"packets (not fitted), {lay['stale_rows'] or 0} stale rows dropped when read")
     progress(f"identifying ({args.method}) on {sum(len(r.t) for r in recs)} samples")
-    fit = fit_recordings(robot, recs, method=args.method, base=base, cutoff=args.cutoff,
-                         decimate_to=decimate_to, min_velocity=min_velocity, rest=args.rest,
-                         delay=args.delay, spring=sb is None, estimate=True)
-    obs, res, delay, estimate = fit.observation, fit.result, fit.delay, fit.delay_estimate
-    progress(estimate.summary() + ("" if args.delay == "auto" else " (not compensated: --delay auto does)"))
-    progress(obs.summary().replace("\n", "\n  "))
-    print(f"filtering: cut-off {obs.cutoffs[0]:.4g} Hz, rate {obs.rate:.6g} Hz"
-          + (f" (decimated to {decimate_to:g} Hz)" if decimate_to else " (no decimation)")
-          + f", torque delay {1e3 * delay:.3g} ms compensated")
-    for note in obs.notes:
-        if note:
-            print(f"note: {note}")
-    block = max(1, int(round(BOOTSTRAP_BLOCK_S * obs.rate)))
-    boot = segment_bootstrap_std(obs.W, obs.Y, obs.joint, obs.samples, res.weights, block,
-                                 BOOTSTRAP_DRAWS, args.bootstrap_seed)
-    print(res.table())
-    print(bootstrap_table(res, boot))
-    spring_entry, spring_text = spring_summary(robot, sb, res, recs)
-    print(f"\n{spring_text}")
-    ess = essential_parameters(res) if args.essential else None
-    if ess is not None:
-        print()
-        print(ess.table())
-    model = FitModel.of(robot, convention=args.convention, gains=gains.to_dict() if gains else None,
-                        rest=args.rest, min_velocity=min_velocity, spring=args.spring,
-                        cutoff_hz=obs.cutoffs[0], decimate_to_hz=decimate_to, rate_hz=obs.rate,
-                        delay_s=delay)
-    filt = model.filtering()
-    val = validate(robot, ess or res, val_rec, base=base, **filt) if val_rec is not None else None
-    if val is not None:
-        print()
-        print(val.table())
+    result = fit(robot, recs, processing_of(args, sb is None), args.method, base=sb, gains=gains,
+                 convention=args.convention, spring_source=args.spring)
+    result = result.bootstrapped(args.bootstrap_seed)
+    result = result.with_flags([*flags, *_fit_flags(result, args.method)])
+    if args.essential:
+        result = result.with_essential()
+    if val_rec is not None:
+        result = result.validated(val_rec)
+    _print_fit(result, recs, args.delay == "auto")
     if args.json:
-        out = {"robot": robot.name, "method": args.method, **res.to_dict(), "spring": spring_entry,
-               "bootstrap_std": [float(v) for v in boot],
-               "bootstrap": {"block_s": block / obs.rate, "draws": BOOTSTRAP_DRAWS, "seed": args.bootstrap_seed},
-               "cutoff_hz": obs.cutoffs[0], "decimate_to_hz": decimate_to,
-               "delay_estimate_s": estimate.delay, "model": model.to_dict(),
-               "essential": ess.to_dict() if ess is not None else {}, "recordings": layouts,
-               "validation": val.to_dict() if val is not None else {}}
-        write_json(args.json, out)
+        result.save(args.json)
     if args.report:
-        sections = identification_sections(robot, res, recs, validation=val, essential=ess,
-                                           fit_prediction=predict(robot, res, recs[0], base=base, **filt),
-                                           model=model, extra_tables=[bootstrap_table(res, boot)])
-        write_report(args.report, f"Identification of {robot.name}", [*sections, Section("Spring", spring_text)])
+        _write_report(args.report, result, recs)
     if args.urdf_out:  # last: a refused (non-physical) link must not cost the fit's JSON and report
-        from rx90sym import UrdfError, write_urdf
-
-        try:
-            written = write_urdf(robot, res.standard, args.urdf_out)
-        except UrdfError as exc:
-            kept = [p for p in (args.json, args.report) if p]
-            raise UrdfError(f"{args.urdf_out} not written: {exc}" +
-                            (f" (written: {', '.join(kept)})" if kept else "")) from None
-        progress("wrote " + ", ".join(str(p) for p in written))
+        _write_urdf(args, result)
     return 0
 
 
-def bootstrap_table(res: Any, boot: np.ndarray) -> str:
-    """σ of eq. 13 (white residuals) beside the segment-bootstrap σ, per parameter."""
-    width = max([len("Parameter")] + [len(n) for n in res.names])
-    lines = [f"{'Parameter':<{width}}  {'σ eq. 13':>10}  {'σ bootstrap':>11}  ratio"]
-    for n, s, b in zip(res.names, res.std, boot):
-        ratio = b / s if s > 0 else float("nan")
-        lines.append(f"{n:<{width}}  {s:10.3g}  {b:11.3g}  {ratio:5.2f}")
-    return "\n".join(lines)
+def _fit_flags(f: Fit, method: str) -> list:
+    """A joint the model does not explain stops the run; non-physical WLS estimates are flagged
+    (judged with the larger of eq. 13's and the bootstrap's sigma)."""
+    obs, res = f.observation, f.result
+    torque_rms = np.array([np.sqrt(np.mean(obs.Y[obs.joint == j] ** 2)) if np.any(obs.joint == j) else np.inf
+                           for j in range(len(res.residual_rms))])
+    flags = settle(residual_flags(res.residual_rms, torque_rms, f.robot.limits.tau_max[:torque_rms.size]))
+    if method != "consistent":
+        flags += settle(estimate_flags(res.names, res.values, np.fmax(res.std, f.bootstrap.std)))
+    return flags
+
+
+def _print_fit(f: Fit, recs: list, auto_delay: bool) -> None:
+    obs, res = f.observation, f.result
+    progress(f.delay_estimate.summary() + ("" if auto_delay else " (not compensated: --delay auto does)"))
+    progress(obs.summary().replace("\n", "\n  "))
+    for lay in f.recordings:
+        if lay["bridged_samples"] or lay["segments"] > 1 or lay["stale_rows"]:
+            print(f"{lay['source']}: {lay['segments']} segment(s), {lay['bridged_samples']} samples bridged over lost "
+                  f"packets (not fitted), {lay['stale_rows'] or 0} stale rows dropped when read")
+    if f.choice is not None:
+        print(f.choice["table"])
+    print(f"filtering: cut-off {obs.cutoffs[0]:.4g} Hz, rate {obs.rate:.6g} Hz"
+          + (f" (decimated to {f.decimate_to:g} Hz)" if f.decimate_to else " (no decimation)")
+          + f", torque delay {1e3 * f.delay:.3g} ms compensated")
+    for note in obs.notes:
+        if note:
+            print(f"note: {note}")
+    print(res.table())
+    print(f.bootstrap.table(res))
+    if f.flags:
+        print(flag_lines(f.flags))
+    print(f"\n{_spring_text(f, recs)}")
+    if f.essential is not None:
+        print()
+        print(f.essential.table())
+    if f.validation is not None:
+        print()
+        print(f.validation.table())
+
+
+def _spring_text(f: Fit, recs: list) -> str:
+    return spring_summary(f.robot, f.base if isinstance(f.base, SpringBase) else None, f.result, recs)[1]
+
+
+def _write_report(path: str, f: Fit, recs: list) -> None:
+    """The HTML report from the fit file's content (what --json writes) plus the recordings' extent."""
+    from ..report.writers import write_identify_report
+
+    record = {**f.to_json(), "data": data_record(recs, f.observation)}
+    write_identify_report(path, f.robot, record, f.result, recs[0], f.validation, f.predict(recs[0]),
+                          _spring_text(f, recs))
+
+
+def data_record(recs: list, obs: Any) -> dict:
+    """What was fitted: per recording its source, samples, duration [s] and recorded rate [Hz]
+    (1 / mean period); the share of samples where each joint moves (after filtering)."""
+    rows = [{"source": src, "samples": int(len(r.t)), "duration_s": float(r.t[-1] - r.t[0]),
+             "rate_hz": float((len(r.t) - 1) / (r.t[-1] - r.t[0]))} for r, src in zip(recs, obs.sources)]
+    share = None if obs.moving_fraction is None else [float(v) for v in obs.moving_fraction]
+    return {"recordings": rows, "moving_fraction": share}
+
+
+def _write_urdf(args: argparse.Namespace, f: Fit) -> None:
+    from rx90sym import UrdfError, write_urdf
+
+    try:
+        written = write_urdf(f.robot, f.result.standard, args.urdf_out)
+    except UrdfError as exc:
+        kept = [p for p in (args.json, args.report) if p]
+        raise UrdfError(f"{args.urdf_out} not written: {exc}" +
+                        (f" (written: {', '.join(kept)})" if kept else "")) from None
+    progress("wrote " + ", ".join(str(p) for p in written))

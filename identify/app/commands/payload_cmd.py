@@ -4,12 +4,18 @@ from __future__ import annotations
 import argparse
 from typing import Any
 
+import numpy as np
+
 from rx90sym.files import write_json
-from identify import read_recording
+from identify.fitting import load_fit
+from identify.io.recordings import read_recording
 from identify.io.gains import apply_gains, read_gains
 from identify.signal.pairing import POSITION_TOLERANCE
 from identify.payload import payload
 
+from identify.plausibility import payload_flags, torque_scale_flags
+
+from ..flags import checked, flag_lines, given_gain_flags, settle
 from ..common import (UsageError, check_output, convention_option, load_robot, progress, robot_option,
                       robot_params, spring_notice)
 
@@ -30,7 +36,7 @@ def register(sub: Any) -> None:
     sp.add_argument("--method", type=int, choices=(1, 2, 3, 4), required=True)
     sp.add_argument("--empty", nargs="*", default=[], help="recordings without the payload")
     sp.add_argument("--loaded", nargs="+", required=True, help="recordings with the payload")
-    robot_option(sp)
+    robot_option(sp, None, "the robot the recordings' '# robot:' line names")
     convention_option(sp)
     sp.add_argument("--robot-params", help="JSON of the robot's parameters (rx90 identify --json)")
     sp.add_argument("--a-priori", help="bundled payload name or JSON file of a priori values")
@@ -45,6 +51,7 @@ def register(sub: Any) -> None:
     sp.add_argument("--position-tol", type=float,
                     help=f"method 3: largest position gap of a paired run [rad] (default {POSITION_TOLERANCE:g})")
     sp.add_argument("--json", help="results as JSON")
+    sp.add_argument("--report", help="self-contained HTML report")
 
 
 def run(args: argparse.Namespace) -> int:
@@ -62,32 +69,43 @@ def run(args: argparse.Namespace) -> int:
     if args.method != 3 and args.position_tol is not None:
         raise UsageError("conflicting options: --position-tol is for method 3 (paired runs)")
     check_output(args.json)
-    robot = load_robot(args, offsets=args.offsets)
+    check_output(args.report)
+    robot = load_robot(args, offsets=args.offsets, recordings=args.empty + args.loaded)
     spring_notice(robot)
     gains = read_gains(args.gains, robot) if args.gains else None
+    flags = given_gain_flags(gains) if gains is not None else []
 
     def read(path: str) -> Any:
-        rec = read_recording(path, robot, convention=args.convention)
+        rec = checked(read_recording(path, robot, convention=args.convention), robot)
         return apply_gains(rec, gains, robot) if gains is not None and rec.current is not None else rec
 
     empty = [read(p) for p in args.empty]
     loaded = [read(p) for p in args.loaded]
     if gains is not None and all(r.current is None for r in empty + loaded):
         raise UsageError(f"--gains {args.gains}: none of the recordings holds motor currents")
+    flags += settle(torque_scale_flags([r.tau for r in empty + loaded if r.tau is not None], robot))
     params = robot_params(args.robot_params) if args.robot_params else None
     progress(f"identifying the payload (method {args.method})")
     filt = {}
-    if args.filtering_from:
-        from .predict import load_identification
-
-        f = load_identification(args.filtering_from)[1].filtering()
+    if args.filtering_from:  # the fit's achieved cut-off, decimation and delay (not its rest handling)
+        f = load_fit(args.filtering_from, robot).filtering()
         filt = {k: f[k] for k in ("cutoff", "decimate_to", "delay")}
     res = payload(robot, args.method, empty=empty, loaded=loaded, robot_params=params, **filt,
                   a_priori=args.a_priori, constrained=args.constrained, mass=args.mass,
                   mass_tol=args.mass_tol if args.mass_tol is not None else 0.05,
                   position_tol=args.position_tol if args.position_tol is not None else POSITION_TOLERANCE)
+    std = res.std if res.bootstrap_std is None else np.fmax(res.std, res.bootstrap_std)
+    flags += settle(payload_flags(res.names, res.values, std))
     print(res.table())
+    if flags:
+        print(flag_lines(flags))
+    spring = robot.spring.describe() if robot.spring is not None else None
+    record = {**res.to_dict(), "spring": spring, "flags": [f.to_json() for f in flags], "robot_name": robot.name,
+              "mass": args.mass, "data": {"empty": [r.source for r in empty], "loaded": [r.source for r in loaded]}}
     if args.json:
-        spring = robot.spring.describe() if robot.spring is not None else None
-        write_json(args.json, {**res.to_dict(), "spring": spring})
+        write_json(args.json, record)
+    if args.report:
+        from ..report.writers import write_payload_report
+
+        write_payload_report(args.report, record, res)
     return 0

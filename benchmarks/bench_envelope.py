@@ -1,0 +1,145 @@
+"""What the safety envelope costs (issue 19): time per start and predicted precision.
+
+A 6-joint arm (the UR5 URDF of the tests, its inertials as nominal parameters, acceleration
+limits 2x the velocity limits), a 20 s, 5-harmonic trajectory, criterion "sigma", one start
+with the same seed for every configuration, adding the envelope's parts one at a time:
+
+  none        the robot's own limits, no Cartesian constraint (the former default)
+  limits      + experiment limits (90 % of the ranges, 0.7 x velocities, 0.5 x accelerations)
+  height      + no moving point below the mounting plane + 0.05 m
+  speed       + Cartesian speed <= 1 m/s at the tool point and every capsule end
+  full        + self-collision of the URDF's capsules (the default of rx90 excite)
+
+Columns: time of the start [s], IPOPT iterations, cond(W), the criterion, and the predicted
+relative sigma of each parameter group (median over the group, %, eq. 15 with the default noise
+of 1 % of each torque limit; groups and reference magnitudes as docs/excitation.md). The ratio
+full / none of the time per start is the figure the issue's target (<= 2x) refers to.
+
+    python benchmarks/bench_envelope.py [--seed 0] [--duration 20] [--json out.json]
+
+With --every-robot: ``rx90 excite`` with its defaults (one start) on every bundled robot and the
+UR5 URDF: time, cond, the largest torque usage, the smallest clearance and height margin, the
+fastest point, and any warning that a check is off (there should be none).
+
+    python benchmarks/bench_envelope.py --every-robot [--duration 20]
+"""
+from __future__ import annotations
+
+import argparse
+import dataclasses
+import json
+import time
+import warnings
+from pathlib import Path
+
+import numpy as np
+
+UR5 = Path(__file__).resolve().parents[1] / "tests" / "data" / "urdf" / "ur5.urdf"
+
+
+def models(robot, chi, base):
+    """(name, ExcitationModel) of each configuration, cumulative."""
+    import excitation
+    from excitation.model import model_from_robot
+
+    full, _ = excitation.safe_model(robot, chi, base, excitation.Envelope())
+    plain = model_from_robot(robot, chi, base)
+    limits = dataclasses.replace(plain, limits=full.limits, centre=full.centre)
+    height = dataclasses.replace(limits, heights=full.heights, z_min=full.z_min, point_names=full.point_names)
+    speed = dataclasses.replace(height, speeds=full.speeds, speed_max=full.speed_max)
+    return [("none", plain), ("limits", limits), ("height", height), ("speed", speed), ("full", full)]
+
+
+def group_sigma(traj, model, objective) -> dict[str, float]:
+    """Median predicted relative sigma [%] per parameter group (eq. 15)."""
+    from excitation.criterion import regressor_samples
+    from excitation.objective import GROUPS, numeric_information, parameter_group
+
+    t, q, qd, qdd = traj.sample(250.0)
+    g = numeric_information(regressor_samples(model.regressor, q, qd, qdd), objective, traj.duration)
+    rel = np.sqrt(objective.predicted_variance(g)) / objective.reference
+    groups = np.array([parameter_group(n) for n in model.names])
+    return {name: float(100 * np.median(rel[groups == name])) for name in GROUPS if np.any(groups == name)}
+
+
+def every_robot(duration: float) -> None:
+    """The default excitation of every bundled robot and the UR5 URDF, through the command line."""
+    import subprocess
+    import sys
+    import tempfile
+
+    rx90 = str(Path(sys.executable).with_name("rx90"))
+    print(f"{'robot':10s} {'s':>6s} {'cond':>7s} {'torque':>7s} {'clear m':>8s} {'above m':>8s} {'v m/s':>6s}  warnings")
+    for name in ("rx90", "tx40", "ur10e", "panda", str(UR5)):
+        extra = ["--tip", "tool0"] if name.endswith(".urdf") else []
+        with tempfile.TemporaryDirectory() as tmp:
+            t0 = time.perf_counter()
+            proc = subprocess.run([rx90, "excite", "--robot", name, *extra, "--duration", f"{duration:g}", "--starts",
+                                   "1", "--out", f"{tmp}/t.csv", "--json", f"{tmp}/t.json"],
+                                  capture_output=True, text=True)
+            elapsed = time.perf_counter() - t0
+            label = Path(name).name
+            if proc.returncode != 0:
+                print(f"{label:10s} failed: {proc.stderr.strip().splitlines()[-1]}")
+                continue
+            usage = json.loads(Path(f"{tmp}/t.json").read_text())["limits_usage"]
+            warns = [w for w in proc.stderr.splitlines() if "warning" in w and "acceleration" not in w]
+            torque = max(v for v in usage["torque"] if v is not None) if isinstance(usage["torque"], list) else "off"
+            print(f"{label:10s} {elapsed:6.1f} {json.loads(Path(f'{tmp}/t.json').read_text())['cond']:7.1f} "
+                  f"{torque:7.3f} {usage['min_clearance_m']:8.4f} {usage['min_height_m'] - usage['z_min_m']:8.4f} "
+                  f"{usage['max_point_speed_m_s']:6.3f}  {'; '.join(warns) or 'none'}", flush=True)
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--seed", type=int, default=0)
+    parser.add_argument("--duration", type=float, default=20.0)
+    parser.add_argument("--harmonics", type=int, default=5)
+    parser.add_argument("--only", nargs="*", default=None, help="run only these configurations")
+    parser.add_argument("--progress", action="store_true", help="a line per start on stderr")
+    parser.add_argument("--json", help="also write the figures to this JSON file")
+    parser.add_argument("--every-robot", action="store_true", help="default rx90 excite on every robot")
+    args = parser.parse_args()
+    if args.every_robot:
+        every_robot(args.duration)
+        return
+
+    import excitation
+    import rx90sym
+    from excitation.optimiser import OptimiserOptions
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")  # the URDF's missing acceleration limits: given below
+        robot = rx90sym.load_robot(UR5, tip="tool0", acceleration=2.0 * 3.15)
+    chi = robot.parameter_vector(rx90sym.nominal_parameters(robot))
+    base = rx90sym.base_parameters(robot)
+    rows = []
+    for name, model in models(robot, chi, base):
+        if args.only and name not in args.only:
+            continue
+        objective = excitation.make_objective(model, "sigma", nominal_base=base.beta(chi))
+        options = OptimiserOptions(criterion=objective)
+        t0 = time.perf_counter()
+        traj = excitation.optimise_model(model, excitation.FourierSeries(args.duration, args.harmonics),
+                                         seed=args.seed, starts=1, options=options, progress=args.progress)
+        elapsed = time.perf_counter() - t0
+        rows.append({"config": name, "time_s": elapsed, "iterations": traj.info.iterations,
+                     "cond": traj.cond, "criterion": traj.info.criterion_value,
+                     "sigma_percent": group_sigma(traj, model, objective)})
+        print(f"{name}: {elapsed:.1f} s", flush=True)
+    groups = list(rows[0]["sigma_percent"])
+    print(f"\nUR5 URDF, {args.duration:g} s, {args.harmonics} harmonics, seed {args.seed}, one start each")
+    print(f"{'config':8s} {'s/start':>8s} {'iter':>5s} {'cond':>8s} {'crit':>7s} "
+          + " ".join(f"{g[:22]:>22s}" for g in groups))
+    for r in rows:
+        print(f"{r['config']:8s} {r['time_s']:8.1f} {r['iterations']:5d} {r['cond']:8.1f} {r['criterion']:7.3f} "
+              + " ".join(f"{r['sigma_percent'][g]:22.3g}" for g in groups))
+    times = {r["config"]: r["time_s"] for r in rows}
+    if "none" in times and "full" in times:
+        print(f"ratio full / none (time per start): {times['full'] / times['none']:.2f} (target <= 2)")
+    if args.json:
+        Path(args.json).write_text(json.dumps(rows, indent=1))
+
+
+if __name__ == "__main__":
+    main()

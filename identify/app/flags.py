@@ -1,0 +1,60 @@
+"""Plausibility flags on the command line: errors stop the run (exit 2, nothing written), warnings
+are printed with the option that addresses them and kept for the JSON and the report."""
+from __future__ import annotations
+
+from typing import Sequence
+
+from identify.plausibility import Flag, raise_errors
+
+from .common import progress
+
+#: The option that addresses each flag (the library's messages quote no options).
+HINTS = {
+    "gains_negative": "swap --empty and --loaded",
+    "payload_mass_negative": "swap --empty and --loaded",
+    "gain_unidentified": "--fix J=VALUE",
+    "gain_uncertain": "--fix J=VALUE",
+    "estimate_not_physical": "--method consistent",
+    "consistency_margin_negative": "--method consistent",
+    "payload_inertia_not_physical": "--constrained",
+    "torque_scale": "--gains K1,..,Kn in N m/A",
+}
+
+
+def given_gain_flags(gains: object) -> list[Flag]:
+    """Gains given with --gains (a DriveGains): all negative stops, one negative is a warning."""
+    import numpy as np
+
+    from identify.plausibility import gain_flags
+
+    return settle(gain_flags(gains.gains, np.zeros_like(gains.gains)))
+
+
+def checked(rec: object, robot: object) -> object:
+    """The recording, refused when its positions do not fit the robot (degrees, swapped q/qd
+    groups, out of range: identify.io.units.check_units)."""
+    from identify.io.units import check_units
+
+    check_units(rec.t, rec.q, rec.dq, robot, rec.source)
+    return rec
+
+
+def with_hint(flag: Flag) -> str:
+    hint = HINTS.get(flag.code)
+    return flag.line() + (f" [{hint}]" if hint else "")
+
+
+def settle(flags: Sequence[Flag]) -> list[Flag]:
+    """Raise on an error flag (exit 2; its message carries the option hint); print each warning."""
+    errors = [f for f in flags if f.severity == "error"]
+    if errors:
+        raise ValueError("; ".join(with_hint(f) for f in errors))
+    warnings = raise_errors(flags)
+    for f in warnings:
+        progress(f"warning: {with_hint(f)}")
+    return warnings
+
+
+def flag_lines(flags: Sequence[Flag]) -> str:
+    """Lines printed under a result table ('' without flags)."""
+    return "\n".join(f"flag [{f.code}]: {with_hint(f)}" for f in flags)

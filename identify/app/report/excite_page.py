@@ -1,0 +1,86 @@
+"""The report of an excitation trajectory (``rx90 excite``), built from its JSON summary.
+
+Verdict first: is the motion safe to run (every limit held on the checking grid, clearances) and
+how well does it excite (criterion, cond); then the limit usage per joint and the figures.
+"""
+from __future__ import annotations
+
+from typing import Any, Mapping, Sequence
+
+from .cells import fmt, number
+from .page import Cell, Column, Figure, Page, Section, Summary, Table
+from .summary import as_flag, flag, next_steps
+from .tables import key_values
+
+#: Limit usage (max |x| / limit) above which a joint is marked "check" (below 1: inside the limit).
+USAGE_CHECK = 0.95
+_KINDS = ("position", "velocity", "acceleration", "torque")
+
+
+def _usage_mark(value: Any) -> str:
+    x = number(value)
+    return "" if x is None else "ok" if x <= USAGE_CHECK else "check" if x <= 1.0 else "poor"
+
+
+def usage_table(usage: Mapping[str, Any], table_id: str = "limits") -> Table:
+    """Per joint: max |x| / limit of position, velocity, acceleration and torque, in % (marked)."""
+    lists = {k: usage.get(k) if isinstance(usage.get(k), list) else [] for k in _KINDS}
+    n = max(len(v) for v in lists.values())
+    lists = {k: v or [None] * n for k, v in lists.items()}
+    rows = tuple((j + 1, *(Cell(None if lists[k][j] is None else 100 * lists[k][j], _usage_mark(lists[k][j]))
+                           for k in _KINDS)) for j in range(n))
+    cols = (Column("joint", decimals=0), *(Column(k, "%", decimals=0) for k in _KINDS))
+    note = (f"Checked at {fmt(usage.get('checked_at_hz'))} Hz; ✓ ≤ {100 * USAGE_CHECK:.0f} %, ! up to the limit, "
+            "✗ beyond. Positions: excursion over half the range about its centre.")
+    return Table(table_id, "Limit usage: max |x| / limit", cols, rows, note)
+
+
+def _flags(record: Mapping[str, Any]) -> list[dict]:
+    usage = record.get("limits_usage") or {}
+    flags = [as_flag(f) for f in record.get("flags") or ()]
+    flags += [flag("limit-violated", "error", v, "do not run it: optimise again (more margin, lower speed)")
+              for v in usage.get("violations") or ()]
+    if isinstance(usage.get("torque"), str):  # the note saying why torques were not checked
+        flags.append(flag("torque-unchecked", "warning", usage["torque"],
+                          "give nominal parameters so the torques are checked"))
+    for k in _KINDS:
+        values = usage.get(k) if isinstance(usage.get(k), list) else []
+        close = [j for j, v in enumerate(values, start=1) if _usage_mark(v) == "check"]
+        if close:
+            flags.append(flag("limit-close", "warning", f"{k} within {100 - 100 * USAGE_CHECK:.0f} % of its limit "
+                              f"on joint(s) {', '.join(map(str, close))}", "run it first at reduced speed"))
+    return flags
+
+
+def envelope_table(worst: Sequence[tuple[str, str, Any, Any, str]]) -> Table:
+    """The safety envelope's worst values along the trajectory (excitation.envelope_report.worst)."""
+    rows = tuple((name, unit, value, t, limit) for name, unit, value, t, limit in worst)
+    return Table("envelope", "Safety envelope: worst values along the trajectory", (
+        Column("quantity", text=True), Column("unit", text=True), Column("worst"), Column("at t", "s", digits=4),
+        Column("limit", text=True)), rows)
+
+
+def excite_page(record: Mapping[str, Any], figures: Sequence[Figure] = (), more: Sequence[Section] = ()) -> Page:
+    """The excitation report from ``Trajectory.summary()`` (what ``rx90 excite --json`` writes);
+    figures go with the limit usage, ``more`` sections after it."""
+    usage = record.get("limits_usage") or {}
+    flags = _flags(record)
+    feasible = usage.get("feasible")
+    headline = ("Safe to run on the checking grid" if feasible else "Not safe to run: a limit is violated"
+                ) + f"; criterion {record.get('criterion', '')}, cond(W) = {fmt(record.get('cond'))}."
+    facts = [("Form", f"{record.get('form', '')}, {fmt(record.get('duration'))} s"
+                      + (f", {record.get('harmonics')} harmonics" if record.get("harmonics") else "")),
+             ("Conditioning", f"cond(W) = {fmt(record.get('cond'))} at {fmt(record.get('cond_rate_hz'))} Hz"),
+             ("Base parameters", fmt(record.get("base_parameters")))]
+    if usage.get("min_clearance_m") is not None:
+        facts.append(("Smallest clearance", f"{fmt(1e3 * usage['min_clearance_m'], 3)} mm"))
+    if usage.get("min_height_m") is not None:
+        facts.append(("Lowest tool height", f"{fmt(usage['min_height_m'], 3)} m (floor {fmt(usage.get('z_min_m'))} m)"))
+    optimiser = record.get("optimiser") or {}
+    sections = [Section("limits", "Limit usage", (usage_table(usage), *figures)), *more]
+    items = [(k.replace("_", " "), "", v) for k, v in optimiser.items() if v not in (None, "") and not isinstance(v, dict)]
+    if items:
+        sections.append(Section("optimiser", "Optimiser", (key_values("optimiser", "How it was optimised", items),)))
+    return Page(f"Excitation trajectory{' for ' + str(record['robot']) if record.get('robot') else ''}",
+                "rx90 excite", Summary(headline, tuple(facts), usage_table(usage, "summary-limits"), tuple(flags),
+                                       next_steps(flags)), tuple(sections))

@@ -1,0 +1,170 @@
+"""The fit file: what an identification was run with and found, in one versioned JSON.
+
+Written by :meth:`identify.Fit.save` (and ``rx90 identify --json``), read by
+:func:`identify.load_fit`. Its records each have their own ``to_json``/``from_json``
+(``model`` below, ``processing`` in :mod:`identify.observation.processing`, the result in
+:mod:`identify.estimation.results`), so a new field goes into one record. ``schema_version``
+says which layout a file has; a file without it, or of an unknown version, is refused.
+"""
+from __future__ import annotations
+
+import hashlib
+import json
+from dataclasses import MISSING, asdict, dataclass
+from importlib import metadata
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+import rx90sym
+
+from identify.io.gains import DriveGains
+
+__all__ = ["SCHEMA_VERSION", "FitModel", "read_fit_file", "robot_file_hash", "toolkit_version",
+           "robot_of", "gains_of"]
+
+#: Layout of the fit file. 2: the first with ``schema_version`` and ``processing`` (1: the
+#: identification JSON before them).
+SCHEMA_VERSION = 2
+
+
+def robot_file_hash(robot: rx90sym.Robot) -> str | None:
+    """SHA-256 of the robot file the description was read from (None for a robot built in memory)."""
+    path = Path(robot.source) if robot.source else None
+    if path is None or not path.is_file():
+        return None
+    return hashlib.sha256(path.read_bytes()).hexdigest()
+
+
+def toolkit_version() -> str:
+    try:
+        return metadata.version("rx90sym")
+    except metadata.PackageNotFoundError:
+        return "unknown"
+
+
+@dataclass(frozen=True)
+class FitModel:
+    """The model and the achieved signal processing of one identification (the file's ``model``).
+
+    robot: name; robot_file: path it was read from; robot_file_sha256; toolkit_version;
+    convention: angles of the files ("controller"/"model" or None: from each file); gains: the drive
+    gains' dictionary (None: torque recordings); rest: "drop" | "zero-coulomb"; min_velocity
+    [rad/s] (None: no rest mask); coulomb_sign: the coupling's Coulomb form (None: no coupling);
+    offsets: torque offsets OFFj identified; spring: "default" | "none" | "identify" |
+    "identify-k" | a table file; cutoff_hz (the one used, also when chosen on the data),
+    decimate_to_hz (None: no decimation), rate_hz (achieved), delay_s: torque lag compensated;
+    tip: the tip link of a URDF robot (None otherwise).
+    """
+
+    robot: str
+    robot_file: str | None
+    robot_file_sha256: str | None
+    toolkit_version: str
+    convention: str | None
+    gains: dict | None
+    rest: str
+    min_velocity: float | None
+    coulomb_sign: str | None
+    offsets: bool
+    spring: str
+    cutoff_hz: float
+    decimate_to_hz: float | None
+    rate_hz: float
+    delay_s: float
+    tip: str | None = None
+
+    @classmethod
+    def of(cls, robot: rx90sym.Robot, **fields: Any) -> "FitModel":
+        return cls(robot=robot.name, robot_file=robot.source or None,
+                   robot_file_sha256=robot_file_hash(robot), toolkit_version=toolkit_version(),
+                   coulomb_sign=robot.coupling.coulomb_sign if robot.coupling is not None else None,
+                   offsets=bool(robot.offsets),
+                   tip=robot.urdf.tip if getattr(robot, "urdf", None) is not None else None, **fields)
+
+    def to_json(self) -> dict[str, Any]:
+        return asdict(self)
+
+    to_dict = to_json
+
+    @classmethod
+    def from_json(cls, d: dict[str, Any], where: str = "fit file") -> "FitModel":
+        names = cls.__dataclass_fields__
+        required = [k for k, f in names.items() if f.default is MISSING]
+        missing = [k for k in required if k not in d]
+        if missing:
+            raise ValueError(f"{where}: 'model' lacks {', '.join(missing)} (written by an older version?)")
+        return cls(**{k: d[k] for k in names if k in d})
+
+    from_dict = from_json
+
+    def filtering(self) -> dict[str, Any]:
+        """Keyword arguments of predict/validate that reproduce the fit's processing."""
+        return {"cutoff": self.cutoff_hz, "decimate_to": self.decimate_to_hz,
+                "min_velocity": self.min_velocity, "delay": self.delay_s,
+                "spring": self.spring != "none", "rest": self.rest}
+
+    def check_robot(self, robot: rx90sym.Robot) -> str:
+        """A warning ('' if none) when ``robot`` is not the description the fit used."""
+        if robot.name != self.robot:
+            return f"the identification is of robot {self.robot!r}, not {robot.name!r}"
+        digest = robot_file_hash(robot)
+        if self.robot_file_sha256 and digest and digest != self.robot_file_sha256:
+            return (f"robot file {robot.source} changed since the identification "
+                    f"(sha256 {digest[:12]} vs {self.robot_file_sha256[:12]})")
+        return ""
+
+
+def read_fit_file(path: str | Path) -> dict[str, Any]:
+    """The parsed fit file, its layout checked (ValueError naming the file otherwise)."""
+    try:
+        data = json.loads(Path(path).read_text(encoding="utf-8"))
+    except OSError as exc:
+        raise ValueError(f"{path}: cannot read the fit file ({exc.strerror})") from None
+    except json.JSONDecodeError as exc:
+        raise ValueError(f"{path}: not valid JSON ({exc})") from None
+    if not isinstance(data, dict) or "parameters" not in data:
+        raise ValueError(f"{path}: not a fit file (no 'parameters')")
+    version = data.get("schema_version")
+    if version is None:
+        raise ValueError(f"{path}: a fit file without 'schema_version' (written before version "
+                         f"{SCHEMA_VERSION} of the format): identify again to write it in the current format")
+    if version != SCHEMA_VERSION:
+        raise ValueError(f"{path}: fit file schema_version {version!r} is not supported "
+                         f"(this version reads {SCHEMA_VERSION})")
+    if "model" not in data:
+        raise ValueError(f"{path}: no 'model' record")
+    return data
+
+
+def robot_of(model: FitModel, spec: str | None = None) -> rx90sym.Robot:
+    """The robot the identification used (``spec``, a name or file, overrides its file), with its
+    friction form, offsets and spring."""
+    source = spec or (model.robot_file if model.robot_file and Path(model.robot_file).is_file() else model.robot)
+    if model.spring in ("identify", "identify-k"):
+        raise ValueError(f"the identification identified its spring ({model.spring}): the robot cannot "
+                         "be rebuilt with it yet; validate within the identification instead")
+    tip = model.tip if str(source).lower().endswith(".urdf") else None
+    robot = rx90sym.load_robot(source, offsets=model.offsets, tip=tip)
+    if model.coulomb_sign is not None and robot.coupling is not None:
+        robot = robot.with_options(coupling=rx90sym.Coupling(robot.coupling.joints, model.coulomb_sign))
+    if model.spring == "none":
+        robot = robot.with_options(spring=None)
+    elif model.spring != "default":
+        from rx90sym.spring import read_spring_table
+
+        joint = robot.spring.joint if robot.spring is not None else 1
+        robot = robot.with_options(spring=rx90sym.Spring(joint=joint, table=read_spring_table(model.spring)))
+    return robot
+
+
+def gains_of(model: FitModel) -> DriveGains | None:
+    """The drive gains the identification applied to current recordings (None: torque recordings)."""
+    if model.gains is None:
+        return None
+    g = model.gains
+    std = None if g.get("std") is None else [np.nan if s is None else s for s in g["std"]]
+    return DriveGains(np.asarray(g["gains"], dtype=float), side=str(g.get("side", "joint")),
+                      current_offsets=g.get("current_offsets"), std=std, robot=str(g.get("robot", "")),
+                      source="fit file")

@@ -1,0 +1,288 @@
+"""One identification, from recordings to a saved fit file (paper sections II-B and III).
+
+:func:`fit` chains the steps (torque-delay estimate, observation matrix with one
+:class:`~identify.observation.processing.Processing`, eqs. 6-8; (weighted) least squares,
+eqs. 9-15; optionally the physically consistent fit) and returns a :class:`Fit` that predicts
+and validates with its own processing, bootstraps its σ, and saves itself; :func:`load_fit`
+reads the file back with its robot, gains and processing.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, replace
+from pathlib import Path
+from typing import Any, Sequence
+
+import numpy as np
+
+import rx90sym
+from rx90sym.files import write_json
+
+from identify.estimation.bootstrap import BLOCK_S, DRAWS, segment_bootstrap_std
+from identify.plausibility import Flag
+from identify.estimation.results import IdentificationResult
+from identify.fit_file import SCHEMA_VERSION, FitModel, gains_of, read_fit_file, robot_of
+from identify.io.gains import DriveGains
+from identify.observation.matrix import Observation, observation_matrix
+from identify.io.recordings import layout_summary
+from identify.observation.processing import DEFAULT_MIN_VELOCITY, Processing
+from identify.signal.delay import DelayEstimate, estimate_delay
+from identify.validation import Validation, predict
+
+__all__ = ["METHODS", "Bootstrap", "Fit", "fit", "load_fit"]
+
+METHODS = ("ols", "wls", "consistent")
+#: Segment bootstrap: block length [s] and number of draws (the library's one bootstrap).
+BOOTSTRAP_BLOCK_S = BLOCK_S
+BOOTSTRAP_DRAWS = DRAWS
+
+
+@dataclass(frozen=True, eq=False)
+class Bootstrap:
+    """Segment-bootstrap σ of each estimate: std (per parameter, its unit), block_s [s], draws, seed."""
+
+    std: np.ndarray
+    block_s: float
+    draws: int
+    seed: int
+
+    def to_json(self) -> dict[str, Any]:
+        return {"bootstrap_std": [float(v) for v in self.std],
+                "bootstrap": {"block_s": self.block_s, "draws": self.draws, "seed": self.seed}}
+
+    @classmethod
+    def from_json(cls, d: dict[str, Any]) -> "Bootstrap | None":
+        if d.get("bootstrap_std") is None:
+            return None
+        b = d["bootstrap"]
+        return cls(np.asarray(d["bootstrap_std"], dtype=float), float(b["block_s"]), int(b["draws"]),
+                   int(b["seed"]))
+
+    def table(self, res: IdentificationResult) -> str:
+        """σ of eq. 13 (white residuals) beside the segment-bootstrap σ, per parameter."""
+        width = max([len("Parameter")] + [len(n) for n in res.names])
+        lines = [f"{'Parameter':<{width}}  {'σ eq. 13':>10}  {'σ bootstrap':>11}  ratio"]
+        for n, s, b in zip(res.names, res.std, self.std):
+            ratio = b / s if s > 0 else float("nan")
+            lines.append(f"{n:<{width}}  {s:10.3g}  {b:11.3g}  {ratio:5.2f}")
+        return "\n".join(lines)
+
+
+@dataclass(frozen=True, eq=False)
+class Fit:
+    """One identification with what it was run with.
+
+    robot: the description fitted; result: the estimates; processing: as asked (cut-off None:
+    automatic); model: the robot record and the achieved processing (cut-off used, rate, delay);
+    base: the base parameters (columns) used; observation: W, Y and notes (None when loaded);
+    delay_estimate: the lag search (None when not run or loaded); delay_estimate_s [s];
+    spring: how the spring entered (JSON entry); bootstrap, essential, validation: None until
+    asked (:meth:`bootstrapped`, :meth:`with_essential`, :meth:`validated`); flags: the
+    plausibility warnings of the fit (identify.plausibility, :meth:`with_flags`); recordings: per
+    recording its samples, segments, samples bridged over lost packets and stale rows dropped
+    (:func:`identify.io.recordings.layout_summary`); choice: the cross-validated processing's
+    candidate table (:meth:`ProcessingChoice.to_dict`), None when the processing was given.
+    """
+
+    robot: rx90sym.Robot
+    result: IdentificationResult
+    processing: Processing
+    model: FitModel
+    base: Any
+    observation: Observation | None = None
+    delay_estimate: DelayEstimate | None = None
+    delay_estimate_s: float | None = None
+    spring: dict | None = None
+    bootstrap: Bootstrap | None = None
+    essential: IdentificationResult | None = None
+    validation: Validation | None = None
+    flags: tuple[Flag, ...] = ()
+    recordings: tuple[dict, ...] = ()
+    choice: dict | None = None
+
+    # ------------------------------------------------------------ what the fit used
+    @property
+    def delay(self) -> float:
+        return self.model.delay_s
+
+    @property
+    def cutoff(self) -> float:
+        return self.model.cutoff_hz
+
+    @property
+    def decimate_to(self) -> float | None:
+        return self.model.decimate_to_hz
+
+    @property
+    def min_velocity(self) -> float | None:
+        return self.model.min_velocity
+
+    @property
+    def rest(self) -> str:
+        return self.model.rest
+
+    @property
+    def gains(self) -> DriveGains | None:
+        return gains_of(self.model)
+
+    def filtering(self, spring: bool | None = None) -> dict[str, Any]:
+        """Keyword arguments of :func:`identify.predict` that reuse this fit's processing."""
+        return {"cutoff": self.cutoff, "decimate_to": self.decimate_to, "min_velocity": self.min_velocity,
+                "delay": self.delay, "spring": self.processing.spring if spring is None else spring,
+                "rest": self.rest}
+
+    # ------------------------------------------------------------ using it
+    def predict(self, recording: Any, result: IdentificationResult | None = None) -> Validation:
+        """Torques of ``recording`` predicted with this fit's parameters (or ``result``) and processing.
+        Where a joint rests the Coulomb term is 0, or the presliding state with that rest policy
+        (every sample is predicted, whatever the rest policy)."""
+        return predict(self.robot, result or self.result, recording, base=self.base, **self.filtering())
+
+    def validate(self, recording: Any) -> Validation:
+        """Cross-validation on a recording not used in the fit (with the essential parameters when
+        they were computed)."""
+        return self.predict(recording, self.essential)
+
+    def validated(self, recording: Any) -> "Fit":
+        """This fit with its validation on ``recording`` recorded (saved in the file)."""
+        return replace(self, validation=self.validate(recording))
+
+    def with_flags(self, flags: Sequence[Flag]) -> "Fit":
+        """This fit with its plausibility flags recorded (saved in the file's ``flags``)."""
+        return replace(self, flags=tuple(flags))
+
+    def with_essential(self) -> "Fit":
+        """This fit with its essential parameters (eqs. 16-17) computed."""
+        from identify.estimation.essential import essential_parameters
+
+        return replace(self, essential=essential_parameters(self.result))
+
+    def bootstrapped(self, seed: int = 0, draws: int = BOOTSTRAP_DRAWS, block_s: float = BOOTSTRAP_BLOCK_S) -> "Fit":
+        """This fit with the segment-bootstrap σ of each estimate (blocks of ``block_s`` s)."""
+        obs = self.observation
+        if obs is None:
+            raise ValueError("bootstrap needs the fit's observation matrix (not a fit loaded from a file)")
+        block = max(1, int(round(block_s * obs.rate)))
+        std = segment_bootstrap_std(obs.W, obs.Y, obs.joint, obs.samples, self.result.weights, block, draws, seed)
+        return replace(self, bootstrap=Bootstrap(std, block / obs.rate, draws, seed))
+
+    # ------------------------------------------------------------ the file
+    def to_json(self) -> dict[str, Any]:
+        """The fit file's content (keys of the former identification JSON kept, new ones added)."""
+        out = {"robot": self.model.robot, "method": self.result.method, **self.result.to_dict(),
+               "spring": self.spring}
+        if self.bootstrap is not None:
+            out.update(self.bootstrap.to_json())
+        out.update({"cutoff_hz": self.model.cutoff_hz, "decimate_to_hz": self.model.decimate_to_hz,
+                    "delay_estimate_s": self.delay_estimate_s, "model": self.model.to_json(),
+                    "essential": self.essential.to_dict() if self.essential is not None else {},
+                    "validation": self.validation.to_dict() if self.validation is not None else {},
+                    "schema_version": SCHEMA_VERSION, "processing": self.processing.to_json(),
+                    "flags": [f.to_json() for f in self.flags], "recordings": list(self.recordings),
+                    "processing_choice": self.choice})
+        return out
+
+    def save(self, path: str | Path) -> Path:
+        """Write the fit file atomically (nothing written on error). Returns the path."""
+        return write_json(path, self.to_json())
+
+    @classmethod
+    def load(cls, path: str | Path, robot: rx90sym.Robot | str | None = None) -> "Fit":
+        """The fit saved in ``path``, with its robot (rebuilt from its file, or ``robot``: a
+        description, name or file), gains and processing. It predicts; it cannot be refitted."""
+        data = read_fit_file(path)
+        try:
+            model = FitModel.from_json(data["model"], str(path))
+            processing = Processing.from_json(data.get("processing", {}), f"{path}: processing")
+            result = IdentificationResult.from_dict(data)
+            essential = IdentificationResult.from_dict(data["essential"]) if data.get("essential") else None
+            bootstrap = Bootstrap.from_json(data)
+            flags = tuple(Flag.from_json(f) for f in data.get("flags", []))
+        except (KeyError, TypeError, ValueError) as exc:
+            raise ValueError(f"{path}: {exc}".replace(f"{path}: {path}: ", f"{path}: ")) from None
+        rob = robot if isinstance(robot, rx90sym.Robot) else robot_of(model, robot)
+        # FS+ / FS- columns in the result: the fit used asymmetric Coulomb friction on those joints.
+        asymmetric = tuple(j for j in range(rob.n) if f"FSP{j + 1}" in result.names)
+        if asymmetric != tuple(rob.asymmetric_coulomb):
+            rob = rob.with_options(asymmetric_coulomb=asymmetric)
+        return cls(rob, result, processing, model, rx90sym.base_parameters(rob),
+                   delay_estimate_s=data.get("delay_estimate_s"), spring=data.get("spring"),
+                   bootstrap=bootstrap, essential=essential, flags=flags,
+                   recordings=tuple(data.get("recordings", [])), choice=data.get("processing_choice"))
+
+
+def load_fit(path: str | Path, robot: rx90sym.Robot | str | None = None) -> Fit:
+    """Read a fit file (:meth:`Fit.save`, ``rx90 identify --json``): see :meth:`Fit.load`."""
+    return Fit.load(path, robot)
+
+
+def _spring_label(robot: rx90sym.Robot, base: Any) -> str:
+    from identify.observation.spring_fit import SpringBase
+
+    if isinstance(base, SpringBase):
+        return "identify-k" if type(base.model).__name__ == "SpringStiffness" else "identify"
+    return "none" if robot.spring is None else "default"
+
+
+def fit(robot: rx90sym.Robot, recordings: Sequence[Any], processing: Processing | None = None,
+        method: str = "wls", *, base: Any = None, gains: DriveGains | None = None,
+        convention: str | None = None, spring_source: str | None = None,
+        observation: Observation | None = None, **consistent_options: Any) -> Fit:
+    """Identify the base parameters of ``robot`` from ``recordings``.
+
+    processing: the signal processing (None: the defaults, those of ``rx90 identify``);
+    method: "ols", "wls" (paper: each joint's rows weighted by 1/σ of its own residual) or
+    "consistent" (WLS data, physically consistent standard parameters through cvxpy; extra
+    keyword arguments go to identify.estimation.consistency.consistent_least_squares, e.g. prior,
+    prior_weight, total_mass, mass_bounds, com_boxes, solver); base: the columns (default: the
+    symbolic base parameters; a SpringBase identifies the spring too, with processing.spring
+    False). Recorded in the fit file for :func:`load_fit`: gains (already applied to current
+    recordings), convention (of the files; None: each file's header), spring_source ("default",
+    "none" or a table file; None: from the robot). observation: an already built observation
+    matrix (the recordings are then not read; no delay estimate).
+    """
+    if method not in METHODS:
+        raise ValueError(f"fit: method must be one of {METHODS}, got {method!r}")
+    p = processing if processing is not None else Processing()
+    recordings = list(recordings) if isinstance(recordings, (list, tuple)) else [recordings]
+    base = base if base is not None else rx90sym.base_parameters(robot)
+    options = p.observation_options()
+    choice = None
+    if p.cross_validate and observation is None:
+        from identify.observation.cross_validation import choose_processing
+
+        choice = choose_processing(robot, recordings, base=base, min_velocity=p.min_velocity, rest=p.rest,
+                                   spring=p.spring, default_decimate=p.decimate_to)
+        c = choice.chosen
+        options.update(cutoff=c.cutoff, decimate_to=c.decimate_to, rest=c.rest or p.rest,
+                       min_velocity=(p.min_velocity or DEFAULT_MIN_VELOCITY) if c.rest else None)
+    found = None
+    if observation is None and (p.estimate_delay or p.delay == "auto"):
+        found = estimate_delay(robot, recordings, base=base, **options)
+    lag = found.delay if p.delay == "auto" else float(p.delay)
+    obs = observation if observation is not None else observation_matrix(robot, recordings, delay=lag,
+                                                                         base=base, **options)
+    result = _solve(robot, obs, base, method, consistent_options)
+    model = FitModel.of(robot, convention=convention, gains=gains.to_dict() if gains is not None else None,
+                        rest=options["rest"], min_velocity=options["min_velocity"],
+                        spring=spring_source or _spring_label(robot, base),
+                        cutoff_hz=obs.cutoffs[0], decimate_to_hz=options["decimate_to"], rate_hz=obs.rate, delay_s=lag)
+    from identify.observation.spring_fit import SpringBase, spring_summary
+
+    spring = spring_summary(robot, base if isinstance(base, SpringBase) else None, result, recordings)[0]
+    return Fit(robot, result, p, model, base, obs, found, found.delay if found is not None else None, spring,
+               recordings=tuple(layout_summary(r) for r in recordings if hasattr(r, "measured_mask")),
+               choice=choice.to_dict() if choice is not None else None)
+
+
+def _solve(robot: rx90sym.Robot, obs: Observation, base: Any, method: str,
+           consistent_options: dict[str, Any]) -> IdentificationResult:
+    from identify.estimation.least_squares import weighted_least_squares
+
+    result = weighted_least_squares(obs.W, obs.Y, obs.joint, obs.names, weighted=method != "ols")
+    if method != "consistent":
+        if consistent_options:
+            raise ValueError(f"fit: options {sorted(consistent_options)} are for method 'consistent'")
+        return result
+    from identify.estimation.consistent_fit import consistent_fit
+
+    return consistent_fit(robot, result, base, **consistent_options)

@@ -1,0 +1,277 @@
+"""Plausibility of inputs and results: refuse what cannot be right, flag what is doubtful.
+
+Each check returns :class:`Flag` objects; severity ``"error"`` stops a run (the application exits
+2 with the message, nothing written), ``"warning"`` is printed and kept in the JSON and the report.
+
+Errors (the likely cause is named):
+
+- ``gains_negative`` — most drive gains (more than half) are negative: the empty and loaded
+  runs are swapped (a payload "removed" gives negative gains; the wrist motor of a coupled wrist,
+  which the payload hardly loads, may keep its sign);
+- ``payload_mass_negative`` — the payload mass is below 0 by more than 3 sigma: empty and loaded
+  swapped (or gains of the wrong sign);
+- ``torque_scale`` — the torques are far from the robot's torque limits: every joint's peak below
+  :data:`TORQUE_LOW` of its limit (currents turned into torques with gains in A/(N m), not
+  N m/A, or torques in kN m) or some joint's peak above :data:`TORQUE_HIGH` times it (mA, N mm);
+- ``model_unexplained`` — a joint whose residual RMS is more than :data:`RESIDUAL_SHARE` of its
+  torque RMS: the model does not explain it (wrong robot, swapped joints, wrong units or sign).
+  Measured: good fits leave 5-15 % (TX40), 7-24 % (UR10e, 14-harmonic run); the UR10e run with
+  q1 and q2 swapped leaves 94 %, 75 % and 59 % on joints 1-3. A joint whose torque RMS is below
+  :data:`RESIDUAL_FLOOR` of its torque limit is not judged (its torque may be mostly noise).
+
+- ``static_gravity`` — at rest, a joint's torque is not the gravity of the robot's nominal
+  parameters (``[nominal]``) within a factor :data:`GRAVITY_RATIO` (or of the opposite sign).
+
+Warnings:
+
+- ``gain_negative`` — a negative gain (half of the gains at most): that motor's current sign may be
+  inverted (the gain then makes the right torque: the run goes on);
+- ``gain_uncertain`` — a gain whose relative sigma is above the flag threshold;
+- ``gain_unidentified`` (error) — a gain of the wrong sign whose sigma is larger than itself is
+  never returned: it is not identified; fix it from a datasheet;
+- ``estimate_not_physical`` — a plain (ungrouped) base parameter that physics wants >= 0 (a mass,
+  a diagonal inertia, a rotor inertia, a friction coefficient) with value + 3 sigma < 0;
+- ``consistency_margin_negative`` — no physical standard parameters reproduce the estimate;
+- ``payload_inertia_not_physical`` — the payload's pseudo-inertia has a negative eigenvalue.
+"""
+from __future__ import annotations
+
+import re
+from dataclasses import dataclass
+from typing import Sequence
+
+import numpy as np
+
+import rx90sym
+
+__all__ = ["Flag", "PlausibilityError", "raise_errors", "gain_flags", "payload_flags", "torque_scale_flags",
+           "residual_flags", "estimate_flags", "margin_flags", "static_gravity_flags", "TORQUE_LOW", "TORQUE_HIGH", "RESIDUAL_SHARE", "RESIDUAL_FLOOR",
+           "SIGMAS"]
+
+#: Every joint's torque peak below this fraction of its limit: torques of the wrong scale.
+TORQUE_LOW = 0.01
+#: Some joint's torque peak above this many times its limit: torques of the wrong scale.
+TORQUE_HIGH = 10.0
+#: A joint whose residual RMS exceeds this fraction of its torque RMS is not explained.
+RESIDUAL_SHARE = 0.5
+#: A joint whose torque RMS is below this fraction of its torque limit is not judged by
+#: RESIDUAL_SHARE: its torque may be mostly noise (the UR10 twin's wrist: ~1e-3 of the limits).
+RESIDUAL_FLOOR = 0.01
+#: Rest for the static check: every joint slower than this, rad/s; at least REST_SAMPLES samples.
+REST_SPEED = 0.01
+REST_SAMPLES = 25
+#: Joints judged by the static check: nominal gravity RMS at least this fraction of the limit.
+GRAVITY_SHARE = 0.1
+#: Measured / nominal gravity at rest outside [1/GRAVITY_RATIO, GRAVITY_RATIO] is refused.
+GRAVITY_RATIO = 3.0
+#: How many sigma below zero a non-negative quantity may lie before it is flagged.
+SIGMAS = 3.0
+# Plain parameters that physics wants >= 0: masses, diagonal inertias, rotor inertias, viscous
+# and (symmetric) Coulomb friction, the coupled motor's friction.
+_NONNEGATIVE = re.compile(r"^(M|XX|YY|ZZ|IA|FV|FS|FVM|FSM)\d+$")
+
+
+@dataclass(frozen=True)
+class Flag:
+    """One plausibility finding.
+
+    code: stable identifier (module docstring); severity: "error" or "warning"; message: what is
+    wrong, with the numbers; action: what to do; joint: 1-based joint or None; parameter: the
+    parameter concerned or None.
+    """
+
+    code: str
+    severity: str
+    message: str
+    action: str
+    joint: int | None = None
+    parameter: str | None = None
+
+    def __post_init__(self) -> None:
+        if self.severity not in ("error", "warning"):
+            raise ValueError(f"Flag severity must be 'error' or 'warning', got {self.severity!r}")
+
+    def to_json(self) -> dict:
+        return {"code": self.code, "severity": self.severity, "joint": self.joint, "parameter": self.parameter,
+                "message": self.message, "action": self.action}
+
+    @classmethod
+    def from_json(cls, d: dict) -> "Flag":
+        """The flag of :meth:`to_json` (a fit file's ``flags``)."""
+        return cls(str(d["code"]), str(d["severity"]), str(d["message"]), str(d["action"]),
+                   None if d.get("joint") is None else int(d["joint"]), d.get("parameter"))
+
+    def line(self) -> str:
+        return f"{self.message}: {self.action}"
+
+
+class PlausibilityError(ValueError):
+    """Inputs or results that cannot be right; ``flags`` holds the errors (the first in the message)."""
+
+    def __init__(self, flags: Sequence[Flag]) -> None:
+        self.flags = tuple(flags)
+        super().__init__("; ".join(f.line() for f in self.flags))
+
+
+def raise_errors(flags: Sequence[Flag]) -> list[Flag]:
+    """Raise PlausibilityError when any flag is an error; return the warnings otherwise."""
+    errors = [f for f in flags if f.severity == "error"]
+    if errors:
+        raise PlausibilityError(errors)
+    return list(flags)
+
+
+def gain_flags(gains: np.ndarray, std: np.ndarray, fixed: Sequence[int] = (), rel_std_pct: np.ndarray | None = None,
+               flag_pct: float | None = None) -> list[Flag]:
+    """Drive gains [N m/A] and their sigma: all negative, one negative, unidentified, uncertain.
+
+    fixed: 1-based joints set from a datasheet (not judged); rel_std_pct, flag_pct: relative sigma
+    and its flag threshold, % (None: no uncertainty flag).
+    """
+    k, s = np.asarray(gains, dtype=float), np.asarray(std, dtype=float)
+    free = [j for j in range(k.size) if j + 1 not in fixed]
+    negative = [j for j in free if k[j] < 0]
+    if len(negative) > len(free) / 2:
+        values = ", ".join(f"{k[j]:.4g}" for j in free)
+        return [Flag("gains_negative", "error", f"{len(negative)} of {len(free)} drive gains are negative "
+                     f"({values} N m/A)",
+                     "were they identified with the empty and loaded recordings swapped? (the payload must be on in the loaded runs)")]
+    flags = []
+    for j in free:
+        if k[j] < 0 and not abs(k[j]) > s[j]:
+            flags.append(Flag("gain_unidentified", "error", f"the gain of joint {j + 1} is {k[j]:.4g} ± {s[j]:.3g} "
+                              "N m/A: negative and smaller than its sigma, it is not identified", "fix it from a "
+                              "datasheet (or record motions that load this joint)", joint=j + 1))
+        elif k[j] < 0:
+            flags.append(Flag("gain_negative", "warning", f"the gain of joint {j + 1} is negative ({k[j]:.4g} N m/A)",
+                              "check the sign of that motor's current (a current sign can be inverted)", joint=j + 1))
+        elif rel_std_pct is not None and flag_pct is not None and not rel_std_pct[j] <= flag_pct:
+            flags.append(Flag("gain_uncertain", "warning", f"the gain of joint {j + 1} has a relative sigma of "
+                              f"{rel_std_pct[j]:.3g} % (above {flag_pct:g} %)", "fix it from a datasheet, or "
+                              "record motions where the payload's mass loads this joint", joint=j + 1))
+    return flags
+
+
+def payload_flags(names: Sequence[str], values: np.ndarray, std: np.ndarray) -> list[Flag]:
+    """Payload (XXc..Mc, SI): a negative mass (error), a non-physical inertia (warning)."""
+    p = dict(zip(names, np.asarray(values, dtype=float)))
+    s = dict(zip(names, np.asarray(std, dtype=float)))
+    flags = []
+    if "Mc" in p and p["Mc"] + SIGMAS * np.nan_to_num(s.get("Mc", 0.0)) < 0:
+        flags.append(Flag("payload_mass_negative", "error", f"the payload mass is negative ({p['Mc']:.4g} ± "
+                          f"{s['Mc']:.3g} kg)", "are the empty and loaded recordings swapped? (or the drive "
+                          "gains of the wrong sign)", parameter="Mc"))
+    fields = ("XXc", "XYc", "XZc", "YYc", "YZc", "ZZc", "MXc", "MYc", "MZc", "Mc")
+    if all(f in p for f in fields):
+        from identify.estimation.consistency.lmi import pseudo_inertia
+
+        smallest = float(np.linalg.eigvalsh(pseudo_inertia([p[f] for f in fields])).min())
+        if smallest < 0:
+            flags.append(Flag("payload_inertia_not_physical", "warning", f"the payload's pseudo-inertia has a "
+                              f"negative eigenvalue ({smallest:.3g} kg m^2): no rigid body has these "
+                              "parameters", "use the constrained payload fit"))
+    return flags
+
+
+def torque_scale_flags(torques: Sequence[np.ndarray], robot: rx90sym.Robot, what: str = "torques") -> list[Flag]:
+    """Joint torques (N m, (N, n) arrays) against the robot's torque limits [limits] torque."""
+    limit = np.asarray(robot.limits.tau_max, dtype=float)
+    known = np.isfinite(limit) & (limit > 0)
+    if not known.any() or not torques:
+        return []
+    peak = np.max([np.max(np.abs(np.asarray(t, dtype=float)), axis=0) for t in torques], axis=0)
+    ratio = peak[known] / limit[known]
+    joints = np.flatnonzero(known)
+    if np.all(ratio < TORQUE_LOW):
+        j = int(joints[np.argmax(ratio)])
+        return [Flag("torque_scale", "error", f"the {what} are far below robot {robot.name}'s torque limits (largest "
+                     f"peak {peak[j]:.3g} N m on joint {j + 1}, {100 * peak[j] / limit[j]:.2g} % of its "
+                     f"{limit[j]:g} N m)", "are the gains in A/(N m) instead of N m/A, or the torques in "
+                     "another unit?")]
+    if np.any(ratio > TORQUE_HIGH):
+        j = int(joints[np.argmax(ratio)])
+        return [Flag("torque_scale", "error", f"the {what} are far above robot {robot.name}'s torque limits (joint "
+                     f"{j + 1}: peak {peak[j]:.3g} N m, {peak[j] / limit[j]:.3g} x its {limit[j]:g} N m)",
+                     "are the gains or the torques in another unit (mA, N mm)?", joint=j + 1)]
+    return []
+
+
+def residual_flags(residual_rms: np.ndarray, torque_rms: np.ndarray, torque_limit: np.ndarray | None = None
+                   ) -> list[Flag]:
+    """Joints the model does not explain: residual RMS > RESIDUAL_SHARE x torque RMS (both N m).
+
+    torque_limit: (n,) the robot's torque limits, N m: a joint whose torque RMS is below
+    RESIDUAL_FLOOR of its limit is not judged (its torque may be mostly noise).
+    """
+    rms = np.asarray(torque_rms, dtype=float)
+    share = np.asarray(residual_rms, dtype=float) / rms
+    judged = np.ones(share.size, bool) if torque_limit is None else ~(rms < RESIDUAL_FLOOR * np.asarray(torque_limit))
+    bad = [j for j in range(share.size) if judged[j] and share[j] > RESIDUAL_SHARE]
+    if not bad:
+        return []
+    text = ", ".join(f"joint {j + 1} {100 * share[j]:.0f} %" for j in bad)
+    return [Flag("model_unexplained", "error", f"the model does not explain the torques: residual RMS / torque RMS "
+                 f"{text} (at most {100 * RESIDUAL_SHARE:.0f} %)", "check the robot (is it the one recorded?), the "
+                 "joint order (swapped columns), the units (rad, N m) and the torque signs", joint=bad[0] + 1)]
+
+
+def estimate_flags(names: Sequence[str], values: np.ndarray, std: np.ndarray) -> list[Flag]:
+    """Plain parameters that physics wants >= 0 with value + SIGMAS sigma < 0 (grouped base
+    parameters, e.g. ZZ1R, are sums with signs and are not judged)."""
+    flags = []
+    for n, v, s in zip(names, np.asarray(values, dtype=float), np.asarray(std, dtype=float)):
+        if _NONNEGATIVE.match(n) and v + SIGMAS * np.nan_to_num(s) < 0:
+            flags.append(Flag("estimate_not_physical", "warning", f"{n} = {v:.4g} ± {s:.3g} cannot be physical "
+                              f"(value + {SIGMAS:g} sigma < 0)", "use the physically consistent fit",
+                              parameter=n))
+    return flags
+
+
+def margin_flags(margin: float) -> list[Flag]:
+    """A negative consistency margin (identify.estimation.consistency.consistency_margin)."""
+    if margin >= 0:
+        return []
+    return [Flag("consistency_margin_negative", "warning", f"no physical standard parameters reproduce the "
+                 f"estimate (consistency margin {margin:.3g})", "use the physically consistent fit")]
+
+
+def static_gravity_flags(recordings: Sequence, robot: rx90sym.Robot, nominal: dict | None) -> list[Flag]:
+    """Torques at rest against the gravity of the robot's nominal parameters ([nominal] table).
+
+    At rest (every joint slower than REST_SPEED) the torque is gravity (and the spring) plus at
+    most the Coulomb friction; on each joint whose nominal gravity RMS is at least GRAVITY_SHARE of
+    its torque limit, the least-squares scale s of measured on nominal must lie in
+    [1/GRAVITY_RATIO, GRAVITY_RATIO]; s < 0 is a wrong sign. Measured on the UR10e at rest
+    (ur-20_01_17-p4.csv, the source's gains): s = 0.875 on joint 3 (the only joint judged).
+    No nominal parameters (None): no check.
+    """
+    if not nominal or not recordings:
+        return []
+    chi = robot.parameter_vector({k: v for k, v in nominal.items() if k in robot.parameter_names
+                                  and not k.startswith(("FS", "FV", "OFF"))}, strict=False)
+    Qs, Ts = [], []
+    for rec in recordings:
+        if rec.tau is None or len(rec.t) < 3:
+            continue
+        dq = rec.dq if rec.dq is not None else np.gradient(np.asarray(rec.q), np.asarray(rec.t), axis=0)
+        rest = np.all(np.abs(dq) < REST_SPEED, axis=1)
+        Qs.append(np.asarray(rec.q)[rest])
+        Ts.append(np.asarray(rec.tau)[rest])
+    Q = np.concatenate(Qs) if Qs else np.zeros((0, robot.n))
+    if len(Q) < REST_SAMPLES:
+        return []
+    Z = np.zeros_like(Q)
+    g = robot.regressor_batch(Q, Z, Z) @ chi
+    if robot.spring is not None:
+        g = g + robot.spring_torque_batch(Q)[:, :, 0]
+    tau = np.concatenate(Ts)
+    judged = np.sqrt(np.mean(g ** 2, axis=0)) >= GRAVITY_SHARE * np.asarray(robot.limits.tau_max, dtype=float)
+    flags = []
+    for j in np.flatnonzero(judged):
+        s = float(tau[:, j] @ g[:, j] / (g[:, j] @ g[:, j]))
+        if not 1 / GRAVITY_RATIO <= s <= GRAVITY_RATIO:
+            cause = "the torque sign" if s < 0 else "the robot, the units or the gains"
+            flags.append(Flag("static_gravity", "error", f"at rest, joint {j + 1}'s torque is {s:.3g} x the gravity of "
+                              f"robot {robot.name}'s nominal parameters ({len(Q)} samples at rest; expected "
+                              f"{1 / GRAVITY_RATIO:.2g}..{GRAVITY_RATIO:g})", f"check {cause}", joint=int(j) + 1))
+    return flags

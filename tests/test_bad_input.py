@@ -1,0 +1,267 @@
+"""Bad input, as new users give it (issue 20): each mistake exits 2 naming its cause with nothing
+written, or (the documented doubtful cases) exits 0 with a warning line and a JSON flag.
+
+Inputs: one short twin motion of the RX90 (10 s, quantised), run empty and with the payload of
+Table 4, recorded as torques and as currents through known joint-side gains of 10 N m/A; the
+mistakes are made on copies of these files. The commands run in-process (rx90's main).
+"""
+from __future__ import annotations
+
+import dataclasses
+import json
+import warnings
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import rx90sym
+from identify.app.cli import main
+from identify.io.recordings import write_recording
+from identify.plausibility import (RESIDUAL_SHARE, Flag, estimate_flags, gain_flags, payload_flags,
+                                   residual_flags, static_gravity_flags, torque_scale_flags)
+from rx90sym.twin import CurrentSensor
+
+from motions import multisine
+
+DURATION = 10.0
+GAIN = 10.0  # N m/A, joint side (the UR10e's order of magnitude)
+SENSOR = CurrentSensor((GAIN,) * 6, "joint", noise=0.01)
+
+
+@pytest.fixture(scope="module")
+def files(tmp_path_factory, rx90):
+    """Folder of good and bad recordings and logs (names in the dict)."""
+    d = tmp_path_factory.mktemp("bad")
+    f = multisine(rx90, 3, duration=DURATION)
+    sim = rx90sym.twin.simulate
+    e = sim(rx90, f, duration=DURATION, noise="quantised", seed=1)
+    l_ = sim(rx90, f, duration=DURATION, noise="quantised", seed=2, payload="tables_4")
+    ei = sim(rx90, f, duration=DURATION, noise="quantised", seed=1, currents=SENSOR)
+    li = sim(rx90, f, duration=DURATION, noise="quantised", seed=2, payload="tables_4", currents=SENSOR)
+    out = {}
+
+    def put(name: str, rec) -> None:
+        write_recording(d / name, rec, rx90)
+        out[name] = d / name
+
+    put("empty.csv", e)
+    put("loaded.csv", l_)
+    put("empty_i.csv", ei)
+    # Motor 6's current logged with the opposite sign: its gain is -10 N m/A, and right.
+    inverted = CurrentSensor((GAIN,) * 5 + (-GAIN,), "joint", noise=0.01)
+    put("inverted6.csv", sim(rx90, f, duration=DURATION, noise="quantised", seed=1, currents=inverted))
+    put("loaded_i.csv", li)
+    put("swapped_q1_q4.csv", dataclasses.replace(e, q=e.q[:, [3, 1, 2, 0, 4, 5]]))
+    put("degrees.csv", dataclasses.replace(e, q=np.rad2deg(e.q)))
+    put("small_torques.csv", dataclasses.replace(e, tau=e.tau / 100))
+    tau = e.tau.copy()
+    tau[:, 1] *= -1
+    put("sign2.csv", dataclasses.replace(e, tau=tau))
+    # A recording that names no robot (no '# robot:' line).
+    text = (d / "empty.csv").read_text().splitlines()
+    (d / "anonymous.csv").write_text("\n".join(x for x in text if not x.startswith("# robot")) + "\n")
+    out["anonymous.csv"] = d / "anonymous.csv"
+    # Controller logs: t, q1..q6 (controller angles), qd1..qd6, tau1..tau6.
+    t, q, qd, _ = (np.asarray(a) for a in (e.t, *f(e.t)))
+    qc = np.asarray(rx90.to_staubli(e.q))
+    for name, cols in (("log.csv", (qc, qd)), ("log_swapped.csv", (qd, qc)), ("log_degrees.csv", (np.rad2deg(qc), np.rad2deg(qd)))):
+        np.savetxt(d / name, np.column_stack([t, *cols, e.tau]), delimiter=",", fmt="%.9g")
+        out[name] = d / name
+    lines = (d / "log.csv").read_text().splitlines()
+    lines[100] = lines[100].rsplit(",", 2)[0]  # a truncated row
+    (d / "log_corrupt.csv").write_text("\n".join(lines) + "\n")
+    out["log_corrupt.csv"] = d / "log_corrupt.csv"
+    return out
+
+
+def rx90_cmd(capsys, *args) -> tuple[int, str, str]:
+    """Run ``rx90 ARGS`` in-process: (exit code, stdout, stderr)."""
+    with warnings.catch_warnings():
+        warnings.simplefilter("always")  # the command prints warnings as lines (tests make them errors)
+        code = main([str(a) for a in args])
+    out = capsys.readouterr()
+    return code, out.out, out.err
+
+
+def refused(capsys, out: Path, *args) -> str:
+    """The command exits 2 with one error line and writes nothing; returns that line."""
+    code, _, err = rx90_cmd(capsys, *args)
+    errors = [x for x in err.splitlines() if ": error: " in x]
+    assert code == 2 and len(errors) == 1, err
+    assert not out.exists(), f"{out} written by a refused command"
+    return errors[0]
+
+
+LOG_COLUMNS = "t,q1..q6,qd1..qd6,tau1..tau6"
+
+
+# --- 1. no silent default robot ----------------------------------------------------------------
+
+def test_convert_needs_a_robot(files, tmp_path, capsys):
+    out = tmp_path / "rec.csv"
+    msg = refused(capsys, out, "convert", files["log.csv"], "--columns", LOG_COLUMNS, "--out", out)
+    assert "convert needs --robot" in msg
+
+
+def test_identify_refuses_a_recording_that_names_no_robot(files, tmp_path, capsys):
+    out = tmp_path / "id.json"
+    msg = refused(capsys, out, "identify", files["anonymous.csv"], "--json", out)
+    assert "no robot" in msg and "--robot" in msg
+
+
+@pytest.mark.parametrize("command", ["gains", "payload"])
+def test_gains_and_payload_take_the_robot_from_the_header_and_print_it(files, tmp_path, capsys, command):
+    out = tmp_path / "out.json"
+    extra = ("--mass", 1.0, "--robot", "tx40") if command == "gains" else ("--method", 3, "--robot", "tx40")
+    msg = refused(capsys, out, command, "--empty", files["empty_i.csv"], "--loaded", files["loaded_i.csv"],
+                  *extra, "--json", out)
+    assert "recorded on robot 'rx90'" in msg  # a recording of another robot (earlier check, kept)
+    _, _, err = rx90_cmd(capsys, "payload", "--method", 3, "--empty", files["empty.csv"], "--loaded",
+                         files["loaded.csv"])
+    assert "robot rx90 (" in err and "rx90.toml; 6 joints; named by the recordings" in err
+
+
+def test_a_recording_with_too_few_joints_for_the_robot_is_refused(files, tmp_path, capsys):
+    out = tmp_path / "id.json"
+    msg = refused(capsys, out, "identify", files["anonymous.csv"], "--robot", "panda", "--json", out)
+    assert "'q7' is missing" in msg
+
+
+# --- 2. plausibility: errors --------------------------------------------------------------------
+
+def test_gains_from_swapped_runs_are_refused(files, tmp_path, capsys):
+    out = tmp_path / "g.json"
+    msg = refused(capsys, out, "gains", "--empty", files["loaded_i.csv"], "--loaded", files["empty_i.csv"],
+                  "--mass", rx90sym.load_payload("tables_4")["Mc"], "--json", out)
+    assert "drive gains are negative" in msg and "swapped" in msg
+
+
+def test_negative_payload_mass_is_refused(files, tmp_path, capsys):
+    out = tmp_path / "p.json"
+    msg = refused(capsys, out, "payload", "--method", 3, "--empty", files["loaded.csv"], "--loaded",
+                  files["empty.csv"], "--json", out)
+    assert "payload mass is negative" in msg and "swapped" in msg
+
+
+@pytest.mark.parametrize("case", ["inverse gains", "torques / 100"])
+def test_torques_far_below_the_limits_are_refused(files, tmp_path, capsys, case):
+    out = tmp_path / "id.json"
+    args = ((files["empty_i.csv"], "--gains", ",".join([str(1 / GAIN)] * 6)) if case == "inverse gains"
+            else (files["small_torques.csv"],))
+    msg = refused(capsys, out, "identify", *args, "--json", out)
+    assert "far below robot rx90's torque limits" in msg and "A/(N m)" in msg
+
+
+def test_swapped_joints_are_not_explained_by_the_model(files, tmp_path, capsys):
+    out = tmp_path / "id.json"
+    msg = refused(capsys, out, "identify", files["swapped_q1_q4.csv"], "--json", out)
+    assert "does not explain" in msg and "joint 1" in msg and "joint 4" in msg and "swapped" in msg
+
+
+def test_positions_in_degrees_are_named(files, tmp_path, capsys):
+    out = tmp_path / "id.json"
+    assert "looks like degrees" in refused(capsys, out, "identify", files["degrees.csv"], "--json", out)
+    rec = tmp_path / "rec.csv"
+    msg = refused(capsys, rec, "convert", files["log_degrees.csv"], "--robot", "rx90", "--no-header",
+                  "--columns", LOG_COLUMNS, "--out", rec)
+    assert "look like degrees" in msg and "corrupt" not in msg
+
+
+def test_swapped_position_and_velocity_groups_are_named(files, tmp_path, capsys):
+    rec = tmp_path / "rec.csv"
+    msg = refused(capsys, rec, "convert", files["log_swapped.csv"], "--robot", "rx90", "--no-header",
+                  "--columns", LOG_COLUMNS, "--out", rec)
+    assert "position and velocity groups look swapped" in msg
+
+
+def test_earlier_checks_still_name_a_truncated_row(files, tmp_path, capsys):
+    rec = tmp_path / "rec.csv"
+    msg = refused(capsys, rec, "convert", files["log_corrupt.csv"], "--robot", "rx90", "--no-header",
+                  "--columns", LOG_COLUMNS, "--out", rec)
+    assert "line 101" in msg
+    code, out, _ = rx90_cmd(capsys, "convert", files["log.csv"], "--robot", "rx90", "--no-header", "--columns",
+                            LOG_COLUMNS, "--out", rec)
+    assert code == 0 and rec.exists(), out  # the clean log converts
+
+
+# --- 2. plausibility: warnings and flags (exit 0) ----------------------------------------------
+
+def test_one_negative_gain_is_a_warning_naming_the_joint(files, tmp_path, capsys):
+    out = tmp_path / "id.json"
+    gains = ",".join([str(GAIN)] * 5 + [str(-GAIN)])
+    code, stdout, err = rx90_cmd(capsys, "identify", files["inverted6.csv"], "--gains", gains, "--json", out)
+    assert code == 0, err
+    assert "warning: the gain of joint 6 is negative" in err
+    flags = json.loads(out.read_text())["flags"]
+    assert {"code": "gain_negative", "joint": 6} in [{k: f[k] for k in ("code", "joint")} for f in flags]
+
+
+def test_a_non_physical_estimate_is_flagged_in_table_and_json(files, tmp_path, capsys):
+    out = tmp_path / "id.json"
+    code, stdout, err = rx90_cmd(capsys, "identify", files["sign2.csv"], "--json", out)
+    assert code == 0, err
+    assert "flag [estimate_not_physical]: FS2" in stdout and "--method consistent" in stdout
+    flags = json.loads(out.read_text())["flags"]
+    assert any(f["code"] == "estimate_not_physical" and f["parameter"] == "FS2" for f in flags)
+
+
+# --- the library checks on their own ------------------------------------------------------------
+
+def test_gain_flags():
+    k, s = np.array([10.0, -9.0, 10.0, -0.5, 10.0]), np.array([0.1, 0.1, 0.5, 0.8, 0.1])
+    flags = gain_flags(k, s, fixed=(5,), rel_std_pct=100 * s / np.abs(k), flag_pct=1.5)
+    assert [(f.code, f.joint, f.severity) for f in flags] == [
+        ("gain_negative", 2, "warning"), ("gain_uncertain", 3, "warning"), ("gain_unidentified", 4, "error")]
+    assert gain_flags(-np.abs(k), s)[0].code == "gains_negative"
+    assert gain_flags(np.array([-1.0, -1, 1, 1]), np.full(4, 0.01))[0].code == "gain_negative"  # half: warnings
+    assert set(flags[0].to_json()) == {"code", "severity", "joint", "parameter", "message", "action"}
+    with pytest.raises(dataclasses.FrozenInstanceError):
+        flags[0].code = "x"  # type: ignore[misc]
+    with pytest.raises(ValueError):
+        Flag("x", "fatal", "m", "a")
+
+
+def test_payload_and_estimate_flags():
+    names = ("XXc", "XYc", "XZc", "YYc", "YZc", "ZZc", "MXc", "MYc", "MZc", "Mc")
+    body = np.array([0.02, 0, 0, 0.02, 0, 0.01, 0.01, 0, 0.05, 2.0])
+    assert payload_flags(names, body, np.full(10, 1e-3)) == []
+    bad = body.copy()
+    bad[3] = -0.01  # YYc < 0: a negative eigenvalue of the pseudo-inertia
+    assert [f.code for f in payload_flags(names, bad, np.full(10, 1e-3))] == ["payload_inertia_not_physical"]
+    neg = -body
+    assert "payload_mass_negative" in [f.code for f in payload_flags(names, neg, np.full(10, 1e-3))]
+    # Plain parameters judged, grouped ones (ZZ1R) and signed ones (MX2) never.
+    flags = estimate_flags(("ZZ1R", "MX2", "FS3", "FV3", "IA4", "M6"), np.array([-5, -5, -1.0, -1.0, 0.1, -0.1]),
+                           np.array([0.1, 0.1, 0.2, 0.5, 0.1, 0.1]))
+    assert [f.parameter for f in flags] == ["FS3"]  # FV3 + 3 sigma > 0; M6 + 3 sigma > 0
+
+
+def test_torque_scale_and_residual_flags(rx90):
+    rng = np.random.default_rng(0)
+    tau = rng.normal(size=(200, 6)) * rx90.limits.tau_max * 0.2
+    assert torque_scale_flags([tau], rx90) == []
+    assert torque_scale_flags([tau / 100], rx90)[0].code == "torque_scale"
+    assert torque_scale_flags([tau * 100], rx90)[0].code == "torque_scale"
+    rms = np.ones(6)
+    assert residual_flags(rms * RESIDUAL_SHARE * 0.9, rms) == []
+    flag = residual_flags(rms * [0.2, 0.9, 0.2, 0.2, 0.2, 0.7], rms)[0]
+    assert flag.joint == 2 and "joint 6 70 %" in flag.message
+    limit = np.full(6, 100.0)  # joint 2's torque RMS (1 N m) is 1 % of it: judged; at 0.5 %, not
+    assert residual_flags(rms * [0.2, 0.9, 0.2, 0.2, 0.2, 0.2], rms, limit)[0].joint == 2
+    assert residual_flags(rms * [0.2, 0.9, 0.2, 0.2, 0.2, 0.2], rms, 2 * limit) == []
+
+
+def test_static_torques_are_checked_against_the_nominal_gravity(rx90):
+    """At rest, the twin's torques are the gravity of its true parameters: within the nominal
+    table's factor; joint 2's torque negated is refused, a robot without nominal table not judged."""
+    t = np.arange(250) / 250.0
+    q = np.tile(np.array([0.3, -1.0, 2.0, 0.2, 0.8, 0.1]), (t.size, 1))
+    rest = rx90sym.twin.simulate(rx90, (t, q, 0 * q, 0 * q), noise="quantised", seed=0)
+    nominal = rx90sym.nominal_parameters(rx90)
+    assert static_gravity_flags([rest], rx90, nominal) == []
+    tau = rest.tau.copy()
+    tau[:, 1] *= -1
+    flags = static_gravity_flags([dataclasses.replace(rest, tau=tau)], rx90, nominal)
+    assert [(f.code, f.joint) for f in flags] == [("static_gravity", 2)] and "sign" in flags[0].action
+    assert static_gravity_flags([dataclasses.replace(rest, tau=tau)], rx90, None) == []

@@ -1,0 +1,132 @@
+"""One processing record, one fit object and its file: the library and the command give the same
+numbers, the file reads back with its robot and processing, and a foreign file is refused."""
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+import warnings
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import identify
+import rx90sym
+from motions import multisine
+
+RX90 = str(Path(sys.executable).parent / "rx90")
+TIMING = ()  # keys that may differ between two identical runs (none are written today)
+
+
+def cli(*args: str, cwd: Path) -> subprocess.CompletedProcess:
+    proc = subprocess.run([RX90, *args], capture_output=True, text=True, cwd=cwd, timeout=600)
+    assert proc.returncode == 0, proc.stderr
+    return proc
+
+
+@pytest.fixture(scope="module")
+def runs(tmp_path_factory, rx90):
+    """Two twin recordings written as a user's CSV files (fit, held out)."""
+    d = tmp_path_factory.mktemp("fitfile")
+    for name, seed in (("fit.csv", 31), ("held.csv", 32)):
+        rec = rx90sym.twin.simulate(rx90, multisine(rx90, seed), duration=8.0, noise="realistic", seed=seed)
+        identify.write_recording(d / name, rec, rx90, convention="controller")
+    return d
+
+
+@pytest.fixture(scope="module")
+def cli_fit(runs):
+    """``rx90 identify fit.csv --json`` with every default (its file and its printed text)."""
+    proc = cli("identify", "fit.csv", "--json", "cli.json", cwd=runs)
+    return json.loads((runs / "cli.json").read_text()), proc.stdout
+
+
+@pytest.fixture(scope="module")
+def lib_fit(runs, rx90):
+    """``identify.fit`` with every default on the same file, bootstrapped as the command does."""
+    rec = identify.read_recording(runs / "fit.csv", rx90)
+    return identify.fit(rx90, [rec]).bootstrapped(seed=0)
+
+
+def _without(d: dict, keys) -> dict:
+    return {k: v for k, v in d.items() if k not in keys}
+
+
+@pytest.mark.slow
+def test_library_defaults_and_command_defaults_give_the_same_file(cli_fit, lib_fit, runs):
+    cli, _ = cli_fit
+    lib = json.loads(lib_fit.save(runs / "lib.json").read_text())
+    assert _without(lib, TIMING) == _without(cli, TIMING)
+    # The defaults are the command's: rest threshold and policy, decimation, delay 0 compensated
+    # while the estimate is reported.
+    assert cli["processing"] == identify.Processing().to_json()
+    assert cli["model"]["min_velocity"] == identify.DEFAULT_MIN_VELOCITY and cli["model"]["rest"] == "zero-coulomb"
+    assert cli["delay_estimate_s"] is not None and cli["model"]["delay_s"] == 0.0
+    assert cli["schema_version"] == identify.fit_file.SCHEMA_VERSION
+
+
+def test_former_keys_of_the_identification_json_are_kept(cli_fit):
+    cli, _ = cli_fit
+    former = {"robot", "method", "parameters", "sigma_rho", "cond", "cond_unweighted", "residual_rms",
+              "weights", "rows", "history", "spring", "bootstrap_std", "bootstrap", "cutoff_hz",
+              "decimate_to_hz", "delay_estimate_s", "model", "essential", "validation"}
+    assert former <= set(cli)
+
+
+@pytest.mark.slow
+def test_load_fit_predicts_as_the_predict_command(cli_fit, runs, rx90):
+    cli("predict", "held.csv", "--identification", "cli.json", "--json", "pred.json", cwd=runs)
+    replay = json.loads((runs / "pred.json").read_text())
+    loaded = identify.load_fit(runs / "cli.json")
+    assert loaded.robot.name == "rx90" and loaded.processing == identify.Processing()
+    val = loaded.predict(identify.read_recording(runs / "held.csv", loaded.robot))
+    assert _without(val.to_dict(), ()) == _without(replay, ("identification", "robot_warning"))
+
+
+def test_saved_fit_reads_back_and_predicts_the_same(lib_fit, runs, rx90, tmp_path):
+    path = lib_fit.with_essential().save(tmp_path / "fit.json")
+    back = identify.load_fit(path)
+    assert back.to_json() == json.loads(path.read_text())
+    held = identify.read_recording(runs / "held.csv", rx90)
+    a, b = lib_fit.predict(held), back.predict(held)
+    np.testing.assert_array_equal(a.predicted, b.predicted)
+    # The held-out error is the model's, not a copy of the fit: it differs from the fit's residual.
+    assert not np.allclose(a.rms_error, lib_fit.result.residual_rms, rtol=1e-3)
+
+
+@pytest.mark.parametrize("change, words", [
+    (lambda d: d.pop("schema_version"), "without 'schema_version'"),
+    (lambda d: d.update(schema_version=99), "schema_version 99 is not supported"),
+    (lambda d: d["processing"].update(cut_off=3.0), "unknown processing field(s) cut_off"),
+])
+def test_old_or_foreign_fit_files_are_refused_by_name(lib_fit, tmp_path, change, words):
+    data = lib_fit.to_json()
+    change(data)
+    path = tmp_path / "bad.json"
+    path.write_text(json.dumps(data))
+    with pytest.raises(ValueError) as err:
+        identify.load_fit(path)
+    assert str(path) in str(err.value) and words in str(err.value)
+
+
+def test_processing_record_checks_and_round_trips():
+    p = identify.Processing(cutoff=4.0, decimate_to=0, min_velocity=0, rest="drop", delay="auto")
+    assert p.decimate_to is None and p.min_velocity is None
+    assert identify.Processing.from_json(json.loads(json.dumps(p.to_json()))) == p
+    for bad in ({"rest": "keep"}, {"delay": "later"}, {"cutoff": -1.0}, {"decimate_to": float("nan")}):
+        with pytest.raises(ValueError, match="processing: "):
+            identify.Processing(**bad)
+
+
+def test_deprecated_entry_points_warn_and_agree_with_fit(lib_fit, runs, rx90):
+    rec = identify.read_recording(runs / "fit.csv", rx90)
+    with pytest.warns(DeprecationWarning, match="identify.fit"):
+        old = identify.fit_recordings(rx90, [rec])
+    with pytest.warns(DeprecationWarning, match="identify.fit"):
+        res = identify.identify(rx90, [rec], min_velocity=identify.DEFAULT_MIN_VELOCITY, rest="zero-coulomb")
+    np.testing.assert_array_equal(old.result.values, lib_fit.result.values)
+    np.testing.assert_array_equal(res.values, lib_fit.result.values)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        identify.Processing()  # the record itself warns of nothing
