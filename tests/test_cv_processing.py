@@ -15,7 +15,8 @@ from motions import multisine
 
 def _held_out(robot, base, fit_part, clean_test, cand: Candidate) -> float:
     """Mean relative error (%) of the held-out prediction against the noise-free torques."""
-    fit_ = fit(robot, [fit_part], Processing(cutoff=cand.cutoff, decimate_to=cand.decimate_to, rest=cand.rest or "zero-coulomb",
+    fit_ = fit(robot, [fit_part], Processing(cutoff=cand.cutoff, decimate_to=cand.decimate_to,
+                                            rest=cand.rest or "zero-coulomb",
                                             min_velocity=0.05 if cand.rest else None, estimate_delay=False),
                base=base)
     val = predict(robot, fit_.result, clean_test, base=base, cutoff=cand.cutoff, decimate_to=None,

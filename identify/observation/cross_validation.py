@@ -89,7 +89,7 @@ class ProcessingChoice:
         lines = [head]
         for c in self.candidates:
             mark = " <- chosen" if c is self.chosen else ""
-            score = ("not scored" + ("" if c.label.strip().startswith("not") else " (time cap)")
+            score = (("-" if c.label.strip().startswith("not") else "not scored (time cap)")
                      if math.isnan(c.score) else f"{c.score:.3f}")
             dec = "none" if c.decimate_to is None else f"{c.decimate_to:.4g}"
             lines.append(f"  {c.cutoff:12.4g}  {dec:>16}  {c.rest or 'none':<12}  {score:>19}"
@@ -197,7 +197,7 @@ def _score(robot: rx90sym.Robot, recordings: Sequence[Any], cand: Candidate, bas
             err2 += np.sum((pred - meas)[ok] ** 2, axis=0)
             ref2 += np.sum(meas[ok] ** 2, axis=0)
     if not np.any(ref2 > 0):
-        raise ValueError("every held-back block is too short to score")
+        raise ValueError("no fold could be fitted and scored (too few rows left after the filters' edges)")
     per_joint = 100.0 * np.sqrt(err2 / np.where(ref2 > 0, ref2, np.nan))
     return float(np.nanmean(per_joint)), tuple(float(v) for v in per_joint)
 
@@ -257,7 +257,7 @@ def _run(robot: rx90sym.Robot, recordings: Sequence[Any], grid: Sequence[Candida
         try:
             score, per_joint = _score(robot, recordings, cand, base, reference, blocks, options)
         except ValueError as exc:  # too few rows left to fit (a low rate on a short recording)
-            scored.append(replace(cand, label=f"{cand.label} not identifiable: {str(exc).splitlines()[0]}".strip()))
+            scored.append(replace(cand, label=f"{cand.label} not scored: {str(exc).splitlines()[0]}".strip()))
             continue
         scored.append(replace(cand, score=score, per_joint=per_joint, seconds=time.perf_counter() - t0))
     return scored
