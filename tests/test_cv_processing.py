@@ -46,3 +46,8 @@ def test_the_cross_validated_choice_is_near_the_best_of_its_grid(rx90, rx90_base
     assert truth[(choice.chosen.cutoff, choice.chosen.decimate_to, choice.chosen.rest)] <= 1.10 * best, truth
     default = truth.get((choice.candidates[-1].cutoff, 50.0, "zero-coulomb"))
     assert default is None or truth[(choice.chosen.cutoff, choice.chosen.decimate_to, None)] < default
+
+
+def test_a_given_cutoff_and_cross_validation_are_refused_together():
+    with pytest.raises(ValueError, match="a cut-off is given and cross_validate asks to choose one"):
+        Processing(cutoff=10.0, cross_validate=True)
