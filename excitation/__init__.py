@@ -13,28 +13,54 @@ collision_model(robot, obstacles) (link capsules, boxes); ``client=`` a Dask cli
 parameters. Generic level (any CasADi model): ExcitationModel + FourierSeries / ViaPointSpline +
 optimise_model / random_feasible; condition_number for any samples. See docs/excitation.md.
 """
-from . import envelope
-from .api import collision_model, make_objective, optimise, optimise_payload, random_trajectory, safe_model
-from .envelope import Envelope, summary_lines as envelope_lines
-from .collision import Box, CollisionModel
-from .constraints import LimitReport, Margins, check_limits
-from .criterion import condition_number, observation_matrix
-from .export import read_trajectory
-from .fourier import FourierSeries
-from .model import ExcitationModel, JointLimits, model_from_robot
-from .multistart import dask_client, optimise_model
-from .objective import (DEFAULT_CRITERION, FALLBACK_CRITERION, OBJECTIVES, Objective,
-                        reference_magnitudes)
-from .optimiser import OptimiserOptions
-from .plotting import plot_limit_usage, plot_trajectory
-from .random_trajectory import random_feasible
-from .trajectory import SolveInfo, Trajectory
-from .via_points import ViaPointSpline
+from rx90sym.lazy import lazy_package
+
+# Public name -> the module that defines it (imported on first use: a fast start).
+_EXPORTS = {
+    "collision_model": "excitation.api",
+    "make_objective": "excitation.api",
+    "optimise": "excitation.api",
+    "optimise_payload": "excitation.api",
+    "random_trajectory": "excitation.api",
+    "safe_model": "excitation.api",
+    "Envelope": "excitation.envelope",
+    "envelope_lines": "excitation.envelope:summary_lines",
+    "Box": "excitation.collision",
+    "CollisionModel": "excitation.collision",
+    "LimitReport": "excitation.constraints",
+    "Margins": "excitation.constraints",
+    "check_limits": "excitation.constraints",
+    "condition_number": "excitation.criterion",
+    "observation_matrix": "excitation.criterion",  # deprecated: stacked_regressor
+    "stacked_regressor": "excitation.criterion",
+    "read_trajectory": "excitation.export",
+    "FourierSeries": "excitation.fourier",
+    "ExcitationModel": "excitation.model",
+    "JointLimits": "excitation.model",
+    "model_from_robot": "excitation.model",
+    "dask_client": "excitation.multistart",
+    "optimise_model": "excitation.multistart",
+    "DEFAULT_CRITERION": "excitation.objective",
+    "FALLBACK_CRITERION": "excitation.objective",
+    "OBJECTIVES": "excitation.objective",
+    "Objective": "excitation.objective",
+    "reference_magnitudes": "excitation.objective",
+    "OptimiserOptions": "excitation.optimiser",
+    "plot_limit_usage": "excitation.plotting",
+    "plot_trajectory": "excitation.plotting",
+    "random_feasible": "excitation.random_trajectory",
+    "SolveInfo": "excitation.trajectory",
+    "Trajectory": "excitation.trajectory",
+    "ViaPointSpline": "excitation.via_points",
+}
+_SUBMODULES = ("envelope",)
 
 __all__ = [
-    "optimise", "random_trajectory", "condition_number", "observation_matrix",
+    "optimise", "random_trajectory", "condition_number", "stacked_regressor", "observation_matrix",
     "FourierSeries", "ViaPointSpline", "Trajectory", "SolveInfo", "OptimiserOptions", "Margins",
     "LimitReport", "check_limits", "read_trajectory", "ExcitationModel", "JointLimits", "model_from_robot",
     "optimise_model", "random_feasible", "plot_trajectory", "plot_limit_usage",
     "collision_model", "optimise_payload", "Envelope", "envelope", "envelope_lines", "safe_model", "Box", "CollisionModel", "DEFAULT_CRITERION", "FALLBACK_CRITERION", "make_objective", "dask_client", "OBJECTIVES", "Objective", "reference_magnitudes",
 ]
+
+lazy_package(__name__, _EXPORTS, _SUBMODULES)

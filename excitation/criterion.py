@@ -41,8 +41,9 @@ import numpy as np
 from rx90sym.compiled import map_samples
 
 # --------------------------------------------------------------------------- numeric (reporting)
-def observation_matrix(base_regressor: Any, q: Any, qd: Any, qdd: Any) -> np.ndarray:
-    """W (n N, nb): Phi_b rows stacked per joint (eqs. 7-8), samples (N, n) in rad, rad/s, rad/s^2.
+def stacked_regressor(base_regressor: Any, q: Any, qd: Any, qdd: Any) -> np.ndarray:
+    """W (n N, nb): Phi_b rows stacked per joint (eqs. 7-8) at exact samples (N, n) in rad, rad/s,
+    rad/s^2 (a planned motion; identify.observation_matrix builds W from recordings).
 
     ``base_regressor`` is a casadi.Function (q, qd, qdd) -> Phi_b (n x nb), evaluated with a serial
     map, or a batch callable (Q, QD, QDD) -> ndarray (N, n, nb) such as ``bp.regressor_batch``.
@@ -52,6 +53,17 @@ def observation_matrix(base_regressor: Any, q: Any, qd: Any, qdd: Any) -> np.nda
         raise ValueError(f"observation matrix: q, qd, qdd shapes differ: {q.shape}, {qd.shape}, {qdd.shape}")
     phi = regressor_samples(base_regressor, q, qd, qdd)  # (N, n, nb)
     return np.concatenate([phi[:, j, :] for j in range(phi.shape[1])], axis=0)
+
+
+
+def observation_matrix(base_regressor: Any, q: Any, qd: Any, qdd: Any) -> np.ndarray:
+    """Deprecated name of :func:`stacked_regressor` (identify.observation_matrix is the one from
+    recordings)."""
+    import warnings
+
+    warnings.warn("excitation.observation_matrix is deprecated: use excitation.stacked_regressor",
+                  DeprecationWarning, stacklevel=2)
+    return stacked_regressor(base_regressor, q, qd, qdd)
 
 
 def regressor_samples(base_regressor: Any, q: np.ndarray, qd: np.ndarray, qdd: np.ndarray) -> np.ndarray:
@@ -73,7 +85,7 @@ def condition_number(base_regressor: Any, t: Any, q: Any, qd: Any, qdd: Any) -> 
         raise ValueError(f"condition number: t has {t.size} samples but q has {q.shape[0]}")
     if np.any(np.diff(t) <= 0.0):
         raise ValueError("condition number: t must increase strictly")
-    sv = np.linalg.svd(observation_matrix(base_regressor, q, qd, qdd), compute_uv=False)
+    sv = np.linalg.svd(stacked_regressor(base_regressor, q, qd, qdd), compute_uv=False)
     return float(sv[0] / sv[-1]) if sv[-1] > 0.0 else float("inf")
 
 

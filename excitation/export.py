@@ -53,4 +53,4 @@ def read_trajectory(path: str | os.PathLike, robot: rx90sym.Robot) -> tuple[np.n
     if len(bad):
         raise ValueError(f"{path}: column {expected[bad[0, 1]]}, row {bad[0, 0] + 1}: not a finite number")
     t, q, qd, qdd = data[:, 0], data[:, 1:n + 1], data[:, n + 1:2 * n + 1], data[:, 2 * n + 1:]
-    return t, robot.to_khalil(q), qd, qdd
+    return t, robot.to_model(q), qd, qdd

@@ -175,6 +175,6 @@ def model_from_robot(robot: rx90sym.Robot, chi_nominal: Any = None, base: Any = 
     names = tuple(base.names) if getattr(base, "names", None) is not None else None
     return ExcitationModel(regressor=base.regressor, limits=limits, names=names, torque=torque,
                            heights=heights, z_min=None if z_min is None else float(z_min),
-                           staubli_offsets=np.asarray(getattr(robot, "staubli_offsets", np.zeros(n))),
+                           staubli_offsets=np.asarray(getattr(robot, "controller_offsets", np.zeros(n))),
                            name=getattr(robot, "name", "robot"))
 

@@ -33,8 +33,8 @@ from rx90sym.recording import Recording, RecordingError
 from identify.signal.filtering import choose_cutoff
 from identify.io.gains import DriveGains, apply_gains
 from identify.estimation.bootstrap import bootstrap_std
-from identify.estimation.least_squares import weighted_least_squares
-from identify.observation.matrix import FilteredMotion, filtered_motion, stack_rows
+from identify.estimation.least_squares import triangular_cond, weighted_least_squares
+from identify.observation.matrix import FilteredMotion, column_regressor, filtered_motion, stack_rows
 from identify.signal.pairing import POSITION_TOLERANCE, PairedRuns, pair_runs
 from identify.estimation.results import IdentificationResult, json_number
 from identify.plausibility import gain_flags, raise_errors
@@ -115,11 +115,13 @@ def _unit_currents(rec: Recording, robot: rx90sym.Robot) -> Recording:
     return apply_gains(rec, DriveGains(np.ones(robot.n), side="joint", source="unit gains"), robot)
 
 
-def _motions(robot: rx90sym.Robot, recs: Sequence[Recording], columns: Sequence[int], cutoff: float | None,
+def _current_motions(robot: rx90sym.Robot, recs: Sequence[Recording], columns: Sequence[int], cutoff: float | None,
              decimate_to: float | None, spring: bool) -> list[FilteredMotion]:
     """Filtered currents (Y) and [W columns, spring torque] (Phi), one parallel filter for all."""
+    _, standard = column_regressor(robot, columns=[robot.parameter_names[i] for i in columns])
+
     def regressor(Q: np.ndarray, QD: np.ndarray, QDD: np.ndarray) -> np.ndarray:
-        W = robot.regressor_batch(Q, QD, QDD)[:, :, list(columns)]
+        W = standard(Q, QD, QDD)
         s = robot.spring_torque_batch(Q)[:, :, :1] if spring else np.zeros((len(Q), robot.n, 1))
         return np.concatenate([W, s], axis=2)
 
@@ -302,8 +304,9 @@ def _fit(motions: Sequence[_Motion], names: Sequence[str], Rt: np.ndarray, free:
     res = Y - W @ x
     rms = np.array([np.sqrt(np.mean(res[joint == j] ** 2)) for j in range(nj)])
     boot = bootstrap_std(W, Y, joint, samples, 1.0 / sigma, rate, seed, instruments=Z)
+    cond = triangular_cond(np.linalg.qr(W / sigma[joint][:, None], mode="r"))
     return IdentificationResult(tuple(names), x, std, 100 * std / np.abs(x), sigma_rho,
-                                _cond(W / sigma[joint][:, None]), ols.cond_unweighted, rms, 1.0 / sigma,
+                                cond, ols.cond_unweighted, rms, 1.0 / sigma,
                                 len(Y), f"drive-gains-{method}-iv", cov), boot
 
 
@@ -316,11 +319,6 @@ def _iv_covariance(W: np.ndarray, Z: np.ndarray, Y: np.ndarray, x: np.ndarray, j
     sigma_rho = float(np.sqrt(r @ r / (len(r) - len(x))))                       # eq. 12
     ZAinv = np.linalg.inv(Zw.T @ Aw)
     return sigma_rho**2 * ZAinv @ (Zw.T @ Zw) @ ZAinv.T, sigma_rho, sigma       # eq. 13, IV form
-
-
-def _cond(A: np.ndarray) -> float:
-    """2-norm condition number of A from its triangular factor (cheaper than the SVD of A)."""
-    return float(np.linalg.cond(np.linalg.qr(A, mode="r")))
 
 
 def _joint_sigma(r: np.ndarray, joint: np.ndarray, nj: int, c: int) -> np.ndarray:
@@ -337,8 +335,8 @@ def _same_motion(empty, loaded, position_tol, *, robot, Rt, mass, free, k_fixed,
     # One cut-off for both runs of a pair, so that the same samples are kept and compared.
     cutoff = cutoff or max(choose_cutoff(np.asarray(p.loaded.q), p.loaded.rate) for p in pairs)
     cols = list(rx90sym.payload_regressor_columns(robot))
-    m_l = _motions(robot, [p.loaded for p in pairs], cols, cutoff, decimate_to, spring)
-    m_e = _motions(robot, [p.empty for p in pairs], cols, cutoff, decimate_to, spring)
+    m_l = _current_motions(robot, [p.loaded for p in pairs], cols, cutoff, decimate_to, spring)
+    m_e = _current_motions(robot, [p.empty for p in pairs], cols, cutoff, decimate_to, spring)
     # eq. 28 turned around: Rt diag(k) (i_l - i_e) - Wc' chi' = Wc_M Mc - (S_l - S_e).
     motions = [_Motion(a.Y - b.Y, a.Phi[:, :, :9], a.Phi[:, :, 9] * mass - (a.Phi[:, :, 10] - b.Phi[:, :, 10]), a.dq)
                for a, b in zip(m_l, m_e)]
@@ -355,8 +353,8 @@ def _global(empty, loaded, offsets, base, *, robot, Rt, mass, free, k_fixed, cut
     base = base if base is not None else rx90sym.base_parameters(robot)
     nb = base.nb
     cols = list(base.independent) + list(rx90sym.payload_regressor_columns(robot))
-    motions = (_motions(robot, empty, cols, cutoff, decimate_to, spring)
-               + _motions(robot, loaded, cols, cutoff, decimate_to, spring))
+    motions = (_current_motions(robot, empty, cols, cutoff, decimate_to, spring)
+               + _current_motions(robot, loaded, cols, cutoff, decimate_to, spring))
     system = []
     for i, m in enumerate(motions):
         Wc = m.Phi[:, :, nb:nb + 10] if i >= len(empty) else np.zeros_like(m.Phi[:, :, nb:nb + 10])

@@ -216,9 +216,9 @@ def load_fit(path: str | Path, robot: rx90sym.Robot | str | None = None) -> Fit:
 
 
 def _spring_label(robot: rx90sym.Robot, base: Any) -> str:
-    from identify.observation.spring_fit import SpringBase
+    from identify.observation.spring_fit import BaseWithSpring
 
-    if isinstance(base, SpringBase):
+    if isinstance(base, BaseWithSpring):
         return "identify-k" if type(base.model).__name__ == "SpringStiffness" else "identify"
     return "none" if robot.spring is None else "default"
 
@@ -234,7 +234,7 @@ def fit(robot: rx90sym.Robot, recordings: Sequence[Any], processing: Processing 
     "consistent" (WLS data, physically consistent standard parameters through cvxpy; extra
     keyword arguments go to identify.estimation.consistency.consistent_least_squares, e.g. prior,
     prior_weight, total_mass, mass_bounds, com_boxes, solver); base: the columns (default: the
-    symbolic base parameters; a SpringBase identifies the spring too, with processing.spring
+    symbolic base parameters; a BaseWithSpring identifies the spring too, with processing.spring
     False). Recorded in the fit file for :func:`load_fit`: gains (already applied to current
     recordings), convention (of the files; None: each file's header), spring_source ("default",
     "none" or a table file; None: from the robot). observation: an already built observation
@@ -266,9 +266,9 @@ def fit(robot: rx90sym.Robot, recordings: Sequence[Any], processing: Processing 
                         rest=options["rest"], min_velocity=options["min_velocity"],
                         spring=spring_source or _spring_label(robot, base),
                         cutoff_hz=obs.cutoffs[0], decimate_to_hz=options["decimate_to"], rate_hz=obs.rate, delay_s=lag)
-    from identify.observation.spring_fit import SpringBase, spring_summary
+    from identify.observation.spring_fit import BaseWithSpring, spring_summary
 
-    spring = spring_summary(robot, base if isinstance(base, SpringBase) else None, result, recordings)[0]
+    spring = spring_summary(robot, base if isinstance(base, BaseWithSpring) else None, result, recordings)[0]
     return Fit(robot, result, p, model, base, obs, found, found.delay if found is not None else None, spring,
                recordings=tuple(layout_summary(r) for r in recordings if hasattr(r, "measured_mask")),
                choice=choice.to_dict() if choice is not None else None)

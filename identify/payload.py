@@ -29,7 +29,7 @@ from identify.estimation.bootstrap import bootstrap_std
 from identify.estimation.least_squares import compress, solve_system, stack_systems, weighted_least_squares
 from identify.observation.processing import Processing
 from identify.signal.filtering import choose_cutoff
-from identify.observation.matrix import filtered_motion, stack_rows
+from identify.observation.matrix import column_regressor, filtered_motion, stack_rows
 from identify.signal.pairing import POSITION_TOLERANCE, PairedRuns, pair_runs
 from identify.estimation.results import IdentificationResult, json_number
 
@@ -128,10 +128,9 @@ def _check_wrist_motion(robot: rx90sym.Robot, loaded: Sequence[Any]) -> None:
                          f"is not excited (need > {MIN_WRIST_MOTION} rad on at least one of them)")
 
 
-def _motions(robot: rx90sym.Robot, recs: Sequence[Any], columns: Sequence[int], options: Mapping[str, Any]):
-    def regressor(Q: np.ndarray, QD: np.ndarray, QDD: np.ndarray) -> np.ndarray:
-        return robot.regressor_batch(Q, QD, QDD)[:, :, columns]
-
+def _payload_motions(robot: rx90sym.Robot, recs: Sequence[Any], columns: Sequence[int], options: Mapping[str, Any]):
+    """Filtered motions with the standard regressor's ``columns`` (indices) as Phi."""
+    _, regressor = column_regressor(robot, columns=[robot.parameter_names[i] for i in columns])
     return [filtered_motion(robot, r, options.get("cutoff"), options.get("decimate_to", 50.0),
                             options.get("spring", True), regressor, delay=options.get("delay", 0.0))
             for r in recs]
@@ -235,7 +234,7 @@ def _payload_part(fit: IdentificationResult) -> tuple[np.ndarray, np.ndarray, np
 def _method_1(robot, base, empty, loaded, robot_params, options, **_):
     beta = _robot_vector(robot, base, robot_params)
     cols = list(base.independent) + list(rx90sym.payload_regressor_columns(robot))
-    motions = _motions(robot, loaded, cols, options)
+    motions = _payload_motions(robot, loaded, cols, options)
     nb = base.nb
     # eq. 22: the robot's known part is moved to the left-hand side.
     Y = [m.Y - m.Phi[:, :, :nb] @ beta for m in motions]
@@ -257,8 +256,8 @@ def _method_3(robot, base, empty, loaded, options, **_):
     # One cut-off for both runs of a pair, so that the same samples are kept and compared.
     cutoff = options.get("cutoff") or max(choose_cutoff(np.asarray(r.q), r.rate) for r in loaded)
     same = {**options, "cutoff": cutoff}
-    m_l = _motions(robot, loaded, cols, same)
-    m_e = _motions(robot, empty, cols, same)
+    m_l = _payload_motions(robot, loaded, cols, same)
+    m_e = _payload_motions(robot, empty, cols, same)
     # eq. 28: the empty run's torques replace W chi.
     W, Y, joint, samples = _rows([m.Phi for m in m_l], [a.Y - b.Y for a, b in zip(m_l, m_e)], m_l, options)
     return weighted_least_squares(W, Y, joint, PAYLOAD_NAMES), None, (W, Y, joint, samples)
@@ -268,8 +267,8 @@ def _global_rows(robot, base, empty, loaded, options):
     """Rows of eq. 29: [W_v 0; W_T W_c] and [Y_v; Y_T], grouped per joint."""
     cols = list(base.independent) + list(rx90sym.payload_regressor_columns(robot))
     nb = base.nb
-    m_e = _motions(robot, empty, cols, options)
-    m_l = _motions(robot, loaded, cols, options)
+    m_e = _payload_motions(robot, empty, cols, options)
+    m_l = _payload_motions(robot, loaded, cols, options)
     blocks = [np.concatenate([m.Phi[:, :, :nb], np.zeros_like(m.Phi[:, :, nb:])], axis=2) for m in m_e]
     blocks += [m.Phi for m in m_l]
     return _rows(blocks, [m.Y for m in m_e + m_l], m_e + m_l, options)
@@ -391,7 +390,7 @@ class PayloadMonitor:
         cols = list(self.base.independent) + list(rx90sym.payload_regressor_columns(robot))
         self._cols = cols
         nb = self.base.nb
-        m_e = _motions(robot, empty, cols, options)
+        m_e = _payload_motions(robot, empty, cols, options)
         blocks = [np.concatenate([m.Phi[:, :, :nb], np.zeros_like(m.Phi[:, :, nb:])], axis=2) for m in m_e]
         W, Y, joint, _ = _rows(blocks, [m.Y for m in m_e], m_e, options)
         empty_fit = weighted_least_squares(W[:, :nb], Y, joint, self.base.names)
@@ -404,7 +403,7 @@ class PayloadMonitor:
         """Add one loaded motion and return the new payload estimate."""
         _check_robot(self.robot, [loaded], "loaded")
         _check_wrist_motion(self.robot, [loaded])
-        m = _motions(self.robot, [loaded], self._cols, self.options)
+        m = _payload_motions(self.robot, [loaded], self._cols, self.options)
         W, Y, joint, _ = _rows([x.Phi for x in m], [x.Y for x in m], m, self.options)
         new = [compress(W[joint == j], Y[joint == j]) for j in range(self.robot.n)]
         self._systems = [stack_systems([a, b]) for a, b in zip(self._systems, new)]

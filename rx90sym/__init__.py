@@ -5,20 +5,36 @@ base parameters, the Pinocchio bridge, the simulated robot (``rx90sym.twin``) an
 bundled real TX40 record (``rx90sym.datasets.tx40()``).
 """
 __version__ = "0.1.0"
+from rx90sym.lazy import lazy_package
 
-from .base_parameters import BaseParameters, base_parameters
-from .description import Coupling, Limits, Robot, robot_from_table
-from .parameters import LINK_PARAMETERS, PAYLOAD_NAMES
-from .pinocchio_bridge import pinocchio_model
-from .robot_file import RobotFileError, bundled_robots, load_robot
-from .nominal import nominal_parameters
-from .spring import Spring
-from .urdf import UrdfChain, load_urdf, urdf_parameters
-from .urdf_export import write_urdf
-from .urdf_tree import UrdfError
-from .payloads import add_payload, bundled_payloads, load_payload, payload_regressor_columns
-from . import datasets, twin
-from .twin import default_parameters
+# Public name -> the module that defines it (imported on first use: a fast start).
+_EXPORTS = {
+    "BaseParameters": "rx90sym.base_parameters",
+    "base_parameters": "rx90sym.base_parameters",
+    "Coupling": "rx90sym.description",
+    "Limits": "rx90sym.description",
+    "Robot": "rx90sym.description",
+    "robot_from_table": "rx90sym.description",
+    "LINK_PARAMETERS": "rx90sym.parameters",
+    "PAYLOAD_NAMES": "rx90sym.parameters",
+    "pinocchio_model": "rx90sym.pinocchio_bridge",
+    "RobotFileError": "rx90sym.robot_file",
+    "bundled_robots": "rx90sym.robot_file",
+    "load_robot": "rx90sym.robot_file",
+    "nominal_parameters": "rx90sym.nominal",
+    "Spring": "rx90sym.spring",
+    "UrdfChain": "rx90sym.urdf",
+    "load_urdf": "rx90sym.urdf",
+    "urdf_parameters": "rx90sym.urdf",
+    "write_urdf": "rx90sym.urdf_export",
+    "UrdfError": "rx90sym.urdf_tree",
+    "add_payload": "rx90sym.payloads",
+    "bundled_payloads": "rx90sym.payloads",
+    "load_payload": "rx90sym.payloads",
+    "payload_regressor_columns": "rx90sym.payloads",
+    "default_parameters": "rx90sym.twin",
+}
+_SUBMODULES = ('datasets', 'twin')
 
 __all__ = [
     "__version__",
@@ -29,3 +45,5 @@ __all__ = [
     "pinocchio_model", "nominal_parameters", "UrdfChain", "UrdfError", "load_urdf", "urdf_parameters",
     "write_urdf",
 ]
+
+lazy_package(__name__, _EXPORTS, _SUBMODULES)

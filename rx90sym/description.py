@@ -5,6 +5,7 @@ instance (like Pinocchio's Model, the description never changes once made).
 """
 from __future__ import annotations
 
+import warnings
 from dataclasses import dataclass, field, replace
 from functools import cached_property
 from typing import Any, Iterable, Sequence
@@ -20,6 +21,23 @@ from .parameters import link_parameter_names
 from .spring import Spring, spring_torque_function
 
 GRAVITY = 9.81  # m/s^2, along -z0
+
+#: Former keyword -> its neutral name (accepted with a DeprecationWarning for one release).
+_FORMER_KEYWORDS = {"staubli_offsets": "controller_offsets"}
+
+
+def _renamed(old: str, new: str) -> None:
+    warnings.warn(f"{old} is deprecated: use {new}", DeprecationWarning, stacklevel=3)
+
+
+def _neutral(options: dict[str, Any]) -> dict[str, Any]:
+    """``options`` with former keywords renamed (each with a DeprecationWarning)."""
+    out = dict(options)
+    for old, new in _FORMER_KEYWORDS.items():
+        if old in out:
+            warnings.warn(f"keyword {old} is deprecated: use {new}", DeprecationWarning, stacklevel=3)
+            out[new] = out.pop(old)
+    return out
 
 
 def gravity_vector(gravity: Any) -> np.ndarray:
@@ -57,7 +75,7 @@ class Coupling:
     (sign(qd_a + qd_b), the speed of motor b, on both rows).
     """
 
-    joints: tuple[int, int] = (4, 5)
+    joints: tuple[int, int]
     coulomb_sign: str = "paper"
 
 
@@ -84,7 +102,7 @@ class Robot:
     limits: Limits
     d_labels: tuple[str, ...] = ()
     r_labels: tuple[str, ...] = ()
-    staubli_offsets: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    controller_offsets: np.ndarray = field(default_factory=lambda: np.zeros(0))
     gear_ratios: np.ndarray = field(default_factory=lambda: np.zeros(0))
     Rq: np.ndarray = field(default_factory=lambda: np.zeros((0, 0)))
     Rt: np.ndarray = field(default_factory=lambda: np.zeros((0, 0)))
@@ -114,7 +132,7 @@ class Robot:
         defaults = {
             "d_labels": tuple(f"D{j + 1}" for j in range(n)),
             "r_labels": tuple(f"RL{j + 1}" for j in range(n)),
-            "staubli_offsets": np.zeros(n),
+            "controller_offsets": np.zeros(n),
             "gear_ratios": np.ones(n),
             "Rq": np.eye(n),
             "Rt": np.eye(n),
@@ -192,24 +210,34 @@ class Robot:
 
     def with_options(self, **changes: Any) -> "Robot":
         """A copy with some fields changed (e.g. offsets=True); caches are not carried over."""
-        return replace(self, **changes)
+        return replace(self, **_neutral(changes))
 
     # ----------------------------------------------------------------- conventions
+    def to_model(self, q_controller: Any) -> np.ndarray:
+        """Joint positions from the controller's convention (what a log holds) to model (Khalil)
+        angles [rad], (N, n) or (n,): q_model = q_controller - controller_offsets."""
+        return np.asarray(q_controller, dtype=float) - self.controller_offsets
+
+    def to_controller(self, q: Any) -> np.ndarray:
+        """Joint positions from model (Khalil) angles to the controller's convention [rad]."""
+        return np.asarray(q, dtype=float) + self.controller_offsets
+
+    # Former RX90 words, kept one release.
     @property
-    def controller_offsets(self) -> np.ndarray:
-        """Controller joint offsets [rad]: q_controller = q_model + offsets (field staubli_offsets)."""
-        return self.staubli_offsets
+    def staubli_offsets(self) -> np.ndarray:
+        """Deprecated: :attr:`controller_offsets`."""
+        _renamed("Robot.staubli_offsets", "Robot.controller_offsets")
+        return self.controller_offsets
 
     def to_khalil(self, q_staubli: Any) -> np.ndarray:
-        """Joint positions from the controller's convention to model (Khalil) angles, (N, n) or (n,)."""
-        return np.asarray(q_staubli, dtype=float) - self.staubli_offsets
+        """Deprecated: :meth:`to_model`."""
+        _renamed("Robot.to_khalil", "Robot.to_model")
+        return self.to_model(q_staubli)
 
     def to_staubli(self, q: Any) -> np.ndarray:
-        """Joint positions from model (Khalil) angles to the controller's convention."""
-        return np.asarray(q, dtype=float) + self.staubli_offsets
-
-    to_model = to_khalil          # neutral names: controller angles <-> model angles
-    to_controller = to_staubli
+        """Deprecated: :meth:`to_controller`."""
+        _renamed("Robot.to_staubli", "Robot.to_controller")
+        return self.to_controller(q)
 
     # ----------------------------------------------------------------- symbolic model
     @cached_property
@@ -300,6 +328,7 @@ def robot_from_table(rows: Sequence[Sequence[float]], name: str = "robot", **opt
     if n == 0:
         raise ValueError("table has no rows")
     cols = list(zip(*rows))
+    options = _neutral(options)
     options.setdefault("limits", Limits.unbounded(n))
     return Robot(name=name, sigma=tuple(int(s) for s in cols[0]),
                  alpha=tuple(float(x) for x in cols[1]), d=tuple(float(x) for x in cols[2]),

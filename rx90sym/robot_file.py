@@ -16,7 +16,7 @@ import numpy as np
 
 from .description import Coupling, Limits, Robot
 from .nominal_table import FLANGE_KEYS, NOMINAL_KEYS, NominalError, parse_flange, parse_nominal
-from .spring import Spring, read_spring_table
+from .spring import SPRING_CONSTANTS, Spring, read_spring_table
 from .toml_lines import Lines, scan
 
 ROBOTS_DIR = Path(__file__).parent / "robots"
@@ -43,7 +43,6 @@ SCHEMA: dict[str, tuple[str, ...]] = {
     "capsules": ("name", "frame", "a", "b", "radius"),
 }
 ARRAY_TABLES = ("joints", "capsules")  # [[...]] arrays of tables
-SPRING_CONSTANTS = ("k", "a", "b", "L0", "angle_offset")
 
 
 class RobotFileError(ValueError):
@@ -296,7 +295,7 @@ def parse_robot(data: dict, source: str, lines: Lines | None = None) -> Robot:
         raise RobotFileError(str(exc)) from None
     return Robot(name=name, sigma=cols[0], alpha=cols[1], d=cols[2], theta=cols[3], r=cols[4],
                  limits=limits, d_labels=tuple(d_labels), r_labels=tuple(r_labels),
-                 staubli_offsets=offsets, gear_ratios=gear, Rq=Rq, Rt=Rt, spring=spring,
+                 controller_offsets=offsets, gear_ratios=gear, Rq=Rq, Rt=Rt, spring=spring,
                  coupling=coupling, asymmetric_coulomb=asym, description=str(data.get("description", "")),
                  source=source, nominal=nominal, flange=flange, joint_names=tuple(names))
 

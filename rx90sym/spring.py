@@ -12,6 +12,10 @@ if TYPE_CHECKING:  # for annotations only
     from .description import Robot
 
 
+#: The constants of the spring model (all needed unless the spring is a table).
+SPRING_CONSTANTS = ("k", "a", "b", "L0", "angle_offset")
+
+
 @dataclass(frozen=True, eq=False)
 class Spring:
     """Spring acting on one joint; either the default model or a table.
@@ -25,17 +29,24 @@ class Spring:
     linearly (extrapolation is refused at evaluation time by clipping to the table's range).
     placeholder: the constants are invented, not the maker's (the bundled RX90's spring: its
     constants are not published); every output that uses such a spring says so.
-    The field defaults are the RX90 placeholder's; robot files must give every constant.
+    No defaults: a robot's constants come from its robot file (the RX90's placeholder is in
+    rx90.toml); a table needs none of them.
     """
 
-    joint: int = 1
-    k: float = 4000.0
-    a: float = 0.10
-    b: float = 0.30
-    L0: float = 0.05
-    angle_offset: float = np.pi / 2
+    joint: int
+    k: float | None = None
+    a: float | None = None
+    b: float | None = None
+    L0: float | None = None
+    angle_offset: float | None = None
     table: tuple[np.ndarray, np.ndarray] | None = field(default=None)
     placeholder: bool = False
+
+    def __post_init__(self) -> None:
+        missing = [n for n in SPRING_CONSTANTS if getattr(self, n) is None]
+        if self.table is None and missing:
+            raise ValueError(f"spring on joint {self.joint + 1}: give {', '.join(missing)} "
+                             "(no defaults) or a table")
 
     def describe(self) -> dict[str, Any]:
         """JSON-ready description (joint 1-based) for outputs that use the spring."""

@@ -43,7 +43,7 @@ NOTEBOOKS = {
                  'print(robot.parameter_names[:13])'),
         ("md", "The inverse dynamic model and the regressor are CasADi functions; Γ = Φ·χ."),
         ("code", 'chi = robot.parameter_vector(rx90sym.default_parameters(robot))\n'
-                 'q = robot.to_khalil(np.zeros(6)); qd = np.ones(6) * 0.5; qdd = np.zeros(6)\n'
+                 'q = robot.to_model(np.zeros(6)); qd = np.ones(6) * 0.5; qdd = np.zeros(6)\n'
                  'tau = np.array(robot.inverse_dynamics(q, qd, qdd, chi)).ravel()\n'
                  'Phi = np.array(robot.regressor(q, qd, qdd))\n'
                  'print(tau, np.abs(Phi @ chi - tau).max())\n'

@@ -64,7 +64,7 @@ def files(tmp_path_factory, rx90):
     out["anonymous.csv"] = d / "anonymous.csv"
     # Controller logs: t, q1..q6 (controller angles), qd1..qd6, tau1..tau6.
     t, q, qd, _ = (np.asarray(a) for a in (e.t, *f(e.t)))
-    qc = np.asarray(rx90.to_staubli(e.q))
+    qc = np.asarray(rx90.to_controller(e.q))
     for name, cols in (("log.csv", (qc, qd)), ("log_swapped.csv", (qd, qc)), ("log_degrees.csv", (np.rad2deg(qc), np.rad2deg(qd)))):
         np.savetxt(d / name, np.column_stack([t, *cols, e.tau]), delimiter=",", fmt="%.9g")
         out[name] = d / name

@@ -27,7 +27,7 @@ def write_trajectory(path: Path, robot, seed: int, duration: float = 12.0) -> No
     t = np.arange(0, duration, 1 / 250)
     q, qd, qdd = multisine(robot, seed, duration)(t)
     header = ",".join(["t"] + [f"{k}{j}" for k in ("q", "dq", "ddq") for j in range(1, 7)])
-    np.savetxt(path, np.c_[t, robot.to_staubli(q), qd, qdd], delimiter=",", header=header, comments="")
+    np.savetxt(path, np.c_[t, robot.to_controller(q), qd, qdd], delimiter=",", header=header, comments="")
 
 
 class _Figures(HTMLParser):

@@ -31,4 +31,8 @@ def test_controller_and_model_angles_with_old_names(tmp_path):
     write_recording(tmp_path / "m.csv", rec, robot, convention="model")
     assert (tmp_path / "m.csv").read_text().startswith("# convention: model")
     np.testing.assert_array_equal(read_recording(tmp_path / "m.csv", robot, convention="khalil").q, q)
-    np.testing.assert_array_equal(robot.to_controller(q), robot.to_staubli(q))
+    with pytest.warns(DeprecationWarning, match="to_controller"):  # the former word, one release
+        former = robot.to_staubli(q)
+    np.testing.assert_array_equal(robot.to_controller(q), former)
+    with pytest.warns(DeprecationWarning, match="controller_offsets"):
+        np.testing.assert_array_equal(robot.staubli_offsets, robot.controller_offsets)

@@ -88,9 +88,9 @@ def toy_robot() -> ToyRobot:
     spring = ca.Function("spring", [q], [ca.vertcat(0, 0)])
     fk = ca.Function("fk", [q], [ca.SX.eye(4), ca.SX.zeros(3, 2)])
     lim = toy_limits()
-    return ToyRobot(name="toy", n=2, limits=lim, staubli_offsets=np.array([0.0, np.pi / 2]),
+    return ToyRobot(name="toy", n=2, limits=lim, controller_offsets=np.array([0.0, np.pi / 2]),
                     inverse_dynamics=idm, spring_torque=spring, forward_kinematics=fk,
-                    to_staubli=lambda x: np.asarray(x) + np.array([0.0, np.pi / 2]))
+                    to_controller=lambda x: np.asarray(x) + np.array([0.0, np.pi / 2]))
 
 
 TOY_BASE = SimpleNamespace(regressor=toy_regressor(), names=NAMES, beta=lambda chi: np.asarray(chi))
@@ -392,7 +392,7 @@ def test_rx90_optimised_trajectory_acceptance(tmp_path):
     assert bp.nb == 54
     t, q, qd, qdd = traj.sample(250.0)
     assert t.size == 5000
-    w = excitation.observation_matrix(bp.regressor_batch, q, qd, qdd)
+    w = excitation.stacked_regressor(bp.regressor_batch, q, qd, qdd)
     assert w.shape == (6 * 5000, 54)
     assert traj.cond == pytest.approx(np.linalg.cond(w), rel=1e-6)
     assert traj.cond <= 30.0
@@ -404,6 +404,6 @@ def test_rx90_optimised_trajectory_acceptance(tmp_path):
     traj.save(tmp_path / "rx90.csv")
     data = np.loadtxt(tmp_path / "rx90.csv", delimiter=",", skiprows=1)
     assert data.shape == (5001, 19)
-    np.testing.assert_allclose(robot.to_khalil(data[:-1, 1:7]), q, atol=1e-8)
+    np.testing.assert_allclose(robot.to_model(data[:-1, 1:7]), q, atol=1e-8)
     rand = excitation.random_trajectory(robot, 20.0, 5, seed=0, chi_nominal=chi, base=bp)
     assert rand.usage.feasible and traj.cond < 0.5 * rand.cond

@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 import excitation
-from excitation.criterion import observation_matrix, smooth_friction_regressor
+from excitation.criterion import smooth_friction_regressor, stacked_regressor
 from excitation.fourier import FourierSeries
 from excitation.multistart import optimise_model
 from excitation.objective import Objective, criterion_function, numeric_information, reference_magnitudes
@@ -60,7 +60,7 @@ def _samples(seed=3, count=300):
 def test_values_match_numpy_on_the_weighted_observation_matrix():
     q, qd, qdd = _samples()
     reg = toy_regressor()
-    w = observation_matrix(reg, q, qd, qdd)                          # rows: joint 1 block, joint 2 block
+    w = stacked_regressor(reg, q, qd, qdd)                          # rows: joint 1 block, joint 2 block
     n_s = q.shape[0]
     ws = w / np.repeat(NOISE, n_s)[:, None]                          # Sigma^-1/2 W
     duration = 3.0

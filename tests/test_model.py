@@ -157,7 +157,7 @@ def test_forward_kinematics_matches_pinocchio(rx90, random_robot):
 
 def test_rx90_reach_is_the_datasheet_one(rx90):
     # Arm stretched up (Staubli zero = vertical): wrist centre at D3 + RL4 = 0.9 m above the shoulder.
-    q = rx90.to_khalil(np.zeros(6))
+    q = rx90.to_model(np.zeros(6))
     assert np.isclose(rx90.frame_origins(q)[4, 2], 0.9)
 
 
@@ -186,8 +186,8 @@ def test_exported_c_compiles(rx90, tmp_path):
 
 def test_conventions_and_table_robot(rx90):
     q = np.random.default_rng(7).normal(size=(4, 6))
-    assert np.allclose(rx90.to_khalil(rx90.to_staubli(q)), q)
-    assert np.allclose(rx90.to_staubli(np.zeros(6)), [0, np.pi / 2, -np.pi / 2, 0, 0, 0])
+    assert np.allclose(rx90.to_model(rx90.to_controller(q)), q)
+    assert np.allclose(rx90.to_controller(np.zeros(6)), [0, np.pi / 2, -np.pi / 2, 0, 0, 0])
     assert len(rx90.parameter_names) == 80 and rx90.parameter_names[-2:] == ("FVM6", "FSM6")
     tx = rx90sym.load_robot("tx40", offsets=True)
     assert tx.parameter_names[-6:] == tuple(f"OFF{j}" for j in range(1, 7))

@@ -88,7 +88,7 @@ def test_simulate_any_robot_given_parameters(tmp_path, own_rx90):
     qd = 0.3 * 0.7 * np.arange(1, 7) * np.cos(np.outer(t, np.arange(1, 7)) * 0.7)
     qdd = -(0.7 * np.arange(1, 7)) ** 2 * q
     header = ",".join(["t"] + [f"{k}{j}" for k in ("q", "dq", "ddq") for j in range(1, 7)])
-    np.savetxt(tmp_path / "traj.csv", np.c_[t, robot.to_staubli(q), qd, qdd], delimiter=",",
+    np.savetxt(tmp_path / "traj.csv", np.c_[t, robot.to_controller(q), qd, qdd], delimiter=",",
                header=header, comments="")
     chi = random_chi(robot, np.random.default_rng(5))
     (tmp_path / "p.json").write_text(json.dumps(dict(zip(robot.parameter_names, chi.tolist()))))

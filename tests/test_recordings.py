@@ -299,7 +299,7 @@ def _with_qd_max(robot, qd_max):
     from types import SimpleNamespace
     limits = SimpleNamespace(q_min=robot.limits.q_min, q_max=robot.limits.q_max, qd_max=qd_max)
     return SimpleNamespace(name=robot.name, n=robot.n, parameter_names=robot.parameter_names,
-                           limits=limits, to_khalil=robot.to_khalil, to_staubli=robot.to_staubli)
+                           limits=limits, to_model=robot.to_model, to_controller=robot.to_controller)
 
 
 def test_npz_validation(tmp_path, rx90):

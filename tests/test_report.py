@@ -162,6 +162,8 @@ def test_summary_held_out_figures_are_the_jsons(checked, reports, name):
     # and the headline's worst joint is the JSON's
     worst = max(val["relative_error_pct_moving"])
     assert f"worst held-out error while moving {worst:.1f} %" in checked[name]["summary_text"]
+    # both held-out files are the end of the fitted run: said so
+    assert "the same motion split at an arbitrary point" in checked[name]["summary_text"]
 
 
 @pytest.mark.slow
@@ -281,3 +283,13 @@ def test_excite_summary_is_the_jsons(checked, reports):
     rows = [[re.sub(r"[✓!✗]", "", c).strip() for c in r] for r in checked["excite"]["summary_cells"]]
     for k, kind in enumerate(("position", "velocity", "acceleration", "torque"), start=1):
         assert [r[k] for r in rows] == [fixed(100 * v, 0) for v in usage[kind]]
+
+
+def test_split_flag_only_for_a_held_out_part_that_continues_the_fitted_run():
+    from identify.app.report.identify_page import split_flags
+
+    fitted = {"recordings": [{"source": "a.csv", "t_first_s": 0.0, "t_last_s": 6.0}]}
+    assert [f["code"] for f in split_flags({**fitted, "heldout": {"source": "b.csv", "t_first_s": 6.02}})] \
+        == ["arbitrary-split"]
+    assert split_flags({**fitted, "heldout": {"source": "c.csv", "t_first_s": 0.0}}) == []  # another motion
+    assert split_flags({**fitted, "heldout": None}) == []

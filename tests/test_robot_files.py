@@ -109,7 +109,7 @@ def test_typos_are_errors_naming_file_line_and_nearest_name(tmp_path, old, new, 
 def test_old_section_name_and_both_spellings(tmp_path):
     old = rx90sym.load_robot(_write(tmp_path, RX90.replace("[controller]", "[staubli]"), "old.toml"))
     new = rx90sym.load_robot("rx90")
-    np.testing.assert_array_equal(old.staubli_offsets, new.staubli_offsets)
+    np.testing.assert_array_equal(old.controller_offsets, new.controller_offsets)
     both = RX90.replace("[controller]", "[staubli]\noffsets = [0, 0, 0, 0, 0, 0]\n\n[controller]")
     with pytest.raises(RobotFileError, match=r"\[controller\] or its old name \[staubli\]"):
         rx90sym.load_robot(_write(tmp_path, both))

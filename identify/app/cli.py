@@ -11,7 +11,7 @@ import warnings
 from typing import Sequence
 
 import rx90sym
-from identify.estimation.consistency import ConsistencyError
+from identify.estimation.consistency.errors import ConsistencyError
 
 from .commands import COMMANDS
 from .common import PROG

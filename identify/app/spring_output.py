@@ -4,12 +4,12 @@ from __future__ import annotations
 from typing import Any
 
 import rx90sym
-from identify.observation.spring_fit import SpringBase, spring_base, spring_summary  # noqa: F401 (re-exported)
+from identify.observation.spring_fit import BaseWithSpring, spring_base, spring_summary  # noqa: F401 (re-exported)
 
 from .common import UsageError, progress, spring_notice
 
 
-def attach_spring(robot: rx90sym.Robot, spring_model: Any, validate: str | None, method: str) -> SpringBase | None:
+def attach_spring(robot: rx90sym.Robot, spring_model: Any, validate: str | None, method: str) -> BaseWithSpring | None:
     """The base parameters plus the spring's coefficients for ``--spring identify``, or None
     (then warns when the robot's spring is a placeholder)."""
     if spring_model is None:

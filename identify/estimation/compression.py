@@ -11,7 +11,6 @@ from dataclasses import dataclass
 from typing import Sequence
 
 import numpy as np
-import scipy.linalg as sla
 
 from rx90sym.recording import frozen_array
 
@@ -104,6 +103,7 @@ def _qr_r(a: np.ndarray) -> np.ndarray:
     Calls LAPACK dgeqrf directly (blocked, optimal workspace) and may overwrite ``a``:
     scipy.linalg.qr(mode="r") would also copy the whole m × p factor through triu.
     """
+    import scipy.linalg as sla  # imported when solving, not when a command starts
     m, p = a.shape
     if m == 0:
         return np.zeros((p, p))

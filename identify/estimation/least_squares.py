@@ -18,7 +18,6 @@ from typing import Sequence
 
 import numpy as np
 
-import scipy.linalg as sla
 
 from identify.estimation.compression import (DEFAULT_CHUNK_ROWS, CompressedSystem, check_system, compress, compress_rows,
                                   stack_systems)
@@ -102,8 +101,8 @@ def _check_rank(system: CompressedSystem, names: Sequence[str], rcond: float) ->
     )
 
 
-def _cond(R: np.ndarray) -> float:
-    """2-norm condition number of W from its triangular factor (same singular values)."""
+def triangular_cond(R: np.ndarray) -> float:
+    """2-norm condition number of a matrix from its triangular factor R (same singular values)."""
     s = np.linalg.svd(R, compute_uv=False)
     return float(s[0] / s[-1]) if s[-1] > 0 else float("inf")
 
@@ -119,6 +118,7 @@ def solve_compressed(system: CompressedSystem) -> tuple[np.ndarray, np.ndarray, 
         covariance: (c, c) ``σρ²·(WᵀW)⁻¹ = σρ²·R⁻¹·R⁻ᵀ`` (eq. 13), WᵀW never formed.
         sigma_rho: ``√(‖Y − W·x‖² / (r − c))`` (eq. 12), units of Y.
     """
+    import scipy.linalg as sla  # imported when solving, not when a command starts
     r, c = system.rows, system.columns
     if r <= c:
         raise ValueError(f"need more equations than parameters for eq. 12: r = {r}, c = {c}")
@@ -169,7 +169,7 @@ def solve_system(
     n = len(joint_systems)
     if n:
         residual_rms = np.array([np.sqrt(s.rss(x) / s.rows) for s in joint_systems])
-        cond_unweighted = _cond(stack_systems(joint_systems).R)
+        cond_unweighted = triangular_cond(stack_systems(joint_systems).R)
     else:
         residual_rms, cond_unweighted = np.full(0, np.nan), float("nan")
     return IdentificationResult(
@@ -178,7 +178,7 @@ def solve_system(
         std=std,
         rel_std_pct=relative_std_pct(x, std),
         sigma_rho=sigma_rho,
-        cond=_cond(system.R),
+        cond=triangular_cond(system.R),
         cond_unweighted=cond_unweighted,
         residual_rms=residual_rms,
         weights=np.ones(n) if weights is None else np.asarray(weights, dtype=float),

@@ -52,7 +52,7 @@ def _resolve_convention(argument: str | None, declared: str | None, source: str)
 
 def _to_model(q: np.ndarray, robot: rx90sym.Robot, convention: str) -> np.ndarray:
     """File angles -> Khalil angles (the one place the conversion happens on reading)."""
-    return np.asarray(robot.to_khalil(q), dtype=float) if convention == "controller" else q
+    return np.asarray(robot.to_model(q), dtype=float) if convention == "controller" else q
 
 
 def _build(

@@ -224,7 +224,7 @@ def read_recording(path: str | os.PathLike[str], robot: rx90sym.Robot, conventio
 
 def _file_arrays(rec: Recording, robot: rx90sym.Robot, convention: str) -> np.ndarray:
     """Angles in the file's convention (conversion at the file boundary, once)."""
-    return np.asarray(robot.to_staubli(rec.q), dtype=float) if convention == "controller" else np.asarray(rec.q)
+    return np.asarray(robot.to_controller(rec.q), dtype=float) if convention == "controller" else np.asarray(rec.q)
 
 
 def write_recording(

@@ -23,7 +23,7 @@ SpringModel = SpringBasis | SpringStiffness
 
 
 @dataclass(frozen=True, eq=False)
-class SpringBase:
+class BaseWithSpring:
     """Base parameters plus the spring's kept coefficients; usable as ``base`` of
     identify.identify / predict / validate with ``spring=False`` (the measured torque is then
     the motor torque alone, the spring being part of the model).
@@ -66,7 +66,7 @@ class SpringBase:
 
 
 def spring_base(robot: rx90sym.Robot, model: SpringModel, base: Any = None, samples: int = 200,
-                seed: int = 0, tol: float = 1e-8) -> SpringBase:
+                seed: int = 0, tol: float = 1e-8) -> BaseWithSpring:
     """Attach a spring model to the base parameters, leaving out (grouping) every coefficient
     whose column the rigid-body columns and the already kept ones span, on ``samples`` random
     states (seeded): relative residual of its projection below ``tol``."""
@@ -79,7 +79,7 @@ def spring_base(robot: rx90sym.Robot, model: SpringModel, base: Any = None, samp
     Q = rng.uniform(-np.pi, np.pi, (samples, robot.n))
     QD, QDD = rng.normal(0, 2, (samples, robot.n)), rng.normal(0, 5, (samples, robot.n))
     W = base.regressor_batch(Q, QD, QDD).reshape(samples * robot.n, -1)
-    everything = SpringBase(base, model, tuple(model.names), ())
+    everything = BaseWithSpring(base, model, tuple(model.names), ())
     S = everything.spring_columns(Q).reshape(samples * robot.n, -1)
     basis, _ = np.linalg.qr(W / np.maximum(np.linalg.norm(W, axis=0), 1e-300))
     kept, grouped = [], []
@@ -94,10 +94,10 @@ def spring_base(robot: rx90sym.Robot, model: SpringModel, base: Any = None, samp
     if not kept:
         raise ValueError(f"spring on joint {model.joint + 1}: every coefficient {model.names} is spanned "
                          f"by the rigid-body model; nothing to identify")
-    return SpringBase(base, model, tuple(kept), tuple(grouped))
+    return BaseWithSpring(base, model, tuple(kept), tuple(grouped))
 
 
-def spring_torque(result: Any, sb: SpringBase, theta: Any) -> tuple[np.ndarray, np.ndarray]:
+def spring_torque(result: Any, sb: BaseWithSpring, theta: Any) -> tuple[np.ndarray, np.ndarray]:
     """Identified spring torque at joint angles theta (S,) [rad] and its standard deviation
     [N m] from the covariance of the fit (eq. 14), grouped coefficients counted as 0."""
     theta = np.asarray(theta, dtype=float).reshape(-1)
@@ -109,7 +109,7 @@ def spring_torque(result: Any, sb: SpringBase, theta: Any) -> tuple[np.ndarray, 
     return tau, np.sqrt(np.maximum(np.einsum("ik,kl,il->i", F, cov, F), 0.0))
 
 
-def spring_summary(robot: rx90sym.Robot, sb: SpringBase | None, res: Any, recs: Sequence[Any]) -> tuple[dict, str]:
+def spring_summary(robot: rx90sym.Robot, sb: BaseWithSpring | None, res: Any, recs: Sequence[Any]) -> tuple[dict, str]:
     """JSON entry and printed lines describing the spring the identification used."""
     if sb is None:
         if robot.spring is None:
@@ -134,3 +134,14 @@ def spring_summary(robot: rx90sym.Robot, sb: SpringBase | None, res: Any, recs: 
     lines.append(f"  torque on the visited range [{grid[0]:.3g}, {grid[-1]:.3g}] rad: max sigma "
                  f"{sigma.max():.3g} N m (without the grouped terms)")
     return entry, "\n".join(lines)
+
+
+def __getattr__(name: str) -> Any:
+    # The former name, too close to rx90sym.spring.SpringBasis: kept one release.
+    if name == "SpringBase":
+        import warnings
+
+        warnings.warn("identify.observation.spring_fit.SpringBase is deprecated: use BaseWithSpring",
+                      DeprecationWarning, stacklevel=2)
+        return BaseWithSpring
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

@@ -19,7 +19,6 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
-from scipy import signal
 
 from rx90sym.messages import plain
 
@@ -76,6 +75,7 @@ def lowpass(x: np.ndarray, rate: float, cutoff: float, order: int = 4) -> np.nda
     Returns:
         Filtered array, same shape as ``x``.
     """
+    from scipy import signal  # imported when filtering, not when a command starts
     rate = _check_rate(rate)
     if not (0.0 < cutoff < rate / 2.0):
         raise ValueError(f"cutoff must lie in (0, {rate / 2:g}) Hz (Nyquist), got {plain(cutoff)}")
@@ -93,6 +93,7 @@ def _band_spectrum(a: np.ndarray, rate: float, seconds: float, per_octave: int) 
     Averaging in 1/``per_octave`` octave bands steadies the estimate at high frequency (many
     bins per band) while keeping the resolution of the Welch estimate at low frequency.
     """
+    from scipy import signal  # imported when filtering, not when a command starts
     nperseg = min(a.size, max(16, int(round(seconds * rate))))
     f, psd = signal.welch(a, fs=rate, window="hann", nperseg=nperseg, detrend="constant")
     df = f[1] - f[0]
@@ -385,6 +386,7 @@ def decimate(x: np.ndarray, factor: int, ftype: str = "iir") -> np.ndarray:
     Returns:
         (ceil(N / factor), ...) array.
     """
+    from scipy import signal  # imported when filtering, not when a command starts
     if int(factor) != factor or factor < 1:
         raise ValueError(f"factor must be an integer >= 1, got {plain(factor)}")
     if ftype not in ("iir", "fir"):

@@ -11,9 +11,6 @@ from __future__ import annotations
 from dataclasses import dataclass, replace
 
 import numpy as np
-from scipy.interpolate import CubicSpline
-from scipy.optimize import minimize_scalar
-from scipy.signal import correlate
 
 from rx90sym.recording import Recording
 
@@ -69,6 +66,8 @@ def _coarse_lag(empty: Recording, loaded: Recording, step: float) -> float:
         raise ValueError(f"{empty.source}: no joint moves; the runs cannot be paired in time")
     a, b = a[:, moving] / scale[moving], b[:, moving] / scale[moving]
     lags = np.arange(-(len(a) - 1), len(b))   # b[n + lag] against a[n]
+    from scipy.signal import correlate  # SciPy when pairing runs, not when the command line starts
+
     cross = sum(correlate(b[:, j], a[:, j], mode="full", method="fft") for j in range(a.shape[1]))
     ca = np.concatenate([[0.0], np.cumsum(np.sum(a**2, axis=1))])
     cb = np.concatenate([[0.0], np.cumsum(np.sum(b**2, axis=1))])
@@ -106,6 +105,9 @@ def pair_runs(empty: Recording, loaded: Recording, position_tol: float = POSITIO
     """
     if empty.n_joints != loaded.n_joints:
         raise ValueError(f"{empty.source} has {empty.n_joints} joints and {loaded.source} {loaded.n_joints}")
+    from scipy.interpolate import CubicSpline
+    from scipy.optimize import minimize_scalar
+
     step = float(np.median(np.diff(empty.t)))
     coarse = _coarse_lag(empty, loaded, step)
     spline = CubicSpline(loaded.t, loaded.q, axis=0)

@@ -19,7 +19,6 @@ import numbers
 from dataclasses import replace
 
 import numpy as np
-from scipy.interpolate import CubicHermiteSpline, CubicSpline
 
 from rx90sym.messages import plain
 from rx90sym.recording import Recording
@@ -47,6 +46,8 @@ def interpolate(rec: Recording, t: np.ndarray) -> Recording:
     Raises:
         ValueError: ``rec`` is made of several segments (interpolate each of :meth:`Recording.pieces`).
     """
+    from scipy.interpolate import CubicHermiteSpline, CubicSpline  # when used: a fast start
+
     if rec.n_segments > 1:
         raise ValueError(f"{rec.source}: {rec.n_segments} segments (gaps too long to bridge): interpolate "
                          f"each segment on its own")

@@ -20,10 +20,6 @@ from __future__ import annotations
 import argparse
 from typing import Any
 
-from identify.io.bags import MissingExtra, is_bag, read_bag
-from identify.io.logs import read_log
-from identify.signal.gaps import DEFAULT_MAX_GAP
-from identify.io.recordings import read_motor_recording, write_recording
 
 from ..common import UsageError, check_output, convention_option, load_robot, progress, robot_option
 
@@ -58,8 +54,8 @@ def register(sub: Any) -> None:
     sp.add_argument("--resample", type=float, metavar="HZ",
                     help="put every signal on a uniform grid at HZ (needed for irregular time stamps)")
     sp.add_argument("--max-gap", type=float, metavar="S",
-                    help=f"longest gap of lost packets bridged by --resample, s (default "
-                         f"{DEFAULT_MAX_GAP:g}); a longer gap starts a new segment")
+                    help="longest gap of lost packets bridged by --resample, s (default 0.05, "
+                         "identify.signal.gaps.DEFAULT_MAX_GAP); a longer gap starts a new segment")
     sp.add_argument("--no-segments", action="store_true",
                     help="refuse a gap longer than --max-gap instead of splitting the log into segments")
     sp.add_argument("--gains", metavar="LIST|FILE",
@@ -95,6 +91,11 @@ def _robot(args: argparse.Namespace):
 
 
 def run(args: argparse.Namespace) -> int:
+    from identify.io.bags import is_bag
+    from identify.io.logs import read_log
+    from identify.io.recordings import write_recording
+    from identify.signal.gaps import DEFAULT_MAX_GAP
+
     if args.log is None:
         return _run_motor(args)
     mixed = _given(args, _MOTOR_OPTIONS)
@@ -124,6 +125,10 @@ def run(args: argparse.Namespace) -> int:
 
 
 def _run_bag(args: argparse.Namespace) -> int:
+    from identify.io.bags import MissingExtra, read_bag
+    from identify.io.recordings import write_recording
+    from identify.signal.gaps import DEFAULT_MAX_GAP
+
     wrong = _given(args, _CSV_ONLY)
     if wrong:
         raise UsageError(f"{', '.join(wrong)} belong to the LOG.csv form, not to a bag")
@@ -181,6 +186,8 @@ _GAPS_SHOWN = 10
 
 
 def _run_motor(args: argparse.Namespace) -> int:
+    from identify.io.recordings import read_motor_recording, write_recording
+
     extra = _given(args, _LOG_OPTIONS + _BAG_OPTIONS)
     if extra:
         raise UsageError(f"{', '.join(extra)} belong to the log form (give LOG.csv or a bag)")

@@ -7,9 +7,7 @@ from typing import Any
 import numpy as np
 
 from rx90sym.files import write_json
-from identify import read_recording
-from identify.drive_gains import DEFAULT_METHOD, FLAG_PCT, GAIN_METHODS, drive_gains
-from identify.io.gains import read_gains
+from identify.drive_gains import DEFAULT_METHOD, FLAG_PCT, GAIN_METHODS
 from identify.signal.pairing import POSITION_TOLERANCE
 
 from identify.plausibility import PlausibilityError, gain_flags
@@ -67,6 +65,10 @@ def parse_fix(items: list[str], n: int) -> dict[int, float]:
 
 
 def run(args: argparse.Namespace) -> int:
+    from identify.drive_gains import drive_gains
+    from identify.io.gains import read_gains
+    from identify.io.recordings import read_recording
+
     if args.method == "same-motion" and args.no_offsets:
         raise UsageError("conflicting options: --no-offsets is for --method global (offsets cancel in same-motion)")
     if args.method == "global" and args.position_tol != POSITION_TOLERANCE:
@@ -99,7 +101,8 @@ def run(args: argparse.Namespace) -> int:
         from ..report.writers import write_gains_report
 
         write_gains_report(args.report, {**res.to_dict(), "flags": [f.to_json() for f in flags],
-                                         "data": {"empty": args.empty, "loaded": args.loaded}})
+                                         "data": {"empty": [r.source for r in empty],
+                                                  "loaded": [r.source for r in loaded]}})
     return 0
 
 

@@ -7,22 +7,22 @@ one filtering for fit and validation, reused by ``rx90 predict`` through :func:`
 from __future__ import annotations
 
 import argparse
-from typing import Any
+import math
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 import rx90sym
-from identify.fitting import Fit, fit
-from identify.io.gains import read_gains
 from identify.observation.processing import DEFAULT_MIN_VELOCITY, DEFAULT_REST, REST_POLICIES, Processing
-from identify.observation.spring_fit import SpringBase, spring_summary
 from identify.plausibility import estimate_flags, residual_flags, static_gravity_flags, torque_scale_flags
 
 from ..flags import flag_lines, given_gain_flags, settle
-
 from ..common import (UsageError, check_output, convention_option, progress, read_recordings, robot_option,
                       robot_with_spring, spring_options)
-from ..spring_output import attach_spring
+
+if TYPE_CHECKING:  # the method is imported when the command runs, not for its --help
+    from identify.fitting import Fit
+
 
 def _delay(text: str) -> str | float:
     if text == "auto":
@@ -31,7 +31,7 @@ def _delay(text: str) -> str | float:
         value = float(text)
     except ValueError:
         raise argparse.ArgumentTypeError(f"--delay takes 'auto' or a number of seconds, got {text!r}") from None
-    if not np.isfinite(value) or abs(value) > 1.0:
+    if not math.isfinite(value) or abs(value) > 1.0:
         raise argparse.ArgumentTypeError(f"--delay must be a finite number of seconds within ±1, got {text!r}")
     return value
 
@@ -137,6 +137,11 @@ def processing_of(args: argparse.Namespace, spring: bool) -> Processing:
 
 
 def run(args: argparse.Namespace) -> int:
+    from identify.fitting import fit
+    from identify.io.gains import read_gains
+
+    from ..spring_output import attach_spring
+
     _check(args)
     robot, spring_model = _robot(args)
     if args.urdf_out and robot.urdf is None:
@@ -210,25 +215,31 @@ def _print_fit(f: Fit, recs: list, auto_delay: bool) -> None:
 
 
 def _spring_text(f: Fit, recs: list) -> str:
-    return spring_summary(f.robot, f.base if isinstance(f.base, SpringBase) else None, f.result, recs)[1]
+    from identify.observation.spring_fit import BaseWithSpring, spring_summary
+
+    return spring_summary(f.robot, f.base if isinstance(f.base, BaseWithSpring) else None, f.result, recs)[1]
 
 
 def _write_report(path: str, f: Fit, recs: list) -> None:
     """The HTML report from the fit file's content (what --json writes) plus the recordings' extent."""
     from ..report.writers import write_identify_report
 
-    record = {**f.to_json(), "data": data_record(recs, f.observation)}
+    record = {**f.to_json(), "data": data_record(recs, f.observation, f.validation)}
     write_identify_report(path, f.robot, record, f.result, recs[0], f.validation, f.predict(recs[0]),
                           _spring_text(f, recs))
 
 
-def data_record(recs: list, obs: Any) -> dict:
-    """What was fitted: per recording its source, samples, duration [s] and recorded rate [Hz]
-    (1 / mean period); the share of samples where each joint moves (after filtering)."""
-    rows = [{"source": src, "samples": int(len(r.t)), "duration_s": float(r.t[-1] - r.t[0]),
-             "rate_hz": float((len(r.t) - 1) / (r.t[-1] - r.t[0]))} for r, src in zip(recs, obs.sources)]
+def data_record(recs: list, obs: Any, validation: Any = None) -> dict:
+    """What was fitted: per recording its source, samples, first and last time [s], duration [s] and
+    recorded rate [Hz] (1 / mean period); the share of samples where each joint moves (after
+    filtering); the held-out samples' first and last time [s]."""
+    rows = [{"source": src, "samples": int(len(r.t)), "t_first_s": float(r.t[0]), "t_last_s": float(r.t[-1]),
+             "duration_s": float(r.t[-1] - r.t[0]), "rate_hz": float((len(r.t) - 1) / (r.t[-1] - r.t[0]))}
+            for r, src in zip(recs, obs.sources)]
     share = None if obs.moving_fraction is None else [float(v) for v in obs.moving_fraction]
-    return {"recordings": rows, "moving_fraction": share}
+    held = None if validation is None else {"source": validation.source, "t_first_s": float(validation.t[0]),
+                                            "t_last_s": float(validation.t[-1])}
+    return {"recordings": rows, "moving_fraction": share, "heldout": held}
 
 
 def _write_urdf(args: argparse.Namespace, f: Fit) -> None:

@@ -7,11 +7,7 @@ from typing import Any
 import numpy as np
 
 from rx90sym.files import write_json
-from identify.fitting import load_fit
-from identify.io.recordings import read_recording
-from identify.io.gains import apply_gains, read_gains
 from identify.signal.pairing import POSITION_TOLERANCE
-from identify.payload import payload
 
 from identify.plausibility import payload_flags, torque_scale_flags
 
@@ -55,6 +51,11 @@ def register(sub: Any) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
+    from identify.fitting import load_fit
+    from identify.io.gains import apply_gains, read_gains
+    from identify.io.recordings import read_recording
+    from identify.payload import payload
+
     if args.mass_tol is not None and args.mass is None:
         raise UsageError("conflicting options: --mass-tol needs --mass")
     if args.mass is not None and not args.constrained:

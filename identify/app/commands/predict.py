@@ -12,7 +12,6 @@ from typing import Any
 import numpy as np
 
 from rx90sym.files import atomic_write, write_json
-from identify.fitting import load_fit
 
 from ..common import announce_robot, check_output, progress, read_recordings
 
@@ -41,6 +40,8 @@ def write_prediction(path: str, val: Any) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
+    from identify.fitting import load_fit
+
     for out in (args.out, args.json):
         check_output(out)
     f = load_fit(args.identification, args.robot)

@@ -5,8 +5,6 @@ import argparse
 from typing import Any
 
 import rx90sym
-from excitation import read_trajectory
-from identify.io.recordings import write_recording
 
 from ..common import UsageError, check_output, load_robot, progress, robot_option, spring_notice
 
@@ -27,6 +25,9 @@ def register(sub: Any) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
+    from excitation import read_trajectory
+    from identify.io.recordings import write_recording
+
     robot = load_robot(args)
     check_output(args.out)
     try:  # the twin's truth: the bundled RX90's own set, else the robot's nominal parameters

@@ -19,6 +19,7 @@ import numpy as np
 
 from rx90sym.messages import plain
 
+from identify.estimation.consistency.errors import ConsistencyError  # noqa: F401 (raised here, re-exported)
 from identify.estimation.consistency.lmi import body_indices, nonnegative_indices, pseudo_inertia
 
 __all__ = ["DEFAULT_SOLVER_OPTIONS", "SOLVERS", "ConsistencyError", "ConsistentProblem",
@@ -47,21 +48,6 @@ DEFAULT_SOLVER_OPTIONS: dict[str, dict[str, Any]] = {
 
 # The fit
 # ---------------------------------------------------------------------------------------------
-
-
-class ConsistencyError(ValueError):
-    """The consistent least-squares problem could not be solved to optimality.
-
-    Attributes:
-        status: cvxpy status string (``"infeasible"``, ``"optimal_inaccurate"``,
-            ``"solver_error"``, …) or ``"external_check_failed"``.
-        solver: solver name (``"CLARABEL"``, ``"SCS"``).
-    """
-
-    def __init__(self, message: str, *, status: str, solver: str) -> None:
-        super().__init__(message)
-        self.status = status
-        self.solver = solver
 
 
 @dataclass(frozen=True)
