@@ -226,17 +226,8 @@ def filtered_motion(robot: rx90sym.Robot, rec: Any, cutoff: float | None = None,
         # Recorded speeds decide the mask only (they are not filtered like q, so W does not use them).
         speed = np.asarray(rec.dq, dtype=float)[d.kept] if getattr(rec, "dq", None) is not None else d.dq
         moving = np.abs(speed) >= min_velocity
-        terms = coulomb_terms(robot, names if names is not None else robot.parameter_names)
         Phi = np.array(Phi, copy=True)
-        for term in terms:
-            driver_moving = np.abs(speed @ np.asarray(term.driver)) >= min_velocity
-            usable[:, term.row] &= driver_moving
-            if rest == "zero-coulomb":
-                Phi[~driver_moving, term.row, term.column] = 0.0
-            elif rest == "presliding":  # the state of the position history, not the torque
-                z = presliding_state(d.q @ np.asarray(term.driver))
-                Phi[~driver_moving, term.row, term.column] = z[~driver_moving]
-        usable &= moving
+        usable = _rest_rows(robot, names, speed, d.q, Phi, min_velocity, rest) & moving
     plan = decimation_plan(d.rate, decimate_to)
     k = plan.factor
     q, dq, ddq, t = d.q, d.dq, d.ddq, d.t
@@ -257,6 +248,23 @@ def filtered_motion(robot: rx90sym.Robot, rec: Any, cutoff: float | None = None,
 #: filter spans (± the factor) were bridged over lost packets (scattered stale rows pass, a burst
 #: of lost packets does not).
 BRIDGED_SHARE = 0.25
+
+
+def _rest_rows(robot: rx90sym.Robot, names: Sequence[str] | None, speed: np.ndarray, q: np.ndarray,
+               Phi: np.ndarray, min_velocity: float, rest: str) -> np.ndarray:
+    """(S, n) rows whose Coulomb drivers all move; sets the Coulomb entries of ``Phi`` (in place)
+    where their driver rests: 0 ("zero-coulomb") or the presliding state of the filtered positions
+    ``q`` ("presliding"; the position history, never the torque)."""
+    usable = np.ones(speed.shape, dtype=bool)
+    for term in coulomb_terms(robot, names if names is not None else robot.parameter_names):
+        driver_moving = np.abs(speed @ np.asarray(term.driver)) >= min_velocity
+        usable[:, term.row] &= driver_moving
+        if rest == "zero-coulomb":
+            Phi[~driver_moving, term.row, term.column] = 0.0
+        elif rest == "presliding":
+            z = presliding_state(q @ np.asarray(term.driver))
+            Phi[~driver_moving, term.row, term.column] = z[~driver_moving]
+    return usable
 
 
 def _measured_rows(measured: np.ndarray | None, kept: slice, factor: int) -> np.ndarray | None:
