@@ -198,6 +198,19 @@ def test_every_report_prints_on_a4_without_overflow(browser, reports):
         assert m["script"] == "none" and m["scroll_width"] <= 718, (name, m["scroll_width"])
 
 
+@pytest.mark.slow
+def test_many_sections_and_a_wide_table_stay_within_the_screen(browser, tmp_path):
+    """The navigation wraps; a table wider than the screen scrolls inside its own box."""
+    from identify.app.report import Column, Page, Section, Summary, Table, write_page
+
+    wide = Table("wide", "Thirty columns", tuple(Column(f"column {k}", "kg·m²") for k in range(30)),
+                 ((*np.linspace(1, 2, 30),),))
+    sections = tuple(Section(f"s{k}", f"A section with a rather long title number {k}", (wide,) if k == 0 else ())
+                     for k in range(14))
+    write_page(tmp_path / "wide.html", Page("Wide", "test", Summary("Fine."), sections))
+    assert problems(browser.check(tmp_path / "wide.html")) == []
+
+
 # ---------------------------------------------------------------- the check fails on broken pages
 def _broken(browser, reports, tmp_path, edit) -> list[str]:
     text = (reports["tx40"] / "tx40.html").read_text()

@@ -62,19 +62,24 @@ def _data_lines(path: Path, header: bool, n_cols: int, blanks: bool = False) -> 
             continue
         if header and header_line is None:
             header_line = k
-            cells = line.split(",")
-            if len(cells) != n_cols:
-                raise RecordingError(f"{source}: line {k} (the header) has {len(cells)} cells, the column map "
-                                     f"names {n_cols}{_separator_hint(line, n_cols)}")
-            if all(_is_number(c) for c in cells):
-                raise RecordingError(f"{source}: line {k}, read as the header, holds only numbers: the log "
-                                     f"has no header (--no-header, header=False in Python)")
+            _check_header(source, k, line, n_cols)
             continue
         numbers.append(k)
         text.append(line)
     if not numbers:
         raise RecordingError(f"{source}: no data rows")
     return _Lines(source, numbers, text)
+
+
+def _check_header(source: str, k: int, line: str, n_cols: int) -> None:
+    """The header line ``k`` has the column map's cell count and is not a row of numbers."""
+    cells = line.split(",")
+    if len(cells) != n_cols:
+        raise RecordingError(f"{source}: line {k} (the header) has {len(cells)} cells, the column map "
+                             f"names {n_cols}{_separator_hint(line, n_cols)}")
+    if all(_is_number(c) for c in cells):
+        raise RecordingError(f"{source}: line {k}, read as the header, holds only numbers: the log "
+                             f"has no header (--no-header, header=False in Python)")
 
 
 def _is_number(cell: str) -> bool:

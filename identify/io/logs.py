@@ -58,7 +58,8 @@ import rx90sym
 from rx90sym.recording import Recording, RecordingError
 
 from identify.io.columns import ColumnMap, parse_columns, rtde_columns
-from identify.io.log_rows import ABSURD, _bad, _data_lines, _parse, _window, header_cells
+from identify.io.log_rows import (ABSURD, _bad, _check_header, _data_lines, _Lines, _parse,  # noqa: F401 (block reader)
+                                  _window, header_cells)
 from identify.io.units import check_units
 from identify.io.gains import DriveGains, apply_gains, read_gains
 from identify.signal.gaps import DEFAULT_MAX_GAP, LogGaps, find_gaps, stale_rows
@@ -168,16 +169,16 @@ def _check_velocities(dq: np.ndarray | None, q: np.ndarray, t: np.ndarray, span:
 # --------------------------------------------------------------------------------------------
 
 
-def _irregular(t: np.ndarray, numbers: Sequence[int], source: str, found: LogGaps) -> str | None:
+def _irregular(t: np.ndarray, numbers: Sequence[int], source: str, found: LogGaps | None = None) -> str | None:
     """None when every step inside a segment is within TIME_RTOL of the median step, else the
     refusal text (lost packets are irregular steps too: resampling bridges them)."""
     dt = np.diff(t)
     step = float(np.median(dt))
-    inside = np.diff(found.segment) == 0
+    inside = np.diff(found.segment) == 0 if found is not None else np.ones(t.size - 1, dtype=bool)
     off = np.flatnonzero((np.abs(dt - step) > TIME_RTOL * step) & inside)
     if not off.size:
         return None
-    lost = (f", {len(found.bridged)} of them lost packets up to {found.max_gap:g} s that resampling bridges"
+    lost = "" if found is None else (f", {len(found.bridged)} of them lost packets up to {found.max_gap:g} s that resampling bridges"
             if found.bridged else "")
     dt = dt[inside]
     return (f"{source}: irregular time steps: {off.size} of {dt.size} steps differ from the median step "
@@ -265,12 +266,7 @@ def rows_to_recording(source: str, values: np.ndarray, numbers: Sequence[int], c
     """The rows of a log (``values`` (N, columns) as ``cmap`` names them, ``numbers`` their line or
     message numbers) as a recording, by the rules of :func:`read_log`: stale rows dropped, time,
     gaps, positions and velocities checked, resampled, currents through the gains."""
-    if gains is not None and not cmap.i:
-        raise ValueError(f"drive gains given, but the column map names no motor currents (i1..i{robot.n})")
-    if gains is not None and cmap.tau:
-        raise ValueError("drive gains given, but the log already holds joint torques (tau1..): "
-                         "the gains would replace them; map the torques as x:NAME to keep both")
-    drive = read_gains(gains, robot) if isinstance(gains, (str, os.PathLike)) else gains
+    drive = _drive(cmap, gains, robot)
     stale = stale_rows(values, cmap.t, [c for c, name in enumerate(cmap.names) if name != "_"])
     report = {"lines": [numbers[0], numbers[-1]], "rows": int(len(numbers)), "stale_rows": int(stale.sum()),
               "stale_lines": [int(numbers[k]) for k in np.flatnonzero(stale)[:_LISTED]]}
@@ -278,8 +274,7 @@ def rows_to_recording(source: str, values: np.ndarray, numbers: Sequence[int], c
     rec = _recording(source, values, numbers, cmap, robot, convention, report, max_gap, segments, resample)
     if drive is not None:
         rec = apply_gains(rec, drive, robot)
-        rec.meta["log"]["gains"] = (drive.source if drive.source not in ("--gains", "<memory>") else
-                                     ",".join(f"{k:g}" for k in drive.gains) + " N·m/A")
+        rec.meta["log"]["gains"] = gains_label(drive)
     return rec
 
 
@@ -331,3 +326,30 @@ def _recording(source: str, values: np.ndarray, numbers: list[int], cmap: Column
         report.update({"resampled_hz": float(resample), "samples": rec.n_samples,
                        "bridged_samples": int(np.sum(~rec.measured_mask))})
     return rec
+
+
+def gains_label(drive: DriveGains) -> str:
+    """How the report names the drive gains: their file, or their values."""
+    return drive.source if drive.source not in ("--gains", "<memory>") else ",".join(f"{k:g}" for k in drive.gains) + " N·m/A"
+
+
+def _log_options(p: Path, robot: rx90sym.Robot, columns: str | Sequence[str], rows: tuple[int, int] | None,
+                 t_from: float | None, t_to: float | None, gains: DriveGains | str | None,
+                 convention: str | None) -> tuple[ColumnMap, str, DriveGains | None]:
+    """The column map, the convention and the drive gains of a log, checked together."""
+    if rows is not None and (t_from is not None or t_to is not None):
+        raise ValueError("give rows or t_from/t_to (--rows or --from/--to), not both")
+    cmap = parse_columns(columns, robot)
+    conv = _normalise_convention(convention, p.name) or "controller"
+    return cmap, conv, _drive(cmap, gains, robot)
+
+
+def _drive(cmap: ColumnMap, gains: DriveGains | str | None, robot: rx90sym.Robot) -> DriveGains | None:
+    """The drive gains of a log (read from their file or list), refused when the log has no
+    currents or already holds torques."""
+    if gains is not None and not cmap.i:
+        raise ValueError(f"drive gains given, but the column map names no motor currents (i1..i{robot.n})")
+    if gains is not None and cmap.tau:
+        raise ValueError("drive gains given, but the log already holds joint torques (tau1..): "
+                         "the gains would replace them; map the torques as x:NAME to keep both")
+    return read_gains(gains, robot) if isinstance(gains, (str, os.PathLike)) else gains

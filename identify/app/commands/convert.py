@@ -21,7 +21,10 @@ import argparse
 from typing import Any
 
 
+from identify.io.blocks import DEFAULT_LOG_BLOCK, count_rows
+
 from ..common import UsageError, check_output, convention_option, load_robot, progress, robot_option
+from .identify_runs import block_option
 
 _LOG_OPTIONS = ("columns", "no_header", "rows", "t_from", "t_to", "resample", "gains", "max_gap", "no_segments")
 _MOTOR_OPTIONS = ("motor_positions", "motor_torques", "period")
@@ -66,6 +69,9 @@ def register(sub: Any) -> None:
     sp.add_argument("--motor-torques", help="motor form: CSV of motor torques [N m]")
     sp.add_argument("--period", type=float, help="motor form: sampling period [s]")
     sp.add_argument("--out", required=True, help="recording file (.csv or .npz)")
+    sp.add_argument("--block", type=block_option, default=DEFAULT_LOG_BLOCK,
+                    help=f"lines per block: a longer log is converted block by block, memory bounded by the "
+                         f"block (default {DEFAULT_LOG_BLOCK}; output CSV)")
 
 
 def _given(args: argparse.Namespace, names: tuple[str, ...]) -> list[str]:
@@ -112,15 +118,42 @@ def run(args: argparse.Namespace) -> int:
         raise UsageError("a LOG.csv without header needs --columns SPEC (e.g. t,q1..q6,qd1..qd6,i1..i6)")
     robot = _robot(args)
     check_output(args.out)
+    if count_rows(args.log) > args.block:
+        return _run_long(args, robot)
     progress(f"reading the log {args.log}")
     rec = read_log(args.log, robot, args.columns, header=not args.no_header, rows=_rows(args.rows),
                    t_from=args.t_from, t_to=args.t_to, resample=args.resample, gains=args.gains,
                    convention=args.convention, max_gap=args.max_gap or DEFAULT_MAX_GAP,
                    segments=not args.no_segments)
     write_recording(args.out, rec, robot, convention="controller")
-    log = rec.meta["log"]
-    print(_print_log(args.log, rec, log))
+    print(_print_log(args.log, rec.meta["log"], "torques as logged" if rec.current is None else
+                     "no gains: the file keeps currents (give --gains to identify with it)"))
     print(f"converted {rec.n_samples} samples -> {args.out}")
+    return 0
+
+
+def _run_long(args: argparse.Namespace, robot: Any) -> int:
+    """A log longer than --block: converted block by block (identify.io.log_blocks)."""
+    if not args.out.lower().endswith(".csv"):
+        raise UsageError(f"--out {args.out}: a log longer than --block ({args.block} lines) is converted block by "
+                         f"block into a CSV recording")
+    unsupported = [f for f, given in (("--max-gap", args.max_gap is not None), ("--no-segments", args.no_segments))
+                   if given]
+    if unsupported or args.columns is None:
+        raise UsageError(f"a log longer than --block ({args.block} lines) is converted block by block, which "
+                         f"needs --columns and takes no {', '.join(unsupported) or '--max-gap'} (stale rows and "
+                         f"lost packets are handled by the whole-log reader: raise --block)")
+    from identify.io.columns import parse_columns
+    from identify.io.log_blocks import convert_log
+
+    progress(f"converting the log {args.log} block by block ({args.block} lines per block)")
+    log = convert_log(args.log, robot, args.columns, args.out, header=not args.no_header, rows=_rows(args.rows),
+                      t_from=args.t_from, t_to=args.t_to, resample=args.resample, gains=args.gains,
+                      convention=args.convention, block=args.block)
+    currents = bool(parse_columns(args.columns, robot).i)
+    print(_print_log(args.log, log, "no gains: the file keeps currents (give --gains to identify with it)"
+                     if currents else "torques as logged"))
+    print(f"converted {log['samples']} samples -> {args.out}")
     return 0
 
 
@@ -148,25 +181,24 @@ def _run_bag(args: argparse.Namespace) -> int:
     print(f"topic {log['topic']}: {log['messages']} messages, {log['reordered']} out of stamp order (sorted), "
           f"{log['duplicate_stamps']} with a repeated stamp (dropped), {log['incomplete_messages']} missing joints "
           f"(dropped), {log['other_joint_messages']} of other joints (skipped); velocities {log['velocities']}")
-    print(_print_log(args.log, rec, log))
+    print(_print_log(args.log, log, "torques as logged" if rec.current is None else
+                     "no gains: the file keeps currents (give --gains to identify with it)"))
     print(f"converted {rec.n_samples} samples -> {args.out}")
     return 0
 
 
-def _print_log(name: str, rec: Any, log: dict) -> str:
+def _print_log(name: str, log: dict, what_else: str) -> str:
     """What the reader did, in the user's words: rows, rate, stale rows, gaps, grid, torques."""
     steps = (f"rate {log['rate_hz']:.6g} Hz (1 / mean step; median step {log['median_step_s']:g} s, "
              f"{log['irregular_steps']} steps off by more than 1 %)")
     grid = (f"resampled to {log['resampled_hz']:g} Hz: {log['samples']} samples"
             if log["resampled_hz"] else "not resampled")
-    what = (f"gains {log['gains']}: joint torques from the currents" if log["gains"] else
-            "torques as logged" if rec.current is None else "no gains: the file keeps currents (give "
-            "--gains to identify with it)")
-    gaps = log["gaps"]
+    what = f"gains {log['gains']}: joint torques from the currents" if log["gains"] else what_else
+    gaps = log.get("gaps", {"gaps": []})
     lines = [f"read lines {log['lines'][0]}..{log['lines'][1]} of {name}: {log['rows']} rows, {steps}",
              f"largest step {log['largest_gap_s']:g} s (lines {log['largest_gap_lines'][0]}-"
              f"{log['largest_gap_lines'][1]}); {grid}; {what}"]
-    if log["stale_rows"]:
+    if log.get("stale_rows"):
         shown = ", ".join(map(str, log["stale_lines"]))
         lines.append(f"stale rows dropped (exact repeats of the previous row): {log['stale_rows']} (lines "
                      f"{shown}{', ...' if log['stale_rows'] > len(log['stale_lines']) else ''})")
@@ -188,7 +220,7 @@ _GAPS_SHOWN = 10
 def _run_motor(args: argparse.Namespace) -> int:
     from identify.io.recordings import read_motor_recording, write_recording
 
-    extra = _given(args, _LOG_OPTIONS + _BAG_OPTIONS)
+    extra = _given(args, _LOG_OPTIONS + _BAG_OPTIONS) + (["--block"] if args.block != DEFAULT_LOG_BLOCK else [])
     if extra:
         raise UsageError(f"{', '.join(extra)} belong to the log form (give LOG.csv or a bag)")
     missing = [f for f, v in (("--motor-positions", args.motor_positions), ("--motor-torques", args.motor_torques),
