@@ -26,9 +26,9 @@ Rules (one time tolerance everywhere, as in :mod:`identify.io.recordings`):
 
 * A row is corrupt when it has the wrong number of cells, a cell that is not a number, a value
   that is not finite or larger than :data:`ABSURD` in magnitude, a position more than
-  :data:`POSITION_MARGIN` beyond the robot's limits, a time that does not increase, or a time
-  step larger than :data:`MAX_GAP_PERIODS` median steps (a gap). Corrupt rows inside the window
-  raise :class:`RecordingError` naming the first bad rows by line number of the file.
+  :data:`POSITION_MARGIN` beyond the robot's limits, or a time that does not increase (a gap is
+  not corrupt: stale rows, lost packets and segments in :mod:`identify.signal.gaps`). Corrupt rows
+  inside the window raise :class:`RecordingError` naming the first bad rows by line number of the file.
 * ``rows=(FIRST, LAST)`` (1-based line numbers, inclusive) or ``t_from``/``t_to`` (seconds of
   the log's clock: from the first row at or after ``t_from`` to the last row at or before
   ``t_to``) select a clean window; only the window is checked. When the time stamps of a
