@@ -68,6 +68,10 @@ def register(sub: Any) -> None:
                          "FILE: a JSON parameter file; none: no prior, the split is arbitrary)")
     sp.add_argument("--essential", action="store_true", help="also compute the essential parameters")
     sp.add_argument("--cutoff", type=float, help="Butterworth cut-off for q [Hz] (default: chosen from the data)")
+    sp.add_argument("--cross-validate", action="store_true",
+                    help="choose the cut-off, the decimation and the rest policy on the torques by blocked "
+                         "cross-validation (a small grid around the position knee, capped in time; the "
+                         "candidate table is printed and saved)")
     sp.add_argument("--decimate-to", type=float, default=50.0,
                     help="rate after parallel filtering [Hz] (default 50; 0: no decimation)")
     sp.add_argument("--no-decimate", action="store_true", help="no decimation (same as --decimate-to 0)")
@@ -75,7 +79,8 @@ def register(sub: Any) -> None:
                     help=f"rest threshold: a joint slower than this is at rest [rad/s] "
                          f"(default {DEFAULT_MIN_VELOCITY:g}; 0: no rest handling)")
     sp.add_argument("--rest", choices=REST_POLICIES, default=DEFAULT_REST,
-                    help=f"rest samples: drop their rows, or keep them with Coulomb = 0 (default {DEFAULT_REST})")
+                    help=f"rest samples: drop their rows, keep them with Coulomb = 0, or with the presliding "
+                         f"state of the position history (default {DEFAULT_REST})")
     sp.add_argument("--delay", type=_delay, default=0.0,
                     help="torque lag behind the positions: 'auto' (estimated) or seconds (default 0; "
                          "the estimate is always reported)")
@@ -144,7 +149,7 @@ def processing_of(args: argparse.Namespace, spring: bool) -> Processing:
     """The Processing the options ask for (the library's defaults where they say nothing)."""
     return Processing(cutoff=args.cutoff, decimate_to=None if args.no_decimate else args.decimate_to,
                       min_velocity=args.min_velocity, rest=args.rest, delay=args.delay,
-                      estimate_delay=True, spring=spring)
+                      estimate_delay=True, spring=spring, cross_validate=args.cross_validate)
 
 
 def run(args: argparse.Namespace) -> int:
@@ -234,6 +239,12 @@ def _print_fit(f: Fit, recs: list, auto_delay: bool, prior: Any = None) -> None:
     obs, res = f.observation or f.streamed, f.result
     progress(f.delay_estimate.summary() + ("" if auto_delay else " (not compensated: --delay auto does)"))
     progress(obs.summary().replace("\n", "\n  "))
+    for lay in f.recordings:
+        if lay["bridged_samples"] or lay["segments"] > 1 or lay["stale_rows"]:
+            print(f"{lay['source']}: {lay['segments']} segment(s), {lay['bridged_samples']} samples bridged over lost "
+                  f"packets (not fitted), {lay['stale_rows'] or 0} stale rows dropped when read")
+    if f.choice is not None:
+        print(f.choice["table"])
     print(f"filtering: cut-off {f.cutoff:.4g} Hz, rate {f.model.rate_hz:.6g} Hz"
           + (f" (decimated to {f.decimate_to:g} Hz)" if f.decimate_to else " (no decimation)")
           + f", torque delay {1e3 * f.delay:.3g} ms compensated")
