@@ -83,15 +83,22 @@ def write_urscript(path: str | os.PathLike, q: np.ndarray, rate: float,
     return atomic_write(path, lambda f: f.write(text))
 
 
-def franka_check(q: np.ndarray, tau: np.ndarray | None = None, rate: float = FRANKA_RATE) -> list[str]:
+def franka_check(q: np.ndarray, tau: np.ndarray | None = None, rate: float = FRANKA_RATE,
+                 qd: np.ndarray | None = None) -> list[str]:
     """Franka's limits broken by positions q (N, 7) [rad] at ``rate`` (finite differences, as
-    libfranka checks them) and torques tau (N, 7) [N m] (torque rate), naming joint and time."""
+    libfranka checks them) and torques tau (N, 7) [N m] (torque rate), naming joint and time.
+    qd (N, 7) [rad/s]: where a joint's velocity changes sign its model torque steps by twice its
+    Coulomb friction (a step of the friction model, not of the motion): that joint's torque rate
+    is not counted there."""
     out = []
     derivs = {"velocity": (np.diff(q, axis=0) * rate, FRANKA_VELOCITY, "rad/s")}
     derivs["acceleration"] = (np.diff(derivs["velocity"][0], axis=0) * rate, FRANKA_ACCELERATION, "rad/s^2")
     derivs["jerk"] = (np.diff(derivs["acceleration"][0], axis=0) * rate, FRANKA_JERK, "rad/s^3")
     if tau is not None:
-        derivs["torque rate"] = (np.diff(tau, axis=0) * rate, (FRANKA_TORQUE_RATE,) * q.shape[1], "N m/s")
+        rate_tau = np.diff(tau, axis=0) * rate
+        if qd is not None:
+            rate_tau[np.sign(qd[1:]) != np.sign(qd[:-1])] = 0.0
+        derivs["torque rate"] = (rate_tau, (FRANKA_TORQUE_RATE,) * q.shape[1], "N m/s")
     for kind, (x, limit, unit) in derivs.items():
         ratio = np.abs(x) / np.asarray(limit[:q.shape[1]])
         k, j = np.unravel_index(int(np.argmax(ratio)), ratio.shape)

@@ -214,9 +214,9 @@ def collision_violations(collision: CollisionModel, q: np.ndarray, clearance: fl
     return out
 
 
-def find_centre(model: ExcitationModel, margins: Margins = Margins(), slack: float = 0.02) -> np.ndarray:
+def find_centre(model: ExcitationModel, margins: Margins = Margins(), slack: float = 0.1) -> np.ndarray:
     """The centre of the joint ranges if it is inside the envelope (with the optimiser's margins
-    plus ``slack`` [m]), else the nearest such pose (IPOPT, ranges scaled to 1). ValueError when
+    plus ``slack`` [m], 0.1 m: room for the random starts), else the nearest such pose (IPOPT, ranges scaled to 1). ValueError when
     none is found (e.g. a floor the arm cannot clear), naming what the best pose breaks."""
     lim = model.limits
     lo, hi = position_bounds(model, margins.position)

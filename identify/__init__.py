@@ -38,12 +38,14 @@ _EXPORTS = {
     "fit": "identify.fitting",
     "Fit": "identify.fitting",
     "load_fit": "identify.fitting",
+    "fit_fleet": "identify.fleet",
+    "FleetFit": "identify.fleet",
     "predict": "identify.validation",
     "validate": "identify.validation",
     "Validation": "identify.validation",
     # what the fit is used for: payloads (section IV), drive gains
     "payload": "identify.payload",
-    "PayloadMonitor": "identify.payload",
+    "PayloadMonitor": "identify.payload_monitor",
     "PayloadResult": "identify.payload_result",
     "drive_gains": "identify.drive_gains",
 }

@@ -92,6 +92,8 @@ class Fit:
     essential: IdentificationResult | None = None
     validation: Validation | None = None
     flags: tuple[Flag, ...] = ()
+    block: int | None = None        # logs read block by block with this many samples (None: whole)
+    streamed: Any = None            # the block-wise fit's record (identify.stream_fit.StreamedFit)
 
     # ------------------------------------------------------------ what the fit used
     @property
@@ -127,6 +129,11 @@ class Fit:
     def predict(self, recording: Any, result: IdentificationResult | None = None) -> Validation:
         """Torques of ``recording`` predicted with this fit's parameters (or ``result``) and processing.
         The Coulomb term is 0 where a joint rests (every sample is predicted, whatever the rest policy)."""
+        if self.block is not None:  # a long log: block by block, as it was fitted
+            from identify.stream_fit import predict_streamed
+
+            return predict_streamed(self.robot, result or self.result, recording, base=self.base, block=self.block,
+                                    convention=self.model.convention, gains=self.gains, **self.filtering())
         return predict(self.robot, result or self.result, recording, base=self.base, **self.filtering())
 
     def validate(self, recording: Any) -> Validation:
@@ -151,8 +158,12 @@ class Fit:
     def bootstrapped(self, seed: int = 0, draws: int = BOOTSTRAP_DRAWS, block_s: float = BOOTSTRAP_BLOCK_S) -> "Fit":
         """This fit with the segment-bootstrap σ of each estimate (blocks of ``block_s`` s)."""
         obs = self.observation
+        done = self.bootstrap
+        if self.streamed is not None and done is not None and (done.seed, done.draws) == (seed, draws):
+            return self  # computed while the blocks streamed by (fit(..., block=...))
         if obs is None:
-            raise ValueError("bootstrap needs the fit's observation matrix (not a fit loaded from a file)")
+            raise ValueError("bootstrap needs the fit's observation matrix (not a fit loaded from a file; "
+                             "a fit in blocks computes it while it reads them: fit(..., bootstrap_seed=...))")
         block = max(1, int(round(block_s * obs.rate)))
         std = segment_bootstrap_std(obs.W, obs.Y, obs.joint, obs.samples, self.result.weights, block, draws, seed)
         return replace(self, bootstrap=Bootstrap(std, block / obs.rate, draws, seed))
@@ -216,7 +227,8 @@ def _spring_label(robot: rx90sym.Robot, base: Any) -> str:
 def fit(robot: rx90sym.Robot, recordings: Sequence[Any], processing: Processing | None = None,
         method: str = "wls", *, base: Any = None, gains: DriveGains | None = None,
         convention: str | None = None, spring_source: str | None = None,
-        observation: Observation | None = None, **consistent_options: Any) -> Fit:
+        observation: Observation | None = None, block: int | None = None, client: Any = None,
+        bootstrap_seed: int = 0, **consistent_options: Any) -> Fit:
     """Identify the base parameters of ``robot`` from ``recordings``.
 
     processing: the signal processing (None: the defaults, those of ``rx90 identify``);
@@ -229,7 +241,17 @@ def fit(robot: rx90sym.Robot, recordings: Sequence[Any], processing: Processing 
     recordings), convention (of the files; None: each file's header), spring_source ("default",
     "none" or a table file; None: from the robot). observation: an already built observation
     matrix (the recordings are then not read; no delay estimate).
+    block: read, filter and fit the recordings (CSV paths, recordings) in blocks of this many
+    samples: memory bounded by the block whatever the logs' length (docs/long-logs.md), the
+    segment bootstrap computed on the way with ``bootstrap_seed``; client: a
+    ``dask.distributed.Client`` running the blocks (block by default 60,000 samples).
     """
+    if block is not None or client is not None:
+        from identify.stream_fit import fit_in_blocks
+
+        return fit_in_blocks(robot, recordings, processing, method, base=base, gains=gains, convention=convention,
+                             spring_source=spring_source, block=block, client=client, bootstrap_seed=bootstrap_seed,
+                             **consistent_options)
     if method not in METHODS:
         raise ValueError(f"fit: method must be one of {METHODS}, got {method!r}")
     p = processing if processing is not None else Processing()

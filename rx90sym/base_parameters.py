@@ -11,7 +11,7 @@ are independent of the preceding columns, so both give the same names and the sa
 """
 from __future__ import annotations
 
-from dataclasses import dataclass, replace
+from dataclasses import dataclass, fields, replace
 from functools import cached_property
 from typing import TYPE_CHECKING, Any
 
@@ -45,6 +45,14 @@ class BaseParameters:
     K_symbolic: ca.Function | None = None  # geometry symbols -> K (symbolic method)
     geometry_names: tuple[str, ...] = ()
     geometry_values: tuple[float, ...] = ()
+
+    def __getstate__(self) -> dict[str, Any]:
+        """The fields only: cached CasADi functions are rebuilt on first use (pickling for Dask workers)."""
+        return {f.name: getattr(self, f.name) for f in fields(self)}
+
+    def __setstate__(self, state: dict[str, Any]) -> None:
+        for key, value in state.items():
+            object.__setattr__(self, key, value)
 
     @property
     def nb(self) -> int:

@@ -6,7 +6,7 @@ instance (like Pinocchio's Model, the description never changes once made).
 from __future__ import annotations
 
 import warnings
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, field, fields, replace
 from functools import cached_property
 from typing import Any, Iterable, Sequence
 
@@ -114,6 +114,14 @@ class Robot:
     urdf: Any = None
     nominal: Any = None
     flange: np.ndarray | None = None
+
+    def __getstate__(self) -> dict[str, Any]:
+        """The fields only: cached CasADi functions are rebuilt on first use (pickling for Dask workers)."""
+        return {f.name: getattr(self, f.name) for f in fields(self)}
+
+    def __setstate__(self, state: dict[str, Any]) -> None:
+        for key, value in state.items():
+            object.__setattr__(self, key, value)
 
     @property
     def gravity_vector(self) -> np.ndarray:

@@ -17,8 +17,9 @@ import pytest
 
 import rx90sym
 from identify.app.cli import main
+from identify.fitting import load_fit
 from identify.io.recordings import write_recording
-from identify.plausibility import (RESIDUAL_SHARE, Flag, estimate_flags, gain_flags, payload_flags,
+from identify.plausibility import (RESIDUAL_SHARE, Flag, estimate_flags, gain_flags, margin_flags, payload_flags,
                                    residual_flags, static_gravity_flags, torque_scale_flags)
 from rx90sym.twin import CurrentSensor
 
@@ -204,6 +205,8 @@ def test_a_non_physical_estimate_is_flagged_in_table_and_json(files, tmp_path, c
     assert "flag [estimate_not_physical]: FS2" in stdout and "--method consistent" in stdout
     flags = json.loads(out.read_text())["flags"]
     assert any(f["code"] == "estimate_not_physical" and f["parameter"] == "FS2" for f in flags)
+    # The fit file keeps them: read back as Flag objects (for predict, the report, export).
+    assert "estimate_not_physical" in [f.code for f in load_fit(out).flags]
 
 
 # --- the library checks on their own ------------------------------------------------------------
@@ -235,6 +238,8 @@ def test_payload_and_estimate_flags():
     flags = estimate_flags(("ZZ1R", "MX2", "FS3", "FV3", "IA4", "M6"), np.array([-5, -5, -1.0, -1.0, 0.1, -0.1]),
                            np.array([0.1, 0.1, 0.2, 0.5, 0.1, 0.1]))
     assert [f.parameter for f in flags] == ["FS3"]  # FV3 + 3 sigma > 0; M6 + 3 sigma > 0
+    assert margin_flags(0.01) == [] and margin_flags(-0.01)[0].code == "consistency_margin_negative"
+    assert Flag.from_json(flags[0].to_json()) == flags[0]
 
 
 def test_torque_scale_and_residual_flags(rx90):

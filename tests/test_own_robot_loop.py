@@ -42,7 +42,8 @@ def test_urdf_to_excitation_identification_urdf_and_payload(tmp_path):
     # default self-collision capsules are sized for the RX90 and touch on the UR at the centre of
     # its joint ranges, so they are turned off here.
     _rx90("excite", *ROBOT, "--duration", "10", "--harmonics", "3", "--starts", "1", "--seed", "0",
-          "--no-self-collision", "--out", "traj.csv", "--json", "excite.json", cwd=tmp_path)
+          "--no-self-collision", "--velocity-scale", "1", "--acceleration-scale", "1", "--max-tool-speed", "1.5",
+          "--out", "traj.csv", "--json", "excite.json", cwd=tmp_path)  # a twin: the loosest envelope, for the wrist
     usage = json.loads((tmp_path / "excite.json").read_text())["limits_usage"]
     assert usage["feasible"] and len(usage["torque"]) == robot.n
     assert all(u is not None and 0.0 < u <= 1.0 for u in usage["torque"])

@@ -162,6 +162,8 @@ def test_summary_held_out_figures_are_the_jsons(checked, reports, name):
     # and the headline's worst joint is the JSON's
     worst = max(val["relative_error_pct_moving"])
     assert f"worst held-out error while moving {worst:.1f} %" in checked[name]["summary_text"]
+    # both held-out files are the end of the fitted run: said so
+    assert "the same motion split at an arbitrary point" in checked[name]["summary_text"]
 
 
 @pytest.mark.slow
@@ -194,6 +196,19 @@ def test_every_report_prints_on_a4_without_overflow(browser, reports):
     for name, folder in reports.items():
         m = browser.check(folder / f"{name}.html", media="print", width=718, script=nav)
         assert m["script"] == "none" and m["scroll_width"] <= 718, (name, m["scroll_width"])
+
+
+@pytest.mark.slow
+def test_many_sections_and_a_wide_table_stay_within_the_screen(browser, tmp_path):
+    """The navigation wraps; a table wider than the screen scrolls inside its own box."""
+    from identify.app.report import Column, Page, Section, Summary, Table, write_page
+
+    wide = Table("wide", "Thirty columns", tuple(Column(f"column {k}", "kg·m²") for k in range(30)),
+                 ((*np.linspace(1, 2, 30),),))
+    sections = tuple(Section(f"s{k}", f"A section with a rather long title number {k}", (wide,) if k == 0 else ())
+                     for k in range(14))
+    write_page(tmp_path / "wide.html", Page("Wide", "test", Summary("Fine."), sections))
+    assert problems(browser.check(tmp_path / "wide.html")) == []
 
 
 # ---------------------------------------------------------------- the check fails on broken pages
@@ -281,3 +296,13 @@ def test_excite_summary_is_the_jsons(checked, reports):
     rows = [[re.sub(r"[✓!✗]", "", c).strip() for c in r] for r in checked["excite"]["summary_cells"]]
     for k, kind in enumerate(("position", "velocity", "acceleration", "torque"), start=1):
         assert [r[k] for r in rows] == [fixed(100 * v, 0) for v in usage[kind]]
+
+
+def test_split_flag_only_for_a_held_out_part_that_continues_the_fitted_run():
+    from identify.app.report.identify_page import split_flags
+
+    fitted = {"recordings": [{"source": "a.csv", "t_first_s": 0.0, "t_last_s": 6.0}]}
+    assert [f["code"] for f in split_flags({**fitted, "heldout": {"source": "b.csv", "t_first_s": 6.02}})] \
+        == ["arbitrary-split"]
+    assert split_flags({**fitted, "heldout": {"source": "c.csv", "t_first_s": 0.0}}) == []  # another motion
+    assert split_flags({**fitted, "heldout": None}) == []

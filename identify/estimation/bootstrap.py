@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["segment_bootstrap_std", "bootstrap_std", "BLOCK_S", "DRAWS"]
+__all__ = ["SegmentBootstrap", "segment_bootstrap_std", "bootstrap_std", "BLOCK_S", "DRAWS"]
 
 #: Block length, s: longer than the residual's correlation (filtered at 20-30 Hz, decimated to
 #: 50 Hz: a few samples), short enough for ~100 blocks in a 50 s run.
@@ -49,14 +49,65 @@ def segment_bootstrap_std(W: np.ndarray, Y: np.ndarray, joint: np.ndarray, sampl
         rows = ids == b
         A[k] = Zw[rows].T @ Ww[rows]
         g[k] = Zw[rows].T @ Yw[rows]
+    counts = _draw_counts(blocks.size, draws, seed)
+    return _spread(np.tensordot(counts, A, axes=1), counts @ g)
+
+
+def _draw_counts(blocks: int, draws: int, seed: int) -> np.ndarray:
+    """(draws, blocks) how often each block is drawn in each refit (blocks drawn with replacement)."""
     rng = np.random.default_rng(seed)
-    estimates = np.full((draws, c), np.nan)
-    for i in range(draws):
-        counts = np.bincount(rng.integers(0, blocks.size, blocks.size), minlength=blocks.size)
-        M = np.tensordot(counts, A, axes=1)
-        if np.linalg.matrix_rank(M) == c:
-            estimates[i] = np.linalg.solve(M, counts @ g)
+    return np.stack([np.bincount(rng.integers(0, blocks, blocks), minlength=blocks) for _ in range(draws)])
+
+
+def _spread(M: np.ndarray, g: np.ndarray) -> np.ndarray:
+    """Standard deviation of the refits ``M_d⁻¹·g_d`` (NaN for a rank-deficient draw)."""
+    c = M.shape[-1]
+    estimates = np.full((M.shape[0], c), np.nan)
+    for i in range(M.shape[0]):
+        if np.linalg.matrix_rank(M[i]) == c:
+            estimates[i] = np.linalg.solve(M[i], g[i])
     return np.nanstd(estimates, axis=0, ddof=1)
+
+
+class SegmentBootstrap:
+    """:func:`segment_bootstrap_std` fed block by block (a long log's W is never held).
+
+    Every draw's normal equations are sums over the bootstrap blocks weighted by how often the
+    draw picks them, so each piece of rows adds its share to every draw at once, per joint (the
+    joint weights are known only at the end). The draws are those of :func:`segment_bootstrap_std`
+    for the same seed when every block has rows (no rest sample dropped from a whole block).
+    Memory: draws × n × c² doubles (200 × 7 × 78² ≈ 68 MB).
+
+    Args:
+        samples: decimated samples of all the recordings together; block, draws, seed: as
+            :func:`segment_bootstrap_std`; joints n, columns c.
+    """
+
+    def __init__(self, samples: int, block: int, joints: int, columns: int, draws: int = 200, seed: int = 0) -> None:
+        if block < 1 or draws < 2:
+            raise ValueError(f"block must be >= 1 sample and draws >= 2, got {block} and {draws}")
+        self.block = int(block)
+        self.counts = _draw_counts(-(-int(samples) // self.block), draws, seed).astype(np.int32)  # 4 B a block
+        self.M = np.zeros((draws, joints, columns, columns))
+        self.g = np.zeros((draws, joints, columns))
+
+    def add(self, joint: int, samples: np.ndarray, W: np.ndarray, Y: np.ndarray) -> None:
+        """Rows of joint ``joint``: their decimated sample index (increasing), W (m, c), Y (m,)."""
+        if samples.size == 0:
+            return
+        ids = np.asarray(samples) // self.block
+        starts = np.flatnonzero(np.r_[True, ids[1:] != ids[:-1]])
+        stops = np.r_[starts[1:], ids.size]
+        A = np.stack([W[a:b].T @ W[a:b] for a, b in zip(starts, stops)])
+        g = np.stack([W[a:b].T @ Y[a:b] for a, b in zip(starts, stops)])
+        picked = self.counts[:, ids[starts]].astype(float)
+        self.M[:, joint] += (picked @ A.reshape(A.shape[0], -1)).reshape(self.M.shape[0], *A.shape[1:])
+        self.g[:, joint] += picked @ g
+
+    def std(self, weights: np.ndarray) -> np.ndarray:
+        """(c,) standard deviations for the joint weights of the fit (1 for OLS)."""
+        w2 = np.asarray(weights, dtype=float) ** 2
+        return _spread(np.tensordot(self.M, w2, axes=([1], [0])), np.tensordot(self.g, w2, axes=([1], [0])))
 
 
 def bootstrap_std(W: np.ndarray, Y: np.ndarray, joint: np.ndarray, samples: np.ndarray, weights: np.ndarray,

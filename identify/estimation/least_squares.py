@@ -37,6 +37,7 @@ __all__ = [
     "solve_system",
     "joint_noise_std",
     "weighted_least_squares",
+    "solve_joint_systems",
 ]
 
 #: Rank tolerance: a singular value of the column-scaled W (every column scaled to unit norm,
@@ -306,6 +307,21 @@ def weighted_least_squares(
     blocks = [
         compress_rows(W, Y, rows, chunk_rows) for rows in np.split(order, bounds)
     ]
+    return solve_joint_systems(blocks, names, weighted, rcond=rcond)
+
+
+def solve_joint_systems(blocks: Sequence[CompressedSystem], names: Sequence[str], weighted: bool = True, *,
+                        rcond: float = RANK_RCOND) -> IdentificationResult:
+    """:func:`weighted_least_squares` from the joints' compressed systems (eqs. 9-15), wherever they
+    come from: the QR of a whole W, or the block-by-block QR of a long log
+    (:class:`identify.estimation.incremental_qr.JointFactors`). The per-joint residual of each
+    joint's own fit, hence its weight, follows from its system alone (:func:`joint_noise_std`)."""
+    names = tuple(names)
+    empty = [i for i, b in enumerate(blocks) if b.rows == 0]
+    if empty:
+        raise ValueError(f"joint {empty[0]} has no rows")
+    if sum(b.rows for b in blocks) <= len(names):
+        raise ValueError(f"need more equations than parameters: r = {sum(b.rows for b in blocks)}, c = {len(names)}")
     unweighted = stack_systems(blocks)
     _check_rank(unweighted, names, rcond)
     if not weighted:

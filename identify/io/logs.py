@@ -114,19 +114,24 @@ def _data_lines(path: Path, header: bool, n_cols: int) -> _Lines:
             continue
         if header and header_line is None:
             header_line = k
-            cells = line.split(",")
-            if len(cells) != n_cols:
-                raise RecordingError(f"{source}: line {k} (the header) has {len(cells)} cells, the column map "
-                                     f"names {n_cols}{_separator_hint(line, n_cols)}")
-            if all(_is_number(c) for c in cells):
-                raise RecordingError(f"{source}: line {k}, read as the header, holds only numbers: the log "
-                                     f"has no header (--no-header, header=False in Python)")
+            _check_header(source, k, line, n_cols)
             continue
         numbers.append(k)
         text.append(line)
     if not numbers:
         raise RecordingError(f"{source}: no data rows")
     return _Lines(source, numbers, text)
+
+
+def _check_header(source: str, k: int, line: str, n_cols: int) -> None:
+    """The header line ``k`` has the column map's cell count and is not a row of numbers."""
+    cells = line.split(",")
+    if len(cells) != n_cols:
+        raise RecordingError(f"{source}: line {k} (the header) has {len(cells)} cells, the column map "
+                             f"names {n_cols}{_separator_hint(line, n_cols)}")
+    if all(_is_number(c) for c in cells):
+        raise RecordingError(f"{source}: line {k}, read as the header, holds only numbers: the log "
+                             f"has no header (--no-header, header=False in Python)")
 
 
 def _is_number(cell: str) -> bool:
@@ -380,17 +385,7 @@ def read_log(
         ValueError: a bad column map, window or gains.
     """
     p = Path(path)
-    if rows is not None and (t_from is not None or t_to is not None):
-        raise ValueError("give rows or t_from/t_to (--rows or --from/--to), not both")
-    cmap = parse_columns(columns, robot)
-    conv = _normalise_convention(convention, p.name) or "controller"
-    if gains is not None and not cmap.i:
-        raise ValueError(f"drive gains given, but the column map names no motor currents (i1..i{robot.n})")
-    if gains is not None and cmap.tau:
-        raise ValueError("drive gains given, but the log already holds joint torques (tau1..): "
-                         "the gains would replace them; map the torques as x:NAME to keep both")
-    drive = read_gains(gains, robot) if isinstance(gains, (str, os.PathLike)) else gains
-
+    cmap, conv, drive = _log_options(p, robot, columns, rows, t_from, t_to, gains, convention)
     lines = _data_lines(p, header, len(cmap.names))
     a, b = _window(lines, rows, t_from, t_to, cmap.t)
     values = _parse(lines, a, b, cmap)
@@ -435,6 +430,26 @@ def read_log(
         report["samples"] = rec.n_samples
     if drive is not None:
         rec = apply_gains(rec, drive, robot)
-        rec.meta["log"]["gains"] = (drive.source if drive.source not in ("--gains", "<memory>") else
-                                     ",".join(f"{k:g}" for k in drive.gains) + " N·m/A")
+        rec.meta["log"]["gains"] = gains_label(drive)
     return rec
+
+
+def gains_label(drive: DriveGains) -> str:
+    """How the report names the drive gains: their file, or their values."""
+    return drive.source if drive.source not in ("--gains", "<memory>") else ",".join(f"{k:g}" for k in drive.gains) + " N·m/A"
+
+
+def _log_options(p: Path, robot: rx90sym.Robot, columns: str | Sequence[str], rows: tuple[int, int] | None,
+                 t_from: float | None, t_to: float | None, gains: DriveGains | str | None,
+                 convention: str | None) -> tuple[ColumnMap, str, DriveGains | None]:
+    """The column map, the convention and the drive gains of a log, checked together."""
+    if rows is not None and (t_from is not None or t_to is not None):
+        raise ValueError("give rows or t_from/t_to (--rows or --from/--to), not both")
+    cmap = parse_columns(columns, robot)
+    conv = _normalise_convention(convention, p.name) or "controller"
+    if gains is not None and not cmap.i:
+        raise ValueError(f"drive gains given, but the column map names no motor currents (i1..i{robot.n})")
+    if gains is not None and cmap.tau:
+        raise ValueError("drive gains given, but the log already holds joint torques (tau1..): "
+                         "the gains would replace them; map the torques as x:NAME to keep both")
+    return cmap, conv, read_gains(gains, robot) if isinstance(gains, (str, os.PathLike)) else gains

@@ -167,7 +167,7 @@ def filtered_motion(robot: rx90sym.Robot, rec: Any, cutoff: float | None = None,
                     decimate_to: float | None = None, spring: bool = True,
                     regressor_batch: Callable[..., np.ndarray] | None = None,
                     names: Sequence[str] | None = None, min_velocity: float | None = None,
-                    rest: str = "drop", delay: float = 0.0) -> FilteredMotion:
+                    rest: str = "drop", delay: float = 0.0, kept: slice | None = None) -> FilteredMotion:
     """Derivatives, regressor and torques of one recording, decimated together.
 
     regressor_batch: (Q, QD, QDD) -> (S, n, c) giving the columns wanted (default: all the
@@ -177,6 +177,8 @@ def filtered_motion(robot: rx90sym.Robot, rec: Any, cutoff: float | None = None,
     rest: "drop" (rows kept as they are, ``usable`` tells which to drop) or "zero-coulomb"
     (Coulomb entries set to 0 where their driver rests, before the parallel filter).
     delay [s]: torques lag positions by this much (compensated by :func:`shifted_torques`).
+    kept: the samples kept after differentiation (default: all but the filter's edges; a block of a
+    long recording keeps its core, :mod:`identify.observation.stream`).
     """
     if rest not in REST_POLICIES:
         raise ValueError(f"rest must be one of {REST_POLICIES}, got {rest!r}")
@@ -189,7 +191,7 @@ def filtered_motion(robot: rx90sym.Robot, rec: Any, cutoff: float | None = None,
         raise ValueError(f"{rec.source}: recording is of robot {rec.robot!r}, not {robot.name!r}")
     if cutoff is None:
         cutoff = automatic_cutoff([rec], decimate_to)
-    d = derivatives(rec.t, rec.q, cutoff=cutoff)
+    d = derivatives(rec.t, rec.q, cutoff=cutoff, kept=kept)
     tau = shifted_torques(rec, delay)[d.kept]
     extra = robot.spring_torque_batch(d.q)[:, :, 0] if spring else 0.0
     Y = tau + extra
@@ -202,7 +204,8 @@ def filtered_motion(robot: rx90sym.Robot, rec: Any, cutoff: float | None = None,
         speed = np.asarray(rec.dq, dtype=float)[d.kept] if getattr(rec, "dq", None) is not None else d.dq
         moving = np.abs(speed) >= min_velocity
         terms = coulomb_terms(robot, names if names is not None else robot.parameter_names)
-        Phi = np.array(Phi, copy=True)
+        if not (Phi.flags.owndata and Phi.flags.writeable):  # a reused workspace's view: not ours to change
+            Phi = np.array(Phi, copy=True)
         for term in terms:
             driver_moving = np.abs(speed @ np.asarray(term.driver)) >= min_velocity
             usable[:, term.row] &= driver_moving

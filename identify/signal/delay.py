@@ -17,7 +17,7 @@ import rx90sym
 from identify.signal.filtering import decimate
 from identify.observation.matrix import automatic_cutoff, column_regressor, filtered_motion, shifted_torques, stack_rows
 
-__all__ = ["DelayEstimate", "estimate_delay"]
+__all__ = ["DelayEstimate", "delay_grid", "estimate_delay", "joint_log_rms", "refined_delay"]
 
 
 @dataclass(frozen=True, eq=False)
@@ -61,8 +61,7 @@ def estimate_delay(robot: rx90sym.Robot, recordings: Sequence[Any], base: Any = 
                for rec in recordings]
     masks = [m.usable for m in motions] if (min_velocity is not None and rest == "drop") else None
     period = max(float(np.median(np.diff(rec.t))) for rec in recordings)
-    step = max(period, 2 * max_delay / (steps - 1))
-    grid = np.arange(-max_delay, max_delay + step / 2, step)
+    grid, step = delay_grid(period, max_delay, steps)
 
     def cost(delay: float) -> float:
         Ys = []
@@ -72,7 +71,27 @@ def estimate_delay(robot: rx90sym.Robot, recordings: Sequence[Any], base: Any = 
         W, Y, joint, _ = stack_rows([m.Phi for m in motions], Ys, masks=masks)
         return _cost(W, Y, joint, robot.n)
 
-    costs = np.array([cost(d) for d in grid])
+    return refined_delay(grid, np.array([cost(d) for d in grid]), step)
+
+
+def delay_grid(period: float, max_delay: float = 0.02, steps: int = 41) -> tuple[np.ndarray, float]:
+    """The coarse grid of lags [s] of :func:`estimate_delay` for a sampling ``period`` [s], and its step [s]."""
+    step = max(period, 2 * max_delay / (steps - 1))
+    return np.arange(-max_delay, max_delay + step / 2, step), step
+
+
+def joint_log_rms(systems: Sequence[Any]) -> float:
+    """The cost of :func:`estimate_delay` from the joints' compressed systems of one lag: plain LS on
+    all joints, then the sum over joints of the log of each joint's residual RMS."""
+    from identify.estimation.compression import stack_systems
+
+    stacked = stack_systems(systems)
+    x, *_ = np.linalg.lstsq(stacked.R, stacked.z, rcond=None)
+    return float(sum(np.log(np.sqrt(s.rss(x) / s.rows) + 1e-300) for s in systems if s.rows))
+
+
+def refined_delay(grid: np.ndarray, costs: np.ndarray, step: float) -> DelayEstimate:
+    """The grid's best lag refined by a parabola through the best three points."""
     k = int(np.argmin(costs))
     at_bound = k in (0, grid.size - 1)
     delay = float(grid[k])

@@ -22,11 +22,16 @@ import numpy as np
 
 from rx90sym.messages import plain
 
+from identify.signal._checks import _as_samples, _check_rate
+from identify.signal.cutoff import choose_cutoff, crossover_frequencies, cutoff_from_spectrum, welch_segment
+
 __all__ = [
     "Derivatives",
     "lowpass",
     "choose_cutoff",
     "crossover_frequencies",
+    "cutoff_from_spectrum",
+    "welch_segment",
     "derivatives",
     "decimate",
     "decimation_factor",
@@ -40,22 +45,6 @@ __all__ = [
 #: 3 periods of the cut-off (1e-4 after 4), so the start-up transients left by the forward–backward
 #: pass (already reduced by sosfiltfilt's odd-extension padding) are gone after 3 periods.
 EDGE_PERIODS = 3.0
-
-
-def _as_samples(x: np.ndarray, name: str, min_rows: int = 1) -> np.ndarray:
-    a = np.asarray(x, dtype=float)
-    if a.ndim == 0 or a.shape[0] < min_rows:
-        raise ValueError(f"{name}: need at least {min_rows} samples along axis 0, got shape {a.shape}")
-    if not np.all(np.isfinite(a)):
-        raise ValueError(f"{name}: contains NaN or inf")
-    return a
-
-
-def _check_rate(rate: float) -> float:
-    rate = float(rate)
-    if not (rate > 0.0 and math.isfinite(rate)):
-        raise ValueError(f"rate must be a positive number of Hz, got {rate!r}")
-    return rate
 
 
 def lowpass(x: np.ndarray, rate: float, cutoff: float, order: int = 4) -> np.ndarray:
@@ -85,133 +74,6 @@ def lowpass(x: np.ndarray, rate: float, cutoff: float, order: int = 4) -> np.nda
     # Second-order sections: numerically safe even when cutoff << rate (e.g. 20 Hz at 5 kHz).
     sos = signal.butter(int(order), cutoff, btype="low", fs=rate, output="sos")
     return signal.sosfiltfilt(sos, a, axis=0)
-
-
-def _band_spectrum(a: np.ndarray, rate: float, seconds: float, per_octave: int) -> tuple[np.ndarray, np.ndarray]:
-    """Welch PSD of ``a`` averaged in log-spaced bands: (band centre frequencies Hz, mean PSD).
-
-    Averaging in 1/``per_octave`` octave bands steadies the estimate at high frequency (many
-    bins per band) while keeping the resolution of the Welch estimate at low frequency.
-    """
-    from scipy import signal  # imported when filtering, not when a command starts
-    nperseg = min(a.size, max(16, int(round(seconds * rate))))
-    f, psd = signal.welch(a, fs=rate, window="hann", nperseg=nperseg, detrend="constant")
-    df = f[1] - f[0]
-    n_bands = int(np.floor(np.log2((rate / 2.0) / (2.0 * df)) * per_octave)) + 1
-    edges = 2.0 * df * 2.0 ** (np.arange(n_bands + 1) / per_octave)
-    centres, values = [], []
-    for lo, hi in zip(edges[:-1], edges[1:]):
-        inside = (f >= lo) & (f < hi)
-        if inside.any():
-            centres.append(np.sqrt(lo * hi))
-            values.append(psd[inside].mean())
-    return np.asarray(centres), np.asarray(values)
-
-
-def _crossover(x: np.ndarray, rate: float, seconds: float, per_octave: int, snr_min: float,
-               floor_ratio: float = 4.0) -> float | None:
-    """Frequency (Hz) where the acceleration spectrum of ``x`` turns from signal to noise.
-
-    ``a`` is the raw (unfiltered) second central difference of ``x``. Its spectrum falls
-    with frequency where the motion dominates and rises (white noise: as f⁴) or stays flat
-    (coloured noise, vibrations) where noise dominates; the minimum above the motion's main
-    frequency is the crossover. Returns None when the joint does not move (position spectrum at
-    its peak less than ``snr_min`` times its value at the crossover).
-    """
-    a = (x[2:] - 2.0 * x[1:-1] + x[:-2]) * rate**2
-    f, s_acc = _band_spectrum(a, rate, seconds, per_octave)
-    # Position spectrum seen through the exact gain of the second difference, |2·rate·sin(πf/rate)|⁴.
-    s_pos = s_acc / (2.0 * rate * np.sin(np.pi * f / rate)) ** 4
-    peak = int(np.argmax(s_pos))  # the motion's main frequency: positions are dominated by it
-    # The knee, not the minimum: a flat noise floor (servo, ripple) has its minimum anywhere along
-    # it, so the first band within floor_ratio of the lowest level is the stable choice.
-    floor = float(np.min(s_acc[peak:]))
-    cross = peak + int(np.flatnonzero(s_acc[peak:] <= floor_ratio * floor)[0])
-    if s_pos[peak] < snr_min * s_pos[cross]:
-        return None
-    return float(f[cross])
-
-
-def crossover_frequencies(
-    q: np.ndarray, rate: float, *, segment: float = 4.0, bands_per_octave: int = 6, snr_min: float = 100.0,
-) -> np.ndarray:
-    """Per-joint frequency (Hz) where noise starts to dominate the acceleration (rule of :func:`choose_cutoff`).
-
-    Args:
-        q: (N,) or (N, n) joint positions, rad, uniformly sampled, N ≥ 64.
-        rate: sampling rate, Hz.
-        segment: Welch segment length, s (resolution 1/segment Hz).
-        bands_per_octave: spectral smoothing, bands per octave.
-        snr_min: peak-to-crossover ratio of the position spectrum below which a joint is still.
-
-    Returns:
-        (n,) frequencies, Hz; NaN for a joint that does not move.
-    """
-    rate = _check_rate(rate)
-    if not (segment > 0.0):
-        raise ValueError(f"segment must be a positive duration in s, got {segment!r}")
-    a = _as_samples(q, "q", min_rows=64)  # fewer samples give no usable spectrum
-    columns = a.reshape(a.shape[0], -1)
-    found = [_crossover(columns[:, j], rate, segment, bands_per_octave, snr_min) for j in range(columns.shape[1])]
-    return np.array([np.nan if f is None else f for f in found])
-
-
-def choose_cutoff(
-    q: np.ndarray, rate: float, *, min_cutoff: float = 2.0, max_fraction: float = 0.4,
-    segment: float = 4.0, bands_per_octave: int = 6, snr_min: float = 100.0,
-) -> float:
-    """Cut-off frequency (Hz) for :func:`lowpass` / :func:`derivatives`, chosen from the positions.
-
-    Rule: *cut where noise starts to dominate the acceleration*. For each joint:
-
-    1. ``a(k) = [q(k+1) − 2·q(k) + q(k−1)] / T²``, the raw (unfiltered) second central difference;
-    2. its power spectral density (Welch, Hann window, segments of ``segment`` s → resolution
-       1/segment Hz), averaged in 1/6-octave bands;
-    3. the motion's main frequency ``f_peak`` is the peak of the position spectrum (the
-       acceleration spectrum divided by the gain of the second difference);
-    4. ``f_j`` is the knee of the acceleration spectrum above ``f_peak``: the first band whose level
-       is within 4× of the lowest level above ``f_peak``. Below it the motion's acceleration
-       dominates (the spectrum falls); above it the noise does (the spectrum rises as f⁴ for white
-       position noise, or stays flat for coloured noise, servo noise and vibrations). The knee, not
-       the minimum itself: on a flat floor the minimum lands anywhere along it (the first design
-       gave 3.36 Hz on one 250 Hz twin recording and 50 Hz on another of the same robot, 42.7 Hz
-       and 101.5 Hz on the two parts of the TX40 record); the knee gives 2.1–2.4 Hz over five twin
-       seeds and 19.0 / 20.1 Hz on the TX40's first 6 s / last 3 s.
-       Cutting at ``f_j`` keeps the motion's acceleration and rejects the noise that
-       differentiation amplifies. Joints that do not move (peak less than ``snr_min`` = 100
-       times the crossover level in the position spectrum) are skipped.
-       :func:`crossover_frequencies` returns these ``f_j``.
-
-    Then ``cutoff = max_j f_j`` — the largest, so that no joint's acceleration is filtered away
-    (the parallel decimation filter, applied to Y and W alike, removes the remaining noise) — bounded
-    to ``[min_cutoff, max_fraction · rate/2]`` (2 Hz and 40 % of Nyquist): the floor keeps a very
-    slow or very noisy motion from losing the closed-loop dynamics seen in the torques; the ceiling
-    keeps the filter well defined. When the bounds cross (very low rates) the ceiling wins. If no
-    joint moves, the floor (bounded likewise) is returned.
-
-    Why not a rule on the position spectrum alone (e.g. 5 × the frequency holding 99 % of the
-    position power, as a first design had it): on the real TX40 recording it gives 7.8 Hz, which
-    changes q̈ by 12–21 % RMS compared with a 30 Hz cut-off; motions from a controller's
-    interpolator have acceleration content well above the position's bandwidth.
-
-    Args:
-        q: (N,) or (N, n) joint positions, rad, uniformly sampled, N ≥ 64.
-        rate: sampling rate, Hz.
-        min_cutoff: lower bound, Hz.
-        max_fraction: upper bound as a fraction of the Nyquist frequency ``rate/2``.
-        segment, bands_per_octave, snr_min: see :func:`crossover_frequencies`.
-
-    Returns:
-        The cut-off frequency, Hz.
-    """
-    rate = _check_rate(rate)
-    if not (0.0 < max_fraction < 1.0):
-        raise ValueError(f"max_fraction must lie in (0, 1), got {max_fraction!r}")
-    found = crossover_frequencies(q, rate, segment=segment, bands_per_octave=bands_per_octave, snr_min=snr_min)
-    ceiling = max_fraction * rate / 2.0
-    if np.all(np.isnan(found)):
-        return float(min(min_cutoff, ceiling))
-    return float(min(max(np.nanmax(found), min_cutoff), ceiling))
 
 
 @dataclass(frozen=True, eq=False)
@@ -258,6 +120,7 @@ def _central_difference(x: np.ndarray, step: float) -> np.ndarray:
 
 def derivatives(
     t: np.ndarray, q: np.ndarray, cutoff: float | None = None, order: int = 4, edge: int | None = None,
+    kept: slice | None = None,
 ) -> Derivatives:
     """Estimate q̇ and q̈ from sampled positions (§III-A: low-pass then central differences).
 
@@ -272,6 +135,8 @@ def derivatives(
         order: Butterworth order (4 in the paper).
         edge: samples dropped at each end (≥ 2); ``None`` uses
             ``max(2, ceil(EDGE_PERIODS · rate / cutoff))``, three periods of the cut-off.
+        kept: the samples to keep instead (a block of a longer signal, whose ends are margins:
+            :mod:`identify.signal.blocks`); at least 2 from each end.
 
     Returns:
         :class:`Derivatives` on the kept samples.
@@ -293,10 +158,12 @@ def derivatives(
     n = t_a.size
     if n - 2 * edge < 1:
         raise ValueError(f"{n} samples are too few to drop {edge} at each end (cut-off {fc:g} Hz)")
+    if kept is not None and not (kept.step in (None, 1) and 2 <= kept.start < kept.stop <= n - 2):
+        raise ValueError(f"kept must be a slice within [2, {n - 2}) of the {n} samples, got {kept}")
     q_f = lowpass(q_a, rate, fc, order)
     dq = _central_difference(q_f, step)   # eq. 20
     ddq = _central_difference(dq, step)   # eq. 20 again, on q̇
-    kept = slice(edge, n - edge)
+    kept = slice(edge, n - edge) if kept is None else kept
     return Derivatives(t=t_a[kept], q=q_f[kept], dq=dq[kept], ddq=ddq[kept], cutoff=fc, rate=rate, kept=kept)
 
 
@@ -391,7 +258,20 @@ def decimate(x: np.ndarray, factor: int, ftype: str = "iir") -> np.ndarray:
         raise ValueError(f"factor must be an integer >= 1, got {plain(factor)}")
     if ftype not in ("iir", "fir"):
         raise ValueError(f"ftype must be 'iir' or 'fir', got {ftype!r}")
-    y = np.array(_as_samples(x, "x"), dtype=float, copy=True)
-    for stage in _stages(int(factor)):
-        y = signal.decimate(y, stage, ftype=ftype, zero_phase=True, axis=0)
-    return y
+    a = _as_samples(x, "x")
+    flat = a.reshape(a.shape[0], -1)
+    # Column groups of about DECIMATE_CHUNK_BYTES: the filter's padded copies and passes then take
+    # that much memory, not several copies of a wide W (each column is filtered alone either way).
+    step = max(1, DECIMATE_CHUNK_BYTES // (8 * max(1, flat.shape[0])))
+    parts = []
+    for c0 in range(0, flat.shape[1], step):
+        y = np.array(flat[:, c0:c0 + step], dtype=float, copy=True)
+        for stage in _stages(int(factor)):
+            y = signal.decimate(y, stage, ftype=ftype, zero_phase=True, axis=0)
+        parts.append(y)
+    out = parts[0] if len(parts) == 1 else np.concatenate(parts, axis=1)
+    return out.reshape((out.shape[0],) + a.shape[1:])
+
+
+#: Bytes of the input filtered at once by :func:`decimate` (column groups of a wide array).
+DECIMATE_CHUNK_BYTES = 32 << 20

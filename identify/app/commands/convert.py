@@ -15,7 +15,10 @@ import argparse
 from typing import Any
 
 
+from identify.io.blocks import DEFAULT_LOG_BLOCK, count_rows
+
 from ..common import UsageError, check_output, convention_option, load_robot, progress, robot_option
+from .identify_runs import block_option
 
 _LOG_OPTIONS = ("columns", "no_header", "rows", "t_from", "t_to", "resample", "gains")
 _MOTOR_OPTIONS = ("motor_positions", "motor_torques", "period")
@@ -48,6 +51,9 @@ def register(sub: Any) -> None:
     sp.add_argument("--motor-torques", help="motor form: CSV of motor torques [N m]")
     sp.add_argument("--period", type=float, help="motor form: sampling period [s]")
     sp.add_argument("--out", required=True, help="recording file (.csv or .npz)")
+    sp.add_argument("--block", type=block_option, default=DEFAULT_LOG_BLOCK,
+                    help=f"lines per block: a longer log is converted block by block, memory bounded by the "
+                         f"block (default {DEFAULT_LOG_BLOCK}; output CSV)")
 
 
 def _given(args: argparse.Namespace, names: tuple[str, ...]) -> list[str]:
@@ -85,30 +91,52 @@ def run(args: argparse.Namespace) -> int:
         raise UsageError("a LOG.csv needs --columns SPEC (e.g. t,q1..q6,qd1..qd6,i1..i6)")
     robot = _robot(args)
     check_output(args.out)
+    if count_rows(args.log) > args.block:
+        return _run_long(args, robot)
     progress(f"reading the log {args.log}")
     rec = read_log(args.log, robot, args.columns, header=not args.no_header, rows=_rows(args.rows),
                    t_from=args.t_from, t_to=args.t_to, resample=args.resample, gains=args.gains,
                    convention=args.convention)
     write_recording(args.out, rec, robot, convention="controller")
-    log = rec.meta["log"]
+    _print_report(args, rec.meta["log"], "torques as logged" if rec.current is None else "no gains: the file keeps "
+                  "currents (give --gains to identify with it)")
+    return 0
+
+
+def _run_long(args: argparse.Namespace, robot: Any) -> int:
+    """A log longer than --block: converted block by block (identify.io.log_blocks)."""
+    if not args.out.lower().endswith(".csv"):
+        raise UsageError(f"--out {args.out}: a log longer than --block ({args.block} lines) is converted block by "
+                         f"block into a CSV recording")
+    from identify.io.columns import parse_columns
+    from identify.io.log_blocks import convert_log
+
+    progress(f"converting the log {args.log} block by block ({args.block} lines per block)")
+    log = convert_log(args.log, robot, args.columns, args.out, header=not args.no_header, rows=_rows(args.rows),
+                      t_from=args.t_from, t_to=args.t_to, resample=args.resample, gains=args.gains,
+                      convention=args.convention, block=args.block)
+    currents = bool(parse_columns(args.columns, robot).i)
+    _print_report(args, log, "no gains: the file keeps currents (give --gains to identify with it)" if currents
+                  else "torques as logged")
+    return 0
+
+
+def _print_report(args: argparse.Namespace, log: dict, what_else: str) -> None:
     steps = (f"rate {log['rate_hz']:.6g} Hz (1 / mean step; median step {log['median_step_s']:g} s, "
              f"{log['irregular_steps']} steps off by more than 1 %)")
     grid = (f"resampled to {log['resampled_hz']:g} Hz: {log['samples']} samples"
             if log["resampled_hz"] else "not resampled")
-    what = (f"gains {log['gains']}: joint torques from the currents" if log["gains"] else
-            "torques as logged" if rec.current is None else "no gains: the file keeps currents (give "
-            "--gains to identify with it)")
+    what = f"gains {log['gains']}: joint torques from the currents" if log["gains"] else what_else
     print(f"read lines {log['lines'][0]}..{log['lines'][1]} of {args.log}: {log['rows']} rows, {steps}")
     print(f"largest step {log['largest_gap_s']:g} s (lines {log['largest_gap_lines'][0]}-"
           f"{log['largest_gap_lines'][1]}); {grid}; {what}")
-    print(f"converted {rec.n_samples} samples -> {args.out}")
-    return 0
+    print(f"converted {log['samples']} samples -> {args.out}")
 
 
 def _run_motor(args: argparse.Namespace) -> int:
     from identify.io.recordings import read_motor_recording, write_recording
 
-    extra = _given(args, _LOG_OPTIONS)
+    extra = _given(args, _LOG_OPTIONS) + (["--block"] if args.block != DEFAULT_LOG_BLOCK else [])
     if extra:
         raise UsageError(f"{', '.join(extra)} belong to the log form (give LOG.csv)")
     missing = [f for f, v in (("--motor-positions", args.motor_positions), ("--motor-torques", args.motor_torques),

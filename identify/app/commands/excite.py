@@ -277,7 +277,7 @@ def _save(args: argparse.Namespace, traj: Any, robot: rx90sym.Robot, start_pose:
     t, q, qd, qdd = ce.controller_samples(traj, controller, model.limits, start_pose)
     if args.controller == "franka":
         tau = evaluate_torque(model, q - robot.controller_offsets, qd, qdd) if model.torque is not None else None
-        problems = cp.franka_check(q, tau, rate)
+        problems = cp.franka_check(q, tau, rate, qd)
         if problems:
             raise ValueError(f"Franka export refused: {problems[0]}")
     if args.program is not None:

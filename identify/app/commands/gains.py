@@ -101,7 +101,8 @@ def run(args: argparse.Namespace) -> int:
         from ..report.writers import write_gains_report
 
         write_gains_report(args.report, {**res.to_dict(), "flags": [f.to_json() for f in flags],
-                                         "data": {"empty": args.empty, "loaded": args.loaded}})
+                                         "data": {"empty": [r.source for r in empty],
+                                                  "loaded": [r.source for r in loaded]}})
     return 0
 
 

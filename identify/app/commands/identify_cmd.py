@@ -8,17 +8,21 @@ from __future__ import annotations
 
 import argparse
 import math
+from types import SimpleNamespace
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 import rx90sym
 from identify.observation.processing import DEFAULT_MIN_VELOCITY, DEFAULT_REST, REST_POLICIES, Processing
+from identify.io.blocks import DEFAULT_BLOCK
 from identify.plausibility import estimate_flags, residual_flags, static_gravity_flags, torque_scale_flags
 
 from ..flags import flag_lines, given_gain_flags, settle
 from ..common import (UsageError, check_output, convention_option, progress, read_recordings, robot_option,
                       robot_with_spring, spring_options)
+
+from .identify_runs import block_option, fit_long, streamed
 
 if TYPE_CHECKING:  # the method is imported when the command runs, not for its --help
     from identify.fitting import Fit
@@ -71,6 +75,12 @@ def register(sub: Any) -> None:
     sp.add_argument("--delay", type=_delay, default=0.0,
                     help="torque lag behind the positions: 'auto' (estimated) or seconds (default 0; "
                          "the estimate is always reported)")
+    sp.add_argument("--block", type=block_option, default=DEFAULT_BLOCK,
+                    help=f"samples per block for long logs: a log longer than this is read, filtered and "
+                         f"fitted block by block, memory bounded by the block (default {DEFAULT_BLOCK})")
+    sp.add_argument("--scheduler", metavar="ADDR|local",
+                    help="fit the blocks on Dask: a scheduler address (tcp://host:8786) or 'local' "
+                         "(a local cluster, one worker per core)")
     sp.add_argument("--bootstrap-seed", type=int, default=0, help="seed of the segment bootstrap (default 0)")
     sp.add_argument("--validate", help="recording used for cross-validation only")
     sp.add_argument("--json", help="results as JSON")
@@ -143,15 +153,24 @@ def run(args: argparse.Namespace) -> int:
         raise UsageError(f"--urdf-out needs a URDF robot (--robot FILE.urdf), not {args.robot!r}")
     sb = attach_spring(robot, spring_model, args.validate, args.method)
     gains = read_gains(args.gains, robot) if args.gains else None
-    progress(f"reading {len(args.recordings)} recording(s)")
     flags = given_gain_flags(gains) if gains is not None else []
-    recs = read_recordings(args.recordings, robot, args.convention, gains)
-    flags += settle(torque_scale_flags([r.tau for r in recs if r.tau is not None], robot))
-    flags += settle(static_gravity_flags(recs, robot, rx90sym.nominal_parameters(robot)))
-    val_rec = read_recordings([args.validate], robot, args.convention, gains)[0] if args.validate else None
-    progress(f"identifying ({args.method}) on {sum(len(r.t) for r in recs)} samples")
-    result = fit(robot, recs, processing_of(args, sb is None), args.method, base=sb, gains=gains,
-                 convention=args.convention, spring_source=args.spring)
+    if streamed(args.recordings + ([args.validate] if args.validate else []), args.block, args.scheduler):
+        if args.report:
+            raise UsageError(f"--report needs the recordings in memory: not for logs longer than --block "
+                             f"({args.block} samples) or with --scheduler")
+        progress("plausibility of the recorded torques (scale, static gravity) not checked: it reads the whole "
+                 "recordings, long logs are read block by block")
+        recs, val_rec = [], args.validate  # long logs: read block by block (docs/long-logs.md)
+        result = fit_long(args, robot, processing_of(args, sb is None), sb, gains)
+    else:
+        progress(f"reading {len(args.recordings)} recording(s)")
+        recs = read_recordings(args.recordings, robot, args.convention, gains)
+        flags += settle(torque_scale_flags([r.tau for r in recs if r.tau is not None], robot))
+        flags += settle(static_gravity_flags(recs, robot, rx90sym.nominal_parameters(robot)))
+        val_rec = read_recordings([args.validate], robot, args.convention, gains)[0] if args.validate else None
+        progress(f"identifying ({args.method}) on {sum(len(r.t) for r in recs)} samples")
+        result = fit(robot, recs, processing_of(args, sb is None), args.method, base=sb, gains=gains,
+                     convention=args.convention, spring_source=args.spring)
     result = result.bootstrapped(args.bootstrap_seed)
     result = result.with_flags([*flags, *_fit_flags(result, args.method)])
     if args.essential:
@@ -172,8 +191,11 @@ def _fit_flags(f: Fit, method: str) -> list:
     """A joint the model does not explain stops the run; non-physical WLS estimates are flagged
     (judged with the larger of eq. 13's and the bootstrap's sigma)."""
     obs, res = f.observation, f.result
-    torque_rms = np.array([np.sqrt(np.mean(obs.Y[obs.joint == j] ** 2)) if np.any(obs.joint == j) else np.inf
-                           for j in range(len(res.residual_rms))])
+    if obs is None:  # fitted in blocks: ‖Y_j‖² is the joint system's residual at x = 0
+        torque_rms = np.array([np.sqrt(s.rss(np.zeros(s.columns)) / s.rows) for s in res.joint_systems])
+    else:
+        torque_rms = np.array([np.sqrt(np.mean(obs.Y[obs.joint == j] ** 2)) if np.any(obs.joint == j) else np.inf
+                               for j in range(len(res.residual_rms))])
     flags = settle(residual_flags(res.residual_rms, torque_rms, f.robot.limits.tau_max[:torque_rms.size]))
     if method != "consistent":
         flags += settle(estimate_flags(res.names, res.values, np.fmax(res.std, f.bootstrap.std)))
@@ -181,10 +203,10 @@ def _fit_flags(f: Fit, method: str) -> list:
 
 
 def _print_fit(f: Fit, recs: list, auto_delay: bool) -> None:
-    obs, res = f.observation, f.result
+    obs, res = f.observation or f.streamed, f.result
     progress(f.delay_estimate.summary() + ("" if auto_delay else " (not compensated: --delay auto does)"))
     progress(obs.summary().replace("\n", "\n  "))
-    print(f"filtering: cut-off {obs.cutoffs[0]:.4g} Hz, rate {obs.rate:.6g} Hz"
+    print(f"filtering: cut-off {f.cutoff:.4g} Hz, rate {f.model.rate_hz:.6g} Hz"
           + (f" (decimated to {f.decimate_to:g} Hz)" if f.decimate_to else " (no decimation)")
           + f", torque delay {1e3 * f.delay:.3g} ms compensated")
     for note in obs.notes:
@@ -206,25 +228,30 @@ def _print_fit(f: Fit, recs: list, auto_delay: bool) -> None:
 def _spring_text(f: Fit, recs: list) -> str:
     from identify.observation.spring_fit import BaseWithSpring, spring_summary
 
-    return spring_summary(f.robot, f.base if isinstance(f.base, BaseWithSpring) else None, f.result, recs)[1]
+    visited = recs or [SimpleNamespace(q=f.streamed.q_range)]  # a long log: its range, from the scan
+    return spring_summary(f.robot, f.base if isinstance(f.base, BaseWithSpring) else None, f.result, visited)[1]
 
 
 def _write_report(path: str, f: Fit, recs: list) -> None:
     """The HTML report from the fit file's content (what --json writes) plus the recordings' extent."""
     from ..report.writers import write_identify_report
 
-    record = {**f.to_json(), "data": data_record(recs, f.observation)}
+    record = {**f.to_json(), "data": data_record(recs, f.observation, f.validation)}
     write_identify_report(path, f.robot, record, f.result, recs[0], f.validation, f.predict(recs[0]),
                           _spring_text(f, recs))
 
 
-def data_record(recs: list, obs: Any) -> dict:
-    """What was fitted: per recording its source, samples, duration [s] and recorded rate [Hz]
-    (1 / mean period); the share of samples where each joint moves (after filtering)."""
-    rows = [{"source": src, "samples": int(len(r.t)), "duration_s": float(r.t[-1] - r.t[0]),
-             "rate_hz": float((len(r.t) - 1) / (r.t[-1] - r.t[0]))} for r, src in zip(recs, obs.sources)]
+def data_record(recs: list, obs: Any, validation: Any = None) -> dict:
+    """What was fitted: per recording its source, samples, first and last time [s], duration [s] and
+    recorded rate [Hz] (1 / mean period); the share of samples where each joint moves (after
+    filtering); the held-out samples' first and last time [s]."""
+    rows = [{"source": src, "samples": int(len(r.t)), "t_first_s": float(r.t[0]), "t_last_s": float(r.t[-1]),
+             "duration_s": float(r.t[-1] - r.t[0]), "rate_hz": float((len(r.t) - 1) / (r.t[-1] - r.t[0]))}
+            for r, src in zip(recs, obs.sources)]
     share = None if obs.moving_fraction is None else [float(v) for v in obs.moving_fraction]
-    return {"recordings": rows, "moving_fraction": share}
+    held = None if validation is None else {"source": validation.source, "t_first_s": float(validation.t[0]),
+                                            "t_last_s": float(validation.t[-1])}
+    return {"recordings": rows, "moving_fraction": share, "heldout": held}
 
 
 def _write_urdf(args: argparse.Namespace, f: Fit) -> None:

@@ -13,7 +13,10 @@ import numpy as np
 
 from rx90sym.files import atomic_write, write_json
 
+from identify.io.blocks import DEFAULT_BLOCK
+
 from ..common import announce_robot, check_output, progress, read_recordings
+from .identify_runs import block_option, streamed
 
 
 def register(sub: Any) -> None:
@@ -28,6 +31,8 @@ def register(sub: Any) -> None:
                     help="joint angles of the file (default: the identification's, else the file's header)")
     sp.add_argument("--out", help="CSV: t, measured tau1..n, predicted pred1..n, moving1..n (1/0)")
     sp.add_argument("--json", help="prediction errors as JSON")
+    sp.add_argument("--block", type=block_option, default=DEFAULT_BLOCK,
+                    help=f"samples per block: a longer recording is predicted block by block (default {DEFAULT_BLOCK})")
 
 
 def write_prediction(path: str, val: Any) -> None:
@@ -49,8 +54,15 @@ def run(args: argparse.Namespace) -> int:
     warning = f.model.check_robot(f.robot)
     if warning:
         progress(f"warning: {warning}")
-    rec = read_recordings([args.recording], f.robot, args.convention or f.model.convention, f.gains)[0]
-    val = f.predict(rec)
+    if streamed([args.recording], args.block, None):  # a long log: predicted block by block
+        from identify.stream_fit import predict_streamed
+
+        val = predict_streamed(f.robot, f.result, args.recording, base=f.base,
+                               block=args.block, convention=args.convention or f.model.convention, gains=f.gains,
+                               **f.filtering())
+    else:
+        rec = read_recordings([args.recording], f.robot, args.convention or f.model.convention, f.gains)[0]
+        val = f.predict(rec)
     print(val.table())
     if args.out:
         write_prediction(args.out, val)

@@ -10,6 +10,10 @@ from .summary import (REST_SHARE_CHECK, as_flag, flag, heldout_flags, heldout_ta
                       parameter_flags)
 from .tables import bodies_table, gains_table, key_values, parameter_table, validation_table
 
+#: Largest gap [s] between the end of a fitted recording and the start of the held-out one for the
+#: two to count as one run split in two (filtering trims a few samples at the edges).
+SPLIT_GAP_S = 1.0
+
 
 def data_facts(data: Mapping[str, Any] | None, model: Mapping[str, Any]) -> list[tuple[str, str]]:
     """Files, duration, samples, rates, cut-off and rest share, as summary facts."""
@@ -45,6 +49,7 @@ def _flags(record: Mapping[str, Any], data: Mapping[str, Any] | None) -> list[di
     params = record.get("parameters") or []
     flags += parameter_flags([p["name"] for p in params], [p.get("rel_std_pct") for p in params],
                              record.get("bootstrap_std"), [p.get("std") for p in params], record.get("cond"))
+    flags += split_flags(data)
     share = (data or {}).get("moving_fraction") or []
     rest = [j for j, s in enumerate(share, start=1) if 1 - s > REST_SHARE_CHECK]
     if rest:
@@ -57,6 +62,21 @@ def _flags(record: Mapping[str, Any], data: Mapping[str, Any] | None) -> list[di
                           "not this robot's", "identify it (--spring identify) or give the maker's table "
                           "(--spring FILE.csv)"))
     return flags
+
+
+def split_flags(data: Mapping[str, Any] | None) -> list[dict]:
+    """A held-out recording that starts where a fitted one ends (within ``SPLIT_GAP_S``) is the same
+    run cut at an arbitrary point: it checks the model on the same motion, not on a new one."""
+    held = (data or {}).get("heldout") or {}
+    start = number(held.get("t_first_s"))
+    for rec in (data or {}).get("recordings") or ():
+        end = number(rec.get("t_last_s"))
+        if start is not None and end is not None and 0 <= start - end <= SPLIT_GAP_S:
+            return [flag("arbitrary-split", "warning", f"the held-out data ({held.get('source')}) continue "
+                         f"{rec.get('source')} (cut at t = {fmt(end, 4)} s): the same motion split at an "
+                         "arbitrary point", "validate also on a different motion (another excitation, a "
+                         "stop-and-go run)")]
+    return []
 
 
 def _headline(record: Mapping[str, Any], flags: Sequence[Mapping[str, Any]]) -> str:
@@ -79,7 +99,7 @@ def identify_summary(record: Mapping[str, Any]) -> Summary:
     data = record.get("data")
     flags = _flags(record, data)
     robot_file = Path(str(model["robot_file"])).name if model.get("robot_file") else "built in memory"
-    facts = [("Robot", f"{record.get('robot', '')} (file {robot_file}; full path in the processing record)"),
+    facts = [("Robot", f"{record.get('robot', '')} (file {robot_file})"),
              ("Method", f"{record.get('method', '')}, {len(record.get('parameters') or [])} parameters"),
              *data_facts(data, model),
              ("Conditioning", f"cond(W) = {fmt(record.get('cond'), 4)} (unweighted {fmt(record.get('cond_unweighted'), 4)})"),

@@ -124,8 +124,9 @@ header,main{max-width:1500px;margin:0 auto;padding:0 24px}
 header{padding-top:14px}
 h1{font-size:1.45em;margin:0 0 2px}
 .sub{color:#57606a;margin:0 0 8px}
-nav{position:sticky;top:0;background:#f6f8fa;border-bottom:1px solid #d0d7de;padding:6px 24px;z-index:1;font-size:.92em}
-nav a{margin-right:14px;color:#0969da;text-decoration:none;white-space:nowrap}
+nav{position:sticky;top:0;background:#f6f8fa;border-bottom:1px solid #d0d7de;padding:6px 24px;z-index:1;font-size:.92em;
+ display:flex;flex-wrap:wrap;gap:2px 14px}
+nav a{color:#0969da;text-decoration:none;white-space:nowrap}
 h2{font-size:1.2em;border-bottom:1px solid #d0d7de;padding-bottom:3px;margin:26px 0 10px}
 #summary{border:1px solid #d0d7de;border-left:6px solid #1a7f37;border-radius:6px;padding:10px 16px;margin-top:10px}
 #summary.check{border-left-color:#bf8700}#summary.poor{border-left-color:#cf222e}

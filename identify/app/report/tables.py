@@ -6,6 +6,8 @@ from typing import Any, Mapping, Sequence
 
 import numpy as np
 
+from rx90sym.rigid_body import RigidBody
+
 from .cells import fmt, number
 from .page import Cell, Column, Table
 from .summary import WEAK_REL_STD_PCT, mark
@@ -56,16 +58,17 @@ def parameter_table(parameters: Sequence[Mapping[str, Any]], bootstrap_std: Sequ
 
 
 def body(standard: Mapping[str, float], j: int) -> tuple[float, np.ndarray, np.ndarray] | None:
-    """Mass [kg], centre of mass in frame j [m] and principal inertias about it [kg·m²] of link j."""
+    """Mass [kg], centre of mass in frame j [m] and principal inertias about it [kg·m²] of link j
+    (None when a parameter is missing; centre NaN for a non-positive mass)."""
     try:
-        xx, xy, xz, yy, yz, zz, mx, my, mz, m = (float(standard[f"{s}{j}"]) for s in
-                                                 ("XX", "XY", "XZ", "YY", "YZ", "ZZ", "MX", "MY", "MZ", "M"))
+        rigid = RigidBody.from_vector(np.array([float(standard[f"{s}{j}"]) for s in
+                                                ("XX", "XY", "XZ", "YY", "YZ", "ZZ", "MX", "MY", "MZ", "M")]))
     except KeyError:
         return None
-    inertia = np.array([[xx, xy, xz], [xy, yy, yz], [xz, yz, zz]])
-    c = np.array([mx, my, mz]) / m if m > 0 else np.full(3, np.nan)
-    about_c = inertia - m * (c @ c * np.eye(3) - np.outer(c, c)) if m > 0 else inertia
-    return m, c, np.sort(np.linalg.eigvalsh(about_c))
+    if rigid.m <= 0:
+        return rigid.m, np.full(3, np.nan), np.sort(np.linalg.eigvalsh(rigid.J))
+    c, inertia = rigid.com_inertia()
+    return rigid.m, c, np.sort(np.linalg.eigvalsh(inertia))
 
 
 def bodies_table(standard: Mapping[str, float], n: int, prior: Mapping[str, float] | None = None) -> Table:

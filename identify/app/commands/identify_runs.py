@@ -1,0 +1,56 @@
+"""Long logs in ``rx90 identify``: when the recordings go block by block, and the call that does it.
+
+Logs no longer than ``--block`` samples are read whole (the figures of every earlier release);
+a longer log, or ``--scheduler``, goes through ``identify.fit(..., block=..., client=...)``, whose
+memory is bounded by the block (docs/long-logs.md).
+"""
+from __future__ import annotations
+
+import argparse
+import os
+from typing import TYPE_CHECKING, Any
+
+import rx90sym
+from identify.io.blocks import count_rows
+
+if TYPE_CHECKING:  # for annotations only: the method is imported when a fit runs
+    from identify.fitting import Fit
+    from identify.observation.processing import Processing
+
+from ..common import progress
+
+
+def streamed(paths: list[str], block: int, scheduler: str | None) -> bool:
+    """Whether the recordings go block by block: one CSV has more than ``block`` lines, or Dask is asked."""
+    if scheduler is not None:
+        return True
+    return any(p.lower().endswith(".csv") and count_rows(p) > block for p in paths)
+
+
+def fit_long(args: argparse.Namespace, robot: rx90sym.Robot, processing: Processing, base: Any, gains: Any) -> Fit:
+    """The fit of ``args.recordings`` block by block (on Dask with ``--scheduler``)."""
+    from identify.fitting import fit
+
+    progress(f"identifying ({args.method}) block by block ({args.block} samples per block"
+             + (f", Dask scheduler {args.scheduler}" if args.scheduler else "") + ")")
+    options = dict(base=base, gains=gains, convention=args.convention, spring_source=args.spring,
+                   block=args.block, bootstrap_seed=args.bootstrap_seed)
+    if args.scheduler is None:
+        return fit(robot, args.recordings, processing, args.method, **options)
+    from excitation.multistart import dask_client
+
+    local = args.scheduler == "local"
+    with dask_client(workers=(os.cpu_count() or 2) if local else None,
+                     scheduler=None if local else args.scheduler) as client:
+        return fit(robot, args.recordings, processing, args.method, client=client, **options)
+
+
+def block_option(text: str) -> int:
+    """``--block``: a whole number of samples (lines), at least 1000."""
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"--block takes a whole number of samples, got {text!r}") from None
+    if value < 1000:
+        raise argparse.ArgumentTypeError(f"--block must be at least 1000 samples, got {value}")
+    return value

@@ -1,0 +1,284 @@
+"""A controller log of any length converted to a recording file block by block (``rx90 convert`` on long logs).
+
+:func:`convert_log` does what :func:`identify.read_log` then :func:`identify.write_recording` do,
+holding one block of lines at a time: lines are read and numbered in Python (comments, header),
+each block's numbers parsed by pyarrow's CSV parser (C++, multithreaded; a block it refuses is
+parsed again by the whole-log parser, whose message names the bad lines), checked with the
+whole-log checks (each block starts with the previous block's last row, so steps and jumps across
+blocks are checked too), resampled when asked (see :class:`_Resampler`), and appended to the output
+through the atomic writer: an error leaves no file behind.
+
+Differences from the whole-log reader, by construction: the median time step (irregular-step and
+gap checks, report) is each block's; the recorded-velocity check compares each block's RMS; with
+``t_from``/``t_to`` every row is parsed, so a corrupt row outside the window stops the conversion.
+"""
+from __future__ import annotations
+
+import io
+import os
+from pathlib import Path
+from typing import IO, Any, Iterator
+
+import numpy as np
+
+import rx90sym
+from rx90sym.files import atomic_write
+from rx90sym.recording import Recording, RecordingError
+
+from identify.io.blocks import DEFAULT_LOG_BLOCK
+from identify.io.columns import ColumnMap
+from identify.io.gains import apply_gains
+from identify.io.logs import (ABSURD, _check_header, _check_positions, _check_time, _check_velocities,
+                              _irregular, _Lines, _log_options, _parse, gains_label)
+from identify.signal.resampling import interpolate
+
+__all__ = ["DEFAULT_LOG_BLOCK", "convert_log"]
+
+#: Samples beyond a resampled block's end: the not-a-knot spline's dependence on far samples decays
+#: by ≈ 0.27 per sample, so 40 samples change an interpolated value by < 1e-20 of the signal.
+SPLINE_MARGIN = 40
+
+
+def _line_blocks(path: Path, header: bool, n_cols: int, size: int) -> Iterator[_Lines]:
+    """Data lines (number, text) in blocks of ``size``; comments and trailing blank lines dropped."""
+    source = path.name
+    numbers: list[int] = []
+    text: list[str] = []
+    blanks: list[tuple[int, str]] = []
+    header_seen = not header
+    try:
+        with open(path, encoding="utf-8-sig", newline="") as fh:
+            for k, line in enumerate(fh, start=1):
+                line = line.rstrip("\n").rstrip("\r")
+                if line.lstrip().startswith("#"):
+                    continue
+                if not line.strip():
+                    blanks.append((k, line))  # a row only if data follow (then _parse names it)
+                    continue
+                if not header_seen:
+                    _check_header(source, k, line, n_cols)
+                    header_seen = True
+                    continue
+                for kb, lb in blanks:
+                    numbers.append(kb)
+                    text.append(lb)
+                blanks = []
+                numbers.append(k)
+                text.append(line)
+                if len(text) >= size:
+                    yield _Lines(source, numbers, text)
+                    numbers, text = [], []
+    except UnicodeDecodeError as exc:
+        raise RecordingError(f"{source}: not a UTF-8 text file ({exc})") from None
+    if text:
+        yield _Lines(source, numbers, text)
+
+
+def _parse_fast(lines: _Lines, cmap: ColumnMap) -> np.ndarray:
+    """Numbers of a block by pyarrow; anything it refuses goes to :func:`identify.io.logs._parse`."""
+    import pyarrow as pa
+    from pyarrow import csv
+
+    n_cols = len(cmap.names)
+    names = [f"c{k}" for k in range(n_cols)]
+    try:
+        table = csv.read_csv(io.BytesIO("\n".join(lines.text).encode()),
+                             read_options=csv.ReadOptions(column_names=names),
+                             convert_options=csv.ConvertOptions(column_types={c: pa.float64() for c in names}))
+        values = np.column_stack([table.column(c).to_numpy(zero_copy_only=False) for c in names])
+    except (pa.ArrowInvalid, ValueError):
+        return _parse(lines, 0, len(lines.text), cmap)
+    used = [c for c, name in enumerate(cmap.names) if name != "_" and c != cmap.t]
+    if (values.shape[0] != len(lines.text) or not np.all(np.isfinite(values[:, [cmap.t] + used]))
+            or np.any(np.abs(values[:, used]) > ABSURD)):
+        return _parse(lines, 0, len(lines.text), cmap)
+    return values
+
+
+class _Resampler:
+    """The rule of :func:`identify.resample` (grid ``t0 + k/rate``, splines) on a stream of blocks.
+
+    Rows are buffered until SPLINE_MARGIN samples lie beyond the grid points emitted, so each
+    emitted point sees the samples around it as the whole-log spline does.
+    """
+
+    def __init__(self, rate: float) -> None:
+        self.rate, self.k, self.t0 = float(rate), 0, None
+        self.buffer: Recording | None = None
+
+    def feed(self, rec: Recording, last: bool) -> Recording | None:
+        buf = rec if self.buffer is None else _joined(self.buffer, rec)
+        if self.t0 is None:
+            self.t0 = float(buf.t[0])
+        limit = float(buf.t[-1]) if last else float(buf.t[max(0, buf.t.size - 1 - SPLINE_MARGIN)])
+        count = int(np.floor((limit - self.t0) * self.rate * (1.0 + 1e-12))) + 1
+        grid = self.t0 + np.arange(self.k, count) / self.rate
+        if last and grid.size:
+            grid[-1] = min(grid[-1], limit)  # never beyond the last sample through rounding
+        self.k = max(self.k, count)
+        if not last:  # keep what the next points need: SPLINE_MARGIN samples before them
+            start = max(0, int(np.searchsorted(buf.t, limit)) - 2 * SPLINE_MARGIN)
+            self.buffer = buf.select(slice(start, None))
+        return interpolate(buf, grid) if grid.size else None
+
+
+def _joined(a: Recording, b: Recording) -> Recording:
+    def cat(x: np.ndarray | None, y: np.ndarray | None) -> np.ndarray | None:
+        return None if x is None else np.concatenate([x, y])
+
+    return Recording(t=np.concatenate([a.t, b.t]), q=np.concatenate([a.q, b.q]), tau=cat(a.tau, b.tau),
+                     dq=cat(a.dq, b.dq), source=a.source, robot=a.robot, current=cat(a.current, b.current),
+                     aux={k: np.concatenate([v, b.aux[k]]) for k, v in a.aux.items()})
+
+
+def _columns(rec: Recording, robot: rx90sym.Robot, convention: str) -> tuple[list[str], np.ndarray]:
+    """Header names and the table of :func:`identify.write_recording` for one block."""
+    n = robot.n
+    q = np.asarray(robot.to_controller(rec.q), dtype=float) if convention == "controller" else rec.q
+    names, parts = ["t", *[f"q{j + 1}" for j in range(n)]], [rec.t[:, None], q]
+    for values, prefix in ((rec.tau, "tau"), (rec.dq, "dq"), (rec.current, "i")):
+        if values is not None:
+            names += [f"{prefix}{j + 1}" for j in range(n)]
+            parts.append(values)
+    names += [f"x:{k}" for k in rec.aux]
+    parts += [v[:, None] for v in rec.aux.values()]
+    return names, np.hstack(parts)
+
+
+def _write_rows(fh: IO, table: np.ndarray) -> None:
+    import pyarrow as pa
+    from pyarrow import csv
+
+    # Shortest round-trip decimal form of each double (like repr): exact on reading back.
+    arrow = pa.table({f"c{k}": table[:, k] for k in range(table.shape[1])})
+    out = io.BytesIO()
+    csv.write_csv(arrow, out, csv.WriteOptions(include_header=False))
+    fh.write(out.getvalue().decode())
+
+
+class _Report:
+    """What :func:`identify.read_log` reports in ``meta["log"]``, gathered block by block."""
+
+    def __init__(self) -> None:
+        self.first_line = self.last_line = None
+        self.rows = self.samples = self.irregular = 0
+        self.t_first = self.t_last = None
+        self.gap, self.gap_lines, self.medians = -1.0, [0, 0], []
+
+    def add(self, t: np.ndarray, numbers: list[int], new: int) -> None:
+        """A block's times (its first row the previous block's last when ``new`` < len)."""
+        dt = np.diff(t)
+        if self.first_line is None:
+            self.first_line, self.t_first = numbers[len(numbers) - new], float(t[len(t) - new])
+        self.last_line, self.t_last, self.rows = numbers[-1], float(t[-1]), self.rows + new
+        if dt.size:
+            step = float(np.median(dt))
+            self.medians.append(step)
+            self.irregular += int(np.sum(np.abs(dt - step) > 0.01 * step))
+            k = int(np.argmax(dt))
+            if dt[k] > self.gap:
+                self.gap, self.gap_lines = float(dt[k]), [numbers[k], numbers[k + 1]]
+
+
+def convert_log(path: str | os.PathLike[str], robot: rx90sym.Robot, columns: str, out: str | os.PathLike[str],
+                header: bool = False, rows: tuple[int, int] | None = None, t_from: float | None = None,
+                t_to: float | None = None, resample: float | None = None, gains: Any = None,
+                convention: str | None = None, block: int = DEFAULT_LOG_BLOCK) -> dict[str, Any]:
+    """Convert the log ``path`` (a column map ``columns``, as :func:`identify.read_log`) to the recording
+    file ``out`` (CSV, controller angles), ``block`` lines at a time. Returns the ``meta["log"]`` report.
+    """
+    p = Path(path)
+    if Path(out).suffix.lower() != ".csv":
+        raise RecordingError(f"{Path(out).name}: a log converted block by block is written as CSV")
+    cmap, conv, drive = _log_options(p, robot, columns, rows, t_from, t_to, gains, convention)
+    report = _Report()
+    resampler = _Resampler(resample) if resample else None
+
+    def write(fh: IO) -> None:
+        carry: tuple[np.ndarray, list[int]] | None = None
+        header_written = False
+        blocks = _selected(_line_blocks(p, header, len(cmap.names), block), cmap, rows, t_from, t_to)
+        pending = next(blocks, None)
+        if pending is None:
+            raise RecordingError(f"{p.name}: no data rows" + (" in the window asked" if (rows or t_from or t_to) else ""))
+        while pending is not None:
+            values, numbers = pending
+            pending = next(blocks, None)
+            new = values.shape[0]
+            if carry is not None:
+                values, numbers = np.vstack([carry[0], values]), carry[1] + numbers
+            rec = _checked(values, numbers, new, cmap, robot, conv, p.name, resample is None)
+            report.add(rec.t, numbers, new)
+            carry = (values[-1:], numbers[-1:])
+            rec = rec.select(slice(rec.t.size - new, None))
+            if resampler is not None:
+                rec = resampler.feed(rec, pending is None)
+                if rec is None:
+                    continue
+            if drive is not None:
+                rec = apply_gains(rec, drive, robot)
+            names, table = _columns(rec, robot, "controller")
+            if not header_written:
+                fh.write(f"# convention: controller\n# robot: {robot.name}\n" + ",".join(names) + "\n")
+                header_written = True
+            report.samples += table.shape[0]
+            _write_rows(fh, table)
+
+    atomic_write(out, write, binary=False)
+    if report.rows < 2:
+        raise RecordingError(f"{p.name}: line {report.first_line}: a log needs at least 2 rows")
+    return {"lines": [report.first_line, report.last_line], "rows": report.rows,
+            "rate_hz": (report.rows - 1) / (report.t_last - report.t_first),
+            "median_step_s": float(np.median(report.medians)), "largest_gap_s": report.gap,
+            "largest_gap_lines": report.gap_lines, "irregular_steps": report.irregular,
+            "resampled_hz": float(resample) if resample else None, "samples": report.samples,
+            "gains": None if drive is None else gains_label(drive),
+            "convention": conv, "blocks_of_lines": block}
+
+
+def _selected(blocks: Iterator[_Lines], cmap: ColumnMap, rows: tuple[int, int] | None, t_from: float | None,
+              t_to: float | None) -> Iterator[tuple[np.ndarray, list[int]]]:
+    """Parsed blocks restricted to the lines ``rows`` or the times [t_from, t_to] (empty blocks skipped)."""
+    for lines in blocks:
+        if rows is not None:
+            keep = [k for k, num in enumerate(lines.numbers) if rows[0] <= num <= rows[1]]
+            if not keep:
+                if lines.numbers[0] > rows[1]:
+                    return
+                continue
+            lines = _Lines(lines.source, [lines.numbers[k] for k in keep], [lines.text[k] for k in keep])
+        values = _parse_fast(lines, cmap)
+        numbers = list(lines.numbers)
+        if t_from is not None or t_to is not None:
+            t = values[:, cmap.t]
+            inside = (t >= (-np.inf if t_from is None else t_from)) & (t <= (np.inf if t_to is None else t_to))
+            values, numbers = values[inside], [n for n, ok in zip(numbers, inside) if ok]
+            if t_to is not None and t.size and t[-1] > t_to and not inside.any():
+                return
+        if values.shape[0]:
+            yield values, numbers
+
+
+def _checked(values: np.ndarray, numbers: list[int], new: int, cmap: ColumnMap, robot: rx90sym.Robot,
+             conv: str, source: str, regular: bool) -> Recording:
+    """One block through the checks of :func:`identify.read_log`, as a recording in model angles."""
+    t = values[:, cmap.t]
+    if t.size >= 2:
+        _check_time(t, numbers, source)
+    q_file = values[:, list(cmap.q)]
+    q = np.asarray(robot.to_model(q_file), dtype=float) if conv == "controller" else q_file
+    _check_positions(q, t, numbers, cmap, robot, source)
+    dq = values[:, list(cmap.qd)] if cmap.qd else None
+    if t.size >= 3:
+        _check_velocities(dq, q, t, np.ptp(q, axis=0), numbers, cmap, source)
+    if regular and t.size >= 2:
+        refusal = _irregular(t, numbers, source)
+        if refusal:
+            raise RecordingError(refusal)
+
+    def take(cols: tuple[int, ...]) -> np.ndarray | None:
+        return values[:, list(cols)] if cols else None
+
+    return Recording(t=t, q=q, tau=take(cmap.tau), dq=dq, source=source, robot=robot.name, current=take(cmap.i),
+                     aux={name: values[:, col] for name, col in cmap.aux})
+

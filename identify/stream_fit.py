@@ -1,0 +1,272 @@
+"""Identification and prediction on logs of any length: the real-data fit streamed block by block.
+
+:func:`fit_streamed` does what :func:`identify.fit_recordings` does (rest policy, torque-delay
+estimate, one filtering, (weighted) least squares, optionally the consistent fit) plus the segment
+bootstrap, without ever holding a full-rate array of a whole log: recordings are read in blocks
+(:mod:`identify.io.blocks`), filtered in overlapping blocks (:mod:`identify.signal.blocks`), turned
+into decimated rows block by block (:mod:`identify.observation.stream`) and folded into the
+per-joint triangular factors (:mod:`identify.estimation.incremental_qr`) from which eqs. 9-15 follow.
+
+With a Dask ``client`` every block is a task (filtering, regressor, parallel decimation and the
+block's QR run on the workers); the client folds the factors in block order, so the result is the
+serial one (the same operations in the same order).
+"""
+from __future__ import annotations
+
+from collections import deque
+from dataclasses import dataclass, replace
+from types import SimpleNamespace
+from typing import Any, Iterable, Sequence
+
+import numpy as np
+
+import rx90sym
+
+from identify.estimation.bootstrap import SegmentBootstrap
+from identify.estimation.incremental_qr import JointFactors, stacked_rows
+from identify.estimation.least_squares import solve_joint_systems
+from identify.estimation.results import IdentificationResult
+from identify.io.blocks import BlockSource, block_source
+from identify.observation.matrix import DEFAULT_MIN_VELOCITY, DEFAULT_REST, column_regressor
+from identify.observation.stream import DEFAULT_BLOCK, Piece, StreamSettings, piece, plan_windows, scan_all
+from identify.signal.delay import DelayEstimate, delay_grid, joint_log_rms, refined_delay
+from identify.validation import Validation, _relative, _rms, base_vector
+
+__all__ = ["BootstrapSpec", "StreamedFit", "fit_in_blocks", "fit_streamed", "predict_streamed"]
+
+
+@dataclass(frozen=True)
+class BootstrapSpec:
+    """Segment bootstrap of the streamed fit: block length [s], draws, seed."""
+
+    block_s: float = 0.5
+    draws: int = 200
+    seed: int = 0
+
+
+@dataclass(frozen=True, eq=False)
+class StreamedFit:
+    """A fit on recordings read block by block.
+
+    result: the identification; cutoff [Hz]; rate [Hz] after decimation; notes: decimation notes;
+    sources: file names; samples: decimated samples used; moving_fraction: (n,) share of moving
+    samples per joint (None without a rest threshold); delay_estimate (None when not estimated);
+    delay [s] compensated; bootstrap_std: (c,) (None when not asked); bootstrap_block: samples per
+    bootstrap block; settings: the processing; blocks: number of blocks processed; q_range: (2, n)
+    smallest and largest position of each joint over the recordings [rad].
+    """
+
+    result: IdentificationResult
+    cutoff: float
+    rate: float
+    notes: tuple[str, ...]
+    sources: tuple[str, ...]
+    samples: int
+    moving_fraction: np.ndarray | None
+    delay_estimate: DelayEstimate | None
+    delay: float
+    bootstrap_std: np.ndarray | None
+    bootstrap_block: int
+    settings: StreamSettings
+    blocks: int
+    q_range: np.ndarray | None = None
+
+    def summary(self) -> str:
+        """What was fitted, in the manner of :meth:`identify.Observation.summary`."""
+        lines = [f"{self.result.rows} equations, {len(self.result.names)} parameters, {self.samples} samples after "
+                 f"decimation to {self.rate:g} Hz, {self.blocks} blocks of at most {self.settings.block} samples"]
+        lines += [f"  {src}: cut-off {self.cutoff:.3g} Hz" for src in self.sources]
+        if self.moving_fraction is not None:
+            frac = " ".join(f"{100 * f:.0f}%" for f in self.moving_fraction)
+            lines.append(f"  rest below {self.settings.min_velocity:g} rad/s ({self.settings.rest}); moving per joint: {frac}")
+        return "\n".join(lines + [f"  note: {n}" for n in self.notes if n])
+
+    def filtering(self, spring: bool = True) -> dict[str, Any]:
+        """Keyword arguments of :func:`identify.predict` / :func:`predict_streamed` that reuse this processing."""
+        s = self.settings
+        return {"cutoff": self.cutoff, "decimate_to": s.decimate_to, "min_velocity": s.min_velocity,
+                "delay": self.delay, "spring": spring}
+
+
+def _block_task(robot: rx90sym.Robot, rec: Any, window: Any, plan: Any, cutoff: float, settings: StreamSettings,
+                base: Any, names: Sequence[str], first: int, lags: Sequence[float]) -> tuple[Piece, list]:
+    """One block: its decimated rows and, per joint, the triangular factor of ``[W_i | Y_i | Y_lags]``."""
+    p = piece(robot, rec, window, plan, cutoff, settings, base.regressor_batch, names, first, lags)
+    m = p.motion
+    drop = settings.min_velocity is not None and settings.rest == "drop"
+    factors = []
+    for j in range(m.Phi.shape[1]):
+        rows = stacked_rows(m.Phi, [m.Y, *p.extra_Y], j, m.usable[:, j] if drop else None)
+        factors.append((JointFactors.block_factor(rows), rows.shape[0]))
+    return p, factors
+
+
+def _in_order(tasks: Iterable[tuple], client: Any, in_flight: int) -> Iterable[tuple[Piece, list]]:
+    """Run the block tasks serially, or on Dask with at most ``in_flight`` blocks submitted; results in order."""
+    if client is None:
+        for args in tasks:
+            yield _block_task(*args)
+        return
+    queue: deque = deque()
+    for args in tasks:
+        queue.append(client.submit(_block_task, *args, pure=False))
+        if len(queue) >= in_flight:
+            yield queue.popleft().result()
+    while queue:
+        yield queue.popleft().result()
+
+
+def _tasks(robot: rx90sym.Robot, sources: Sequence[BlockSource], plans: Sequence[Any], cutoff: float,
+           settings: StreamSettings, base: Any, names: Sequence[str], lags: Sequence[float]) -> Iterable[tuple]:
+    offset = 0
+    for src, plan in zip(sources, plans):
+        for window, rec in zip(plan.windows, src.windows(plan.spans)):
+            yield (robot, rec, window, plan, cutoff, settings, base, names, offset, tuple(lags))
+        offset += plan.samples
+
+
+def _workers(client: Any) -> int:
+    try:
+        return max(1, len(client.scheduler_info().get("workers", {})))
+    except Exception:  # a client that cannot say: two blocks in flight per assumed worker
+        return 1
+
+
+def _accumulate(robot: rx90sym.Robot, sources: Sequence[BlockSource], plans: Sequence[Any], cutoff: float,
+                settings: StreamSettings, base: Any, lags: Sequence[float], client: Any,
+                boot: SegmentBootstrap | None) -> tuple[JointFactors, np.ndarray, int]:
+    """The second pass: per-joint factors, moving-sample counts and the number of blocks."""
+    names = tuple(base.names)
+    factors = JointFactors(robot.n, len(names), 1 + len(lags))
+    moving = np.zeros(robot.n)
+    drop = settings.min_velocity is not None and settings.rest == "drop"
+    count = 0
+    # On Dask the robot and its compiled regressor are sent once to each worker, not with every block.
+    shared = client.scatter([robot, base], broadcast=True) if client is not None else (robot, base)
+    tasks = _tasks(shared[0], sources, plans, cutoff, settings, shared[1], names, lags)
+    for p, block_factors in _in_order(tasks, client, 2 * _workers(client) if client is not None else 1):
+        count += 1
+        m = p.motion
+        moving += m.moving.sum(axis=0)
+        for j, (factor, rows) in enumerate(block_factors):
+            factors.add_factor(j, factor, rows)
+            if boot is not None:
+                keep = m.usable[:, j] if drop else np.ones(m.Y.shape[0], dtype=bool)
+                boot.add(j, p.first + np.flatnonzero(keep), m.Phi[keep, j, :], m.Y[keep, j])
+    return factors, moving, count
+
+
+def fit_streamed(robot: rx90sym.Robot, recordings: Sequence[Any], method: str = "wls", base: Any = None,
+                 cutoff: float | None = None, decimate_to: float | None = 50.0,
+                 min_velocity: float | None = DEFAULT_MIN_VELOCITY, rest: str = DEFAULT_REST,
+                 delay: float | str = 0.0, spring: bool = True, estimate: bool = False,
+                 block: int = DEFAULT_BLOCK, client: Any = None, bootstrap: BootstrapSpec | None = None,
+                 convention: str | None = None, gains: Any = None, **consistent_options: Any) -> StreamedFit:
+    """:func:`identify.fit_recordings` on recordings of any length, block by block.
+
+    recordings: CSV paths (streamed), :class:`~identify.Recording` objects or
+    :class:`~identify.io.blocks.BlockSource`; block: raw samples per block core (peak memory grows
+    with it, not with the logs: docs/long-logs.md); client: a ``dask.distributed.Client`` to run the
+    blocks on (None: here); bootstrap: also the segment-bootstrap σ; convention, gains: how CSV files
+    are read. The other arguments are those of :func:`identify.fit_recordings`.
+    """
+    from identify.estimation.consistent_fit import consistent_fit
+    from identify.fitting import METHODS
+
+    if method not in METHODS:
+        raise ValueError(f"method must be one of {METHODS}, got {method!r}")
+    if not (delay == "auto" or isinstance(delay, (int, float))):
+        raise ValueError(f"delay must be 'auto' or a number of seconds, got {delay!r}")
+    if int(block) != block or block < 1000:
+        raise ValueError(f"block must be a whole number of samples >= 1000, got {block!r}")
+    base = base if base is not None else rx90sym.base_parameters(robot)
+    sources = [block_source(r, robot, convention, gains) for r in recordings]
+    settings = StreamSettings(cutoff, decimate_to or None, min_velocity or None, rest,
+                              0.0 if delay == "auto" else float(delay), spring, int(block))
+    scans, fc = scan_all(sources, settings)
+    plans = [plan_windows(s, fc, replace(settings, delay=0.02 if (estimate or delay == "auto") else settings.delay))
+             for s in scans]
+    rates = [p.rate for p in plans]
+    if max(rates) > min(rates) * (1 + 1e-3):
+        raise ValueError(f"recordings have different rates after decimation: {', '.join(f'{r:g}' for r in rates)} Hz; "
+                         f"give decimate_to")
+    grid, step = delay_grid(max(1.0 / s.rate for s in scans))
+    lags = tuple(grid) if (estimate or delay == "auto") else ()
+    total = sum(p.samples for p in plans)
+    bblock = max(1, int(round(bootstrap.block_s * plans[0].rate))) if bootstrap else 0
+    make_boot = (lambda: SegmentBootstrap(total, bblock, robot.n, len(base.names), bootstrap.draws, bootstrap.seed)
+                 if bootstrap else None)
+    boot = make_boot()
+    factors, moving, count = _accumulate(robot, sources, plans, fc, settings, base, lags, client, boot)
+    found = None
+    if lags:
+        found = refined_delay(grid, np.array([joint_log_rms(factors.systems(k + 1)) for k in range(len(lags))]), step)
+    if delay == "auto":  # a second pass with the torques put back in step
+        settings = replace(settings, delay=found.delay)
+        boot = make_boot()
+        factors, moving, count = _accumulate(robot, sources, plans, fc, settings, base, (), client, boot)
+    result = solve_joint_systems(factors.systems(0), base.names, weighted=method != "ols")
+    if method == "consistent":
+        result = consistent_fit(robot, result, base, **consistent_options)
+    return StreamedFit(result, fc, plans[0].rate, tuple(p.note for p in plans), tuple(s.source for s in scans), total,
+                       moving / total if settings.min_velocity is not None else None, found, settings.delay,
+                       boot.std(result.weights) if boot is not None else None, bblock, settings, count,
+                       np.vstack([np.min([s.q_range[0] for s in scans], axis=0),
+                                  np.max([s.q_range[1] for s in scans], axis=0)]))
+
+
+def predict_streamed(robot: rx90sym.Robot, result: IdentificationResult, recording: Any, base: Any = None,
+                     cutoff: float | None = None, decimate_to: float | None = 50.0, spring: bool = True,
+                     min_velocity: float | None = None, delay: float = 0.0, block: int = DEFAULT_BLOCK,
+                     convention: str | None = None, gains: Any = None) -> Validation:
+    """:func:`identify.predict` on a recording of any length: predicted and measured torques block by block
+    (only the decimated torques are held, n columns at the decimated rate)."""
+    base = base if base is not None else rx90sym.base_parameters(robot)
+    beta = base_vector(result, base, robot)
+    src = block_source(recording, robot, convention, gains)
+    settings = StreamSettings(cutoff, decimate_to or None, min_velocity or None, "zero-coulomb", float(delay),
+                              spring, int(block))
+    scans, fc = scan_all([src], settings)
+    plan = plan_windows(scans[0], fc, settings)
+    names, regressor = column_regressor(robot, base)
+    parts = []
+    for window, rec in zip(plan.windows, src.windows(plan.spans)):
+        m = piece(robot, rec, window, plan, fc, settings, regressor, names, 0).motion
+        parts.append((m.Y, m.Phi @ beta, m.t, m.moving))
+    Y, pred, t, mov = (np.concatenate(a) for a in zip(*parts))
+    err = Y - pred
+    every = np.ones_like(mov)
+    return Validation(
+        relative_error_pct=_relative(err, Y, every), rms_error=_rms(err, every), measured=Y, predicted=pred, t=t,
+        source=src.source, relative_error_pct_moving=_relative(err, Y, mov), rms_error_moving=_rms(err, mov),
+        moving_fraction=mov.mean(axis=0), moving_threshold=settings.min_velocity, moving=mov, cutoff=fc,
+        rate=plan.rate)
+
+
+def fit_in_blocks(robot: rx90sym.Robot, recordings: Sequence[Any], processing: Any = None, method: str = "wls", *,
+                  base: Any = None, gains: Any = None, convention: str | None = None, spring_source: str | None = None,
+                  block: int | None = None, client: Any = None, bootstrap_seed: int = 0,
+                  **consistent_options: Any) -> Any:
+    """:func:`identify.fit` block by block (``identify.fit(..., block=..., client=...)`` calls this): a
+    :class:`identify.Fit` without an observation matrix, its bootstrap computed on the way."""
+    from identify.fitting import BOOTSTRAP_BLOCK_S, BOOTSTRAP_DRAWS, Bootstrap, Fit, _spring_label
+    from identify.fit_file import FitModel
+    from identify.observation.processing import Processing
+    from identify.observation.spring_fit import BaseWithSpring, spring_summary
+
+    p = processing if processing is not None else Processing()
+    block = DEFAULT_BLOCK if block is None else int(block)
+    base = base if base is not None else rx90sym.base_parameters(robot)
+    recordings = list(recordings) if isinstance(recordings, (list, tuple)) else [recordings]
+    spec = BootstrapSpec(BOOTSTRAP_BLOCK_S, BOOTSTRAP_DRAWS, bootstrap_seed)
+    sf = fit_streamed(robot, recordings, method, base, p.cutoff, p.decimate_to, p.min_velocity, p.rest, p.delay,
+                      p.spring, p.estimate_delay, block, client, spec, convention, gains, **consistent_options)
+    model = FitModel.of(robot, convention=convention, gains=gains.to_dict() if gains is not None else None,
+                        rest=p.rest, min_velocity=p.min_velocity, spring=spring_source or _spring_label(robot, base),
+                        cutoff_hz=sf.cutoff, decimate_to_hz=p.decimate_to, rate_hz=sf.rate, delay_s=sf.delay)
+    angles = [SimpleNamespace(q=sf.q_range)]  # what the spring summary reads: the range visited
+    spring = spring_summary(robot, base if isinstance(base, BaseWithSpring) else None, sf.result, angles)[0]
+    boot = Bootstrap(sf.bootstrap_std, sf.bootstrap_block / sf.rate, spec.draws, spec.seed)
+    found = sf.delay_estimate
+    return Fit(robot, sf.result, p, model, base, None, found, found.delay if found is not None else None, spring,
+               boot, block=block, streamed=sf)
