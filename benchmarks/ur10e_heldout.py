@@ -55,7 +55,8 @@ SECOND_HALF = (2567, 5375)                   # rows of the empty run: motion, th
 THRESHOLDS = (0.005, 0.01, 0.02, 0.05, 0.2)  # rad/s, rest thresholds compared in part 4
 POLICIES = {"none": dict(min_velocity=None), "drop": dict(rest="drop"),
             "zero-coulomb": dict(rest="zero-coulomb"),
-            "zero-coulomb, delay auto": dict(rest="zero-coulomb", delay="auto")}
+            "zero-coulomb, delay auto": dict(rest="zero-coulomb", delay="auto"),
+            "presliding": dict(rest="presliding")}
 
 
 def torques(path: Path, rows: tuple[int, int], robot: rx90sym.Robot, gains: np.ndarray = SOURCE_GAINS):

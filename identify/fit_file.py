@@ -103,7 +103,7 @@ class FitModel:
         """Keyword arguments of predict/validate that reproduce the fit's processing."""
         return {"cutoff": self.cutoff_hz, "decimate_to": self.decimate_to_hz,
                 "min_velocity": self.min_velocity, "delay": self.delay_s,
-                "spring": self.spring != "none"}
+                "spring": self.spring != "none", "rest": self.rest}
 
     def check_robot(self, robot: rx90sym.Robot) -> str:
         """A warning ('' if none) when ``robot`` is not the description the fit used."""

@@ -17,13 +17,15 @@ import numpy as np
 import rx90sym
 from rx90sym.files import write_json
 
-from identify.estimation.bootstrap import BLOCK_S, DRAWS, segment_bootstrap_std
+from identify.estimation.bootstrap import BLOCK_S, DRAWS, bootstrap_std, segment_bootstrap_std
+from identify.estimation.consistent_fit import ConsistentResult
 from identify.plausibility import Flag
 from identify.estimation.results import IdentificationResult
 from identify.fit_file import SCHEMA_VERSION, FitModel, gains_of, read_fit_file, robot_of
 from identify.io.gains import DriveGains
 from identify.observation.matrix import Observation, observation_matrix
-from identify.observation.processing import Processing
+from identify.io.recordings import layout_summary
+from identify.observation.processing import DEFAULT_MIN_VELOCITY, Processing
 from identify.signal.delay import DelayEstimate, estimate_delay
 from identify.validation import Validation, predict
 
@@ -76,7 +78,10 @@ class Fit:
     delay_estimate: the lag search (None when not run or loaded); delay_estimate_s [s];
     spring: how the spring entered (JSON entry); bootstrap, essential, validation: None until
     asked (:meth:`bootstrapped`, :meth:`with_essential`, :meth:`validated`); flags: the
-    plausibility warnings of the fit (identify.plausibility, :meth:`with_flags`).
+    plausibility warnings of the fit (identify.plausibility, :meth:`with_flags`); recordings: per
+    recording its samples, segments, samples bridged over lost packets and stale rows dropped
+    (:func:`identify.io.recordings.layout_summary`); choice: the cross-validated processing's
+    candidate table (:meth:`ProcessingChoice.to_dict`), None when the processing was given.
     """
 
     robot: rx90sym.Robot
@@ -92,6 +97,8 @@ class Fit:
     essential: IdentificationResult | None = None
     validation: Validation | None = None
     flags: tuple[Flag, ...] = ()
+    recordings: tuple[dict, ...] = ()
+    choice: dict | None = None
     block: int | None = None        # logs read block by block with this many samples (None: whole)
     streamed: Any = None            # the block-wise fit's record (identify.stream_fit.StreamedFit)
 
@@ -123,17 +130,22 @@ class Fit:
     def filtering(self, spring: bool | None = None) -> dict[str, Any]:
         """Keyword arguments of :func:`identify.predict` that reuse this fit's processing."""
         return {"cutoff": self.cutoff, "decimate_to": self.decimate_to, "min_velocity": self.min_velocity,
-                "delay": self.delay, "spring": self.processing.spring if spring is None else spring}
+                "delay": self.delay, "spring": self.processing.spring if spring is None else spring,
+                "rest": self.rest}
 
     # ------------------------------------------------------------ using it
     def predict(self, recording: Any, result: IdentificationResult | None = None) -> Validation:
         """Torques of ``recording`` predicted with this fit's parameters (or ``result``) and processing.
-        The Coulomb term is 0 where a joint rests (every sample is predicted, whatever the rest policy)."""
+        Where a joint rests the Coulomb term is 0, or the presliding state with that rest policy
+        (every sample is predicted, whatever the rest policy)."""
         if self.block is not None:  # a long log: block by block, as it was fitted
             from identify.stream_fit import predict_streamed
 
+            options = self.filtering()
+            if options.pop("rest") == "presliding":
+                raise ValueError("a fit with the presliding rest policy predicts whole recordings, not block by block")
             return predict_streamed(self.robot, result or self.result, recording, base=self.base, block=self.block,
-                                    convention=self.model.convention, gains=self.gains, **self.filtering())
+                                    convention=self.model.convention, gains=self.gains, **options)
         return predict(self.robot, result or self.result, recording, base=self.base, **self.filtering())
 
     def validate(self, recording: Any) -> Validation:
@@ -180,7 +192,8 @@ class Fit:
                     "essential": self.essential.to_dict() if self.essential is not None else {},
                     "validation": self.validation.to_dict() if self.validation is not None else {},
                     "schema_version": SCHEMA_VERSION, "processing": self.processing.to_json(),
-                    "flags": [f.to_json() for f in self.flags]})
+                    "flags": [f.to_json() for f in self.flags], "recordings": list(self.recordings),
+                    "processing_choice": self.choice})
         return out
 
     def save(self, path: str | Path) -> Path:
@@ -195,7 +208,8 @@ class Fit:
         try:
             model = FitModel.from_json(data["model"], str(path))
             processing = Processing.from_json(data.get("processing", {}), f"{path}: processing")
-            result = IdentificationResult.from_dict(data)
+            consistent = data.get("method") == "consistent" and isinstance(data.get("standard"), dict)
+            result = (ConsistentResult if consistent else IdentificationResult).from_dict(data)
             essential = IdentificationResult.from_dict(data["essential"]) if data.get("essential") else None
             bootstrap = Bootstrap.from_json(data)
             flags = tuple(Flag.from_json(f) for f in data.get("flags", []))
@@ -208,7 +222,8 @@ class Fit:
             rob = rob.with_options(asymmetric_coulomb=asymmetric)
         return cls(rob, result, processing, model, rx90sym.base_parameters(rob),
                    delay_estimate_s=data.get("delay_estimate_s"), spring=data.get("spring"),
-                   bootstrap=bootstrap, essential=essential, flags=flags)
+                   bootstrap=bootstrap, essential=essential, flags=flags,
+                   recordings=tuple(data.get("recordings", [])), choice=data.get("processing_choice"))
 
 
 def load_fit(path: str | Path, robot: rx90sym.Robot | str | None = None) -> Fit:
@@ -234,9 +249,12 @@ def fit(robot: rx90sym.Robot, recordings: Sequence[Any], processing: Processing 
     processing: the signal processing (None: the defaults, those of ``rx90 identify``);
     method: "ols", "wls" (paper: each joint's rows weighted by 1/σ of its own residual) or
     "consistent" (WLS data, physically consistent standard parameters through cvxpy; extra
-    keyword arguments go to identify.estimation.consistency.consistent_least_squares, e.g. prior,
-    prior_weight, total_mass, mass_bounds, com_boxes, solver); base: the columns (default: the
-    symbolic base parameters; a BaseWithSpring identifies the spring too, with processing.spring
+    keyword arguments go to identify.estimation.consistent_fit.consistent_fit, e.g.
+    physical_prior (a PhysicalPrior: the unseen directions from the robot's nominal parameters,
+    within a covariance of the base parameters calibrated by the segment bootstrap) or
+    consistent_least_squares' prior, prior_weight, total_mass, mass_bounds, com_boxes, solver);
+    base: the columns (default: the symbolic base parameters; a BaseWithSpring identifies the
+    spring too, with processing.spring
     False). Recorded in the fit file for :func:`load_fit`: gains (already applied to current
     recordings), convention (of the files; None: each file's header), spring_source ("default",
     "none" or a table file; None: from the robot). observation: an already built observation
@@ -249,6 +267,9 @@ def fit(robot: rx90sym.Robot, recordings: Sequence[Any], processing: Processing 
     if block is not None or client is not None:
         from identify.stream_fit import fit_in_blocks
 
+        if processing is not None and processing.cross_validate:
+            raise ValueError("fit: the cross-validated processing is chosen on whole recordings, not block by "
+                             "block: give a cut-off and a rest policy, or no block")
         return fit_in_blocks(robot, recordings, processing, method, base=base, gains=gains, convention=convention,
                              spring_source=spring_source, block=block, client=client, bootstrap_seed=bootstrap_seed,
                              **consistent_options)
@@ -258,6 +279,15 @@ def fit(robot: rx90sym.Robot, recordings: Sequence[Any], processing: Processing 
     recordings = list(recordings) if isinstance(recordings, (list, tuple)) else [recordings]
     base = base if base is not None else rx90sym.base_parameters(robot)
     options = p.observation_options()
+    choice = None
+    if p.cross_validate and observation is None:
+        from identify.observation.cross_validation import choose_processing
+
+        choice = choose_processing(robot, recordings, base=base, min_velocity=p.min_velocity, rest=p.rest,
+                                   spring=p.spring, default_decimate=p.decimate_to)
+        c = choice.chosen
+        options.update(cutoff=c.cutoff, decimate_to=c.decimate_to, rest=c.rest or p.rest,
+                       min_velocity=(p.min_velocity or DEFAULT_MIN_VELOCITY) if c.rest else None)
     found = None
     if observation is None and (p.estimate_delay or p.delay == "auto"):
         found = estimate_delay(robot, recordings, base=base, **options)
@@ -266,12 +296,24 @@ def fit(robot: rx90sym.Robot, recordings: Sequence[Any], processing: Processing 
                                                                          base=base, **options)
     result = _solve(robot, obs, base, method, consistent_options)
     model = FitModel.of(robot, convention=convention, gains=gains.to_dict() if gains is not None else None,
-                        rest=p.rest, min_velocity=p.min_velocity, spring=spring_source or _spring_label(robot, base),
-                        cutoff_hz=obs.cutoffs[0], decimate_to_hz=p.decimate_to, rate_hz=obs.rate, delay_s=lag)
+                        rest=options["rest"], min_velocity=options["min_velocity"],
+                        spring=spring_source or _spring_label(robot, base),
+                        cutoff_hz=obs.cutoffs[0], decimate_to_hz=options["decimate_to"], rate_hz=obs.rate, delay_s=lag)
     from identify.observation.spring_fit import BaseWithSpring, spring_summary
 
     spring = spring_summary(robot, base if isinstance(base, BaseWithSpring) else None, result, recordings)[0]
-    return Fit(robot, result, p, model, base, obs, found, found.delay if found is not None else None, spring)
+    return Fit(robot, result, p, model, base, obs, found, found.delay if found is not None else None, spring,
+               recordings=tuple(layout_summary(r) for r in recordings if hasattr(r, "measured_mask")),
+               choice=choice.to_dict() if choice is not None else None)
+
+
+def _honest_covariance(obs: Observation, result: IdentificationResult) -> np.ndarray:
+    """Eq. 13's covariance of the base parameters, inflated by the median ratio of the segment
+    bootstrap's σ to eq. 13's when above 1 (coloured residuals: eq. 13 is optimistic; white
+    ones leave it as it is). The budget of the prior fit is measured in it."""
+    std = bootstrap_std(obs.W, obs.Y, obs.joint, obs.samples, result.weights, obs.rate)
+    ratio = np.nanmedian(std / np.where(result.std > 0, result.std, np.nan))
+    return result.covariance * max(1.0, float(ratio) if np.isfinite(ratio) else 1.0) ** 2
 
 
 def _solve(robot: rx90sym.Robot, obs: Observation, base: Any, method: str,
@@ -285,4 +327,6 @@ def _solve(robot: rx90sym.Robot, obs: Observation, base: Any, method: str,
         return result
     from identify.estimation.consistent_fit import consistent_fit
 
+    if consistent_options.get("physical_prior") is not None and "covariance" not in consistent_options:
+        consistent_options = {**consistent_options, "covariance": _honest_covariance(obs, result)}
     return consistent_fit(robot, result, base, **consistent_options)

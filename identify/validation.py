@@ -14,7 +14,7 @@ import numpy as np
 
 import rx90sym
 
-from identify.observation.matrix import filtered_motion
+from identify.observation.matrix import automatic_cutoff, filtered_motions
 from identify.estimation.results import IdentificationResult, json_number
 
 __all__ = ["Validation", "predict", "validate"]
@@ -95,26 +95,34 @@ def base_vector(result: IdentificationResult, base: Any, robot: rx90sym.Robot) -
 
 def predict(robot: rx90sym.Robot, result: IdentificationResult, recording: Any, base: Any = None,
             cutoff: float | None = None, decimate_to: float | None = 50.0, spring: bool = True,
-            min_velocity: float | None = None, delay: float = 0.0) -> Validation:
+            min_velocity: float | None = None, delay: float = 0.0, rest: str = "zero-coulomb") -> Validation:
     """Predicted vs measured torques of ``recording`` with the parameters of ``result``.
 
     cutoff [Hz], decimate_to [Hz]: give those of the fit (None: chosen on this recording);
     min_velocity [rad/s]: rest threshold (Coulomb term 0 at rest, errors also while moving);
-    delay [s]: torque lag compensated as in the fit.
+    delay [s]: torque lag compensated as in the fit; rest: the fit's rest policy ("presliding":
+    the presliding state at rest, any other: Coulomb 0 at rest).
     """
     base = base if base is not None else rx90sym.base_parameters(robot)
     beta = base_vector(result, base, robot)
-    m = filtered_motion(robot, recording, cutoff, decimate_to, spring, base.regressor_batch, base.names,
-                        min_velocity, "zero-coulomb", delay)
-    predicted = m.Phi @ beta
-    err = m.Y - predicted
-    every = np.ones_like(m.moving)
+    cutoff = cutoff if cutoff is not None else automatic_cutoff([recording], decimate_to)
+    motions, _, _ = filtered_motions(robot, [recording], cutoff, decimate_to, spring, base.regressor_batch,
+                                     base.names, min_velocity,
+                                     "presliding" if rest == "presliding" else "zero-coulomb", delay)
+    # Samples bridged over lost packets are no measurements: they are not scored.
+    rows = [m.measured if m.measured is not None else slice(None) for m in motions]
+    Y = np.concatenate([m.Y[r] for m, r in zip(motions, rows)])
+    predicted = np.concatenate([(m.Phi @ beta)[r] for m, r in zip(motions, rows)])
+    moving = np.concatenate([m.moving[r] for m, r in zip(motions, rows)])
+    err = Y - predicted
+    every = np.ones_like(moving)
     return Validation(
-        relative_error_pct=_relative(err, m.Y, every), rms_error=_rms(err, every),
-        measured=m.Y, predicted=predicted, t=m.t, source=m.source,
-        relative_error_pct_moving=_relative(err, m.Y, m.moving), rms_error_moving=_rms(err, m.moving),
-        moving_fraction=m.moving.mean(axis=0), moving_threshold=min_velocity, moving=m.moving,
-        cutoff=m.cutoff, rate=m.rate)
+        relative_error_pct=_relative(err, Y, every), rms_error=_rms(err, every),
+        measured=Y, predicted=predicted, t=np.concatenate([m.t[r] for m, r in zip(motions, rows)]),
+        source=recording.source,
+        relative_error_pct_moving=_relative(err, Y, moving), rms_error_moving=_rms(err, moving),
+        moving_fraction=moving.mean(axis=0), moving_threshold=min_velocity, moving=moving,
+        cutoff=motions[0].cutoff, rate=motions[0].rate)
 
 
 def validate(robot: rx90sym.Robot, result: IdentificationResult, recording: Any, **options: Any) -> Validation:

@@ -87,6 +87,8 @@ class Robot:
     sigma_j = 0 revolute (q_j = theta_j - theta offset), 1 prismatic. Lengths in m, angles in rad.
     gravity: a number g [m/s^2] (gravity along -z0) or the gravity vector in frame 0.
     urdf: for a robot imported from a URDF, its chain (rx90sym.urdf.UrdfChain), else None.
+    joint_names: the joints' names in ROS messages (robot file ``joint_names``; a URDF robot's
+        are its URDF joint names, :meth:`ros_joint_names`), or () when the file gives none.
     nominal: the robot file's [nominal] table (rx90sym.nominal_table.NominalTable), else None.
     flange: 4x4 pose of the maker's tool flange frame in frame n (robot file's [flange]), else None.
     """
@@ -112,6 +114,7 @@ class Robot:
     description: str = ""
     source: str = ""
     urdf: Any = None
+    joint_names: tuple[str, ...] = ()
     nominal: Any = None
     flange: np.ndarray | None = None
 
@@ -166,6 +169,12 @@ class Robot:
         object.__setattr__(self, "asymmetric_coulomb", asym)
 
     # ----------------------------------------------------------------- description
+    def ros_joint_names(self) -> tuple[str, ...]:
+        """The joints' names in ROS messages: ``joint_names``, else the URDF's joint names, else ()."""
+        if self.joint_names:
+            return tuple(self.joint_names)
+        return tuple(self.urdf.joints) if self.urdf is not None else ()
+
     @property
     def n(self) -> int:
         """Number of joints."""

@@ -47,6 +47,11 @@ class Recording:
             from drive gains (``tau = Rt·diag(k)·current``); until then ``tau`` is None.
         aux: auxiliary columns kept from a log (``x:NAME`` in a column map, e.g. a target
             current), name -> (N,) array; never used as torque.
+        measured: (N,) bool, False for a sample bridged over a lost packet (interpolated, kept
+            so that the filters run through, never a measurement), or None: all measured.
+        segment: (N,) int, the segment of each sample (0, 1, ...; non-decreasing): a log split at
+            gaps too long to bridge; each segment is filtered and differentiated on its own
+            (:meth:`pieces`). None: one segment.
 
     Only shapes are checked here; the data checks (finite values, regular time, radians, ...)
     are done by the readers and :func:`recording_from_arrays`.
@@ -61,6 +66,8 @@ class Recording:
     meta: dict = field(default_factory=dict, repr=False)
     current: np.ndarray | None = None
     aux: dict = field(default_factory=dict, repr=False)
+    measured: np.ndarray | None = None
+    segment: np.ndarray | None = None
 
     def __post_init__(self) -> None:
         t = frozen_array(self.t)
@@ -89,6 +96,43 @@ class Recording:
                 raise RecordingError(f"{self.source}: auxiliary column {key} must have shape {t.shape}, got {a.shape}")
             aux[str(key)] = a
         object.__setattr__(self, "aux", aux)
+        self._set_layout(n_samples)
+
+    def _set_layout(self, n_samples: int) -> None:
+        """Check and freeze ``measured`` and ``segment`` (None when trivial)."""
+        if self.measured is not None:
+            m = np.array(self.measured, dtype=bool, copy=True)
+            if m.shape != (n_samples,):
+                raise RecordingError(f"{self.source}: measured must have shape ({n_samples},), got {m.shape}")
+            m.setflags(write=False)
+            object.__setattr__(self, "measured", None if m.all() else m)
+        if self.segment is not None:
+            s = np.array(self.segment, copy=True)
+            if s.shape != (n_samples,) or not np.all(np.isfinite(s)) or not np.all(s == np.round(s)):
+                raise RecordingError(f"{self.source}: segment must be ({n_samples},) integers, got {s.shape}")
+            s = s.astype(np.int64)
+            if s.size and (s[0] != 0 or np.any(np.diff(s) < 0) or np.any(np.diff(s) > 1)):
+                raise RecordingError(f"{self.source}: segment numbers must start at 0 and grow by steps of 1")
+            s.setflags(write=False)
+            object.__setattr__(self, "segment", None if not s.size or s[-1] == 0 else s)
+
+    @property
+    def n_segments(self) -> int:
+        """Number of segments (1 for a recording without gaps too long to bridge)."""
+        return 1 if self.segment is None else int(self.segment[-1]) + 1
+
+    @property
+    def measured_mask(self) -> np.ndarray:
+        """(N,) bool: True for a measured sample, False for one bridged over a lost packet."""
+        return np.ones(self.t.size, dtype=bool) if self.measured is None else self.measured
+
+    def pieces(self) -> list["Recording"]:
+        """One recording per segment (each keeps its ``measured`` mask), in time order."""
+        if self.segment is None:
+            return [self]
+        edges = np.flatnonzero(np.diff(self.segment)) + 1
+        bounds = zip(np.r_[0, edges], np.r_[edges, self.t.size])
+        return [self.select(slice(int(a), int(b)), f"{self.source}#{k + 1}") for k, (a, b) in enumerate(bounds)]
 
     @property
     def torques(self) -> np.ndarray:
@@ -108,10 +152,15 @@ class Recording:
         def cut(a: np.ndarray | None) -> np.ndarray | None:
             return None if a is None else a[rows]
 
+        segment = None
+        if self.segment is not None:  # renumbered from 0, one step per break kept
+            kept = self.segment[rows]
+            segment = np.r_[0, np.cumsum(np.diff(kept) != 0)] if kept.size else kept
         return Recording(t=self.t[rows], q=self.q[rows], tau=cut(self.tau), dq=cut(self.dq),
                          source=self.source if source is None else source, robot=self.robot,
                          meta=dict(self.meta), current=cut(self.current),
-                         aux={k: v[rows] for k, v in self.aux.items()})
+                         aux={k: v[rows] for k, v in self.aux.items()}, measured=cut(self.measured),
+                         segment=segment)
 
     @property
     def n_samples(self) -> int:
@@ -125,10 +174,13 @@ class Recording:
 
     @property
     def rate(self) -> float:
-        """Sampling rate, Hz: 1 / mean time step (nan for a single sample)."""
+        """Sampling rate, Hz: 1 / mean time step inside the segments (nan for a single sample)."""
         if self.t.size < 2:
             return math.nan
-        return float((self.t.size - 1) / (self.t[-1] - self.t[0]))
+        dt = np.diff(self.t)
+        if self.segment is not None:
+            dt = dt[np.diff(self.segment) == 0]
+        return float(dt.size / dt.sum()) if dt.size else math.nan
 
     @property
     def duration(self) -> float:
@@ -139,5 +191,7 @@ class Recording:
         return (
             f"Recording(robot={self.robot!r}, source={self.source!r}, samples={self.n_samples}, "
             f"joints={self.n_joints}, rate={self.rate:.6g} Hz, dq={'yes' if self.dq is not None else 'no'}, "
-            f"{'torques' if self.tau is not None else 'currents'})"
+            f"{'torques' if self.tau is not None else 'currents'}"
+            + (f", {self.n_segments} segments" if self.segment is not None else "")
+            + (f", {int(np.sum(~self.measured))} bridged" if self.measured is not None else "") + ")"
         )

@@ -26,7 +26,7 @@ JOINT_FIELDS = ("sigma", "alpha", "d", "theta", "r")
 # [staubli] is the old name of [controller] (still accepted).
 _OFFSETS = ("offsets", "offsets_deg")
 SCHEMA: dict[str, tuple[str, ...]] = {
-    "": ("name", "description", "n"),
+    "": ("name", "description", "n", "joint_names"),
     "joints": ("sigma", "alpha", "alpha_deg", "d", "theta", "theta_deg", "r", "d_label", "r_label"),
     "controller": _OFFSETS,
     "staubli": _OFFSETS,
@@ -280,6 +280,11 @@ def parse_robot(data: dict, source: str, lines: Lines | None = None) -> Robot:
         coupling = Coupling((pair[0] - 1, pair[1] - 1),
                             _sign_option(c.get("coulomb_sign", "paper"), where("coupling", "coulomb_sign")))
     spring = _parse_spring(data["spring"], n, source, lambda key: where("spring", key)) if "spring" in data else None
+    names = data.get("joint_names", [])
+    if not (isinstance(names, list) and all(isinstance(x, str) and x for x in names)
+            and len(names) in (0, n) and len(set(names)) == len(names)):
+        raise RobotFileError(f"{where('', 'joint_names')}: field 'joint_names' must list {n} distinct "
+                             f"joint names (the names a ROS joint_states message uses)")
     friction = data.get("friction", {})
     asym = _joint_numbers(friction.get("asymmetric_coulomb", []), n, where("friction", "asymmetric_coulomb"))
     try:
@@ -292,7 +297,7 @@ def parse_robot(data: dict, source: str, lines: Lines | None = None) -> Robot:
                  limits=limits, d_labels=tuple(d_labels), r_labels=tuple(r_labels),
                  controller_offsets=offsets, gear_ratios=gear, Rq=Rq, Rt=Rt, spring=spring,
                  coupling=coupling, asymmetric_coulomb=asym, description=str(data.get("description", "")),
-                 source=source, nominal=nominal, flange=flange)
+                 source=source, nominal=nominal, flange=flange, joint_names=tuple(names))
 
 
 def _parse_limits(table: dict, n: int, controller_offsets: np.ndarray, where: Any) -> Limits:

@@ -53,3 +53,20 @@ def stop_and_go(traj, period: float = 4.0):
         return q, qd * g[:, None], qdd * g[:, None] ** 2 + qd * dg[:, None]
 
     return warped
+
+
+# Plausible true parameters for a Panda twin (no bundled nominal set yet): link masses close to
+# those identified for the Panda in the literature (kg), centres of mass on the z axes, diagonal
+# inertias of 0.02 m^2 x mass, rotor inertia 0.05 kg m^2, viscous 0.6 N m s/rad, Coulomb 0.4 N m.
+PANDA_MASSES = (4.97, 0.646, 3.228, 3.587, 1.225, 1.666, 0.735)
+
+
+def panda_truth(robot) -> dict:
+    """name -> value of the Panda twin's true standard parameters (SI)."""
+    p = {}
+    for j, m in enumerate(PANDA_MASSES, start=1):
+        p.update({f"{k}{j}": 0.0 for k in ("XY", "XZ", "YZ", "MX", "MY")})
+        p.update({f"{k}{j}": 0.02 * m for k in ("XX", "YY", "ZZ", "MZ")})
+        p.update({f"M{j}": m, f"IA{j}": 0.05, f"FV{j}": 0.6, f"FS{j}": 0.4})
+    assert set(p) == set(robot.parameter_names)
+    return p

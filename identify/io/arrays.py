@@ -59,11 +59,30 @@ def _build(
     t: np.ndarray, q: np.ndarray, tau: np.ndarray | None, dq: np.ndarray | None,
     robot: rx90sym.Robot, labels: _Labels, source: str, convention: str,
     current: np.ndarray | None = None, aux: dict[str, np.ndarray] | None = None,
+    measured: np.ndarray | None = None, segment: np.ndarray | None = None,
 ) -> Recording:
     q_model = _to_model(q, robot, convention)  # the offsets are constant: dq is unchanged
-    _validate(t, q_model, tau, dq, robot, labels, source, current, aux)
+    segment = _check_layout(measured, segment, source)
+    _validate(t, q_model, tau, dq, robot, labels, source, current, aux, segment)
     return Recording(t=t, q=q_model, tau=tau, dq=dq, source=source, robot=robot.name,
-                     current=current, aux=dict(aux or {}))
+                     current=current, aux=dict(aux or {}),
+                     measured=None if measured is None else measured == 1, segment=segment)
+
+
+def _check_layout(measured: np.ndarray | None, segment: np.ndarray | None, source: str) -> np.ndarray | None:
+    """``measured`` holds 0/1, ``segment`` whole numbers from 0 growing by steps of 0 or 1."""
+    if measured is not None:
+        bad = np.flatnonzero((measured != 0) & (measured != 1))
+        if bad.size:
+            raise RecordingError(f"{source}: column 'measured', row {bad[0] + 1}: {measured[bad[0]]:g} is not 0 or 1")
+    if segment is None:
+        return None
+    steps = np.diff(segment, prepend=0.0)
+    bad = np.flatnonzero((steps != 0) & (steps != 1) | ~np.isfinite(segment))
+    if bad.size:
+        raise RecordingError(f"{source}: column 'segment', row {bad[0] + 1}: {segment[bad[0]]:g} does not "
+                             f"continue the previous segment number (0, 1, ... growing by steps of 1)")
+    return segment.astype(np.int64)
 
 
 def recording_from_arrays(

@@ -82,8 +82,9 @@ def _check_finite(values: np.ndarray, labels: Sequence[tuple[str, str]]) -> None
             raise RecordingError(f"{_where(label, int(rows[0]) + 1)}: value {values[rows[0], j]:g} is not finite")
 
 
-def _check_time(t: np.ndarray, label: tuple[str, str], rtol: float = TIME_RTOL) -> None:
-    """Time must increase strictly with a regular step (within ``rtol`` of the median step)."""
+def _check_time(t: np.ndarray, label: tuple[str, str], rtol: float = TIME_RTOL, offset: int = 0) -> None:
+    """Time must increase strictly with a regular step (within ``rtol`` of the median step);
+    ``offset``: index of ``t[0]`` in the file's rows (for the messages)."""
     if t.size < 2:
         return
     dt = np.diff(t)
@@ -91,14 +92,14 @@ def _check_time(t: np.ndarray, label: tuple[str, str], rtol: float = TIME_RTOL) 
     if not_increasing.size:
         k = int(not_increasing[0]) + 1  # 0-based index of the offending sample
         raise RecordingError(
-            f"{_where(label, k + 1)}: time {t[k]:g} s does not increase (previous row: {t[k - 1]:g} s)"
+            f"{_where(label, offset + k + 1)}: time {t[k]:g} s does not increase (previous row: {t[k - 1]:g} s)"
         )
     step = float(np.median(dt))
     irregular = np.flatnonzero(np.abs(dt - step) > rtol * step)
     if irregular.size:
         k = int(irregular[0]) + 1
         raise RecordingError(
-            f"{_where(label, k + 1)}: irregular time step {dt[k - 1]:g} s, the median step is {step:g} s "
+            f"{_where(label, offset + k + 1)}: irregular time step {dt[k - 1]:g} s, the median step is {step:g} s "
             f"(tolerance {rtol:.0%}); resample the recording or split it at the gap"
         )
 
@@ -136,7 +137,7 @@ def _check_radians(q: np.ndarray, robot: rx90sym.Robot, labels: Sequence[tuple[s
 
 def _check_jumps(
     q: np.ndarray, dt: float, robot: rx90sym.Robot, labels: Sequence[tuple[str, str]],
-    safety: float = JUMP_SAFETY, atol: float = JUMP_ATOL,
+    safety: float = JUMP_SAFETY, atol: float = JUMP_ATOL, offset: int = 0,
 ) -> None:
     """Refuse a step between consecutive samples faster than ``safety * qd_max`` (glitch, wrap)."""
     if q.shape[0] < 2:
@@ -151,7 +152,7 @@ def _check_jumps(
         if too_big.size:
             k = int(too_big[0]) + 1
             raise RecordingError(
-                f"{_where(label, k + 1)}: jump of {steps[k - 1, j]:.6g} rad from the previous row "
+                f"{_where(label, offset + k + 1)}: jump of {steps[k - 1, j]:.6g} rad from the previous row "
                 f"(allowed {allowed:.3g} rad = {safety:g} x qd_max {qd_max[j]:.4g} rad/s x dt {dt:.4g} s "
                 f"+ {atol:g} rad)"
             )
@@ -160,9 +161,10 @@ def _check_jumps(
 def _validate(
     t: np.ndarray, q: np.ndarray, tau: np.ndarray | None, dq: np.ndarray | None,
     robot: rx90sym.Robot, labels: _Labels, source: str, current: np.ndarray | None = None,
-    aux: dict[str, np.ndarray] | None = None,
+    aux: dict[str, np.ndarray] | None = None, segment: np.ndarray | None = None,
 ) -> None:
-    """All data checks of the module docstring, on arrays already in Khalil angles."""
+    """All data checks of the module docstring, on arrays already in Khalil angles; time steps
+    and jumps are checked inside each segment (``segment``: (N,) segment numbers, or None)."""
     n = int(robot.n)
     if q.shape[1] != n or (tau is not None and tau.shape[1] != n):
         raise RecordingError(
@@ -183,9 +185,15 @@ def _validate(
             f"{source}: column '{labels.t[1]}' has {t.size} rows, robot {robot.name} needs at least "
             f"{max(n_min, 2)} samples (one per standard parameter) to be identifiable"
         )
-    _check_time(t, labels.t)
+    bounds = [0, t.size] if segment is None else [0, *(np.flatnonzero(np.diff(segment)) + 1), t.size]
+    if segment is not None and np.any(np.diff(t) <= 0):
+        _check_time(t, labels.t, rtol=np.inf)  # increasing across the segments too
+    for a, b in zip(bounds[:-1], bounds[1:]):
+        _check_time(t[a:b], labels.t, offset=a)
     _check_radians(q, robot, labels.q)
-    _check_jumps(q, float(np.median(np.diff(t))), robot, labels.q)
+    for a, b in zip(bounds[:-1], bounds[1:]):
+        if b - a > 1:
+            _check_jumps(q[a:b], float(np.median(np.diff(t[a:b]))), robot, labels.q, offset=a)
 
 
 def _check_robot_name(declared: str | None, robot: rx90sym.Robot, source: str) -> None:

@@ -13,7 +13,13 @@ from typing import Sequence
 
 import rx90sym
 
-__all__ = ["ColumnMap", "parse_columns"]
+__all__ = ["ColumnMap", "parse_columns", "rtde_columns", "RTDE_NAMES"]
+
+#: UR's RTDE recorder's column names -> the column map's (``actual_q_0`` is joint 1's position):
+#: measured positions, velocities and motor currents; the controller's target torque
+#: (``target_moment``, its model, not a measurement) and target current are kept as auxiliaries.
+RTDE_NAMES = {"actual_q": "q", "actual_qd": "qd", "actual_current": "i",
+              "target_moment": "x:target_moment", "target_current": "x:target_current"}
 
 _GROUPS = ("q", "qd", "tau", "i")
 _NAME = re.compile(r"^(q|qd|tau|i)(\d+)$")
@@ -119,3 +125,23 @@ def parse_columns(spec: str | Sequence[str], robot: rx90sym.Robot) -> ColumnMap:
 
     return ColumnMap(names=tuple(names), t=t_col, q=cols("q"), qd=cols("qd"), tau=cols("tau"),
                      i=cols("i"), aux=tuple(aux.items()))
+
+
+def rtde_columns(header: Sequence[str], robot: rx90sym.Robot) -> str | None:
+    """The column map of a UR RTDE recording from its header (``timestamp``, ``actual_q_0`` ...,
+    other columns ignored), or None when ``header`` is not one: a ``timestamp`` column and
+    ``actual_q_0``..``actual_q_{n-1}`` are needed."""
+    names = [h.strip() for h in header]
+    wanted = [f"actual_q_{j}" for j in range(robot.n)]
+    if "timestamp" not in names or not set(wanted) <= set(names):
+        return None
+    out = []
+    for name in names:
+        match = re.fullmatch(r"(.+)_(\d+)", name)
+        if name == "timestamp":
+            out.append("t")
+        elif match and match.group(1) in RTDE_NAMES and int(match.group(2)) < robot.n:
+            out.append(f"{RTDE_NAMES[match.group(1)]}{int(match.group(2)) + 1}")
+        else:
+            out.append("_")
+    return ",".join(out)

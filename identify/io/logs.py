@@ -26,9 +26,9 @@ Rules (one time tolerance everywhere, as in :mod:`identify.io.recordings`):
 
 * A row is corrupt when it has the wrong number of cells, a cell that is not a number, a value
   that is not finite or larger than :data:`ABSURD` in magnitude, a position more than
-  :data:`POSITION_MARGIN` beyond the robot's limits, a time that does not increase, or a time
-  step larger than :data:`MAX_GAP_PERIODS` median steps (a gap). Corrupt rows inside the window
-  raise :class:`RecordingError` naming the first bad rows by line number of the file.
+  :data:`POSITION_MARGIN` beyond the robot's limits, or a time that does not increase (a gap is
+  not corrupt: stale rows, lost packets and segments in :mod:`identify.signal.gaps`). Corrupt rows
+  inside the window raise :class:`RecordingError` naming the first bad rows by line number of the file.
 * ``rows=(FIRST, LAST)`` (1-based line numbers, inclusive) or ``t_from``/``t_to`` (seconds of
   the log's clock: from the first row at or after ``t_from`` to the last row at or before
   ``t_to``) select a clean window; only the window is checked. When the time stamps of a
@@ -57,21 +57,20 @@ import numpy as np
 import rx90sym
 from rx90sym.recording import Recording, RecordingError
 
-from identify.io.columns import ColumnMap, parse_columns
+from identify.io.columns import ColumnMap, parse_columns, rtde_columns
+from identify.io.log_rows import (ABSURD, _bad, _check_header, _data_lines, _Lines, _parse,  # noqa: F401 (block reader)
+                                  _window, header_cells)
 from identify.io.units import check_units
 from identify.io.gains import DriveGains, apply_gains, read_gains
+from identify.signal.gaps import DEFAULT_MAX_GAP, LogGaps, find_gaps, stale_rows
 from identify.signal.resampling import resample as resample_recording
 from identify.io.recordings import JUMP_ATOL, JUMP_SAFETY, TIME_RTOL, RecordingWarning, _normalise_convention
 
-__all__ = ["ColumnMap", "parse_columns", "read_log", "ABSURD", "POSITION_MARGIN", "MAX_GAP_PERIODS",
+__all__ = ["ColumnMap", "parse_columns", "read_log", "ABSURD", "POSITION_MARGIN", "DEFAULT_MAX_GAP",
            "STILL", "MOVING_SPAN", "VELOCITY_MISMATCH"]
 
-#: A value larger than this in magnitude (any column but time) marks its row as corrupt.
-ABSURD = 1e6
 #: A position further than this beyond the robot's joint limits (rad) marks its row as corrupt.
 POSITION_MARGIN = 1.0
-#: A time step longer than this many median steps is a gap: an error naming the rows.
-MAX_GAP_PERIODS = 5.0
 #: A joint whose position spans less than this (rad) in the window does not move (the UR10e logs
 #: print 4 decimals: 1e-4 rad of quantisation).
 STILL = 1e-3
@@ -81,171 +80,9 @@ MOVING_SPAN = 0.05
 #: Largest RMS difference between a recorded velocity and the derivative of its positions, as a
 #: fraction of the derivative's RMS (measured on the UR10e logs: see docs/real-logs.md).
 VELOCITY_MISMATCH = 0.5
-#: How many bad rows a message names before "and K more".
-_SHOWN = 3
-
-# --------------------------------------------------------------------------------------------
-# Rows of the file
-# --------------------------------------------------------------------------------------------
-
-
-@dataclass(frozen=True)
-class _Lines:
-    """The data lines of a log: their 1-based line numbers and text."""
-
-    source: str
-    numbers: list[int]
-    text: list[str]
-
-
-def _data_lines(path: Path, header: bool, n_cols: int) -> _Lines:
-    source = path.name
-    try:
-        raw = path.read_text(encoding="utf-8-sig")
-    except UnicodeDecodeError as exc:
-        raise RecordingError(f"{source}: not a UTF-8 text file ({exc})") from None
-    lines = [line.rstrip("\r") for line in raw.split("\n")]  # the numbering of editors and sed -n
-    while lines and not lines[-1].strip():  # trailing blank lines are not rows
-        lines.pop()
-    numbers, text = [], []
-    header_line = None
-    for k, line in enumerate(lines, start=1):
-        if line.lstrip().startswith("#"):
-            continue
-        if header and header_line is None:
-            header_line = k
-            _check_header(source, k, line, n_cols)
-            continue
-        numbers.append(k)
-        text.append(line)
-    if not numbers:
-        raise RecordingError(f"{source}: no data rows")
-    return _Lines(source, numbers, text)
-
-
-def _check_header(source: str, k: int, line: str, n_cols: int) -> None:
-    """The header line ``k`` has the column map's cell count and is not a row of numbers."""
-    cells = line.split(",")
-    if len(cells) != n_cols:
-        raise RecordingError(f"{source}: line {k} (the header) has {len(cells)} cells, the column map "
-                             f"names {n_cols}{_separator_hint(line, n_cols)}")
-    if all(_is_number(c) for c in cells):
-        raise RecordingError(f"{source}: line {k}, read as the header, holds only numbers: the log "
-                             f"has no header (--no-header, header=False in Python)")
-
-
-def _is_number(cell: str) -> bool:
-    try:
-        float(cell)
-    except ValueError:
-        return False
-    return True
-
-
-def _separator_hint(line: str, n_cols: int) -> str:
-    if line.count(",") + 1 < n_cols and line.count(";") + 1 >= n_cols:
-        return "; the file seems to use ';' as separator (expected ',')"
-    return ""
-
-
-def _window(lines: _Lines, rows: tuple[int, int] | None, t_from: float | None, t_to: float | None,
-            t_col: int) -> tuple[int, int]:
-    """Indices [a, b) into ``lines`` of the selected window."""
-    source, numbers = lines.source, lines.numbers
-    if rows is not None:
-        first, last = (int(r) for r in rows)
-        if first < 1 or last < first:
-            raise ValueError(f"rows {first}:{last}: expected 1 <= FIRST <= LAST (1-based line numbers)")
-        if last > numbers[-1]:
-            raise RecordingError(f"{source}: rows {first}:{last}: the file ends at line {numbers[-1]}")
-        a = int(np.searchsorted(numbers, first))
-        b = int(np.searchsorted(numbers, last, side="right"))
-        if b - a < 1:
-            raise RecordingError(f"{source}: rows {first}:{last} hold no data row")
-        return a, b
-    if t_from is None and t_to is None:
-        return 0, len(numbers)
-    if t_from is not None and t_to is not None and t_to <= t_from:
-        raise ValueError(f"--to {t_to:g} s must be after --from {t_from:g} s")
-    times = np.full(len(numbers), np.nan)  # rows whose time cannot be read never bound a window
-    for k, line in enumerate(lines.text):
-        cells = line.split(",")
-        if t_col < len(cells):
-            try:
-                times[k] = float(cells[t_col])
-            except ValueError:
-                pass
-    lo = -np.inf if t_from is None else float(t_from)
-    hi = np.inf if t_to is None else float(t_to)
-    after = np.flatnonzero(times >= lo)
-    before = np.flatnonzero(times <= hi)
-    if not after.size or not before.size or before[-1] < after[0]:
-        finite = times[np.isfinite(times)]
-        span = f"{finite.min():g} to {finite.max():g} s" if finite.size else "no readable time"
-        raise RecordingError(f"{source}: no row between {lo:g} and {hi:g} s (the log's clock runs {span})")
-    return int(after[0]), int(before[-1]) + 1
-
-
-def _bad(source: str, problems: list[tuple[int, str]]) -> RecordingError:
-    """One message naming the first bad rows by line number and what is wrong with them."""
-    problems = sorted(problems)
-    shown = "; ".join(f"line {line}: {what}" for line, what in problems[:_SHOWN])
-    more = len(problems) - _SHOWN
-    tail = f" (and {more} more bad rows, the last at line {problems[-1][0]})" if more > 0 else ""
-    return RecordingError(f"{source}: {shown}{tail}; select a clean window with --rows FIRST:LAST "
-                          f"or --from/--to (rows=, t_from=, t_to= in Python)")
-
-
-def _parse(lines: _Lines, a: int, b: int, cmap: ColumnMap) -> np.ndarray:
-    """Numbers of the window's rows (N, ncols); corrupt rows raise naming their lines."""
-    n_cols = len(cmap.names)
-    cells = [line.split(",") for line in lines.text[a:b]]
-    problems: dict[int, str] = {}  # row index in the window -> what is wrong (the first thing)
-    for k, row in enumerate(cells):
-        if not "".join(row).strip():
-            problems[k] = "empty row"
-        elif len(row) != n_cols:
-            problems[k] = (f"{len(row)} cells, the column map names {n_cols}"
-                           f"{_separator_hint(lines.text[a + k], n_cols)}")
-    counts = {len(row) for row in cells}
-    if len(counts) == 1 and n_cols not in counts:
-        # Not corrupt rows: a column map that does not fit the file.
-        raise RecordingError(f"{lines.source}: every row of lines {lines.numbers[a]}..{lines.numbers[b - 1]} has "
-                             f"{len(cells[0])} cells, the column map names {n_cols}"
-                             f"{_separator_hint(lines.text[a], n_cols)}; fix the column map (--columns, "
-                             f"columns= in Python)")
-    values = np.full((len(cells), n_cols), np.nan)
-    whole = [k for k in range(len(cells)) if k not in problems]
-    try:
-        values[whole] = np.array([cells[k] for k in whole], dtype=float).reshape(len(whole), n_cols)
-    except ValueError:  # locate the text cells, row by row
-        for k in whole:
-            for col, cell in enumerate(cells[k]):
-                try:
-                    values[k, col] = float(cell)
-                except ValueError:
-                    problems.setdefault(k, f"column {col + 1} ('{cmap.names[col]}'): {cell.strip()!r} is "
-                                           f"not a number")
-    used = [c for c, name in enumerate(cmap.names) if name != "_"]
-    for k in whole:
-        if k in problems:
-            continue
-        for col in used:
-            v = values[k, col]
-            if not math.isfinite(v):
-                problems[k] = f"column {col + 1} ('{cmap.names[col]}'): value {v:g} is not finite"
-            elif col != cmap.t and abs(v) > ABSURD:
-                problems[k] = f"column {col + 1} ('{cmap.names[col]}'): value {v:g} is absurdly large (> {ABSURD:g})"
-            else:
-                continue
-            break
-    if problems:
-        raise _bad(lines.source, [(lines.numbers[a + k], what) for k, what in problems.items()])
-    return values
-
 
 def _check_time(t: np.ndarray, numbers: Sequence[int], source: str) -> None:
-    """Time increases, with no step beyond MAX_GAP_PERIODS median steps."""
+    """Time increases (a gap is not an error: :func:`identify.signal.gaps.find_gaps`)."""
     if t.size < 2:
         raise RecordingError(f"{source}: line {numbers[0]}: a log needs at least 2 rows")
     dt = np.diff(t)
@@ -253,12 +90,16 @@ def _check_time(t: np.ndarray, numbers: Sequence[int], source: str) -> None:
                 for k in np.flatnonzero(dt <= 0.0)]
     if problems:
         raise _bad(source, problems)
-    step = float(np.median(dt))
-    problems = [(numbers[k], f"gap of {dt[k]:g} s to line {numbers[k + 1]} ({dt[k] / step:.3g} median steps of "
-                             f"{step:g} s, at most {MAX_GAP_PERIODS:g})")
-                for k in np.flatnonzero(dt > MAX_GAP_PERIODS * step)]
+
+
+def _refuse_splits(found: LogGaps, source: str) -> None:
+    """With segments refused: every gap longer than the limit, named by its lines."""
+    problems = [(g.lines[0], f"gap of {g.duration:g} s to line {g.lines[1]} ({g.periods:.3g} median steps), "
+                             f"longer than the {found.max_gap:g} s that can be bridged")
+                for g in found.splits]
     if problems:
-        raise _bad(source, problems)
+        err = _bad(source, problems)
+        raise RecordingError(f"{err} (or allow segments, or a longer max_gap)")
 
 
 def _check_positions(q: np.ndarray, t: np.ndarray, numbers: Sequence[int], cmap: ColumnMap,
@@ -328,16 +169,21 @@ def _check_velocities(dq: np.ndarray | None, q: np.ndarray, t: np.ndarray, span:
 # --------------------------------------------------------------------------------------------
 
 
-def _irregular(t: np.ndarray, numbers: Sequence[int], source: str) -> str | None:
-    """None when every step is within TIME_RTOL of the median step, else the refusal text."""
+def _irregular(t: np.ndarray, numbers: Sequence[int], source: str, found: LogGaps | None = None) -> str | None:
+    """None when every step inside a segment is within TIME_RTOL of the median step, else the
+    refusal text (lost packets are irregular steps too: resampling bridges them)."""
     dt = np.diff(t)
     step = float(np.median(dt))
-    off = np.flatnonzero(np.abs(dt - step) > TIME_RTOL * step)
+    inside = np.diff(found.segment) == 0 if found is not None else np.ones(t.size - 1, dtype=bool)
+    off = np.flatnonzero((np.abs(dt - step) > TIME_RTOL * step) & inside)
     if not off.size:
         return None
+    lost = "" if found is None else (f", {len(found.bridged)} of them lost packets up to {found.max_gap:g} s that resampling bridges"
+            if found.bridged else "")
+    dt = dt[inside]
     return (f"{source}: irregular time steps: {off.size} of {dt.size} steps differ from the median step "
             f"{step:g} s by more than {TIME_RTOL:.0%} (steps from {dt.min():g} to {dt.max():g} s, the first "
-            f"at line {numbers[off[0] + 1]}); resample on a uniform grid with --resample HZ (resample= in "
+            f"at line {numbers[off[0] + 1]}{lost}); resample on a uniform grid with --resample HZ (resample= in "
             f"Python), e.g. --resample {_round_rate(1.0 / float(np.mean(dt))):g}")
 
 
@@ -353,84 +199,132 @@ def _round_rate(rate: float) -> float:
 
 
 def read_log(
-    path: str | os.PathLike[str], robot: rx90sym.Robot, columns: str | Sequence[str],
+    path: str | os.PathLike[str], robot: rx90sym.Robot, columns: str | Sequence[str] | None,
     header: bool = False, rows: tuple[int, int] | None = None, t_from: float | None = None,
     t_to: float | None = None, resample: float | None = None, gains: DriveGains | str | None = None,
-    convention: str | None = None,
+    convention: str | None = None, max_gap: float = DEFAULT_MAX_GAP, segments: bool = True,
 ) -> Recording:
     """Read a controller log (a CSV whose columns ``columns`` names) as a recording.
 
     Args:
         path: the log, comma separated; lines starting with ``#`` are skipped.
         robot: the robot the log belongs to.
-        columns: the column map (module docstring), a string or a list of names.
+        columns: the column map (module docstring), a string or a list of names; None for a log
+            whose header names its columns (UR's RTDE recorder: :func:`identify.io.columns.rtde_columns`;
+            cells separated by commas or blanks).
         header: the first non-comment line is a header (skipped; its cell count is checked).
         rows: ``(FIRST, LAST)`` 1-based line numbers of the file, inclusive.
         t_from, t_to: window in seconds of the log's clock (not with ``rows``).
         resample: rate in Hz of a uniform grid to put every signal on; required when the time
-            steps are irregular (more than 1 % from the median step).
+            steps are irregular (more than 1 % from the median step) or packets were lost.
         gains: drive gains (a :class:`DriveGains`, a comma list in N·m/A joint side, or a JSON
             file) turning the currents into joint torques; without them ``tau`` stays None.
         convention: angles of the log, ``"controller"`` (default: what a controller logs) or
             ``"model"`` (Khalil); converted once to model angles.
+        max_gap: longest gap (s) of lost packets bridged by interpolation (default 50 ms,
+            :mod:`identify.signal.gaps`); a longer one starts a new segment.
+        segments: False refuses a gap longer than ``max_gap`` instead of splitting the log.
 
     Returns:
-        A recording in model angles; ``meta["log"]`` says what was done: ``lines`` (first, last
-        line read), ``rows`` (count), ``rate_hz`` (1 / mean step of the log), ``median_step_s``,
-        ``largest_gap_s`` and ``largest_gap_lines``, ``irregular_steps``, ``resampled_hz`` (or
-        None), ``samples``, ``gains`` (their source, or None), ``convention``.
+        A recording in model angles, with ``measured`` (bridged samples False) and ``segment``
+        when packets were lost; ``meta["log"]`` says what was done: ``lines`` (first, last line
+        read), ``rows`` (count, stale rows included), ``stale_rows`` (dropped), ``stale_lines``
+        (the first few), ``rate_hz`` (1 / mean step), ``median_step_s``, ``largest_gap_s`` and
+        ``largest_gap_lines``, ``irregular_steps``, ``gaps`` (:meth:`LogGaps.summary`),
+        ``bridged_samples``, ``resampled_hz`` (or None), ``samples``, ``gains``, ``convention``.
 
     Raises:
-        RecordingError: corrupt rows, gaps or irregular time (message names file and lines).
+        RecordingError: corrupt rows, irregular time without ``resample``, a gap over ``max_gap``
+            with ``segments=False`` (message names file and lines).
         ValueError: a bad column map, window or gains.
     """
     p = Path(path)
-    cmap, conv, drive = _log_options(p, robot, columns, rows, t_from, t_to, gains, convention)
-    lines = _data_lines(p, header, len(cmap.names))
+    if rows is not None and (t_from is not None or t_to is not None):
+        raise ValueError("give rows or t_from/t_to (--rows or --from/--to), not both")
+    blanks = False
+    if columns is None:
+        cells, blanks = header_cells(p)
+        columns = rtde_columns(cells, robot) if header else None
+        if columns is None:
+            raise ValueError(f"{p.name}: give the column map (columns=, --columns): the first line is not a "
+                             f"header this reader knows (UR RTDE: timestamp, actual_q_0..actual_q_{robot.n - 1})")
+    cmap = parse_columns(columns, robot)
+    conv = _normalise_convention(convention, p.name) or "controller"
+    lines = _data_lines(p, header, len(cmap.names), blanks)
     a, b = _window(lines, rows, t_from, t_to, cmap.t)
     values = _parse(lines, a, b, cmap)
-    numbers = lines.numbers[a:b]
+    rec = rows_to_recording(p.name, values, lines.numbers[a:b], cmap, robot, conv, gains=gains,
+                            max_gap=max_gap, segments=segments, resample=resample)
+    rec.meta["log"]["columns"] = ",".join(cmap.names)
+    return rec
+
+
+def rows_to_recording(source: str, values: np.ndarray, numbers: Sequence[int], cmap: ColumnMap,
+                      robot: rx90sym.Robot, convention: str, gains: DriveGains | str | None = None,
+                      max_gap: float = DEFAULT_MAX_GAP, segments: bool = True,
+                      resample: float | None = None) -> Recording:
+    """The rows of a log (``values`` (N, columns) as ``cmap`` names them, ``numbers`` their line or
+    message numbers) as a recording, by the rules of :func:`read_log`: stale rows dropped, time,
+    gaps, positions and velocities checked, resampled, currents through the gains."""
+    drive = _drive(cmap, gains, robot)
+    stale = stale_rows(values, cmap.t, [c for c, name in enumerate(cmap.names) if name != "_"])
+    report = {"lines": [numbers[0], numbers[-1]], "rows": int(len(numbers)), "stale_rows": int(stale.sum()),
+              "stale_lines": [int(numbers[k]) for k in np.flatnonzero(stale)[:_LISTED]]}
+    values, numbers = values[~stale], [n for n, s in zip(numbers, stale) if not s]
+    rec = _recording(source, values, numbers, cmap, robot, convention, report, max_gap, segments, resample)
+    if drive is not None:
+        rec = apply_gains(rec, drive, robot)
+        rec.meta["log"]["gains"] = gains_label(drive)
+    return rec
+
+
+#: How many stale rows the report lists by line.
+_LISTED = 10
+
+
+def _recording(source: str, values: np.ndarray, numbers: list[int], cmap: ColumnMap, robot: rx90sym.Robot,
+               conv: str, report: dict, max_gap: float, segments: bool, resample: float | None) -> Recording:
+    """The checked rows as a recording: time, gaps, positions, velocities, then the grid."""
     t = values[:, cmap.t]
-    _check_time(t, numbers, p.name)
+    _check_time(t, numbers, source)
+    found = find_gaps(t, numbers, max_gap)
+    if not segments:
+        _refuse_splits(found, source)
     q_file = values[:, list(cmap.q)]
     q = np.asarray(robot.to_model(q_file), dtype=float) if conv == "controller" else q_file
     dq = values[:, list(cmap.qd)] if cmap.qd else None
     # Degrees and swapped q/qd groups named as such, before they read as corrupt rows.
-    check_units(t, q_file, dq, robot, p.name, numbers, to_model=conv == "controller", ranges=False)
-    _check_positions(q, t, numbers, cmap, robot, p.name)
-
+    check_units(t, q_file, dq, robot, source, numbers, to_model=conv == "controller", ranges=False)
+    _check_positions(q, t, numbers, cmap, robot, source)
     span = np.ptp(q, axis=0)
-    _check_velocities(dq, q, t, span, numbers, cmap, p.name)
+    _check_velocities(dq, q, t, span, numbers, cmap, source)
     if np.all(span < STILL):
-        warnings.warn(f"{p.name}: no joint moves in lines {numbers[0]}..{numbers[-1]} (largest position span "
+        warnings.warn(f"{source}: no joint moves in lines {numbers[0]}..{numbers[-1]} (largest position span "
                       f"{span.max():g} rad): a recording at rest identifies gravity and offsets at most",
-                      RecordingWarning, stacklevel=2)
+                      RecordingWarning, stacklevel=3)
     dt = np.diff(t)
     k_gap = int(np.argmax(dt))
-    report = {"lines": [numbers[0], numbers[-1]], "rows": int(t.size), "rate_hz": float(1.0 / np.mean(dt)),
-              "median_step_s": float(np.median(dt)), "largest_gap_s": float(dt[k_gap]),
-              "largest_gap_lines": [numbers[k_gap], numbers[k_gap + 1]],
-              "irregular_steps": int(np.sum(np.abs(dt - np.median(dt)) > TIME_RTOL * np.median(dt))),
-              "resampled_hz": None, "samples": int(t.size), "gains": None, "convention": conv,
-              "position_span_rad": span.tolist()}
+    inside = dt[np.diff(found.segment) == 0]
+    report.update({"rate_hz": float(inside.size / inside.sum()), "median_step_s": float(np.median(dt)),
+                   "largest_gap_s": float(dt[k_gap]), "largest_gap_lines": [numbers[k_gap], numbers[k_gap + 1]],
+                   "irregular_steps": int(np.sum(np.abs(dt - np.median(dt)) > TIME_RTOL * np.median(dt))),
+                   "gaps": found.summary(), "bridged_samples": 0, "resampled_hz": None,
+                   "samples": int(t.size), "gains": None, "convention": conv, "position_span_rad": span.tolist()})
     if resample is None:
-        refusal = _irregular(t, numbers, p.name)
+        refusal = _irregular(t, numbers, source, found)
         if refusal:
             raise RecordingError(refusal)
 
     def take(cols: tuple[int, ...]) -> np.ndarray | None:
         return values[:, list(cols)] if cols else None
 
-    rec = Recording(t=t, q=q, tau=take(cmap.tau), dq=dq, source=p.name, robot=robot.name,
+    rec = Recording(t=t, q=q, tau=take(cmap.tau), dq=dq, source=source, robot=robot.name,
                     meta={"log": report}, current=take(cmap.i),
-                    aux={name: values[:, col] for name, col in cmap.aux})
+                    aux={name: values[:, col] for name, col in cmap.aux}, segment=found.segment)
     if resample is not None:
         rec = resample_recording(rec, float(resample))
-        report["resampled_hz"] = float(resample)
-        report["samples"] = rec.n_samples
-    if drive is not None:
-        rec = apply_gains(rec, drive, robot)
-        rec.meta["log"]["gains"] = gains_label(drive)
+        report.update({"resampled_hz": float(resample), "samples": rec.n_samples,
+                       "bridged_samples": int(np.sum(~rec.measured_mask))})
     return rec
 
 
@@ -447,9 +341,15 @@ def _log_options(p: Path, robot: rx90sym.Robot, columns: str | Sequence[str], ro
         raise ValueError("give rows or t_from/t_to (--rows or --from/--to), not both")
     cmap = parse_columns(columns, robot)
     conv = _normalise_convention(convention, p.name) or "controller"
+    return cmap, conv, _drive(cmap, gains, robot)
+
+
+def _drive(cmap: ColumnMap, gains: DriveGains | str | None, robot: rx90sym.Robot) -> DriveGains | None:
+    """The drive gains of a log (read from their file or list), refused when the log has no
+    currents or already holds torques."""
     if gains is not None and not cmap.i:
         raise ValueError(f"drive gains given, but the column map names no motor currents (i1..i{robot.n})")
     if gains is not None and cmap.tau:
         raise ValueError("drive gains given, but the log already holds joint torques (tau1..): "
                          "the gains would replace them; map the torques as x:NAME to keep both")
-    return cmap, conv, read_gains(gains, robot) if isinstance(gains, (str, os.PathLike)) else gains
+    return read_gains(gains, robot) if isinstance(gains, (str, os.PathLike)) else gains

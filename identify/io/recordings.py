@@ -11,8 +11,10 @@ CSV
     Optional leading comment lines ``# key: value`` (keys ``convention`` and ``robot`` are
     understood, other comments are ignored), then a header line naming the columns
     ``t, q1..qn``, joint torques ``tau1..taun`` (N·m) and/or motor currents ``i1..in`` (A), and
-    optionally recorded velocities ``dq1..dqn`` (rad/s) and auxiliary columns ``x:NAME`` (kept,
-    never used as torque), in any order; then one row per sample. A file that names no robot
+    optionally recorded velocities ``dq1..dqn`` (rad/s), auxiliary columns ``x:NAME`` (kept,
+    never used as torque), ``measured`` (1, or 0 for a sample bridged over lost packets) and
+    ``segment`` (0, 1, ...: a log split at gaps too long to bridge), in any order; then one row
+    per sample. The time step is regular inside each segment. A file that names no robot
     read as another robot than ``rx90`` gives a :class:`RecordingWarning`.
 NPZ
     Arrays ``t`` (N,), ``q`` (N, n), ``tau`` (N, n) and/or ``current`` (N, n), optional ``dq``
@@ -62,6 +64,7 @@ __all__ = [
     "read_motor_recording",
     "recording_from_arrays",
     "split",
+    "layout_summary",
     "TIME_RTOL",
     "JUMP_SAFETY",
     "JUMP_ATOL",
@@ -74,7 +77,8 @@ def _read_csv(path: Path, robot: rx90sym.Robot, convention: str | None) -> Recor
     _check_robot_name(table.meta.get("robot"), robot, table.source)
     n = robot.n
     names = {p: [f"{p}{j + 1}" for j in range(n)] for p in ("q", "tau", "dq", "i")}
-    index = _column_index(table, ["t", *names["q"]], [names["tau"], names["dq"], names["i"]], aux=True)
+    index = _column_index(table, ["t", *names["q"]], [names["tau"], names["dq"], names["i"], ["measured"],
+                                                       ["segment"]], aux=True)
     if "tau1" not in index and "i1" not in index:
         raise RecordingError(f"{table.source}: column 'tau1' is missing (joint torques tau1..tau{n}, or "
                              f"motor currents i1..i{n})")
@@ -87,7 +91,19 @@ def _read_csv(path: Path, robot: rx90sym.Robot, convention: str | None) -> Recor
     aux = {name[2:]: table.values[:, col] for name, col in index.items() if name.startswith("x:")}
     labels = _default_labels(table.source, n)
     t = table.values[:, index["t"]]
-    return _build(t, take("q"), take("tau"), take("dq"), robot, labels, table.source, conv, take("i"), aux)
+    layout = {k: table.values[:, index[k]] for k in ("measured", "segment") if k in index}
+    rec = _build(t, take("q"), take("tau"), take("dq"), robot, labels, table.source, conv, take("i"), aux,
+                 **layout)
+    if "stale_rows" in table.meta:
+        rec.meta["log"] = {"stale_rows": _count(table.meta["stale_rows"], table.source)}
+    return rec
+
+
+def _count(text: str, source: str) -> int:
+    try:
+        return int(text)
+    except ValueError:
+        raise RecordingError(f"{source}: '# stale_rows: {text}' is not a whole number") from None
 
 
 # --------------------------------------------------------------------------------------------
@@ -95,6 +111,7 @@ def _read_csv(path: Path, robot: rx90sym.Robot, convention: str | None) -> Recor
 # --------------------------------------------------------------------------------------------
 
 _NPZ_ARRAYS = ("t", "q", "tau", "dq", "current")
+_NPZ_LAYOUT = ("measured", "segment")
 _NPZ_STRINGS = ("convention", "robot")
 
 
@@ -124,7 +141,7 @@ def _read_npz(path: Path, robot: rx90sym.Robot, convention: str | None) -> Recor
         declared_robot = _npz_string(archive, "robot", source)
         _check_robot_name(declared_robot, robot, source)
         for key in archive.files:
-            if key not in _NPZ_ARRAYS + _NPZ_STRINGS and not (key.startswith("x:") and len(key) > 2):
+            if key not in _NPZ_ARRAYS + _NPZ_STRINGS + _NPZ_LAYOUT and not (key.startswith("x:") and len(key) > 2):
                 raise RecordingError(
                     f"{source}: column '{key}' is unknown (expected t, q, tau and/or current, optionally "
                     f"dq, x:NAME, convention, robot)"
@@ -134,6 +151,7 @@ def _read_npz(path: Path, robot: rx90sym.Robot, convention: str | None) -> Recor
                 raise RecordingError(f"{source}: column '{key}' is missing")
         arrays = {k: _npz_array(archive, k, source) for k in _NPZ_ARRAYS if k in archive.files}
         aux = {k[2:]: _npz_array(archive, k, source) for k in archive.files if k.startswith("x:")}
+        layout = {k: _npz_array(archive, k, source) for k in _NPZ_LAYOUT if k in archive.files}
         declared_conv = _npz_string(archive, "convention", source)
     _warn_no_robot(declared_robot, robot, source)
     conv = _resolve_convention(convention, declared_conv, source)
@@ -142,8 +160,11 @@ def _read_npz(path: Path, robot: rx90sym.Robot, convention: str | None) -> Recor
         if v.shape != arrays["t"].shape:
             raise RecordingError(f"{source}: auxiliary column 'x:{name}' must have shape {arrays['t'].shape}, got {v.shape}")
     labels = _default_labels(source, robot.n)
+    for name, v in layout.items():
+        if v.shape != arrays["t"].shape:
+            raise RecordingError(f"{source}: '{name}' must have shape {arrays['t'].shape}, got {v.shape}")
     return _build(arrays["t"], arrays["q"], arrays.get("tau"), arrays.get("dq"), robot, labels, source, conv,
-                  arrays.get("current"), aux)
+                  arrays.get("current"), aux, **layout)
 
 
 # --------------------------------------------------------------------------------------------
@@ -244,6 +265,7 @@ def write_recording(
                                   "robot": np.array(robot.name)}
         arrays.update({k: v for k, v in signals.items() if v is not None})
         arrays.update({f"x:{k}": v for k, v in rec.aux.items()})
+        arrays.update({k: v for k, v in _layout(rec).items()})
         atomic_write(p, lambda fh: np.savez(fh, **arrays), binary=True)
         return
     n = robot.n
@@ -255,14 +277,37 @@ def write_recording(
             blocks.append(signals[key])
     names += [f"x:{k}" for k in rec.aux]
     blocks += [v[:, None] for v in rec.aux.values()]
+    layout = _layout(rec)
+    names += list(layout)
+    blocks += [v[:, None].astype(float) for v in layout.values()]
     table = np.hstack(blocks)
-    header = f"# convention: {conv}\n# robot: {robot.name}\n" + ",".join(names) + "\n"
+    stale = rec.meta.get("log", {}).get("stale_rows")
+    header = (f"# convention: {conv}\n# robot: {robot.name}\n" + (f"# stale_rows: {stale}\n" if stale else "")
+              + ",".join(names) + "\n")
 
     def write_csv(fh: Any) -> None:
         fh.write(header)
         np.savetxt(fh, table, fmt="%.17g", delimiter=",")  # %.17g: float64 round-trips exactly
 
     atomic_write(p, write_csv, binary=False)
+
+
+def _layout(rec: Recording) -> dict[str, np.ndarray]:
+    """The ``measured`` and ``segment`` columns a recording needs (none when trivial)."""
+    out = {}
+    if rec.measured is not None:
+        out["measured"] = rec.measured.astype(np.int64)
+    if rec.segment is not None:
+        out["segment"] = rec.segment
+    return out
+
+
+def layout_summary(rec: Recording) -> dict[str, Any]:
+    """What a recording holds beyond its samples, for reports and JSON: ``source``, ``samples``,
+    ``bridged_samples`` (interpolated over lost packets, never measurements), ``segments`` and
+    ``stale_rows`` (dropped when the log was read; None when not known)."""
+    return {"source": rec.source, "samples": rec.n_samples, "bridged_samples": int(np.sum(~rec.measured_mask)),
+            "segments": rec.n_segments, "stale_rows": rec.meta.get("log", {}).get("stale_rows")}
 
 
 def split(rec: Recording, fraction: float) -> tuple[Recording, Recording]:

@@ -6,9 +6,16 @@ decimated by the same zero-phase filter (parallel filtering), and rows grouped p
 
 Rest phases: a joint whose speed is below ``min_velocity`` (rad/s) is at rest; the sign of its
 Coulomb term is then the sign of noise. ``rest="drop"`` leaves those rows out of the fit,
-``rest="zero-coulomb"`` keeps them with the Coulomb entries set to 0 (see :func:`coulomb_terms`).
+``rest="zero-coulomb"`` keeps them with the Coulomb entries set to 0 (see :func:`coulomb_terms`),
+``rest="presliding"`` with the presliding state of the position history
+(:mod:`identify.observation.friction`).
 The speed is the recorded one when the recording has it (``Recording.dq``), else the filtered
 derivative; it decides the mask only, W keeps the filtered derivatives.
+
+Lost packets: a recording made of segments (``Recording.segment``) is filtered, differentiated
+and decimated segment by segment (:meth:`Recording.pieces`), the rows stacked in one W; a sample
+bridged over lost packets (``Recording.measured`` False) runs through the filters but gives no
+row, nor does a decimated sample whose decimation filter (± the factor) reaches one.
 """
 from __future__ import annotations
 
@@ -19,11 +26,12 @@ import numpy as np
 
 import rx90sym
 
+from identify.observation.friction import presliding_state
 from identify.observation.processing import DEFAULT_MIN_VELOCITY, DEFAULT_REST, REST_POLICIES
-from identify.signal.filtering import choose_cutoff, decimate, decimation_plan, derivatives
+from identify.signal.filtering import EDGE_PERIODS, choose_cutoff, decimate, decimation_plan, derivatives
 
 __all__ = ["DECIMATION_PASSBAND", "automatic_cutoff", "DEFAULT_MIN_VELOCITY", "DEFAULT_REST", "REST_POLICIES", "CoulombTerm", "FilteredMotion", "Observation",
-           "coulomb_terms", "filtered_motion", "observation_matrix", "stack_rows"]
+           "coulomb_terms", "filtered_motion", "filtered_motions", "observation_matrix", "stack_rows"]
 
 # Rest threshold and policy (measured on the TX40 and the twin: docs/real-data-identification.md):
 # defined once, with the other processing defaults, in identify.observation.processing.
@@ -135,6 +143,12 @@ class FilteredMotion:
     kept: slice = field(default_factory=lambda: slice(None))
     extra: np.ndarray | float = 0.0
     note: str = ""
+    measured: np.ndarray | None = None
+
+    def rows(self, drop_rest: bool) -> np.ndarray:
+        """(S, n) rows that enter W: measured samples, and with ``drop_rest`` only ``usable`` ones."""
+        keep = self.usable if drop_rest else np.ones(self.usable.shape, dtype=bool)
+        return keep if self.measured is None else keep & self.measured[:, None]
 
 
 #: Pass band of the parallel decimation filter, as a fraction of the decimated rate (0.8 of its Nyquist).
@@ -146,11 +160,19 @@ def automatic_cutoff(recordings: Sequence[Any], decimate_to: float | None = None
     and, when decimating, at least the pass band of the parallel filter (0.4 × ``decimate_to``):
     Y keeps its content up to there, so W must too (parallel filtering filters both alike)."""
     cuts = []
-    for rec in recordings:
+    pieces = [p for rec in recordings for p in rec.pieces()] if recordings else []
+    longest = max((p.n_samples for p in pieces), default=0)
+    for rec in pieces:
+        if rec.n_samples < min(longest, _SPECTRUM_SAMPLES):
+            continue  # too short for a spectrum: the longer segments decide
         rate = 1.0 / float(np.median(np.diff(np.asarray(rec.t, dtype=float))))
         floor = max(2.0, DECIMATION_PASSBAND * decimate_to) if decimate_to else 2.0
         cuts.append(choose_cutoff(np.asarray(rec.q, dtype=float), rate, min_cutoff=floor))
     return float(max(cuts))
+
+
+#: A segment shorter than this many samples does not take part in the automatic cut-off.
+_SPECTRUM_SAMPLES = 256
 
 
 def shifted_torques(rec: Any, delay: float) -> np.ndarray:
@@ -189,6 +211,9 @@ def filtered_motion(robot: rx90sym.Robot, rec: Any, cutoff: float | None = None,
                          f"{robot.name!r} has {robot.n}")
     if rec.robot and rec.robot != robot.name:
         raise ValueError(f"{rec.source}: recording is of robot {rec.robot!r}, not {robot.name!r}")
+    if getattr(rec, "n_segments", 1) > 1:
+        raise ValueError(f"{rec.source}: {rec.n_segments} segments: filter each of its pieces() "
+                         f"(filtered_motions does)")
     if cutoff is None:
         cutoff = automatic_cutoff([rec], decimate_to)
     d = derivatives(rec.t, rec.q, cutoff=cutoff, kept=kept)
@@ -203,18 +228,13 @@ def filtered_motion(robot: rx90sym.Robot, rec: Any, cutoff: float | None = None,
         # Recorded speeds decide the mask only (they are not filtered like q, so W does not use them).
         speed = np.asarray(rec.dq, dtype=float)[d.kept] if getattr(rec, "dq", None) is not None else d.dq
         moving = np.abs(speed) >= min_velocity
-        terms = coulomb_terms(robot, names if names is not None else robot.parameter_names)
         if not (Phi.flags.owndata and Phi.flags.writeable):  # a reused workspace's view: not ours to change
             Phi = np.array(Phi, copy=True)
-        for term in terms:
-            driver_moving = np.abs(speed @ np.asarray(term.driver)) >= min_velocity
-            usable[:, term.row] &= driver_moving
-            if rest == "zero-coulomb":
-                Phi[~driver_moving, term.row, term.column] = 0.0
-        usable &= moving
+        usable = _rest_rows(robot, names, speed, d.q, Phi, min_velocity, rest) & moving
     plan = decimation_plan(d.rate, decimate_to)
     k = plan.factor
     q, dq, ddq, t = d.q, d.dq, d.ddq, d.t
+    measured = _measured_rows(getattr(rec, "measured", None), d.kept, k)
     if k > 1:
         # Parallel filtering: the same zero-phase filter on Y and on every column of W.
         Y, Phi = decimate(Y, k), decimate(Phi, k)
@@ -224,7 +244,63 @@ def filtered_motion(robot: rx90sym.Robot, rec: Any, cutoff: float | None = None,
     if not Phi.flags.owndata:  # a view of a reused workspace: the next recording overwrites it
         Phi = Phi.copy()
     return FilteredMotion(t, q, dq, ddq, Y, Phi, d.cutoff, plan.rate, rec.source, moving, usable,
-                          k, d.kept, extra, plan.note)
+                          k, d.kept, extra, plan.note, measured)
+
+
+#: A decimated sample gives a row only when at most this share of the samples its decimation
+#: filter spans (± the factor) were bridged over lost packets (scattered stale rows pass, a burst
+#: of lost packets does not).
+BRIDGED_SHARE = 0.25
+
+
+def _rest_rows(robot: rx90sym.Robot, names: Sequence[str] | None, speed: np.ndarray, q: np.ndarray,
+               Phi: np.ndarray, min_velocity: float, rest: str) -> np.ndarray:
+    """(S, n) rows whose Coulomb drivers all move; sets the Coulomb entries of ``Phi`` (in place)
+    where their driver rests: 0 ("zero-coulomb") or the presliding state of the filtered positions
+    ``q`` ("presliding"; the position history, never the torque)."""
+    usable = np.ones(speed.shape, dtype=bool)
+    for term in coulomb_terms(robot, names if names is not None else robot.parameter_names):
+        driver_moving = np.abs(speed @ np.asarray(term.driver)) >= min_velocity
+        usable[:, term.row] &= driver_moving
+        if rest == "zero-coulomb":
+            Phi[~driver_moving, term.row, term.column] = 0.0
+        elif rest == "presliding":
+            z = presliding_state(q @ np.asarray(term.driver))
+            Phi[~driver_moving, term.row, term.column] = z[~driver_moving]
+    return usable
+
+
+def _measured_rows(measured: np.ndarray | None, kept: slice, factor: int) -> np.ndarray | None:
+    """(S,) measured flags after decimation by ``factor``: the sample itself was measured and at
+    most :data:`BRIDGED_SHARE` of the 2·factor + 1 samples around it were bridged."""
+    if measured is None:
+        return None
+    ok = np.asarray(measured, dtype=bool)[kept]
+    if factor > 1:
+        share = np.convolve((~ok).astype(float), np.ones(2 * factor + 1) / (2 * factor + 1), mode="same")
+        ok = (ok & (share <= BRIDGED_SHARE))[::factor]
+    return ok
+
+
+def filtered_motions(robot: rx90sym.Robot, recordings: Sequence[Any], cutoff: float,
+                     *args: Any, **options: Any) -> tuple[list[FilteredMotion], tuple[str, ...], list[Any]]:
+    """:func:`filtered_motion` of every segment of every recording (same arguments after
+    ``cutoff``, which must be given): the motions, notes naming each segment left out because it
+    is too short for the filters' edges, and the segments used (one per motion)."""
+    motions, notes, used = [], [], []
+    for rec in recordings:
+        for piece in rec.pieces():
+            rate = 1.0 / float(np.median(np.diff(piece.t))) if piece.n_samples > 1 else 0.0
+            edge = max(2, int(np.ceil(EDGE_PERIODS * rate / cutoff))) if rate else 0
+            if rec.n_segments > 1 and piece.n_samples < 2 * edge + 5:
+                notes.append(f"{piece.source}: segment of {piece.n_samples} samples left out (shorter than "
+                             f"the {2 * edge + 5} the filter's edges need at {cutoff:.3g} Hz)")
+                continue
+            motions.append(filtered_motion(robot, piece, cutoff, *args, **options))
+            used.append(piece)
+    if not motions:
+        raise ValueError("no segment is long enough to filter: " + "; ".join(notes))
+    return motions, tuple(notes), used
 
 
 def stack_rows(blocks: Sequence[np.ndarray], Ys: Sequence[np.ndarray], min_velocity: float | None = None,
@@ -295,9 +371,9 @@ def observation_matrix(robot: rx90sym.Robot, recordings: Sequence[Any], cutoff: 
         raise ValueError("observation_matrix: no recordings given")
     names, regressor = column_regressor(robot, base, columns)
     cutoff = cutoff if cutoff is not None else automatic_cutoff(recordings, decimate_to)
-    motions = [filtered_motion(robot, rec, cutoff, decimate_to, spring, regressor, names, min_velocity,
-                               rest, delay) for rec in recordings]  # one filtering for every recording
-    keep = [m.usable for m in motions] if (min_velocity is not None and rest == "drop") else None
+    motions, skipped, _ = filtered_motions(robot, recordings, cutoff, decimate_to, spring, regressor, names,
+                                        min_velocity, rest, delay)  # one filtering for every segment
+    keep = [m.rows(min_velocity is not None and rest == "drop") for m in motions]
     W, Y, joint, samples = stack_rows([m.Phi for m in motions], [m.Y for m in motions], masks=keep)
     rates = tuple(m.rate for m in motions)
     if max(rates) > min(rates) * (1 + 1e-3):
@@ -306,5 +382,5 @@ def observation_matrix(robot: rx90sym.Robot, recordings: Sequence[Any], cutoff: 
     moving = np.concatenate([m.moving for m in motions])
     return Observation(W, Y, joint, names, samples, tuple(m.cutoff for m in motions), rates,
                        rates[0], tuple(m.source for m in motions), sum(len(m.Y) for m in motions),
-                       tuple(m.note for m in motions), min_velocity, rest,
+                       tuple(m.note for m in motions) + skipped, min_velocity, rest,
                        moving.mean(axis=0) if min_velocity is not None else None)

@@ -14,8 +14,9 @@ __all__ = ["Processing", "REST_POLICIES", "DEFAULT_MIN_VELOCITY", "DEFAULT_REST"
 
 #: Rest threshold [rad/s]: a joint slower than this is at rest (its Coulomb sign is unknown).
 DEFAULT_MIN_VELOCITY = 0.05
-#: What rest samples do: their rows are dropped, or kept with a Coulomb term of 0.
-REST_POLICIES = ("drop", "zero-coulomb")
+#: What rest samples do: their rows are dropped, kept with a Coulomb term of 0, or kept with the
+#: presliding state of the position history (identify.observation.friction).
+REST_POLICIES = ("drop", "zero-coulomb", "presliding")
 DEFAULT_REST = "zero-coulomb"
 #: Rate after parallel filtering [Hz].
 DEFAULT_DECIMATE_TO = 50.0
@@ -33,7 +34,10 @@ class Processing:
     estimate_delay: estimate the lag even when it is not compensated, to report it (~40
     least-squares fits);
     spring: add the robot's spring torque to the measured torque (False when the spring is
-    identified with the other parameters).
+    identified with the other parameters);
+    cross_validate: choose the cut-off, the decimation and the rest policy on the torques by
+    blocked cross-validation (:mod:`identify.observation.cross_validation`; ``cutoff`` must be
+    None); the fit records the choice and its candidate table.
     """
 
     cutoff: float | None = None
@@ -43,6 +47,7 @@ class Processing:
     delay: float | str = 0.0
     estimate_delay: bool = True
     spring: bool = True
+    cross_validate: bool = False
 
     def __post_init__(self) -> None:
         # 0 means "none" for the rate and the threshold: one spelling inside (None).
@@ -52,6 +57,8 @@ class Processing:
             value = getattr(self, name)
             if value is not None and not (isinstance(value, (int, float)) and math.isfinite(value) and value > 0):
                 raise ValueError(f"processing: {name} must be a positive number or None, got {value!r}")
+        if self.cross_validate and self.cutoff is not None:
+            raise ValueError("processing: a cut-off is given and cross_validate asks to choose one: give one of them")
         if self.rest not in REST_POLICIES:
             raise ValueError(f"processing: rest must be one of {REST_POLICIES}, got {self.rest!r}")
         if not (self.delay == "auto" or (isinstance(self.delay, (int, float)) and math.isfinite(self.delay))):

@@ -15,7 +15,7 @@ import numpy as np
 import rx90sym
 
 from identify.signal.filtering import decimate
-from identify.observation.matrix import automatic_cutoff, column_regressor, filtered_motion, shifted_torques, stack_rows
+from identify.observation.matrix import automatic_cutoff, column_regressor, filtered_motions, shifted_torques, stack_rows
 
 __all__ = ["DelayEstimate", "delay_grid", "estimate_delay", "joint_log_rms", "refined_delay"]
 
@@ -57,15 +57,15 @@ def estimate_delay(robot: rx90sym.Robot, recordings: Sequence[Any], base: Any = 
         raise ValueError(f"max_delay must be a positive duration in s, got {max_delay!r}")
     names, regressor = column_regressor(robot, base)
     cutoff = cutoff if cutoff is not None else automatic_cutoff(recordings, decimate_to)
-    motions = [filtered_motion(robot, rec, cutoff, decimate_to, spring, regressor, names, min_velocity, rest)
-               for rec in recordings]
-    masks = [m.usable for m in motions] if (min_velocity is not None and rest == "drop") else None
+    motions, _, pieces = filtered_motions(robot, recordings, cutoff, decimate_to, spring, regressor, names,
+                                          min_velocity, rest)
+    masks = [m.rows(min_velocity is not None and rest == "drop") for m in motions]
     period = max(float(np.median(np.diff(rec.t))) for rec in recordings)
     grid, step = delay_grid(period, max_delay, steps)
 
     def cost(delay: float) -> float:
         Ys = []
-        for rec, m in zip(recordings, motions):
+        for rec, m in zip(pieces, motions):
             Y = shifted_torques(rec, delay)[m.kept] + m.extra
             Ys.append(decimate(Y, m.factor) if m.factor > 1 else Y)
         W, Y, joint, _ = stack_rows([m.Phi for m in motions], Ys, masks=masks)

@@ -3,7 +3,13 @@
 Log form (docs/real-logs.md)::
 
     rx90 convert LOG.csv --robot R --columns SPEC [--no-header] [--rows FIRST:LAST]
-                 [--from S] [--to S] [--resample HZ] [--gains LIST|FILE] [--convention C] --out REC.csv
+                 [--from S] [--to S] [--resample HZ] [--max-gap S] [--no-segments] [--gains LIST|FILE]
+                 [--convention C] --out REC.csv
+
+ROS bag form (joint_states; ROS 1, ROS 2 sqlite3 or MCAP; needs the ``ros`` extra)::
+
+    rx90 convert BAG --topic /joint_states --robot R [--effort torque|current] [--gains ...]
+                 [--resample HZ] [--max-gap S] [--no-segments] --out REC.csv
 
 Motor form (Stäubli CS8 / TX40 files)::
 
@@ -20,8 +26,10 @@ from identify.io.blocks import DEFAULT_LOG_BLOCK, count_rows
 from ..common import UsageError, check_output, convention_option, load_robot, progress, robot_option
 from .identify_runs import block_option
 
-_LOG_OPTIONS = ("columns", "no_header", "rows", "t_from", "t_to", "resample", "gains")
+_LOG_OPTIONS = ("columns", "no_header", "rows", "t_from", "t_to", "resample", "gains", "max_gap", "no_segments")
 _MOTOR_OPTIONS = ("motor_positions", "motor_torques", "period")
+_BAG_OPTIONS = ("topic", "effort")
+_CSV_ONLY = ("columns", "no_header", "rows", "t_from", "t_to")
 
 
 def register(sub: Any) -> None:
@@ -30,7 +38,12 @@ def register(sub: Any) -> None:
     sp = sub.add_parser("convert", help=text, description=text + "; see docs/real-logs.md")
     sp.set_defaults(func=run)
     robot_option(sp, None, "")
-    sp.add_argument("log", nargs="?", metavar="LOG.csv", help="controller log (comma separated)")
+    sp.add_argument("log", nargs="?", metavar="LOG.csv|BAG",
+                    help="controller log (comma separated), or a ROS bag (.bag, ROS 2 directory, .db3, .mcap)")
+    sp.add_argument("--topic", help="bag form: the sensor_msgs/JointState topic (e.g. /joint_states)")
+    sp.add_argument("--effort", choices=("torque", "current"),
+                    help="bag form: what the messages' effort holds (default torque; current needs --gains "
+                         "to become torques)")
     sp.add_argument("--columns", metavar="SPEC",
                     help="what each column of the log holds, in order: t, q1..qn, qd1..qdn (recorded "
                          "velocities), tau1..taun, i1..in (motor currents, A), _ (ignored), x:NAME "
@@ -43,6 +56,11 @@ def register(sub: Any) -> None:
     sp.add_argument("--to", dest="t_to", type=float, metavar="S", help="keep rows up to this time, s")
     sp.add_argument("--resample", type=float, metavar="HZ",
                     help="put every signal on a uniform grid at HZ (needed for irregular time stamps)")
+    sp.add_argument("--max-gap", type=float, metavar="S",
+                    help="longest gap of lost packets bridged by --resample, s (default 0.05, "
+                         "identify.signal.gaps.DEFAULT_MAX_GAP); a longer gap starts a new segment")
+    sp.add_argument("--no-segments", action="store_true",
+                    help="refuse a gap longer than --max-gap instead of splitting the log into segments")
     sp.add_argument("--gains", metavar="LIST|FILE",
                     help="drive gains turning currents into joint torques: K1,...,Kn (N m/A, joint "
                          "side) or the JSON of rx90 gains; without them the file keeps currents")
@@ -79,16 +97,25 @@ def _robot(args: argparse.Namespace):
 
 
 def run(args: argparse.Namespace) -> int:
+    from identify.io.bags import is_bag
     from identify.io.logs import read_log
     from identify.io.recordings import write_recording
+    from identify.signal.gaps import DEFAULT_MAX_GAP
 
     if args.log is None:
         return _run_motor(args)
     mixed = _given(args, _MOTOR_OPTIONS)
     if mixed:
         raise UsageError(f"{', '.join(mixed)} belong to the motor form, not to a LOG.csv")
-    if args.columns is None:
-        raise UsageError("a LOG.csv needs --columns SPEC (e.g. t,q1..q6,qd1..qd6,i1..i6)")
+    if args.max_gap is not None and not args.max_gap > 0:
+        raise UsageError(f"--max-gap must be a positive time in s, got {args.max_gap:g}")
+    if is_bag(args.log) or args.topic is not None:
+        return _run_bag(args)
+    extra = _given(args, _BAG_OPTIONS)
+    if extra:
+        raise UsageError(f"{', '.join(extra)} belong to the bag form (a .bag, .db3, .mcap or ROS 2 bag directory)")
+    if args.columns is None and args.no_header:
+        raise UsageError("a LOG.csv without header needs --columns SPEC (e.g. t,q1..q6,qd1..qd6,i1..i6)")
     robot = _robot(args)
     check_output(args.out)
     if count_rows(args.log) > args.block:
@@ -96,10 +123,12 @@ def run(args: argparse.Namespace) -> int:
     progress(f"reading the log {args.log}")
     rec = read_log(args.log, robot, args.columns, header=not args.no_header, rows=_rows(args.rows),
                    t_from=args.t_from, t_to=args.t_to, resample=args.resample, gains=args.gains,
-                   convention=args.convention)
+                   convention=args.convention, max_gap=args.max_gap or DEFAULT_MAX_GAP,
+                   segments=not args.no_segments)
     write_recording(args.out, rec, robot, convention="controller")
-    _print_report(args, rec.meta["log"], "torques as logged" if rec.current is None else "no gains: the file keeps "
-                  "currents (give --gains to identify with it)")
+    print(_print_log(args.log, rec.meta["log"], "torques as logged" if rec.current is None else
+                     "no gains: the file keeps currents (give --gains to identify with it)"))
+    print(f"converted {rec.n_samples} samples -> {args.out}")
     return 0
 
 
@@ -108,6 +137,12 @@ def _run_long(args: argparse.Namespace, robot: Any) -> int:
     if not args.out.lower().endswith(".csv"):
         raise UsageError(f"--out {args.out}: a log longer than --block ({args.block} lines) is converted block by "
                          f"block into a CSV recording")
+    unsupported = [f for f, given in (("--max-gap", args.max_gap is not None), ("--no-segments", args.no_segments))
+                   if given]
+    if unsupported or args.columns is None:
+        raise UsageError(f"a log longer than --block ({args.block} lines) is converted block by block, which "
+                         f"needs --columns and takes no {', '.join(unsupported) or '--max-gap'} (stale rows and "
+                         f"lost packets are handled by the whole-log reader: raise --block)")
     from identify.io.columns import parse_columns
     from identify.io.log_blocks import convert_log
 
@@ -116,29 +151,78 @@ def _run_long(args: argparse.Namespace, robot: Any) -> int:
                       t_from=args.t_from, t_to=args.t_to, resample=args.resample, gains=args.gains,
                       convention=args.convention, block=args.block)
     currents = bool(parse_columns(args.columns, robot).i)
-    _print_report(args, log, "no gains: the file keeps currents (give --gains to identify with it)" if currents
-                  else "torques as logged")
+    print(_print_log(args.log, log, "no gains: the file keeps currents (give --gains to identify with it)"
+                     if currents else "torques as logged"))
+    print(f"converted {log['samples']} samples -> {args.out}")
     return 0
 
 
-def _print_report(args: argparse.Namespace, log: dict, what_else: str) -> None:
+def _run_bag(args: argparse.Namespace) -> int:
+    from identify.io.bags import MissingExtra, read_bag
+    from identify.io.recordings import write_recording
+    from identify.signal.gaps import DEFAULT_MAX_GAP
+
+    wrong = _given(args, _CSV_ONLY)
+    if wrong:
+        raise UsageError(f"{', '.join(wrong)} belong to the LOG.csv form, not to a bag")
+    if args.topic is None:
+        raise UsageError("a bag needs --topic (the sensor_msgs/JointState topic, e.g. /joint_states)")
+    robot = _robot(args)
+    check_output(args.out)
+    progress(f"reading the bag {args.log}, topic {args.topic}")
+    try:
+        rec = read_bag(args.log, robot, args.topic, effort=args.effort or "torque", gains=args.gains,
+                       resample=args.resample, convention=args.convention or "controller",
+                       max_gap=args.max_gap or DEFAULT_MAX_GAP, segments=not args.no_segments)
+    except MissingExtra as exc:
+        raise UsageError(str(exc)) from None
+    write_recording(args.out, rec, robot, convention="controller")
+    log = rec.meta["log"]
+    print(f"topic {log['topic']}: {log['messages']} messages, {log['reordered']} out of stamp order (sorted), "
+          f"{log['duplicate_stamps']} with a repeated stamp (dropped), {log['incomplete_messages']} missing joints "
+          f"(dropped), {log['other_joint_messages']} of other joints (skipped); velocities {log['velocities']}")
+    print(_print_log(args.log, log, "torques as logged" if rec.current is None else
+                     "no gains: the file keeps currents (give --gains to identify with it)"))
+    print(f"converted {rec.n_samples} samples -> {args.out}")
+    return 0
+
+
+def _print_log(name: str, log: dict, what_else: str) -> str:
+    """What the reader did, in the user's words: rows, rate, stale rows, gaps, grid, torques."""
     steps = (f"rate {log['rate_hz']:.6g} Hz (1 / mean step; median step {log['median_step_s']:g} s, "
              f"{log['irregular_steps']} steps off by more than 1 %)")
     grid = (f"resampled to {log['resampled_hz']:g} Hz: {log['samples']} samples"
             if log["resampled_hz"] else "not resampled")
     what = f"gains {log['gains']}: joint torques from the currents" if log["gains"] else what_else
-    print(f"read lines {log['lines'][0]}..{log['lines'][1]} of {args.log}: {log['rows']} rows, {steps}")
-    print(f"largest step {log['largest_gap_s']:g} s (lines {log['largest_gap_lines'][0]}-"
-          f"{log['largest_gap_lines'][1]}); {grid}; {what}")
-    print(f"converted {log['samples']} samples -> {args.out}")
+    gaps = log.get("gaps", {"gaps": []})
+    lines = [f"read lines {log['lines'][0]}..{log['lines'][1]} of {name}: {log['rows']} rows, {steps}",
+             f"largest step {log['largest_gap_s']:g} s (lines {log['largest_gap_lines'][0]}-"
+             f"{log['largest_gap_lines'][1]}); {grid}; {what}"]
+    if log.get("stale_rows"):
+        shown = ", ".join(map(str, log["stale_lines"]))
+        lines.append(f"stale rows dropped (exact repeats of the previous row): {log['stale_rows']} (lines "
+                     f"{shown}{', ...' if log['stale_rows'] > len(log['stale_lines']) else ''})")
+    if gaps["gaps"]:
+        lines.append(f"lost packets: {len(gaps['gaps'])} gaps; {gaps['bridged_gaps']} up to {gaps['max_gap_s']:g} s "
+                     f"bridged ({log['bridged_samples']} samples interpolated, never used as measurements), "
+                     f"{gaps['segments']} segment(s)")
+        lines += [f"  gap of {g['duration_s']:g} s ({g['periods']:.3g} steps) between lines {g['lines'][0]} and "
+                  f"{g['lines'][1]}: {'bridged' if g['bridged'] else 'new segment'}" for g in gaps["gaps"][:_GAPS_SHOWN]]
+        if len(gaps["gaps"]) > _GAPS_SHOWN:
+            lines.append(f"  ... and {len(gaps['gaps']) - _GAPS_SHOWN} more gaps")
+    return "\n".join(lines)
+
+
+#: How many gaps the output lists one by one.
+_GAPS_SHOWN = 10
 
 
 def _run_motor(args: argparse.Namespace) -> int:
     from identify.io.recordings import read_motor_recording, write_recording
 
-    extra = _given(args, _LOG_OPTIONS) + (["--block"] if args.block != DEFAULT_LOG_BLOCK else [])
+    extra = _given(args, _LOG_OPTIONS + _BAG_OPTIONS) + (["--block"] if args.block != DEFAULT_LOG_BLOCK else [])
     if extra:
-        raise UsageError(f"{', '.join(extra)} belong to the log form (give LOG.csv)")
+        raise UsageError(f"{', '.join(extra)} belong to the log form (give LOG.csv or a bag)")
     missing = [f for f, v in (("--motor-positions", args.motor_positions), ("--motor-torques", args.motor_torques),
                               ("--period", args.period)) if v is None]
     if missing:

@@ -1,0 +1,263 @@
+"""Processing chosen on the torques: the cut-off and decimation by blocked cross-validation.
+
+The position-spectrum knee (:func:`identify.signal.filtering.choose_cutoff`) looks at the positions
+only; nothing checks it against the torques. Here every candidate processing (a cut-off ``fc`` of
+the position filter, with the decimation to about 2.5 fc so that the parallel filter's pass band,
+0.4 x the decimated rate, is the cut-off) is scored *inside the fitted data*:
+
+1. the recordings' time span is cut into ``blocks`` contiguous blocks of equal duration;
+2. for each block, the base parameters are fitted (WLS) on the rows of the other blocks and the
+   torques of the held-back block are predicted;
+3. predicted and measured torques of the held-back block are both low-passed at one common
+   **reference bandwidth** (the grid's lowest cut-off), so that a candidate is neither rewarded nor
+   punished for the noise its own filter lets through; the score of joint j is
+   100 ||LP(Y_j - W_j beta)|| / ||LP(Y_j)|| over every held-back block, the candidate's score the
+   mean over joints.
+
+The grid is small: the knee times (0.5, 0.7, 1, 1.4, 2), within [2 Hz, 40 % of Nyquist], each
+decimated to max(2.5 fc, 25 Hz), and the default processing (the automatic cut-off with the
+default decimation); where the fit leaves the rest policy open, the policies zero-coulomb,
+presliding and none are then scored at the best cut-off. Cut-offs are scored from the knee
+outwards and no further one is started once ``time_cap`` seconds are spent (those left are listed
+as not scored); the rest policies are always scored. Bridged samples and rest rows follow the
+fit's rules (the same rows as W).
+"""
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import dataclass, replace
+from typing import Any, Sequence
+
+import numpy as np
+
+import rx90sym
+
+from identify.observation.matrix import (DECIMATION_PASSBAND, DEFAULT_MIN_VELOCITY, automatic_cutoff, column_regressor,
+                                         filtered_motions, stack_rows)
+from identify.signal.filtering import choose_cutoff, lowpass
+
+__all__ = ["Candidate", "ProcessingChoice", "GRID_FACTORS", "DEFAULT_BLOCKS", "DEFAULT_TIME_CAP",
+           "candidate_grid", "choose_processing"]
+
+#: Cut-offs of the grid, as multiples of the position-spectrum knee.
+GRID_FACTORS = (0.5, 0.7, 1.0, 1.4, 2.0)
+#: Contiguous blocks of the cross-validation.
+DEFAULT_BLOCKS = 5
+#: Lowest rate a candidate decimates to, Hz (enough rows per block for the fits and the scores).
+MIN_DECIMATED_RATE = 25.0
+#: Seconds after which no further candidate is scored.
+DEFAULT_TIME_CAP = 60.0
+
+
+@dataclass(frozen=True)
+class Candidate:
+    """One processing: cut-off [Hz], decimation target [Hz] (None: none), rest policy (None: no
+    rest handling, every row a moving one; "" while not set: the caller's), its cross-validated
+    score (mean over joints of the relative held-back error, %; nan: not scored), per joint (%),
+    and the seconds it took."""
+
+    cutoff: float
+    decimate_to: float | None
+    rest: str | None = None
+    score: float = math.nan
+    per_joint: tuple[float, ...] = ()
+    seconds: float = 0.0
+    label: str = ""
+
+    def to_dict(self) -> dict[str, Any]:
+        return {"cutoff_hz": self.cutoff, "decimate_to_hz": self.decimate_to, "rest": self.rest,
+                "score_pct": None if math.isnan(self.score) else self.score,
+                "per_joint_pct": list(self.per_joint), "seconds": self.seconds, "label": self.label}
+
+
+@dataclass(frozen=True)
+class ProcessingChoice:
+    """The candidates scored, the chosen one (lowest score), the knee [Hz], the reference
+    bandwidth [Hz], the number of blocks and the time spent [s]."""
+
+    candidates: tuple[Candidate, ...]
+    chosen: Candidate
+    knee: float
+    reference_hz: float
+    blocks: int
+    seconds: float
+
+    def table(self) -> str:
+        head = (f"processing chosen by {self.blocks}-block cross-validation (scored at {self.reference_hz:.3g} Hz; "
+                f"knee {self.knee:.3g} Hz)\n  cut-off [Hz]  decimate to [Hz]  rest policy   held-back error [%]")
+        lines = [head]
+        for c in self.candidates:
+            mark = " <- chosen" if c is self.chosen else ""
+            score = (("-" if c.label.strip().startswith("not") else "not scored (time cap)")
+                     if math.isnan(c.score) else f"{c.score:.3f}")
+            dec = "none" if c.decimate_to is None else f"{c.decimate_to:.4g}"
+            lines.append(f"  {c.cutoff:12.4g}  {dec:>16}  {c.rest or 'none':<12}  {score:>19}"
+                         f"{' ' + c.label if c.label else ''}{mark}")
+        return "\n".join(lines)
+
+    def to_dict(self) -> dict[str, Any]:
+        return {"method": "blocked cross-validation", "blocks": self.blocks, "reference_hz": self.reference_hz,
+                "knee_hz": self.knee, "seconds": self.seconds, "chosen": self.chosen.to_dict(),
+                "candidates": [c.to_dict() for c in self.candidates], "table": self.table()}
+
+
+def _rate(recordings: Sequence[Any]) -> float:
+    return min(1.0 / float(np.median(np.diff(np.asarray(p.t)))) for r in recordings for p in r.pieces())
+
+
+def candidate_grid(recordings: Sequence[Any], default_decimate: float | None = 50.0) -> tuple[float, list[Candidate]]:
+    """(knee [Hz], candidates in scoring order: the knee first, then outwards, then the default)."""
+    rate = _rate(recordings)
+    knee = max(choose_cutoff(np.asarray(p.q), rate) for r in recordings for p in r.pieces()
+               if p.n_samples >= 64)
+    top = 0.4 * rate / 2.0
+    cuts = sorted({min(max(2.0, f * knee), top) for f in GRID_FACTORS}, key=lambda c: abs(math.log(c / knee)))
+    out = []
+    for fc in cuts:
+        target = max(fc / DECIMATION_PASSBAND, MIN_DECIMATED_RATE)  # pass band >= fc
+        factor = max(1, int(math.floor(rate / target)))
+        out.append(Candidate(fc, rate / factor if factor > 1 else None))
+    default = Candidate(automatic_cutoff(recordings, default_decimate), default_decimate, label="(default)")
+    if all(abs(c.cutoff - default.cutoff) > 1e-9 * default.cutoff or c.decimate_to != default.decimate_to
+           for c in out):
+        out.append(default)
+    return knee, out
+
+
+def _blocks_of(t: np.ndarray, start: float, span: float, blocks: int) -> np.ndarray:
+    return np.minimum((blocks * (t - start) / span).astype(int), blocks - 1)
+
+
+def _compressed_blocks(motions: Sequence[Any], ids: Sequence[np.ndarray], blocks: int, drop: bool,
+                       n: int) -> dict[tuple[int, int], tuple[np.ndarray, int]]:
+    """(block, joint) -> (the triangular factor of [W | Y] over the block's rows of that joint,
+    their number)."""
+    out = {}
+    for b in range(blocks):
+        rows = [m.rows(drop) & (i == b)[:, None] for m, i in zip(motions, ids)]
+        W, Y, joint, _ = stack_rows([m.Phi for m in motions], [m.Y for m in motions], masks=rows)
+        for j in range(n):
+            A = np.column_stack([W[joint == j], Y[joint == j]])
+            if A.shape[0]:
+                out[(b, j)] = (np.linalg.qr(A, mode="r"), A.shape[0])
+    return out
+
+
+def _fold_wls(factors: dict[tuple[int, int], tuple[np.ndarray, int]], held: int, n: int) -> np.ndarray | None:
+    """WLS (each joint weighted by 1 / its residual standard deviation, as the fit does) on every
+    block but ``held``, from the compressed blocks; None when a joint has too few rows."""
+    systems = []
+    for j in range(n):
+        parts = [f for (b, jj), f in factors.items() if jj == j and b != held]
+        if not parts:
+            return None
+        stacked = np.vstack([R for R, _ in parts])  # the same norms as the rows it compresses
+        rows = sum(count for _, count in parts)
+        c = stacked.shape[1] - 1
+        x, *_ = np.linalg.lstsq(stacked[:, :c], stacked[:, c], rcond=None)
+        resid = np.linalg.norm(stacked[:, :c] @ x - stacked[:, c])
+        if rows <= c or resid == 0:
+            return None
+        systems.append(stacked / (resid / np.sqrt(rows - c)))  # sigma_j as in eq. 12, per joint
+    R = np.vstack(systems)
+    c = R.shape[1] - 1
+    beta, *_ = np.linalg.lstsq(R[:, :c], R[:, c], rcond=None)
+    return beta
+
+
+def _score(robot: rx90sym.Robot, recordings: Sequence[Any], cand: Candidate, base: Any, reference: float,
+           blocks: int, options: dict) -> tuple[float, tuple[float, ...]]:
+    names, regressor = column_regressor(robot, base)
+    min_velocity = (options["min_velocity"] or DEFAULT_MIN_VELOCITY) if cand.rest is not None else None
+    rest = cand.rest or "zero-coulomb"
+    motions, _, _ = filtered_motions(robot, recordings, cand.cutoff, cand.decimate_to, options["spring"],
+                                     regressor, names, min_velocity, rest, 0.0)
+    start = min(float(m.t[0]) for m in motions)
+    span = max(float(m.t[-1]) for m in motions) - start + 1e-9
+    ids = [_blocks_of(m.t, start, span, blocks) for m in motions]
+    drop = min_velocity is not None and rest == "drop"
+    n = robot.n
+    # One compression per (block, joint): [R | z] of the QR of [W | Y] (eq. 10 on few rows).
+    blocks_R = _compressed_blocks(motions, ids, blocks, drop, n)
+    err2, ref2 = np.zeros(n), np.zeros(n)
+    for b in range(blocks):
+        beta = _fold_wls(blocks_R, b, n)
+        if beta is None:
+            continue
+        for m, i in zip(motions, ids):
+            held = np.flatnonzero(i == b)
+            if held.size < 16:  # too short for the reference filter
+                continue
+            pred = m.Phi[held] @ beta
+            meas = m.Y[held]
+            ok = m.measured[held] if m.measured is not None else np.ones(held.size, dtype=bool)
+            if reference < 0.5 * m.rate * 0.99:
+                pred, meas = lowpass(pred, m.rate, reference), lowpass(meas, m.rate, reference)
+            err2 += np.sum((pred - meas)[ok] ** 2, axis=0)
+            ref2 += np.sum(meas[ok] ** 2, axis=0)
+    if not np.any(ref2 > 0):
+        raise ValueError("no fold could be fitted and scored (too few rows left after the filters' edges)")
+    per_joint = 100.0 * np.sqrt(err2 / np.where(ref2 > 0, ref2, np.nan))
+    return float(np.nanmean(per_joint)), tuple(float(v) for v in per_joint)
+
+
+def choose_processing(robot: rx90sym.Robot, recordings: Sequence[Any], base: Any = None,
+                      min_velocity: float | None = None, rest: str = "zero-coulomb", spring: bool = True,
+                      blocks: int = DEFAULT_BLOCKS, time_cap: float = DEFAULT_TIME_CAP,
+                      default_decimate: float | None = 50.0, rest_open: bool = True,
+                      candidates: Sequence[Candidate] | None = None) -> ProcessingChoice:
+    """Score the candidate processings (module docstring) and choose the lowest held-back error.
+
+    min_velocity [rad/s], rest, spring: the fit's rest threshold, policy and spring (the rows of W);
+    rest_open: the rest policy is open too (the robot file fixes none): the other policies
+    ("zero-coulomb", "presliding", none) are scored at the best cut-off;
+    blocks: contiguous blocks (>= 2); time_cap [s]: no candidate is started after it (the first is
+    always scored); candidates: another grid (default :func:`candidate_grid`).
+    """
+    if blocks < 2:
+        raise ValueError(f"cross-validation needs at least 2 blocks, got {blocks}")
+    base = base if base is not None else rx90sym.base_parameters(robot)
+    knee, grid = candidate_grid(recordings, default_decimate)
+    grid = list(candidates) if candidates is not None else grid
+    reference = min(c.cutoff for c in grid)
+    options = {"min_velocity": min_velocity, "spring": spring}
+    start = time.perf_counter()
+    given = rest if min_velocity is not None else None
+    first = _run(robot, recordings, [replace(c, rest=given) for c in grid], base, reference, blocks, options,
+                 start, time_cap, always_first=True)
+    best = _best(first)
+    # Second stage, at the best cut-off: the rest policies the fit leaves open (and none at all).
+    others = [r for r in ("zero-coulomb", "presliding", None) if r != given] if rest_open else []
+    second = _run(robot, recordings, [replace(best, rest=r, score=math.nan, per_joint=(), label="")
+                                      for r in others], base, reference, blocks, options, start, math.inf)
+    scored = first + second
+    chosen = _best(scored)
+    ordered = tuple(sorted(scored, key=lambda c: c.cutoff))
+    return ProcessingChoice(ordered, chosen, knee, reference, blocks, time.perf_counter() - start)
+
+
+def _best(scored: Sequence[Candidate]) -> Candidate:
+    valid = [c for c in scored if not math.isnan(c.score)]
+    if not valid:
+        raise ValueError("no candidate processing could be fitted: " + "; ".join(c.label for c in scored))
+    return min(valid, key=lambda c: c.score)
+
+
+def _run(robot: rx90sym.Robot, recordings: Sequence[Any], grid: Sequence[Candidate], base: Any, reference: float,
+         blocks: int, options: dict, start: float, time_cap: float, always_first: bool = False) -> list[Candidate]:
+    """Score ``grid`` in order; none is started after ``time_cap`` s since ``start`` (but the first
+    with ``always_first``)."""
+    scored: list[Candidate] = []
+    for cand in grid:
+        if time.perf_counter() - start > time_cap and (scored or not always_first):
+            scored.append(cand)
+            continue
+        t0 = time.perf_counter()
+        try:
+            score, per_joint = _score(robot, recordings, cand, base, reference, blocks, options)
+        except ValueError as exc:  # too few rows left to fit (a low rate on a short recording)
+            scored.append(replace(cand, label=f"{cand.label} not scored: {str(exc).splitlines()[0]}".strip()))
+            continue
+        scored.append(replace(cand, score=score, per_joint=per_joint, seconds=time.perf_counter() - t0))
+    return scored

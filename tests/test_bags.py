@@ -1,0 +1,163 @@
+"""ROS bags (ROS 1, ROS 2 sqlite3 and MCAP) written with rosbags' own writer from a twin run: the
+same recording as the CSV route; UR RTDE CSVs recognised by their header; bad bags exit 2."""
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import rx90sym
+from identify.app.cli import main
+from identify.io.bags import read_bag
+from identify.io.logs import read_log
+from identify.io.recordings import read_recording
+from motions import multisine, panda_truth
+from rx90sym.host_log import HostFaults, host_log
+
+rosbags = pytest.importorskip("rosbags", reason="the ros extra (rosbags) is not installed")
+
+EPOCH_NS = 1_732_000_000_123_456_789  # a real clock's stamps: far from 0
+
+
+@pytest.fixture(scope="module")
+def panda():
+    return rx90sym.load_robot("panda")
+
+
+@pytest.fixture(scope="module")
+def host_table(panda):
+    """A 3 s, 1 kHz Panda twin run as a host logs it (lost packets, 5 % stale rows, jitter)."""
+    rec = rx90sym.twin.simulate(panda, multisine(panda, 3, duration=3.0), params=panda_truth(panda),
+                                duration=3.0, rate=1000.0, noise="quantised", seed=3)
+    table, _, _ = host_log(rec, HostFaults(gap_every_s=(0.5, 1.0)), seed=3)
+    return table
+
+
+def _stamps(table: np.ndarray) -> np.ndarray:
+    return EPOCH_NS + np.round(table[:, 0] * 1e9).astype(np.int64)
+
+
+def write_bag(path: Path, table: np.ndarray, names: list[str], kind: str, seed: int = 0,
+              topic: str = "/joint_states") -> Path:
+    """Messages of ``table`` (t, q, qd, tau; robot order) on ``topic`` with names in the order given
+    (and an extra gripper joint), written in a receive order that is not the stamp order."""
+    from rosbags.typesys import Stores, get_typestore
+
+    store = get_typestore(Stores.ROS1_NOETIC if kind == "ros1" else Stores.ROS2_HUMBLE)
+    JointState = store.types["sensor_msgs/msg/JointState"]
+    Header = store.types["std_msgs/msg/Header"]
+    Time = store.types["builtin_interfaces/msg/Time"]
+    n = (table.shape[1] - 1) // 3
+    robot_names = [f"panda_joint{j}" for j in range(1, n + 1)]
+    order = [robot_names.index(nm) for nm in names]
+    stamps = _stamps(table)
+    received = stamps + np.random.default_rng(seed).integers(0, 3_000_000, stamps.size)  # up to 3 ms late
+    msgtype = "sensor_msgs/msg/JointState"
+
+    def message(k: int):
+        stamp = int(stamps[k])
+        q, qd, tau = (table[k, 1 + a * n:1 + (a + 1) * n][order] for a in range(3))
+        return JointState(header=Header(seq=k, stamp=Time(sec=stamp // 10**9, nanosec=stamp % 10**9), frame_id="")
+                          if kind == "ros1" else Header(stamp=Time(sec=stamp // 10**9, nanosec=stamp % 10**9),
+                                                        frame_id=""),
+                          name=names + ["panda_finger_joint1"], position=np.r_[q, 0.04],
+                          velocity=np.r_[qd, 0.0], effort=np.r_[tau, 1.0])
+
+    if kind == "ros1":
+        from rosbags.rosbag1 import Writer
+
+        with Writer(path) as writer:
+            conn = writer.add_connection(topic, msgtype, typestore=store)
+            for k in np.argsort(received, kind="stable"):
+                writer.write(conn, int(received[k]), store.serialize_ros1(message(k), msgtype))
+        return path
+    from rosbags.rosbag2 import StoragePlugin, Writer
+
+    plugin = StoragePlugin.MCAP if kind == "mcap" else StoragePlugin.SQLITE3
+    with Writer(path, version=9, storage_plugin=plugin) as writer:
+        conn = writer.add_connection(topic, msgtype, typestore=store)
+        for k in np.argsort(received, kind="stable"):
+            writer.write(conn, int(received[k]), store.serialize_cdr(message(k), msgtype))
+    return path
+
+
+def csv_route(tmp_path: Path, table: np.ndarray, robot, **options):
+    """The same samples through the CSV reader: time from the first stamp, robot order."""
+    stamps = _stamps(table)
+    rows = table.copy()
+    rows[:, 0] = (stamps - stamps[0]) * 1e-9
+    path = tmp_path / "route.csv"
+    np.savetxt(path, rows, fmt="%.17g", delimiter=",")
+    n = robot.n
+    return read_log(path, robot, f"t,q1..q{n},qd1..qd{n},tau1..tau{n}", **options)
+
+
+@pytest.mark.parametrize("kind", ["ros1", "sqlite3", "mcap"])
+def test_a_bag_gives_the_recording_of_the_csv_route(tmp_path, panda, host_table, kind):
+    names = sorted(f"panda_joint{j}" for j in range(1, 8))[::-1]  # not the robot's order
+    bag = write_bag(tmp_path / ("run.bag" if kind == "ros1" else "run"), host_table, names, kind)
+    rec = read_bag(bag, panda, "/joint_states", resample=1000.0)
+    ref = csv_route(tmp_path, host_table, panda, resample=1000.0)
+    for name in ("t", "q", "dq", "tau", "measured", "segment"):
+        a, b = getattr(rec, name), getattr(ref, name)
+        assert (a is None) == (b is None), name
+        if a is not None:
+            np.testing.assert_allclose(a, b, rtol=0, atol=1e-12, err_msg=name)
+    assert rec.measured is not None and 0 < np.sum(~rec.measured) < 0.2 * rec.n_samples  # bridged samples
+    log = rec.meta["log"]
+    assert log["reordered"] > 0 and log["duplicate_stamps"] == 0 and log["velocities"] == "recorded"
+    assert log["stale_rows"] == ref.meta["log"]["stale_rows"] > 0
+    assert log["t0_ns"] == _stamps(host_table)[0]
+
+
+def test_bad_bags_exit_2_naming_the_problem(tmp_path, capsys, panda, host_table):
+    names = [f"panda_joint{j}" for j in range(1, 8)]
+    bag = write_bag(tmp_path / "run", host_table, names, "sqlite3")
+    out = tmp_path / "rec.csv"
+    cases = [(["--topic", "/other"], "no topic '/other' in the bag (its topics: /joint_states"),
+             (["--topic", "/joint_states", "--robot", "ur10e"], "no message names every joint of the robot"),
+             (["--topic", "/joint_states", "--resample", "1000", "--max-gap", "0.004", "--no-segments"],
+              "longer than the 0.004 s that can be bridged")]
+    for extra, needle in cases:
+        robot = [] if "--robot" in extra else ["--robot", "panda"]
+        code = main(["convert", str(bag), *robot, *extra, "--out", str(out)])
+        err = capsys.readouterr().err.strip().splitlines()[-1]
+        assert code == 2 and needle in err, err
+        assert not out.exists()
+    code = main(["convert", str(bag), "--robot", "panda", "--topic", "/joint_states", "--resample", "1000",
+                 "--out", str(out)])
+    printed = capsys.readouterr().out
+    assert code == 0 and out.exists() and "stale rows dropped" in printed and "lost packets" in printed
+
+
+def test_without_rosbags_the_message_names_the_extra(tmp_path, monkeypatch, panda):
+    import sys
+
+    monkeypatch.setitem(sys.modules, "rosbags.highlevel", None)  # import fails as if not installed
+    with pytest.raises(ImportError, match=r"pip install 'rx90sym\[ros\]'"):
+        read_bag(tmp_path, panda, "/joint_states")
+
+
+def test_an_rtde_csv_needs_no_column_map(tmp_path, capsys):
+    """UR's RTDE recorder: a header of names, cells separated by blanks; columns found by name."""
+    ur = rx90sym.load_robot("ur10e")
+    rng = np.random.default_rng(4)
+    t = 0.002 * np.arange(400)
+    q = 0.3 * np.sin(np.outer(t, np.arange(1, 7)))
+    qd = 0.3 * np.arange(1, 7) * np.cos(np.outer(t, np.arange(1, 7)))
+    cur, moment, target = rng.normal(size=(3, t.size, 6))
+    groups = [("target_q", q), ("actual_q", q), ("actual_qd", qd), ("actual_current", cur),
+              ("target_moment", moment)]
+    header = ["timestamp"] + [f"{g}_{j}" for g, _ in groups for j in range(6)] + ["robot_mode"]
+    table = np.column_stack([1234.5 + t] + [a for _, a in groups] + [np.full(t.size, 7.0)])
+    path = tmp_path / "rtde.csv"
+    path.write_text(" ".join(header) + "\n" + "\n".join(" ".join(f"{v:.17g}" for v in row) for row in table) + "\n")
+    rec = read_log(path, ur, None, header=True)
+    np.testing.assert_array_equal(rec.q, q)
+    np.testing.assert_array_equal(rec.dq, qd)
+    np.testing.assert_array_equal(rec.current, cur)
+    np.testing.assert_array_equal(rec.aux["target_moment1"], moment[:, 0])
+    out = tmp_path / "rec.csv"
+    assert main(["convert", str(path), "--robot", "ur10e", "--gains", "10,10,10,10,10,10", "--out", str(out)]) == 0
+    np.testing.assert_allclose(read_recording(out, ur).torques, 10 * cur, rtol=1e-14)
