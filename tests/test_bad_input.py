@@ -270,3 +270,27 @@ def test_static_torques_are_checked_against_the_nominal_gravity(rx90):
     flags = static_gravity_flags([dataclasses.replace(rest, tau=tau)], rx90, nominal)
     assert [(f.code, f.joint) for f in flags] == [("static_gravity", 2)] and "sign" in flags[0].action
     assert static_gravity_flags([dataclasses.replace(rest, tau=tau)], rx90, None) == []
+
+
+# --- controller programs name their robot (issue 20 follow-up) ----------------------------------
+
+@pytest.mark.parametrize("extra, message", [
+    (("--controller", "ur", "--program", "X.script"), "name its robot with --robot"),
+    (("--robot", "rx90", "--controller", "ur", "--program", "X.script"), "not rx90"),
+    (("--robot", "tx40", "--controller", "ur"), "not tx40"),
+    (("--robot", "panda", "--controller", "ur", "--program", "X.script"), "not panda"),
+    (("--robot", "ur10e", "--controller", "franka", "--program", "X.csv"), "not ur10e"),
+])
+def test_controller_programs_need_a_named_robot_of_their_make(tmp_path, capsys, extra, message):
+    out = tmp_path / "t.csv"
+    extra = tuple(str(tmp_path / x) if x.startswith("X.") else x for x in extra)
+    msg = refused(capsys, out, "excite", "--duration", 2, "--harmonics", 1, "--starts", 1, *extra, "--out", out)
+    assert message in msg and ("--controller" in msg or "--program" in msg)
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_the_default_robot_is_announced_as_default(tmp_path, capsys):
+    code, _, err = rx90_cmd(capsys, "model")
+    assert "robot rx90 (" in err and "; default)" in err and "from --robot" not in err, err
+    code, _, err = rx90_cmd(capsys, "model", "--robot", "rx90")
+    assert "; from --robot)" in err, err

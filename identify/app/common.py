@@ -47,7 +47,7 @@ def load_robot(args: argparse.Namespace, offsets: bool = False, recordings: Sequ
     """The robot of ``--robot``, else the one the recordings' headers name (all the same), else a
     UsageError: no command that reads recordings guesses a robot. Prints the robot it uses."""
     acceleration = getattr(args, "acceleration", None)
-    spec = args.robot
+    spec = args.robot if args.robot is not None else getattr(args, "default_robot", None)
     if spec is None:
         names = {p: declared_robot(p) for p in recordings}
         named = sorted({n for n in names.values() if n is not None})
@@ -63,7 +63,8 @@ def load_robot(args: argparse.Namespace, offsets: bool = False, recordings: Sequ
                              f"file with --robot FILE.toml|FILE.urdf")
     robot = rx90sym.load_robot(spec, offsets=offsets, tip=getattr(args, "tip", None),
                                acceleration=None if acceleration is None else floats(acceleration, "--acceleration"))
-    announce_robot(robot, "from --robot" if args.robot is not None else "named by the recordings")
+    announce_robot(robot, "from --robot" if args.robot is not None else
+                   "default" if getattr(args, "default_robot", None) is not None else "named by the recordings")
     return robot
 
 
@@ -170,7 +171,9 @@ def robot_option(sp: argparse.ArgumentParser, default: str | None = "rx90", sour
     ``default`` None: no default robot (``source`` says where the robot is taken from instead)."""
     text = (f"(default {default})" if default is not None else
             f"(default: {source})" if source else "(required)")
-    sp.add_argument("--robot", default=default, help=f"bundled robot name, robot file or URDF {text}")
+    # args.robot stays None unless given: the robot line says "default", not "from --robot".
+    sp.set_defaults(default_robot=default)
+    sp.add_argument("--robot", default=None, help=f"bundled robot name, robot file or URDF {text}")
     sp.add_argument("--tip", help="with a URDF --robot: the link ending the chain from the URDF root "
                                   "(default: the only leaf link)")
     sp.add_argument("--acceleration", metavar="A|A1,..,An",

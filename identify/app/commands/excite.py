@@ -167,6 +167,25 @@ def _report(args: argparse.Namespace, robot: rx90sym.Robot, model: Any, traj: An
     write_page(args.report, excite_page({**traj.summary(), "robot": robot.name}, (), (envelope,)))
 
 
+# Bundled robots each controller drives (docs/excitation.md): a bundled robot of another make is
+# refused; a robot file or URDF of your own is taken as you name it with --robot.
+CONTROLLER_ROBOTS = {"ur": ("ur10e",), "franka": ("panda",)}
+
+
+def _check_controller_robot(args: argparse.Namespace) -> None:
+    """A controller program is written for the robot the user names, and for a robot of that make."""
+    if args.controller is None:
+        return
+    if args.program is not None and args.robot is None:
+        raise UsageError(f"--program writes a {args.controller} controller's program: name its robot with "
+                         f"--robot (the default robot {args.default_robot} is not used for one)")
+    spec = args.robot if args.robot is not None else args.default_robot
+    allowed = CONTROLLER_ROBOTS[args.controller]
+    if spec in rx90sym.bundled_robots() and spec not in allowed:
+        raise UsageError(f"--controller {args.controller} drives {', '.join(allowed)} among the bundled robots, "
+                         f"not {spec} (its joint limits differ): give --robot {allowed[0]} or your robot's file")
+
+
 def _check_options(args: argparse.Namespace) -> None:
     """Option combinations refused before anything is computed."""
     if args.workers is not None and args.scheduler is not None:
@@ -182,6 +201,7 @@ def _check_options(args: argparse.Namespace) -> None:
     for option in ("start_pose", "program", "controller_rate"):
         if getattr(args, option) is not None and args.controller is None:
             raise UsageError(f"--{option.replace('_', '-')} is for --controller (the controller's program and rate)")
+    _check_controller_robot(args)
     if args.controller_rate is not None and (args.controller != "ur" or args.controller_rate <= 0):
         raise UsageError("--controller-rate is for --controller ur, a rate > 0 Hz (500 e-Series, 125 CB3)")
     if args.payload is not None and args.target != "payload":

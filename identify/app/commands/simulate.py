@@ -34,7 +34,7 @@ def run(args: argparse.Namespace) -> int:
         params = rx90sym.default_parameters(robot, args.params)
     except ValueError as exc:
         raise UsageError(f"{exc}: pass --params FILE (the names: \"parameters\" of rx90 model --robot "
-                         f"{args.robot} --json F)") from None
+                         f"{args.robot or robot.name} --json F)") from None
     spring_notice(robot)
     trajectory = read_trajectory(args.trajectory, robot)
     progress(f"simulating {trajectory[0][-1] - trajectory[0][0]:.1f} s ({args.noise})")
