@@ -32,7 +32,12 @@ Warnings:
 - ``estimate_not_physical`` — a plain (ungrouped) base parameter that physics wants >= 0 (a mass,
   a diagonal inertia, a rotor inertia, a friction coefficient) with value + 3 sigma < 0;
 - ``consistency_margin_negative`` — no physical standard parameters reproduce the estimate;
-- ``payload_inertia_not_physical`` — the payload's pseudo-inertia has a negative eigenvalue.
+- ``payload_inertia_not_physical`` — the payload's pseudo-inertia has a negative eigenvalue;
+- ``payload_mass_on_bound`` — the constrained mass sits on its bound (weighed mass ± tolerance,
+  within :data:`BOUND_SHARE` of the tolerance): the data pull it outside, the bound set it.
+
+With the constrained payload fit, ``payload_mass_negative`` judges the unconstrained estimate too
+(the constraints would hide swapped runs behind a small positive mass).
 """
 from __future__ import annotations
 
@@ -45,13 +50,15 @@ import numpy as np
 import rx90sym
 
 __all__ = ["Flag", "PlausibilityError", "raise_errors", "gain_flags", "payload_flags", "torque_scale_flags",
-           "residual_flags", "estimate_flags", "margin_flags", "static_gravity_flags", "TORQUE_LOW", "TORQUE_HIGH", "RESIDUAL_SHARE", "RESIDUAL_FLOOR",
+           "residual_flags", "estimate_flags", "mass_bound_flags", "margin_flags", "static_gravity_flags", "TORQUE_LOW", "TORQUE_HIGH", "RESIDUAL_SHARE", "RESIDUAL_FLOOR",
            "SIGMAS"]
 
 #: Every joint's torque peak below this fraction of its limit: torques of the wrong scale.
 TORQUE_LOW = 0.01
 #: Some joint's torque peak above this many times its limit: torques of the wrong scale.
 TORQUE_HIGH = 10.0
+#: A constrained mass within this fraction of the tolerance from its bound sits on the bound.
+BOUND_SHARE = 0.01
 #: A joint whose residual RMS exceeds this fraction of its torque RMS is not explained.
 RESIDUAL_SHARE = 0.5
 #: A joint whose torque RMS is below this fraction of its torque limit is not judged by
@@ -171,6 +178,18 @@ def payload_flags(names: Sequence[str], values: np.ndarray, std: np.ndarray) -> 
                               f"negative eigenvalue ({smallest:.3g} kg m^2): no rigid body has these "
                               "parameters", "use the constrained payload fit"))
     return flags
+
+
+def mass_bound_flags(estimate: float, mass: float, tol: float) -> list[Flag]:
+    """The constrained payload mass ``estimate`` [kg] against its bound ``mass`` ± ``tol`` [kg]:
+    a warning when it sits on the bound (the data alone put it outside the weighed range)."""
+    if tol <= 0 or abs(estimate - mass) < (1 - BOUND_SHARE) * tol:
+        return []
+    side = "upper" if estimate > mass else "lower"
+    return [Flag("payload_mass_on_bound", "warning", f"the constrained payload mass {estimate:.4g} kg sits on "
+                 f"its {side} bound ({mass:g} ± {tol:g} kg): the data alone put it outside", "check the weighed "
+                 "mass, the drive gains and the pairing of the runs; compare with the unconstrained fit",
+                 parameter="Mc")]
 
 
 def torque_scale_flags(torques: Sequence[np.ndarray], robot: rx90sym.Robot, what: str = "torques") -> list[Flag]:

@@ -19,7 +19,8 @@ import rx90sym
 from identify.app.cli import main
 from identify.fitting import load_fit
 from identify.io.recordings import write_recording
-from identify.plausibility import (RESIDUAL_SHARE, Flag, estimate_flags, gain_flags, margin_flags, payload_flags,
+from identify.plausibility import (RESIDUAL_SHARE, Flag, estimate_flags, gain_flags, margin_flags, mass_bound_flags,
+                                   payload_flags,
                                    residual_flags, static_gravity_flags, torque_scale_flags)
 from rx90sym.twin import CurrentSensor
 
@@ -294,3 +295,30 @@ def test_the_default_robot_is_announced_as_default(tmp_path, capsys):
     assert "robot rx90 (" in err and "; default)" in err and "from --robot" not in err, err
     code, _, err = rx90_cmd(capsys, "model", "--robot", "rx90")
     assert "; from --robot)" in err, err
+
+
+def test_swapped_runs_are_refused_with_the_constrained_payload_too(files, tmp_path, capsys):
+    """The PSD constraint would turn the negative mass of swapped runs into a small positive one:
+    the unconstrained estimate is judged as well."""
+    out = tmp_path / "p.json"
+    msg = refused(capsys, out, "payload", "--method", 3, "--empty", files["loaded.csv"], "--loaded",
+                  files["empty.csv"], "--constrained", "--json", out)
+    assert "unconstrained payload mass is negative" in msg and "swapped" in msg
+
+
+def test_a_constrained_mass_on_its_bound_is_flagged(files, tmp_path, capsys):
+    out = tmp_path / "p.json"
+    weighed = 1.5 * rx90sym.load_payload("tables_4")["Mc"]  # 50 % off: the bound must hold the estimate
+    code, stdout, err = rx90_cmd(capsys, "payload", "--method", 3, "--empty", files["empty.csv"], "--loaded",
+                                 files["loaded.csv"], "--constrained", "--mass", weighed, "--mass-tol", 0.05,
+                                 "--json", out)
+    assert code == 0, err
+    assert "warning: the constrained payload mass" in err and "lower bound" in err
+    assert "payload_mass_on_bound" in [f["code"] for f in json.loads(out.read_text())["flags"]]
+    assert mass_bound_flags(weighed - 0.02, weighed, 0.05) == []  # inside the range: no flag
+
+
+def test_mass_bound_flags():
+    assert [f.code for f in mass_bound_flags(2.85, 2.8, 0.05)] == ["payload_mass_on_bound"]
+    assert "upper bound" in mass_bound_flags(2.85, 2.8, 0.05)[0].message
+    assert mass_bound_flags(2.83, 2.8, 0.05) == [] and mass_bound_flags(2.8, 2.8, 0.0) == []

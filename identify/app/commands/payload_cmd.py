@@ -2,6 +2,7 @@
 from __future__ import annotations
 
 import argparse
+import dataclasses
 from typing import Any
 
 import numpy as np
@@ -10,7 +11,7 @@ from rx90sym.files import write_json
 from rx90sym.flange_payload import flange_payload
 from identify.signal.pairing import POSITION_TOLERANCE
 
-from identify.plausibility import payload_flags, torque_scale_flags
+from identify.plausibility import mass_bound_flags, payload_flags, torque_scale_flags
 
 from ..flags import checked, flag_lines, given_gain_flags, settle
 from ..common import (UsageError, check_output, convention_option, load_robot, progress, robot_option,
@@ -97,7 +98,9 @@ def run(args: argparse.Namespace) -> int:
                   mass_tol=args.mass_tol if args.mass_tol is not None else 0.05,
                   position_tol=args.position_tol if args.position_tol is not None else POSITION_TOLERANCE)
     std = res.std if res.bootstrap_std is None else np.fmax(res.std, res.bootstrap_std)
-    flags += settle(payload_flags(res.names, res.values, std))
+    flags += settle(_unconstrained_mass_flags(res, std) + payload_flags(res.names, res.values, std))
+    if args.constrained and args.mass is not None:
+        flags += settle(mass_bound_flags(res["Mc"], args.mass, args.mass_tol if args.mass_tol is not None else 0.05))
     print(res.table())
     if flags:
         print(flag_lines(flags))
@@ -114,3 +117,14 @@ def run(args: argparse.Namespace) -> int:
 
         write_payload_report(args.report, record, res)
     return 0
+
+
+def _unconstrained_mass_flags(res: Any, std: np.ndarray) -> list:
+    """With --constrained, the sign of the unconstrained mass (the constraints would hide swapped
+    runs behind a small positive mass): its negative-mass error, named as such."""
+    if not res.constrained or res.fit is None:
+        return []
+    free = res.fit.values[[res.fit.names.index(n) for n in res.names]]
+    return [dataclasses.replace(f, message=f"{f.message.replace('the payload', 'the unconstrained payload')} "
+                                f"(the constrained fit gave {res['Mc']:.4g} kg)")
+            for f in payload_flags(res.names, free, std) if f.code == "payload_mass_negative"]
