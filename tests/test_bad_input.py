@@ -322,3 +322,14 @@ def test_mass_bound_flags():
     assert [f.code for f in mass_bound_flags(2.85, 2.8, 0.05)] == ["payload_mass_on_bound"]
     assert "upper bound" in mass_bound_flags(2.85, 2.8, 0.05)[0].message
     assert mass_bound_flags(2.83, 2.8, 0.05) == [] and mass_bound_flags(2.8, 2.8, 0.0) == []
+
+
+def test_gains_of_a_mass_in_grams_are_refused(files, tmp_path, capsys):
+    out = tmp_path / "g.json"
+    grams = 1000 * rx90sym.load_payload("tables_4")["Mc"]
+    msg = refused(capsys, out, "gains", "--empty", files["empty_i.csv"], "--loaded", files["loaded_i.csv"],
+                  "--mass", grams, "--json", out)
+    assert "torques the fitted gains give are far above" in msg and "--mass in g" in msg
+    code, _, err = rx90_cmd(capsys, "gains", "--empty", files["empty_i.csv"], "--loaded", files["loaded_i.csv"],
+                            "--mass", grams / 1000, "--json", out)
+    assert code == 0 and out.exists(), err  # the same runs with the mass in kg pass the check

@@ -2,6 +2,7 @@
 from __future__ import annotations
 
 import argparse
+import dataclasses
 from typing import Any
 
 import numpy as np
@@ -10,7 +11,7 @@ from rx90sym.files import write_json
 from identify.drive_gains import DEFAULT_METHOD, FLAG_PCT, GAIN_METHODS
 from identify.signal.pairing import POSITION_TOLERANCE
 
-from identify.plausibility import PlausibilityError, gain_flags
+from identify.plausibility import Flag, PlausibilityError, gain_flags, torque_scale_flags
 
 from ..flags import checked, flag_lines, settle
 from ..common import UsageError, check_output, convention_option, load_robot, progress, robot_option
@@ -89,7 +90,8 @@ def run(args: argparse.Namespace) -> int:
     except PlausibilityError as exc:
         settle(exc.flags)  # the same errors, with the options that address them
         raise
-    flags = settle(gain_flags(res.gains.gains, res.gains.std, res.fixed, res.rel_std_pct, res.flag_pct))
+    flags = settle(_torque_scale(res.gains, robot, empty + loaded)
+                   + gain_flags(res.gains.gains, res.gains.std, res.fixed, res.rel_std_pct, res.flag_pct))
     print(res.table())
     if flags:
         print(flag_lines(flags))
@@ -104,6 +106,14 @@ def run(args: argparse.Namespace) -> int:
                                          "data": {"empty": [r.source for r in empty],
                                                   "loaded": [r.source for r in loaded]}})
     return 0
+
+
+def _torque_scale(gains: Any, robot: Any, recs: list) -> list[Flag]:
+    """The torque-scale check identify and payload apply, on the torques the fitted gains make of
+    the recordings' currents: gains scale with --mass, so a mass in g gives torques 1000x too large."""
+    torques = [gains.torques(robot, r.current) for r in recs if r.current is not None]
+    return [dataclasses.replace(f, action="is --mass in g instead of kg? (the fitted gains scale with it)")
+            for f in torque_scale_flags(torques, robot, "torques the fitted gains give")]
 
 
 def _comparison(gains: np.ndarray, reference: Any, side: str) -> str:
