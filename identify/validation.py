@@ -26,8 +26,9 @@ def _rms(err: np.ndarray, mask: np.ndarray) -> np.ndarray:
 
 
 def _relative(err: np.ndarray, y: np.ndarray, mask: np.ndarray) -> np.ndarray:
-    return np.array([100 * np.linalg.norm(err[mask[:, j], j]) / np.linalg.norm(y[mask[:, j], j])
-                     if mask[:, j].any() else np.nan for j in range(err.shape[1])])
+    # No samples, or a torque that is 0 on all of them (joint 1 at rest): no relative error (nan).
+    norms = [(np.linalg.norm(err[mask[:, j], j]), np.linalg.norm(y[mask[:, j], j])) for j in range(err.shape[1])]
+    return np.array([100 * e / y_ if y_ > 0 else np.nan for e, y_ in norms])
 
 
 @dataclass(frozen=True, eq=False)
@@ -69,6 +70,18 @@ class Validation:
                else f"moving: |q̇j| ≥ {self.moving_threshold:g} rad/s")
         return "\n".join([f"Validation on {self.source} (cut-off {self.cutoff:.4g} Hz, rate {self.rate:.6g} Hz, "
                           f"{thr})", head, *rows])
+
+    def still_message(self) -> str | None:
+        """What to say when joints never move in the recording (their while-moving errors are
+        undefined, nan), or None when every joint moves on some sample."""
+        if self.moving_fraction is None or np.all(self.moving_fraction > 0):
+            return None
+        thr = "" if self.moving_threshold is None else f" (|q̇j| ≥ {self.moving_threshold:g} rad/s on no sample)"
+        if np.all(self.moving_fraction == 0):
+            return (f"{self.source}: no joint moves{thr}: the errors while moving are undefined (nan) and the "
+                    f"all-sample errors judge the model at rest only (gravity, offsets)")
+        still = ", ".join(str(j + 1) for j in np.flatnonzero(self.moving_fraction == 0))
+        return f"{self.source}: joint(s) {still} never move{thr}: their errors while moving are undefined (nan)"
 
     def to_dict(self) -> dict[str, Any]:
         def listed(a: np.ndarray | None) -> list | None:

@@ -60,6 +60,10 @@ def files(tmp_path_factory, rx90):
     tau = e.tau.copy()
     tau[:, 1] *= -1
     put("sign2.csv", dataclasses.replace(e, tau=tau))
+    # The robot standing still (4 s at one pose): no joint moves.
+    t_rest = np.arange(1000) / 250.0
+    q_rest = np.tile(np.array([0.3, -1.0, 2.0, 0.2, 0.8, 0.1]), (t_rest.size, 1))
+    put("still.csv", sim(rx90, (t_rest, q_rest, 0 * q_rest, 0 * q_rest), noise="quantised", seed=3))
     # A recording that names no robot (no '# robot:' line).
     text = (d / "empty.csv").read_text().splitlines()
     (d / "anonymous.csv").write_text("\n".join(x for x in text if not x.startswith("# robot")) + "\n")
@@ -333,3 +337,16 @@ def test_gains_of_a_mass_in_grams_are_refused(files, tmp_path, capsys):
     code, _, err = rx90_cmd(capsys, "gains", "--empty", files["empty_i.csv"], "--loaded", files["loaded_i.csv"],
                             "--mass", grams / 1000, "--json", out)
     assert code == 0 and out.exists(), err  # the same runs with the mass in kg pass the check
+
+
+def test_validation_on_a_recording_where_no_joint_moves_says_so(files, tmp_path, capsys):
+    fit = tmp_path / "id.json"
+    code, stdout, err = rx90_cmd(capsys, "identify", files["empty.csv"], "--validate", files["still.csv"],
+                                 "--json", fit)
+    assert code == 0, err
+    assert "warning: " in err and "still.csv: no joint moves" in err, err
+    code, stdout, err = rx90_cmd(capsys, "predict", files["still.csv"], "--identification", fit)
+    assert code == 0, err
+    assert "still.csv: no joint moves" in err and "divide by zero" not in err, err
+    code, _, err = rx90_cmd(capsys, "predict", files["loaded.csv"], "--identification", fit)
+    assert code == 0 and "moves" not in err, err  # a recording that moves: no such line

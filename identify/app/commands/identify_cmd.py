@@ -192,6 +192,8 @@ def run(args: argparse.Namespace) -> int:
         result = result.with_essential()
     if val_rec is not None:
         result = result.validated(val_rec)
+        if result.validation.still_message():
+            progress(f"warning: {result.validation.still_message()}")
     _print_fit(result, recs, args.delay == "auto", prior)
     if args.json:
         result.save(args.json)

@@ -63,6 +63,8 @@ def run(args: argparse.Namespace) -> int:
     else:
         rec = read_recordings([args.recording], f.robot, args.convention or f.model.convention, f.gains)[0]
         val = f.predict(rec)
+    if val.still_message():
+        progress(f"warning: {val.still_message()}")
     print(val.table())
     if args.out:
         write_prediction(args.out, val)
