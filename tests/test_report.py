@@ -303,6 +303,6 @@ def test_split_flag_only_for_a_held_out_part_that_continues_the_fitted_run():
 
     fitted = {"recordings": [{"source": "a.csv", "t_first_s": 0.0, "t_last_s": 6.0}]}
     assert [f["code"] for f in split_flags({**fitted, "heldout": {"source": "b.csv", "t_first_s": 6.02}})] \
-        == ["arbitrary-split"]
+        == ["heldout-continues-fit"]
     assert split_flags({**fitted, "heldout": {"source": "c.csv", "t_first_s": 0.0}}) == []  # another motion
     assert split_flags({**fitted, "heldout": None}) == []

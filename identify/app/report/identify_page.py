@@ -50,6 +50,10 @@ def _flags(record: Mapping[str, Any], data: Mapping[str, Any] | None) -> list[di
     flags += parameter_flags([p["name"] for p in params], [p.get("rel_std_pct") for p in params],
                              record.get("bootstrap_std"), [p.get("std") for p in params], record.get("cond"))
     flags += split_flags(data)
+    if record.get("method") == "consistent" and not record.get("prior"):
+        flags.append(flag("arbitrary-split", "warning", "no prior: how the links share what the data cannot see is "
+                          "arbitrary (the bodies are one physical choice among many)",
+                          "give the robot's nominal parameters (--prior FILE, or a [nominal] table in its file)"))
     share = (data or {}).get("moving_fraction") or []
     rest = [j for j, s in enumerate(share, start=1) if 1 - s > REST_SHARE_CHECK]
     if rest:
@@ -72,7 +76,7 @@ def split_flags(data: Mapping[str, Any] | None) -> list[dict]:
     for rec in (data or {}).get("recordings") or ():
         end = number(rec.get("t_last_s"))
         if start is not None and end is not None and 0 <= start - end <= SPLIT_GAP_S:
-            return [flag("arbitrary-split", "warning", f"the held-out data ({held.get('source')}) continue "
+            return [flag("heldout-continues-fit", "warning", f"the held-out data ({held.get('source')}) continue "
                          f"{rec.get('source')} (cut at t = {fmt(end, 4)} s): the same motion split at an "
                          "arbitrary point", "validate also on a different motion (another excitation, a "
                          "stop-and-go run)")]
@@ -109,7 +113,8 @@ def identify_summary(record: Mapping[str, Any]) -> Summary:
         facts.append(("Drive gains", f"{', '.join(fmt(k, 4) for k in gains['gains'])} N·m/A, "
                                      f"{gains.get('side', 'joint')} side"))
     if record.get("cost_increase_pct") is not None:
-        facts.append(("Consistent fit", f"cost +{fmt(record.get('cost_increase_pct'), 3)} % over WLS"))
+        facts.append(("Consistent fit", f"cost +{fmt(record.get('cost_increase_pct'), 3)} % over WLS; split "
+                                        + (str(record["split"]) if record.get("split") else "–")))
     val = record.get("validation") or {}
     return Summary(_headline(record, flags), tuple(facts), heldout_table(val) if val else None, tuple(flags),
                    next_steps(flags))
