@@ -19,7 +19,8 @@ from typing import Any, Iterator, TextIO
 import numpy as np
 
 from .model import ExcitationModel
-from .optimiser import OptimiserOptions, StartResult, check_request, run_starts
+from .optimiser import StartResult, run_starts
+from .options import OptimiserOptions, check_request
 from .trajectory import Form, SolveInfo, Trajectory
 
 

@@ -7,7 +7,8 @@ import numpy as np
 
 from .constraints import Margins, check_limits, range_centre
 from .model import ExcitationModel
-from .optimiser import MAX_COND, OptimiserOptions, check_request, kinematic_room
+from .optimiser import kinematic_room
+from .options import MAX_COND, OptimiserOptions, check_request
 from .trajectory import Form, SolveInfo, Trajectory, sample_times
 from .criterion import condition_number
 

@@ -19,7 +19,7 @@ from excitation.criterion import log_cond_surrogate, smooth_friction_regressor
 from excitation.fourier import FourierSeries
 from excitation.model import ExcitationModel, JointLimits
 from excitation.multistart import optimise_model
-from excitation.optimiser import OptimiserOptions
+from excitation.options import OptimiserOptions
 from excitation.via_points import ViaPointSpline
 
 L1, G = 0.5, 9.81
