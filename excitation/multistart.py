@@ -104,7 +104,7 @@ def _best(model: ExcitationModel, form: Form, options: OptimiserOptions, seed: i
                      best.surrogate_cond, options.grid_rate, best.index, skipped,
                      best.score)
     return Trajectory(form, best.coefficients, best.cond, options.criterion.name,
-                      model.staubli_offsets, best.report, info, options.cond_rate, model.names)
+                      model.controller_offsets, best.report, info, options.cond_rate, model.names)
 
 
 @contextlib.contextmanager

@@ -48,5 +48,5 @@ def random_feasible(model: ExcitationModel, form: Form, seed: int = 0,
                          f"deficient (cond {cond:.3g})")
     info = SolveInfo("random", int(seed), starts=1, feasible_starts=1,
                      time_s=time.perf_counter() - t_start)
-    return Trajectory(form, coefficients, cond, "none (random)", model.staubli_offsets, report, info,
+    return Trajectory(form, coefficients, cond, "none (random)", model.controller_offsets, report, info,
                       options.cond_rate, model.names)
