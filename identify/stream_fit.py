@@ -218,14 +218,15 @@ def fit_streamed(robot: rx90sym.Robot, recordings: Sequence[Any], method: str = 
 def predict_streamed(robot: rx90sym.Robot, result: IdentificationResult, recording: Any, base: Any = None,
                      cutoff: float | None = None, decimate_to: float | None = 50.0, spring: bool = True,
                      min_velocity: float | None = None, delay: float = 0.0, block: int = DEFAULT_BLOCK,
-                     convention: str | None = None, gains: Any = None) -> Validation:
+                     convention: str | None = None, gains: Any = None, rest: str = "zero-coulomb") -> Validation:
     """:func:`identify.predict` on a recording of any length: predicted and measured torques block by block
     (only the decimated torques are held, n columns at the decimated rate)."""
     base = base if base is not None else rx90sym.base_parameters(robot)
     beta = base_vector(result, base, robot)
     src = block_source(recording, robot, convention, gains)
-    settings = StreamSettings(cutoff, decimate_to or None, min_velocity or None, "zero-coulomb", float(delay),
-                              spring, int(block))
+    # As identify.predict: the fit's presliding state at rest, else the Coulomb term 0 at rest.
+    settings = StreamSettings(cutoff, decimate_to or None, min_velocity or None,
+                              "presliding" if rest == "presliding" else "zero-coulomb", float(delay), spring, int(block))
     scans, fc = scan_all([src], settings)
     plan = plan_windows(scans[0], fc, settings)
     names, regressor = column_regressor(robot, base)
