@@ -17,7 +17,8 @@ import numpy as np
 import rx90sym
 from rx90sym.files import write_json
 
-from identify.estimation.bootstrap import BLOCK_S, DRAWS, segment_bootstrap_std
+from identify.estimation.bootstrap import BLOCK_S, DRAWS, bootstrap_std, segment_bootstrap_std
+from identify.estimation.consistent_fit import ConsistentResult
 from identify.plausibility import Flag
 from identify.estimation.results import IdentificationResult
 from identify.fit_file import SCHEMA_VERSION, FitModel, gains_of, read_fit_file, robot_of
@@ -204,7 +205,8 @@ class Fit:
         try:
             model = FitModel.from_json(data["model"], str(path))
             processing = Processing.from_json(data.get("processing", {}), f"{path}: processing")
-            result = IdentificationResult.from_dict(data)
+            consistent = data.get("method") == "consistent" and isinstance(data.get("standard"), dict)
+            result = (ConsistentResult if consistent else IdentificationResult).from_dict(data)
             essential = IdentificationResult.from_dict(data["essential"]) if data.get("essential") else None
             bootstrap = Bootstrap.from_json(data)
             flags = tuple(Flag.from_json(f) for f in data.get("flags", []))
@@ -244,9 +246,12 @@ def fit(robot: rx90sym.Robot, recordings: Sequence[Any], processing: Processing 
     processing: the signal processing (None: the defaults, those of ``rx90 identify``);
     method: "ols", "wls" (paper: each joint's rows weighted by 1/σ of its own residual) or
     "consistent" (WLS data, physically consistent standard parameters through cvxpy; extra
-    keyword arguments go to identify.estimation.consistency.consistent_least_squares, e.g. prior,
-    prior_weight, total_mass, mass_bounds, com_boxes, solver); base: the columns (default: the
-    symbolic base parameters; a BaseWithSpring identifies the spring too, with processing.spring
+    keyword arguments go to identify.estimation.consistent_fit.consistent_fit, e.g.
+    physical_prior (a PhysicalPrior: the unseen directions from the robot's nominal parameters,
+    within a covariance of the base parameters calibrated by the segment bootstrap) or
+    consistent_least_squares' prior, prior_weight, total_mass, mass_bounds, com_boxes, solver);
+    base: the columns (default: the symbolic base parameters; a BaseWithSpring identifies the
+    spring too, with processing.spring
     False). Recorded in the fit file for :func:`load_fit`: gains (already applied to current
     recordings), convention (of the files; None: each file's header), spring_source ("default",
     "none" or a table file; None: from the robot). observation: an already built observation
@@ -299,6 +304,15 @@ def fit(robot: rx90sym.Robot, recordings: Sequence[Any], processing: Processing 
                choice=choice.to_dict() if choice is not None else None)
 
 
+def _honest_covariance(obs: Observation, result: IdentificationResult) -> np.ndarray:
+    """Eq. 13's covariance of the base parameters, inflated by the median ratio of the segment
+    bootstrap's σ to eq. 13's when above 1 (coloured residuals: eq. 13 is optimistic; white
+    ones leave it as it is). The budget of the prior fit is measured in it."""
+    std = bootstrap_std(obs.W, obs.Y, obs.joint, obs.samples, result.weights, obs.rate)
+    ratio = np.nanmedian(std / np.where(result.std > 0, result.std, np.nan))
+    return result.covariance * max(1.0, float(ratio) if np.isfinite(ratio) else 1.0) ** 2
+
+
 def _solve(robot: rx90sym.Robot, obs: Observation, base: Any, method: str,
            consistent_options: dict[str, Any]) -> IdentificationResult:
     from identify.estimation.least_squares import weighted_least_squares
@@ -310,4 +324,6 @@ def _solve(robot: rx90sym.Robot, obs: Observation, base: Any, method: str,
         return result
     from identify.estimation.consistent_fit import consistent_fit
 
+    if consistent_options.get("physical_prior") is not None and "covariance" not in consistent_options:
+        consistent_options = {**consistent_options, "covariance": _honest_covariance(obs, result)}
     return consistent_fit(robot, result, base, **consistent_options)

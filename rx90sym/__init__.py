@@ -27,6 +27,7 @@ _EXPORTS = {
     "load_urdf": "rx90sym.urdf",
     "urdf_parameters": "rx90sym.urdf",
     "write_urdf": "rx90sym.urdf_export",
+    "write_mjcf": "rx90sym.mjcf_export",
     "UrdfError": "rx90sym.urdf_tree",
     "add_payload": "rx90sym.payloads",
     "bundled_payloads": "rx90sym.payloads",
@@ -43,7 +44,7 @@ __all__ = [
     "RobotFileError", "bundled_robots", "load_robot", "Spring", "bundled_payloads",
     "load_payload", "twin", "datasets", "add_payload", "payload_regressor_columns", "default_parameters",
     "pinocchio_model", "nominal_parameters", "UrdfChain", "UrdfError", "load_urdf", "urdf_parameters",
-    "write_urdf",
+    "write_urdf", "write_mjcf",
 ]
 
 lazy_package(__name__, _EXPORTS, _SUBMODULES)

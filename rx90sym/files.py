@@ -41,3 +41,14 @@ def write_json(path: str | os.PathLike, content: Any) -> Path:
     """Indented JSON, atomically; NaN/inf are refused (turn them into null first)."""
     text = json.dumps(content, indent=1, allow_nan=False)
     return atomic_write(path, lambda handle: handle.write(text + "\n"))
+
+
+def read_json(path: str | os.PathLike) -> Any:
+    """The JSON content of ``path``; ValueError naming the file (and the line and column)."""
+    try:
+        with open(path, encoding="utf-8") as fh:
+            return json.load(fh)
+    except json.JSONDecodeError as exc:
+        raise ValueError(f"{path}: not valid JSON (line {exc.lineno}, column {exc.colno}: {exc.msg})") from None
+    except OSError as exc:
+        raise ValueError(f"{path}: cannot read ({exc.strerror or exc})") from None

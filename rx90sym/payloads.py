@@ -12,6 +12,7 @@ from typing import TYPE_CHECKING, Any, Mapping
 
 import numpy as np
 
+from .files import read_json
 from .parameters import INERTIAL, PAYLOAD_NAMES, checked_values
 from .urdf import payload_matrix
 
@@ -86,10 +87,4 @@ def add_payload(robot: Robot, chi: Any, payload: str | Path | Payload) -> np.nda
 
 
 def _read_json(path: Path) -> Any:
-    try:
-        with open(path, encoding="utf-8") as fh:
-            return json.load(fh)
-    except json.JSONDecodeError as exc:
-        raise ValueError(f"{path}: not valid JSON ({exc})") from None
-    except OSError as exc:
-        raise ValueError(f"{path}: cannot read ({exc})") from None
+    return read_json(path)

@@ -1,10 +1,12 @@
-"""URDF export: the robot's URDF with each moving link's <inertial> replaced by given parameters.
+"""URDF export of a robot with given standard parameters (any robot: URDF or robot file).
 
-The parameters (standard, Khalil frames) are transformed back into the URDF link frames. A moving
-link that carries lumped children (a hand, fingers, fixed links) gets the given body minus its
-children, which keep their own inertials: the written URDF reproduces the torques, though the
-split between links is not unique. Everything else in the file is kept byte for byte. Rotor
-inertia, friction (and coupling friction, torque offsets) go into a companion JSON.
+A URDF robot: the parameters (standard, Khalil frames) are transformed back into the URDF link
+frames. A moving link that carries lumped children (a hand, fingers, fixed links) gets the given
+body minus its children, which keep their own inertials: the written URDF reproduces the
+torques, though the split between links is not unique. Each chain joint's <dynamics> gets the
+viscous (damping) and Coulomb (friction) coefficients; everything else in the file is kept byte
+for byte. A robot file: a generated URDF (rx90sym.urdf_generate). Rotor inertia, the coupled
+wrist, offsets and the frames go into one companion JSON (rx90sym.model_export.companion).
 """
 from __future__ import annotations
 
@@ -16,19 +18,15 @@ from typing import Mapping, Sequence
 import numpy as np
 
 from .description import Robot
-from .files import atomic_write, write_json
+from .model_export import (companion, companion_path, joint_terms, link_bodies, parameter_vector,  # noqa: F401
+                           payload_body, write_model)
 from .parameters import LINK_PARAMETERS
 from .rigid_body import RigidBody, physical_problem
 from .urdf import relative_pose, zero_poses
+from .urdf_generate import dynamics_xml, generated_urdf, gravity_note, inertial_xml
 from .urdf_tree import UrdfError
 
 _K = len(LINK_PARAMETERS)
-
-
-def companion_path(path: str | Path) -> Path:
-    """Where write_urdf puts rotor inertia and friction: ``NAME.urdf`` -> ``NAME.actuation.json``."""
-    path = Path(path)
-    return path.with_name(path.stem + ".actuation.json")
 
 
 def link_inertials(robot: Robot, params: Mapping[str, float] | Sequence[float]) -> dict[str, RigidBody]:
@@ -37,7 +35,7 @@ def link_inertials(robot: Robot, params: Mapping[str, float] | Sequence[float]) 
     Raises UrdfError naming the link when the body, or the body minus its children, is not a
     physical rigid body."""
     chain = _chain(robot)
-    chi = _vector(robot, params)
+    chi = parameter_vector(robot, params)
     poses = zero_poses(chain.tree)
     out = {}
     for k, link in enumerate(chain.links):
@@ -66,35 +64,84 @@ def _problem(body: RigidBody) -> str | None:
     return physical_problem(body)
 
 
-def write_urdf(robot: Robot, params: Mapping[str, float] | Sequence[float], path: str | Path) -> list[Path]:
-    """Write the robot's URDF with the moving links' inertials from ``params`` (standard
-    parameters, name -> value or vector) to ``path``, and IA/FS/FV to companion_path(path).
+def write_urdf(robot: Robot, params: Mapping[str, float] | Sequence[float], path: str | Path,
+               payload: Mapping[str, float] | None = None) -> list[Path]:
+    """Write the robot as a URDF with its links' inertials from ``params`` (standard parameters,
+    name -> value or vector), each joint's ``<dynamics damping="FVj" friction="FSj">``, and the
+    companion ``NAME.actuation.json`` (companion_path: rotor inertia, the coupled wrist, offsets,
+    frames; rx90sym.model_export.companion).
 
-    Returns the paths written. Nothing is written when a link is refused (UrdfError)."""
-    chain = _chain(robot)
-    chi = _vector(robot, params)
-    bodies = link_inertials(robot, chi)
-    text = chain.tree.text
-    for link, body in bodies.items():
-        text = replace_inertial(text, link, body)
+    A URDF robot gets its own file back with only these elements changed (``<limit>`` stays its
+    own); a robot file gets a generated URDF (rx90sym.urdf_generate) in the controller's angles.
+    payload: the payload's ten parameters XXc..Mc in the payload frame (frame n; a URDF robot's
+    tip link), added as a fixed ``payload`` link on the flange.
+    Returns the paths written; nothing is written when a link is refused (UrdfError)."""
+    return write_model(path, *urdf_export(robot, params, path, payload))
+
+
+def urdf_export(robot: Robot, params: Mapping[str, float] | Sequence[float], path: str | Path,
+                payload: Mapping[str, float] | None = None) -> tuple[str, dict]:
+    """(URDF text, companion dict) that :func:`write_urdf` writes to ``path``; nothing written."""
+    chi = parameter_vector(robot, params)
+    _, FV, FS = joint_terms(robot, chi)
+    try:
+        body = payload_body(robot, payload) if payload is not None else None
+        if robot.urdf is None:
+            text = generated_urdf(robot, link_bodies(robot, chi), FV, FS, body)
+        else:
+            text = _edited_urdf(robot, chi, FV, FS, body)
+    except UrdfError:
+        raise
+    except ValueError as exc:
+        raise UrdfError(str(exc)) from None
     try:
         ET.fromstring(text)
-    except ET.ParseError as exc:  # pragma: no cover - a bug of replace_inertial
+    except ET.ParseError as exc:  # pragma: no cover - a bug of the writers
         raise RuntimeError(f"write_urdf produced invalid XML ({exc})") from None
-    names = robot.parameter_names
-    values = dict(zip(names, (float(x) for x in chi)))
-    joints = {j: {p: values[f"{p}{k + 1}"] for p in ("IA", "FS", "FV")}
-              for k, j in enumerate(chain.joints)}
-    companion = {
-        "robot": robot.name, "urdf": str(Path(path).name), "source_urdf": chain.path,
-        "units": {"IA": "kg m^2 (or kg, prismatic), on the joint side",
-                  "FS": "N m (or N)", "FV": "N m s/rad (or N s/m)"},
-        "joints": joints,
-        "other": {p: values[p] for p in names[_K * robot.n:]},  # coupling friction, offsets
-    }
-    out = Path(path)
-    atomic_write(out, lambda fh: fh.write(text))
-    return [out, write_json(companion_path(out), companion)]
+    notes = ["rotor inertia IAj: not in a URDF; add IAj q''j (Pinocchio: model.armature = IA)"]
+    if robot.coupling is not None:
+        notes.append("coupled wrist: the terms IA_b q''_a, IA_b q''_b, FVM, FSM of eqs. 17-18 are not in a URDF "
+                     "(companion 'coupling', 'other')")
+    notes += [n for n in (gravity_note(robot),) if n]
+    side = companion(robot, chi, path, "urdf", notes)
+    side["source_model"] = robot.urdf.path if robot.urdf is not None else (robot.source or None)
+    return text, side
+
+
+def _edited_urdf(robot: Robot, chi: np.ndarray, FV: np.ndarray, FS: np.ndarray,
+                 payload: RigidBody | None) -> str:
+    """The robot's own URDF text with the inertials, dynamics (and a payload link) replaced."""
+    chain = _chain(robot)
+    text = chain.tree.text
+    for link, body in link_inertials(robot, chi).items():
+        text = replace_inertial(text, link, body)
+    for k, joint in enumerate(chain.joints):
+        text = replace_dynamics(text, joint, FV[k], FS[k])
+    if payload is not None:
+        end = text.rfind("</robot>")
+        block = (f'  <joint name="payload_joint" type="fixed">\n    <parent link="{chain.tip}"/>\n'
+                 f'    <child link="payload"/>\n    <origin xyz="0 0 0" rpy="0 0 0"/>\n  </joint>\n'
+                 f'  <link name="payload">\n    {inertial_xml(payload, "    ")}\n  </link>\n')
+        text = text[:end] + block + text[end:]
+    return text
+
+
+def replace_dynamics(text: str, joint: str, damping: float, friction: float) -> str:
+    """``text`` with the <dynamics> of ``<joint name=joint>`` replaced (or added)."""
+    m = re.search(r"<joint\b[^>]*?\bname\s*=\s*([\"'])" + re.escape(joint) + r"\1[^>]*?>", text)
+    end = re.compile(r"</joint\s*>").search(text, m.end()) if m is not None else None
+    if m is None or end is None:
+        raise UrdfError(f"joint {joint!r} not found in the URDF text")
+    inner = text[m.end():end.start()]
+    block = dynamics_xml(damping, friction)
+    old = re.search(r"<dynamics\b[^>]*/>|<dynamics\b.*?</dynamics\s*>", inner, flags=re.S)
+    if old is not None:
+        inner = inner[:old.start()] + block + inner[old.end():]
+    else:
+        line_start = text.rfind("\n", 0, m.start()) + 1
+        indent = re.match(r"[ \t]*", text[line_start:m.start()]).group(0)
+        inner = inner.rstrip() + f"\n{indent}  {block}\n{indent}"
+    return text[:m.end()] + inner + text[end.start():]
 
 
 def replace_inertial(text: str, link: str, body: RigidBody) -> str:
@@ -104,7 +151,7 @@ def replace_inertial(text: str, link: str, body: RigidBody) -> str:
         raise UrdfError(f"link {link!r} not found in the URDF text")
     line_start = text.rfind("\n", 0, m.start()) + 1
     indent = re.match(r"[ \t]*", text[line_start:m.start()]).group(0)
-    block = _inertial_xml(body, indent + "  ")
+    block = inertial_xml(body, indent + "  ")
     if m.group(2) == "/":  # <link name="x"/>
         opening = text[m.start():m.end() - 2].rstrip() + ">"
         return text[:m.start()] + f"{opening}\n{indent}  {block}\n{indent}</link>" + text[m.end():]
@@ -120,29 +167,7 @@ def replace_inertial(text: str, link: str, body: RigidBody) -> str:
     return text[:m.end()] + inner + text[end.start():]
 
 
-def _inertial_xml(body: RigidBody, indent: str) -> str:
-    if body.m > 0:
-        c, I = body.com_inertia()
-    else:
-        c, I = np.zeros(3), np.zeros((3, 3))
-    f = lambda x: repr(float(x)) if x != 0 else "0"  # noqa: E731 - shortest exact round trip
-    return (f"<inertial>\n{indent}  <origin xyz=\"{f(c[0])} {f(c[1])} {f(c[2])}\" rpy=\"0 0 0\"/>\n"
-            f"{indent}  <mass value=\"{f(body.m)}\"/>\n"
-            f"{indent}  <inertia ixx=\"{f(I[0, 0])}\" ixy=\"{f(I[0, 1])}\" ixz=\"{f(I[0, 2])}\" "
-            f"iyy=\"{f(I[1, 1])}\" iyz=\"{f(I[1, 2])}\" izz=\"{f(I[2, 2])}\"/>\n{indent}</inertial>")
-
-
 def _chain(robot: Robot):
     if robot.urdf is None:
         raise ValueError(f"robot {robot.name!r} was not loaded from a URDF: nothing to write into")
     return robot.urdf
-
-
-def _vector(robot: Robot, params: Mapping[str, float] | Sequence[float]) -> np.ndarray:
-    if isinstance(params, Mapping):
-        return robot.parameter_vector(dict(params), strict=True)
-    chi = np.asarray(params, dtype=float)
-    if chi.shape != (len(robot.parameter_names),):
-        raise ValueError(f"params: expected {len(robot.parameter_names)} standard parameters of "
-                         f"robot {robot.name!r}, got shape {chi.shape}")
-    return chi

@@ -142,6 +142,30 @@ def read_urdf(path: str | Path, snap: float = SNAP) -> UrdfTree:
 
     snap: joint origin rotation entries within it of 0, +-1 are made exact (see SNAP)."""
     path = Path(path)
+    text, root_el = _robot_element(path)
+    links, inertials = _links(root_el, path)
+    joints: dict[str, UrdfJoint] = {}
+    parent_joint: dict[str, str] = {}
+    near: list[str] = []
+    for el in root_el.findall("joint"):
+        joint = _joint(el, path, links, joints, parent_joint, snap)
+        joints[joint.name] = joint
+        parent_joint[joint.child] = joint.name
+        if _near_right_angle(joint.R):
+            near.append(joint.name)
+    if not links:
+        raise UrdfError(f"{path}: no <link>")
+    if near:
+        warnings.warn(f"{path}: the origin of joint(s) {near[:4]} is within {NEAR_RIGHT_ANGLE:g} rad of "
+                      f"a right angle but not at it (e.g. 1.5708 for pi/2): kept as written; pass "
+                      f"snap=1e-5 (or larger) to make such angles exact", stacklevel=3)
+    root = _single_root(path, links, joints, parent_joint)
+    return UrdfTree(str(path), root_el.attrib.get("name", path.stem), text, tuple(links),
+                    inertials, joints, parent_joint, root)
+
+
+def _robot_element(path: Path) -> tuple[str, ET.Element]:
+    """The file's text and its <robot> element."""
     try:
         text = path.read_text(encoding="utf-8")
     except OSError as exc:
@@ -152,6 +176,11 @@ def read_urdf(path: str | Path, snap: float = SNAP) -> UrdfTree:
         raise UrdfError(f"{path}: not valid XML ({exc})") from None
     if root_el.tag != "robot":
         raise UrdfError(f"{path}: the top element is <{root_el.tag}>, not <robot> (not a URDF)")
+    return text, root_el
+
+
+def _links(root_el: ET.Element, path: Path) -> tuple[list[str], dict[str, RigidBody]]:
+    """The link names in file order and the inertials of those that have one."""
     links: list[str] = []
     inertials: dict[str, RigidBody] = {}
     for el in root_el.findall("link"):
@@ -164,53 +193,49 @@ def read_urdf(path: str | Path, snap: float = SNAP) -> UrdfTree:
         body = _inertial(el, f"{path}: link {name!r}")
         if body is not None:
             inertials[name] = body
-    joints: dict[str, UrdfJoint] = {}
-    parent_joint: dict[str, str] = {}
-    near: list[str] = []
-    for el in root_el.findall("joint"):
-        name = el.attrib.get("name")
-        where = f"{path}: joint {name!r}"
-        if not name:
-            raise UrdfError(f"{path}: a <joint> has no name")
-        if name in joints:
-            raise UrdfError(f"{where} is defined twice")
-        jtype = el.attrib.get("type")
-        if jtype not in JOINT_TYPES:
-            raise UrdfError(f"{where}: unknown type {jtype!r} (expected one of {list(JOINT_TYPES)})")
-        ends = {}
-        for tag in ("parent", "child"):
-            e = el.find(tag)
-            ends[tag] = None if e is None else e.attrib.get("link")
-            if ends[tag] is None:
-                raise UrdfError(f"{where}: missing <{tag} link=...>")
-            if ends[tag] not in links:
-                raise UrdfError(f"{where}: {tag} link {ends[tag]!r} is not a <link> of the file")
-        child = ends["child"]
-        if child in parent_joint:
-            raise UrdfError(f"{where}: link {child!r} is already the child of joint "
-                            f"{parent_joint[child]!r}: the URDF has a loop (a URDF must be a tree)")
-        parent_joint[child] = name
-        R, p = _origin(el, where, snap)
-        if _near_right_angle(R):
-            near.append(name)
-        axis = np.array(_floats(el.find("axis"), "xyz", 3, where, [1.0, 0.0, 0.0]))
-        norm = float(np.linalg.norm(axis))
-        if jtype in MOVABLE and norm < 1e-12:
-            raise UrdfError(f"{where}: <axis> has zero length")
-        axis = axis / norm if norm > 0 else axis
-        limit, dyn = el.find("limit"), el.find("dynamics")
-        joints[name] = UrdfJoint(
-            name, jtype, ends["parent"], child, R, p, axis,
-            _number(limit, "lower", where), _number(limit, "upper", where),
-            _number(limit, "effort", where), _number(limit, "velocity", where),
-            _number(dyn, "damping", where) or 0.0, _number(dyn, "friction", where) or 0.0,
-            el.find("mimic") is not None)
-    if not links:
-        raise UrdfError(f"{path}: no <link>")
-    if near:
-        warnings.warn(f"{path}: the origin of joint(s) {near[:4]} is within {NEAR_RIGHT_ANGLE:g} rad of "
-                      f"a right angle but not at it (e.g. 1.5708 for pi/2): kept as written; pass "
-                      f"snap=1e-5 (or larger) to make such angles exact", stacklevel=3)
+    return links, inertials
+
+
+def _joint(el: ET.Element, path: Path, links: list[str], joints: dict[str, UrdfJoint],
+           parent_joint: dict[str, str], snap: float) -> UrdfJoint:
+    """One <joint>, checked against the links and the joints read before it."""
+    name = el.attrib.get("name")
+    where = f"{path}: joint {name!r}"
+    if not name:
+        raise UrdfError(f"{path}: a <joint> has no name")
+    if name in joints:
+        raise UrdfError(f"{where} is defined twice")
+    jtype = el.attrib.get("type")
+    if jtype not in JOINT_TYPES:
+        raise UrdfError(f"{where}: unknown type {jtype!r} (expected one of {list(JOINT_TYPES)})")
+    ends = {}
+    for tag in ("parent", "child"):
+        e = el.find(tag)
+        ends[tag] = None if e is None else e.attrib.get("link")
+        if ends[tag] is None:
+            raise UrdfError(f"{where}: missing <{tag} link=...>")
+        if ends[tag] not in links:
+            raise UrdfError(f"{where}: {tag} link {ends[tag]!r} is not a <link> of the file")
+    child = ends["child"]
+    if child in parent_joint:
+        raise UrdfError(f"{where}: link {child!r} is already the child of joint "
+                        f"{parent_joint[child]!r}: the URDF has a loop (a URDF must be a tree)")
+    R, p = _origin(el, where, snap)
+    axis = np.array(_floats(el.find("axis"), "xyz", 3, where, [1.0, 0.0, 0.0]))
+    norm = float(np.linalg.norm(axis))
+    if jtype in MOVABLE and norm < 1e-12:
+        raise UrdfError(f"{where}: <axis> has zero length")
+    axis = axis / norm if norm > 0 else axis
+    limit, dyn = el.find("limit"), el.find("dynamics")
+    return UrdfJoint(name, jtype, ends["parent"], child, R, p, axis,
+                     _number(limit, "lower", where), _number(limit, "upper", where),
+                     _number(limit, "effort", where), _number(limit, "velocity", where),
+                     _number(dyn, "damping", where) or 0.0, _number(dyn, "friction", where) or 0.0,
+                     el.find("mimic") is not None)
+
+
+def _single_root(path: Path, links: list[str], joints: dict[str, UrdfJoint], parent_joint: dict[str, str]) -> str:
+    """The one root link; every link below it (no loop)."""
     roots = [l for l in links if l not in parent_joint]
     if not roots:
         raise UrdfError(f"{path}: every link has a parent joint: the URDF has a loop (no root link)")
@@ -229,5 +254,4 @@ def read_urdf(path: str | Path, snap: float = SNAP) -> UrdfTree:
         j = parent_joint[unreachable[0]]
         raise UrdfError(f"{path}: joint {j!r} closes a loop (link {unreachable[0]!r} is not below "
                         f"the root {roots[0]!r})")
-    return UrdfTree(str(path), root_el.attrib.get("name", path.stem), text, tuple(links),
-                    inertials, joints, parent_joint, roots[0])
+    return roots[0]

@@ -22,6 +22,25 @@ def benchmark_module(name: str):
     return module
 
 
+@pytest.fixture(scope="session")
+def ur10e_gains_25s():
+    """The shared UR10e pair (benchmarks/ur10e_gains.py), paired, and drive gains fitted on its
+    first 25 s (global method): (benchmark module, robot, pair, gains result, cut sample).
+    Skips when the logs are absent (they are never copied into the repository)."""
+    b = benchmark_module("ur10e_gains")
+    if not (b.DATA / b.EMPTY[0]).exists():
+        pytest.skip(f"UR10e logs not found in {b.DATA} (../shared is absent)")
+    from identify.drive_gains import drive_gains
+    from identify.signal.pairing import pair_runs
+
+    robot = b.ur10e_robot()
+    pair = pair_runs(b.load_run(b.DATA / b.EMPTY[0], b.EMPTY[1]), b.load_run(b.DATA / b.LOADED[0], b.LOADED[1]))
+    cut = 2500  # 25 s at the benchmark's 100 Hz grid
+    gains = drive_gains(robot, [pair.empty.select(slice(0, cut))], [pair.loaded.select(slice(0, cut))], b.MASS,
+                        method="global")
+    return b, robot, pair, gains, cut
+
+
 def robot_file_without(path, name: str, *tables: str):
     """A copy of bundled robot ``name`` at ``path`` without the given [tables] (e.g. "nominal")."""
     from rx90sym.robot_file import ROBOTS_DIR

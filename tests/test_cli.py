@@ -16,7 +16,7 @@ import rx90sym
 from motions import multisine
 
 RX90 = str(Path(sys.executable).parent / "rx90")
-SUBCOMMANDS = ("model", "excite", "simulate", "convert", "identify", "payload", "gains", "demo")
+SUBCOMMANDS = ("model", "excite", "simulate", "convert", "identify", "payload", "gains", "export", "demo")
 
 
 def run(*args: str, cwd: Path | None = None) -> subprocess.CompletedProcess:

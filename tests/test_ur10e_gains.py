@@ -49,16 +49,11 @@ def ur():
 
 @needs_data
 @pytest.mark.slow
-def test_gains_fitted_on_25_s_give_the_mass_on_the_rest(ur):
-    from identify.drive_gains import drive_gains
-    from identify.signal.pairing import pair_runs
-
-    b, robot, empty, loaded = ur
-    p = pair_runs(empty, loaded)
+def test_gains_fitted_on_25_s_give_the_mass_on_the_rest(ur, ur10e_gains_25s):
+    b, robot, p, res, cut = ur10e_gains_25s
+    empty = ur[2]
     assert p.gap < 0.005  # the same trajectory, run ~17 min apart on the controller's clock
-    cut = 2500
     e, l = p.empty, p.loaded
-    res = drive_gains(robot, [e.select(slice(0, cut))], [l.select(slice(0, cut))], b.MASS, method="global")
     # Joint 1 (vertical axis) feels the payload only through its unknown inertia: flagged.
     assert res.flagged == (1,)
     # The controller's own constants (independent: its target current on its target torque)

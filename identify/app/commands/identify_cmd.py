@@ -62,6 +62,10 @@ def register(sub: Any) -> None:
                     help="FS+ / FS- instead of FS on these joints: 'all', 'none' or e.g. 1,2,3 "
                          "(default: the robot file's [friction]); not with --offsets (collinear)")
     sp.add_argument("--method", choices=("ols", "wls", "consistent"), default="wls")
+    sp.add_argument("--prior", metavar="FILE|none",
+                    help="with --method consistent: where the parameters the data cannot see come from "
+                         "(default: the robot's nominal parameters, its [nominal] table or URDF inertials; "
+                         "FILE: a JSON parameter file; none: no prior, the split is arbitrary)")
     sp.add_argument("--essential", action="store_true", help="also compute the essential parameters")
     sp.add_argument("--cutoff", type=float, help="Butterworth cut-off for q [Hz] (default: chosen from the data)")
     sp.add_argument("--cross-validate", action="store_true",
@@ -90,8 +94,8 @@ def register(sub: Any) -> None:
     sp.add_argument("--validate", help="recording used for cross-validation only")
     sp.add_argument("--json", help="results as JSON")
     sp.add_argument("--report", help="self-contained HTML report")
-    sp.add_argument("--urdf-out", help="with --method consistent and a URDF robot: the URDF with the "
-                                       "identified inertials (and FILE.actuation.json: IA, FS, FV)")
+    sp.add_argument("--urdf-out", help="with --method consistent: the URDF with the identified inertials "
+                                       "and joint dynamics, and FILE.actuation.json (as rx90 export --urdf)")
 
 
 def _robot(args: argparse.Namespace) -> tuple[rx90sym.Robot, Any]:
@@ -135,6 +139,8 @@ def _check(args: argparse.Namespace) -> None:
         raise UsageError(f"--min-velocity must be >= 0 rad/s, got {args.min_velocity:g}")
     if args.urdf_out and args.method != "consistent":
         raise UsageError("--urdf-out needs --method consistent (a URDF holds physical bodies only)")
+    if args.prior is not None and args.method != "consistent":
+        raise UsageError("--prior is for --method consistent")
     for out in (args.json, args.report, args.urdf_out):
         check_output(out)
 
@@ -154,17 +160,19 @@ def run(args: argparse.Namespace) -> int:
 
     _check(args)
     robot, spring_model = _robot(args)
-    if args.urdf_out and robot.urdf is None:
-        raise UsageError(f"--urdf-out needs a URDF robot (--robot FILE.urdf), not {args.robot!r}")
     sb = attach_spring(robot, spring_model, args.validate, args.method)
     gains = read_gains(args.gains, robot) if args.gains else None
     flags = given_gain_flags(gains) if gains is not None else []
+    prior = None
     if streamed(args.recordings + ([args.validate] if args.validate else []), args.block, args.scheduler):
         if args.report:
             raise UsageError(f"--report needs the recordings in memory: not for logs longer than --block "
                              f"({args.block} samples) or with --scheduler")
         progress("plausibility of the recorded torques (scale, static gravity) not checked: it reads the whole "
                  "recordings, long logs are read block by block")
+        if args.method == "consistent":
+            progress("long logs: the consistent fit takes no prior yet: the split of what the data cannot see "
+                     "is arbitrary")
         recs, val_rec = [], args.validate  # long logs: read block by block (docs/long-logs.md)
         result = fit_long(args, robot, processing_of(args, sb is None), sb, gains)
     else:
@@ -174,15 +182,17 @@ def run(args: argparse.Namespace) -> int:
         flags += settle(static_gravity_flags(recs, robot, rx90sym.nominal_parameters(robot)))
         val_rec = read_recordings([args.validate], robot, args.convention, gains)[0] if args.validate else None
         progress(f"identifying ({args.method}) on {sum(len(r.t) for r in recs)} samples")
+        prior = physical_prior(args, robot) if args.method == "consistent" else None
+        options = {"physical_prior": prior} if args.method == "consistent" else {}
         result = fit(robot, recs, processing_of(args, sb is None), args.method, base=sb, gains=gains,
-                     convention=args.convention, spring_source=args.spring)
+                     convention=args.convention, spring_source=args.spring, **options)
     result = result.bootstrapped(args.bootstrap_seed)
     result = result.with_flags([*flags, *_fit_flags(result, args.method)])
     if args.essential:
         result = result.with_essential()
     if val_rec is not None:
         result = result.validated(val_rec)
-    _print_fit(result, recs, args.delay == "auto")
+    _print_fit(result, recs, args.delay == "auto", prior)
     if args.json:
         result.save(args.json)
     if args.report:
@@ -190,6 +200,24 @@ def run(args: argparse.Namespace) -> int:
     if args.urdf_out:  # last: a refused (non-physical) link must not cost the fit's JSON and report
         _write_urdf(args, result)
     return 0
+
+
+def physical_prior(args: argparse.Namespace, robot: rx90sym.Robot) -> Any:
+    """The prior of a consistent fit (--prior), or None with a line saying the split is arbitrary."""
+    from identify.estimation.consistency.prior import PhysicalPrior
+
+    if args.prior == "none":
+        progress("no prior (--prior none): the split of what the data cannot see is arbitrary")
+        return None
+    values = rx90sym.nominal_parameters(robot, args.prior)
+    if values is None:
+        progress(f"robot {robot.name!r} has no nominal parameters: the split of what the data cannot see is "
+                 f"arbitrary (give --prior FILE)")
+        return None
+    source = (args.prior if args.prior is not None else
+              f"[nominal] of {robot.source}" if robot.urdf is None else f"URDF inertials of {robot.source}")
+    progress(f"prior: {source}")
+    return PhysicalPrior(values, source)
 
 
 def _fit_flags(f: Fit, method: str) -> list:
@@ -207,7 +235,7 @@ def _fit_flags(f: Fit, method: str) -> list:
     return flags
 
 
-def _print_fit(f: Fit, recs: list, auto_delay: bool) -> None:
+def _print_fit(f: Fit, recs: list, auto_delay: bool, prior: Any = None) -> None:
     obs, res = f.observation or f.streamed, f.result
     progress(f.delay_estimate.summary() + ("" if auto_delay else " (not compensated: --delay auto does)"))
     progress(obs.summary().replace("\n", "\n  "))
@@ -224,7 +252,15 @@ def _print_fit(f: Fit, recs: list, auto_delay: bool) -> None:
         if note:
             print(f"note: {note}")
     print(res.table())
+    if res.method == "consistent":
+        print("segment bootstrap of the unconstrained WLS estimate (the data's spread, not the consistent one's):")
     print(f.bootstrap.table(res))
+    if res.method == "consistent":
+        from identify.estimation.consistency.prior import bodies_table
+
+        print(f"\nsplit of the standard parameters: {res.split}")
+        print(f"weighted RSS {res.cost:.6g} vs WLS {res.wls_cost:.6g} ({res.cost_increase_pct:+.3f} %)")
+        print(bodies_table(f.robot.n, res.standard, prior))
     if f.flags:
         print(flag_lines(f.flags))
     print(f"\n{_spring_text(f, recs)}")
@@ -266,10 +302,12 @@ def data_record(recs: list, obs: Any, validation: Any = None) -> dict:
 
 
 def _write_urdf(args: argparse.Namespace, f: Fit) -> None:
-    from rx90sym import UrdfError, write_urdf
+    """--urdf-out: a shortcut of rx90 export --urdf (identify.export_urdf)."""
+    from rx90sym import UrdfError
+    from identify.export import export_urdf
 
     try:
-        written = write_urdf(f.robot, f.result.standard, args.urdf_out)
+        written = export_urdf(f, args.urdf_out)
     except UrdfError as exc:
         kept = [p for p in (args.json, args.report) if p]
         raise UrdfError(f"{args.urdf_out} not written: {exc}" +

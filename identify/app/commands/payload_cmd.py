@@ -7,6 +7,7 @@ from typing import Any
 import numpy as np
 
 from rx90sym.files import write_json
+from rx90sym.flange_payload import flange_payload
 from identify.signal.pairing import POSITION_TOLERANCE
 
 from identify.plausibility import payload_flags, torque_scale_flags
@@ -102,7 +103,10 @@ def run(args: argparse.Namespace) -> int:
         print(flag_lines(flags))
     spring = robot.spring.describe() if robot.spring is not None else None
     record = {**res.to_dict(), "spring": spring, "flags": [f.to_json() for f in flags], "robot_name": robot.name,
-              "mass": args.mass, "data": {"empty": [r.source for r in empty], "loaded": [r.source for r in loaded]}}
+              "mass": args.mass, "data": {"empty": [r.source for r in empty], "loaded": [r.source for r in loaded]},
+              # The neutral block: mass, CoG and inertia at the CoG in the maker's flange frame (what
+              # a controller takes; rx90 export --ur / --franka writes it in the controller's form).
+              "flange": flange_payload(robot, res.as_dict()).to_dict()}
     if args.json:
         write_json(args.json, record)
     if args.report:

@@ -85,6 +85,7 @@ def consistent_least_squares(
     solver_options: Mapping[str, Any] | None = None,
     tol: float = 1e-9,
     null_space_weight: float = NULL_SPACE_WEIGHT,
+    physical_prior: Any = None,
 ) -> ConsistentSolution:
     """Physically consistent least squares over the standard parameters.
 
@@ -124,6 +125,9 @@ def consistent_least_squares(
             residuals per SI unit². It picks one bounded χ among the many with the same β and
             costs at most a fraction δ·‖ν‖² of the residual; 0 disables it (the solver may
             then return huge values in directions the data do not see).
+        physical_prior: a :class:`identify.estimation.consistency.prior.PhysicalPrior`: its
+            bounds (bounding ellipsoids, mass floors, rotor-inertia ratios) are imposed too; the
+            choice of the unseen directions is :func:`identify.estimation.consistency.prior_fit.prior_fit`.
 
     Returns:
         :class:`ConsistentSolution` whose ``report.ok`` is always True.
@@ -162,7 +166,7 @@ def consistent_least_squares(
         return build_consistent_problem(
             R, z, K, names, epsilon=margin, rss_outside=rss_outside, prior=prior, prior_weight=prior_weight,
             mass_bounds=mass_bounds, total_mass=total_mass, com_boxes=com_boxes, nonnegative=nonnegative,
-            null_space_weight=null_space_weight,
+            null_space_weight=null_space_weight, physical_prior=physical_prior,
             # see build_consistent_problem: noise scaling for the interior-point solver, data
             # scaling for the first-order one (same minimiser).
             objective_scale="noise" if solver == "CLARABEL" else "data")

@@ -109,6 +109,7 @@ def build_consistent_problem(
     nonnegative: Sequence[str] = ("IA", "FV", "FS"),
     null_space_weight: float = NULL_SPACE_WEIGHT,
     objective_scale: str = "noise",
+    physical_prior: Any = None,
 ) -> ConsistentProblem:
     """Build the conic problem behind :func:`consistent_least_squares` (same arguments).
 
@@ -145,6 +146,10 @@ def build_consistent_problem(
     constraints = (_cone_constraints(chi, names, bodies, epsilon, nonnegative)
                    + _mass_constraints(chi, bodies, mass_bounds, total_mass)
                    + _com_box_constraints(chi, bodies, com_boxes))
+    if physical_prior is not None:  # its bounding ellipsoids, mass floors, rotor-inertia ratios
+        from identify.estimation.consistency.prior import prior_constraints
+
+        constraints += prior_constraints(chi, names, physical_prior)
     problem = cp.Problem(cp.Minimize(objective), constraints)
     return ConsistentProblem(problem, chi, names, scale, noise_scale, float(epsilon))
 

@@ -1,0 +1,120 @@
+"""``rx90 export``: the one command for artefacts made from a JSON.
+
+- a consistent fit (``rx90 identify --method consistent --json ID.json``) -> ``--urdf`` and/or
+  ``--mjcf`` (with ``--payload PAYLOAD.json``: the payload as a body on the flange);
+- a payload (``rx90 payload --json PAYLOAD.json``) -> ``--ur`` (URScript ``set_target_payload``)
+  and/or ``--franka`` (libfranka's ``setLoad`` arguments as JSON).
+
+Every output is checked before anything is written: a refused link or payload writes nothing.
+"""
+from __future__ import annotations
+
+import argparse
+import json
+from typing import Any
+
+from rx90sym.files import atomic_write, read_json
+from rx90sym.flange_payload import FlangePayload, franka_load, ur_script
+from rx90sym.mjcf_export import mjcf_export
+from rx90sym.model_export import companion_path, write_model
+from rx90sym.urdf_export import urdf_export
+
+from ..common import UsageError, check_output, progress
+
+
+def register(sub: Any) -> None:
+    sp = sub.add_parser("export", help="URDF / MJCF from a consistent fit, controller payloads from a payload JSON",
+                        description="make the artefacts a user needs from a JSON: a consistent fit -> URDF, "
+                                    "MJCF; a payload -> UR's set_target_payload, Franka's load")
+    sp.set_defaults(func=run)
+    sp.add_argument("input", help="ID.json (rx90 identify --method consistent --json) or PAYLOAD.json "
+                                  "(rx90 payload --json)")
+    sp.add_argument("--robot", help="with ID.json: the robot (default: the one the fit records; another "
+                                    "robot is refused)")
+    sp.add_argument("--urdf", metavar="OUT.urdf", help="URDF (and OUT.actuation.json beside it)")
+    sp.add_argument("--mjcf", metavar="OUT.xml", help="MJCF for MuJoCo (and OUT.actuation.json beside it)")
+    sp.add_argument("--payload", metavar="PAYLOAD.json", help="with --urdf/--mjcf: add this payload (rx90 "
+                                                              "payload --json) as a body on the flange")
+    sp.add_argument("--ur", metavar="OUT.script", help="from PAYLOAD.json: URScript set_target_payload line")
+    sp.add_argument("--franka", metavar="OUT.json", help="from PAYLOAD.json: Franka's load (libfranka setLoad)")
+
+
+def _read(path: str) -> dict:
+    data = read_json(path)
+    if not isinstance(data, dict):
+        raise ValueError(f"{path}: expected a JSON object")
+    return data
+
+
+def is_payload_file(data: dict) -> bool:
+    """A payload JSON (rx90 payload --json) rather than a fit."""
+    return isinstance(data.get("payload"), list) and isinstance(data.get("method"), int)
+
+
+def run(args: argparse.Namespace) -> int:
+    outputs = [args.urdf, args.mjcf, args.ur, args.franka]
+    if not any(outputs):
+        raise UsageError("nothing to export: give --urdf, --mjcf (from a fit) or --ur, --franka (from a payload)")
+    for out in outputs:
+        check_output(out)
+    if args.urdf and args.mjcf and companion_path(args.urdf) == companion_path(args.mjcf):
+        raise UsageError(f"--urdf {args.urdf} and --mjcf {args.mjcf} would share the companion "
+                         f"{companion_path(args.urdf)}: give them different names")
+    data = _read(args.input)
+    if is_payload_file(data):
+        return _payload(args, data)
+    if args.ur or args.franka:
+        raise UsageError(f"--ur/--franka take a payload JSON (rx90 payload --json); {args.input} is not one")
+    return _model(args, data)
+
+
+def _payload(args: argparse.Namespace, data: dict) -> int:
+    if args.urdf or args.mjcf or args.payload or args.robot:
+        raise UsageError(f"{args.input} is a payload JSON: it exports --ur and --franka only "
+                         f"(--urdf/--mjcf take a consistent fit, with --payload {args.input})")
+    if "flange" not in data:
+        raise ValueError(f"{args.input}: no 'flange' block (the payload in the flange frame): written by an "
+                         f"older rx90 payload; run it again")
+    load = FlangePayload.from_dict(data["flange"], args.input)
+    if load.problem is not None:
+        raise ValueError(f"{args.input}: the payload is not a physical rigid body ({load.problem}): a controller "
+                         f"refuses it; identify it with rx90 payload --constrained")
+    texts = {}
+    if args.ur:
+        texts[args.ur] = ur_script(load)
+    if args.franka:
+        texts[args.franka] = json.dumps(franka_load(load), indent=1) + "\n"
+    for path, text in texts.items():
+        atomic_write(path, lambda fh, text=text: fh.write(text))
+        progress(f"wrote {path}")
+    return 0
+
+
+def _model(args: argparse.Namespace, data: dict) -> int:
+    from identify import load_fit
+    from identify.export import fit_standard
+
+    if data.get("method") != "consistent":
+        raise ValueError(f"{args.input}: a {data.get('method') or 'unknown'} fit holds base parameters, not "
+                         f"physical bodies: identify with --method consistent and export its JSON")
+    fit = load_fit(args.input, args.robot)
+    warning = fit.model.check_robot(fit.robot)
+    if warning.startswith("the identification is of robot"):
+        raise ValueError(f"{args.input}: {warning}")
+    if warning:
+        progress(f"warning: {warning}")
+    params = fit_standard(fit)
+    payload = None
+    if args.payload:
+        pdata = _read(args.payload)
+        if not is_payload_file(pdata):
+            raise ValueError(f"{args.payload}: not a payload JSON (rx90 payload --json)")
+        payload = {p["name"]: p["value"] for p in pdata["payload"]}
+    artefacts = []  # every text first: a refused link or payload writes nothing
+    if args.urdf:
+        artefacts.append((args.urdf, *urdf_export(fit.robot, params, args.urdf, payload)))
+    if args.mjcf:
+        artefacts.append((args.mjcf, *mjcf_export(fit.robot, params, args.mjcf, payload)))
+    for path, text, side in artefacts:
+        progress("wrote " + " and ".join(str(p) for p in write_model(path, text, side)))
+    return 0
