@@ -227,8 +227,9 @@ def predict_streamed(robot: rx90sym.Robot, result: IdentificationResult, recordi
     base = base if base is not None else rx90sym.base_parameters(robot)
     beta = base_vector(result, base, robot)
     src = block_source(recording, robot, convention, gains)
-    settings = StreamSettings(cutoff, decimate_to or None, min_velocity or None, "zero-coulomb", float(delay),
-                              spring, int(block))
+    # As identify.predict: the fit's presliding state at rest, else the Coulomb term 0 at rest.
+    settings = StreamSettings(cutoff, decimate_to or None, min_velocity or None,
+                              "presliding" if rest == "presliding" else "zero-coulomb", float(delay), spring, int(block))
     scans, fc = scan_all([src], settings)
     plan = plan_windows(scans[0], fc, settings)
     names, regressor = column_regressor(robot, base)
