@@ -220,10 +220,7 @@ def predict_streamed(robot: rx90sym.Robot, result: IdentificationResult, recordi
                      min_velocity: float | None = None, delay: float = 0.0, block: int = DEFAULT_BLOCK,
                      convention: str | None = None, gains: Any = None, rest: str = "zero-coulomb") -> Validation:
     """:func:`identify.predict` on a recording of any length: predicted and measured torques block by block
-    (only the decimated torques are held, n columns at the decimated rate). rest: the fit's rest
-    policy (Coulomb 0 at rest; the presliding state needs the whole recording and is refused)."""
-    if rest == "presliding":
-        raise ValueError("the presliding rest policy predicts whole recordings, not block by block")
+    (only the decimated torques are held, n columns at the decimated rate)."""
     base = base if base is not None else rx90sym.base_parameters(robot)
     beta = base_vector(result, base, robot)
     src = block_source(recording, robot, convention, gains)
