@@ -141,11 +141,8 @@ class Fit:
         if self.block is not None:  # a long log: block by block, as it was fitted
             from identify.stream_fit import predict_streamed
 
-            options = self.filtering()
-            if options.pop("rest") == "presliding":
-                raise ValueError("a fit with the presliding rest policy predicts whole recordings, not block by block")
             return predict_streamed(self.robot, result or self.result, recording, base=self.base, block=self.block,
-                                    convention=self.model.convention, gains=self.gains, **options)
+                                    convention=self.model.convention, gains=self.gains, **self.filtering())
         return predict(self.robot, result or self.result, recording, base=self.base, **self.filtering())
 
     def validate(self, recording: Any) -> Validation:
