@@ -306,3 +306,15 @@ def test_split_flag_only_for_a_held_out_part_that_continues_the_fitted_run():
         == ["heldout-continues-fit"]
     assert split_flags({**fitted, "heldout": {"source": "c.csv", "t_first_s": 0.0}}) == []  # another motion
     assert split_flags({**fitted, "heldout": None}) == []
+
+
+def test_held_out_data_in_which_nothing_moves_is_not_reported_as_a_zero_error():
+    """A validation file where no joint moves (the UR10e's p4 log) has no while-moving error: the
+    headline says so and gives the at-rest figure, never "0.0 %"."""
+    from identify.app.report.identify_page import identify_summary
+    still = {"robot": "ur10e", "method": "wls", "parameters": [], "model": {},
+             "validation": {"relative_error_pct": [100.9, 52.6, 12.0], "relative_error_pct_moving": [None, None, None]}}
+    head = identify_summary(still).headline
+    assert "0.0 %" not in head and "no held-out sample moves" in head and "100.9 %" in head
+    moving = dict(still, validation={"relative_error_pct": [20.0, 9.0, 3.0], "relative_error_pct_moving": [7.4, None, 5.0]})
+    assert "worst held-out error while moving 7.4 %" in identify_summary(moving).headline
