@@ -318,3 +318,17 @@ def test_held_out_data_in_which_nothing_moves_is_not_reported_as_a_zero_error():
     assert "0.0 %" not in head and "no held-out sample moves" in head and "100.9 %" in head
     moving = dict(still, validation={"relative_error_pct": [20.0, 9.0, 3.0], "relative_error_pct_moving": [7.4, None, 5.0]})
     assert "worst held-out error while moving 7.4 %" in identify_summary(moving).headline
+
+
+def test_a_constrained_payload_page_prints_no_sigma_of_the_unconstrained_fit():
+    """As on the command line: the constrained estimate has no σ of its own, so the page shows none."""
+    from identify.app.report.payload_pages import payload_page
+    params = [{"name": n, "value": v, "std": 0.004, "rel_std_pct": 0.2, "bootstrap_std": 0.006}
+              for n, v in (("MXc", 0.0), ("MYc", 0.0), ("MZc", 0.2), ("Mc", 2.804))]
+    record = {"method": 3, "robot_name": "ur10e", "payload": params, "constrained": False}
+    assert "± 0.004" in payload_page(record).summary.headline
+    page = payload_page(dict(record, constrained=True))
+    assert "±" not in page.summary.headline and "no σ of its own" in page.summary.headline
+    table = page.sections[0].blocks[0]
+    assert all(row[3] is None for row in table.rows)                                # σ eq. 13
+    assert all(row[4].value is None for row in table.rows if row[2])                # σr eq. 15
