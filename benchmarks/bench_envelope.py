@@ -106,7 +106,7 @@ def main() -> None:
 
     import excitation
     import rx90sym
-    from excitation.optimiser import OptimiserOptions
+    from excitation.options import OptimiserOptions
 
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")  # the URDF's missing acceleration limits: given below

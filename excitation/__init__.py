@@ -45,7 +45,7 @@ _EXPORTS = {
     "OBJECTIVES": "excitation.objective",
     "Objective": "excitation.objective",
     "reference_magnitudes": "excitation.objective",
-    "OptimiserOptions": "excitation.optimiser",
+    "OptimiserOptions": "excitation.options",
     "plot_limit_usage": "excitation.plotting",
     "plot_trajectory": "excitation.plotting",
     "random_feasible": "excitation.random_trajectory",

@@ -16,7 +16,7 @@ from .fourier import FourierSeries
 from .model import ExcitationModel, model_from_robot
 from .multistart import optimise_model
 from .objective import DEFAULT_CRITERION, FALLBACK_CRITERION, Objective, reference_magnitudes
-from .optimiser import OptimiserOptions
+from .options import OptimiserOptions
 from .payload_design import payload_model, payload_objective
 from .random_trajectory import random_feasible
 from .trajectory import Trajectory

@@ -65,7 +65,7 @@ def controller_samples(trajectory: Any, controller: str | Controller, limits: An
     trajectory's start). limits: qd_max, qdd_max (n,) [rad/s, rad/s^2] for the approach. Raises
     ValueError naming the joint and the time when the controller's jerk limit is exceeded."""
     ctrl = CONTROLLERS[controller] if isinstance(controller, str) else controller
-    offsets = trajectory.staubli_offsets
+    offsets = trajectory.controller_offsets
     t, q, qd, qdd = trajectory.sample(ctrl.rate, closed=True)
     q = q + offsets
     parts = [(t, q, qd, qdd)]

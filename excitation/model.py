@@ -6,6 +6,8 @@ works for any model, including toy ones in tests. :func:`model_from_robot` is th
 """
 from __future__ import annotations
 
+import functools
+import warnings
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any, Sequence
 
@@ -14,6 +16,30 @@ import numpy as np
 
 if TYPE_CHECKING:  # for annotations only
     import rx90sym
+
+
+def renamed_offsets(cls: type) -> type:
+    """Class decorator: the dataclass ``cls`` takes its former keyword ``staubli_offsets`` (a
+    DeprecationWarning, kept one release) for ``controller_offsets`` and reads it back likewise."""
+    init = cls.__init__
+
+    @functools.wraps(init)
+    def __init__(self: Any, *args: Any, **kwargs: Any) -> None:
+        if "staubli_offsets" in kwargs:
+            warnings.warn(f"{cls.__name__}(staubli_offsets=...) is deprecated: use controller_offsets",
+                          DeprecationWarning, stacklevel=2)
+            kwargs["controller_offsets"] = kwargs.pop("staubli_offsets")
+        init(self, *args, **kwargs)
+
+    def staubli_offsets(self: Any) -> np.ndarray:
+        """Deprecated: :attr:`controller_offsets`."""
+        warnings.warn(f"{cls.__name__}.staubli_offsets is deprecated: use controller_offsets",
+                      DeprecationWarning, stacklevel=2)
+        return self.controller_offsets
+
+    cls.__init__ = __init__
+    cls.staubli_offsets = property(staubli_offsets)
+    return cls
 
 
 @dataclass(frozen=True, eq=False)
@@ -65,6 +91,7 @@ class JointLimits:
         return JointLimits(limits.q_min, limits.q_max, limits.qd_max, limits.qdd_max, limits.tau_max)
 
 
+@renamed_offsets
 @dataclass(frozen=True, eq=False)
 class ExcitationModel:
     """A robot as the excitation optimiser sees it.
@@ -73,7 +100,7 @@ class ExcitationModel:
     names: base parameter names (used to pair FSx with FVx for the smooth friction surrogate).
     torque: casadi.Function (q, qd, qdd) -> motor torque (n,) [N m], or None (no torque limits).
     heights: casadi.Function (q) -> (k,) heights [m] of points that must stay above z_min, or None.
-    staubli_offsets: q_staubli = q_khalil + staubli_offsets [rad], for exports.
+    controller_offsets: q_controller = q_model + controller_offsets [rad], for exports.
     collision: a collision.CollisionModel (self-collision of link capsules, obstacle boxes), or None.
     speeds: casadi.Function (q, qd) -> (k,) squared Cartesian speeds [m^2/s^2] of points that must
     stay below speed_max [m/s], or None. centre: the pose [rad] random starts are drawn about
@@ -87,7 +114,7 @@ class ExcitationModel:
     torque: ca.Function | None = None
     heights: ca.Function | None = None
     z_min: float | None = None
-    staubli_offsets: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    controller_offsets: np.ndarray = field(default_factory=lambda: np.zeros(0))
     name: str = "robot"
     collision: Any = None  # excitation.collision.CollisionModel: capsules and obstacle boxes
     speeds: ca.Function | None = None
@@ -103,11 +130,11 @@ class ExcitationModel:
         if self.names is not None and len(self.names) != self.regressor.size2_out(0):
             raise ValueError(f"model {self.name!r}: {len(self.names)} names for "
                              f"{self.regressor.size2_out(0)} regressor columns")
-        offsets = np.zeros(n) if len(self.staubli_offsets) == 0 else np.asarray(self.staubli_offsets, float)
+        offsets = np.zeros(n) if len(self.controller_offsets) == 0 else np.asarray(self.controller_offsets, float)
         if offsets.shape != (n,):
-            raise ValueError(f"model {self.name!r}: staubli_offsets must have {n} entries")
+            raise ValueError(f"model {self.name!r}: controller_offsets must have {n} entries")
         offsets.setflags(write=False)
-        object.__setattr__(self, "staubli_offsets", offsets)
+        object.__setattr__(self, "controller_offsets", offsets)
         if (self.z_min is None) != (self.heights is None):
             raise ValueError(f"model {self.name!r}: give both heights and z_min, or neither")
         if (self.speed_max is None) != (self.speeds is None):
@@ -175,6 +202,6 @@ def model_from_robot(robot: rx90sym.Robot, chi_nominal: Any = None, base: Any = 
     names = tuple(base.names) if getattr(base, "names", None) is not None else None
     return ExcitationModel(regressor=base.regressor, limits=limits, names=names, torque=torque,
                            heights=heights, z_min=None if z_min is None else float(z_min),
-                           staubli_offsets=np.asarray(getattr(robot, "controller_offsets", np.zeros(n))),
+                           controller_offsets=np.asarray(getattr(robot, "controller_offsets", np.zeros(n))),
                            name=getattr(robot, "name", "robot"))
 

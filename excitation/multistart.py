@@ -19,7 +19,8 @@ from typing import Any, Iterator, TextIO
 import numpy as np
 
 from .model import ExcitationModel
-from .optimiser import OptimiserOptions, StartResult, check_request, run_starts
+from .optimiser import StartResult, run_starts
+from .options import OptimiserOptions, check_request
 from .trajectory import Form, SolveInfo, Trajectory
 
 
@@ -103,7 +104,7 @@ def _best(model: ExcitationModel, form: Form, options: OptimiserOptions, seed: i
                      best.surrogate_cond, options.grid_rate, best.index, skipped,
                      best.score)
     return Trajectory(form, best.coefficients, best.cond, options.criterion.name,
-                      model.staubli_offsets, best.report, info, options.cond_rate, model.names)
+                      model.controller_offsets, best.report, info, options.cond_rate, model.names)
 
 
 @contextlib.contextmanager

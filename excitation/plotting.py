@@ -22,7 +22,7 @@ def plot_trajectory(traj: Any, rate: float = 250.0, axes: Any = None) -> Any:
         fig, axes = plt.subplots(3, 1, sharex=True, figsize=(9, 7))
     else:
         fig = np.ravel(axes)[0].figure
-    panels = ((np.degrees(q + traj.staubli_offsets), "q [deg]"), (np.degrees(qd), "qd [deg/s]"),
+    panels = ((np.degrees(q + traj.controller_offsets), "q [deg]"), (np.degrees(qd), "qd [deg/s]"),
               (np.degrees(qdd), "qdd [deg/s²]"))
     for ax, (values, label) in zip(np.ravel(axes), panels):
         for j in range(values.shape[1]):

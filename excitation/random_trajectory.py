@@ -7,7 +7,8 @@ import numpy as np
 
 from .constraints import Margins, check_limits, range_centre
 from .model import ExcitationModel
-from .optimiser import MAX_COND, OptimiserOptions, check_request, kinematic_room
+from .optimiser import kinematic_room
+from .options import MAX_COND, OptimiserOptions, check_request
 from .trajectory import Form, SolveInfo, Trajectory, sample_times
 from .criterion import condition_number
 
@@ -47,5 +48,5 @@ def random_feasible(model: ExcitationModel, form: Form, seed: int = 0,
                          f"deficient (cond {cond:.3g})")
     info = SolveInfo("random", int(seed), starts=1, feasible_starts=1,
                      time_s=time.perf_counter() - t_start)
-    return Trajectory(form, coefficients, cond, "none (random)", model.staubli_offsets, report, info,
+    return Trajectory(form, coefficients, cond, "none (random)", model.controller_offsets, report, info,
                       options.cond_rate, model.names)

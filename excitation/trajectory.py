@@ -13,6 +13,7 @@ from rx90sym.files import write_json
 
 from .export import write_csv
 from .fourier import FourierSeries
+from .model import renamed_offsets
 from .via_points import ViaPointSpline
 
 Form = FourierSeries | ViaPointSpline
@@ -37,6 +38,7 @@ class SolveInfo:
     criterion_value: float = float("nan")  # the criterion of the kept start (see objective.py)
 
 
+@renamed_offsets
 @dataclass(frozen=True, eq=False)
 class Trajectory:
     """A rest-to-rest excitation trajectory in Khalil angles.
@@ -51,7 +53,7 @@ class Trajectory:
     coefficients: np.ndarray
     cond: float
     criterion: str
-    staubli_offsets: np.ndarray
+    controller_offsets: np.ndarray
     usage: LimitReport
     info: SolveInfo
     cond_rate: float = 250.0
@@ -59,7 +61,7 @@ class Trajectory:
     envelope: dict[str, Any] | None = field(default=None)  # the safety envelope applied (envelope.describe)
 
     def __post_init__(self) -> None:
-        for name in ("coefficients", "staubli_offsets"):
+        for name in ("coefficients", "controller_offsets"):
             a = np.array(getattr(self, name), dtype=float)
             a.setflags(write=False)
             object.__setattr__(self, name, a)
@@ -114,7 +116,7 @@ class Trajectory:
         n = self.n
         header = (["t"] + [f"q{j}" for j in range(1, n + 1)] + [f"dq{j}" for j in range(1, n + 1)]
                   + [f"ddq{j}" for j in range(1, n + 1)])
-        rows = np.hstack([t[:, None], q + self.staubli_offsets, qd, qdd])
+        rows = np.hstack([t[:, None], q + self.controller_offsets, qd, qdd])
         return write_csv(path, header, rows)
 
     def summary(self) -> dict[str, Any]:
@@ -122,7 +124,7 @@ class Trajectory:
         out: dict[str, Any] = dict(self.form.describe())
         # Neutral words: the model's angles (Khalil) and the controller's = model + controller offsets.
         out["angles"] = "model"
-        out["controller_offsets_rad"] = self.staubli_offsets.tolist()
+        out["controller_offsets_rad"] = self.controller_offsets.tolist()
         if isinstance(self.form, FourierSeries):
             parts = self.form.split(self.coefficients)
             out["coefficients"] = {

@@ -20,7 +20,7 @@ from rx90sym.files import write_json
 from identify.estimation.bootstrap import BLOCK_S, DRAWS, bootstrap_std, segment_bootstrap_std
 from identify.estimation.consistent_fit import ConsistentResult
 from identify.plausibility import Flag
-from identify.estimation.results import IdentificationResult
+from identify.estimation.results import IdentificationResult, json_number
 from identify.fit_file import SCHEMA_VERSION, FitModel, gains_of, read_fit_file, robot_of
 from identify.io.gains import DriveGains
 from identify.observation.matrix import Observation, observation_matrix
@@ -47,7 +47,8 @@ class Bootstrap:
     seed: int
 
     def to_json(self) -> dict[str, Any]:
-        return {"bootstrap_std": [float(v) for v in self.std],
+        # A column the draws could not estimate (NaN) is null in the file, NaN again when read.
+        return {"bootstrap_std": [json_number(v) for v in self.std],
                 "bootstrap": {"block_s": self.block_s, "draws": self.draws, "seed": self.seed}}
 
     @classmethod
@@ -55,7 +56,8 @@ class Bootstrap:
         if d.get("bootstrap_std") is None:
             return None
         b = d["bootstrap"]
-        return cls(np.asarray(d["bootstrap_std"], dtype=float), float(b["block_s"]), int(b["draws"]),
+        std = np.array([np.nan if v is None else v for v in d["bootstrap_std"]], dtype=float)
+        return cls(std, float(b["block_s"]), int(b["draws"]),
                    int(b["seed"]))
 
     def table(self, res: IdentificationResult) -> str:
@@ -141,11 +143,8 @@ class Fit:
         if self.block is not None:  # a long log: block by block, as it was fitted
             from identify.stream_fit import predict_streamed
 
-            options = self.filtering()
-            if options.pop("rest") == "presliding":
-                raise ValueError("a fit with the presliding rest policy predicts whole recordings, not block by block")
             return predict_streamed(self.robot, result or self.result, recording, base=self.base, block=self.block,
-                                    convention=self.model.convention, gains=self.gains, **options)
+                                    convention=self.model.convention, gains=self.gains, **self.filtering())
         return predict(self.robot, result or self.result, recording, base=self.base, **self.filtering())
 
     def validate(self, recording: Any) -> Validation:

@@ -11,7 +11,7 @@ are independent of the preceding columns, so both give the same names and the sa
 """
 from __future__ import annotations
 
-from dataclasses import dataclass, fields, replace
+from dataclasses import dataclass, replace
 from functools import cached_property
 from typing import TYPE_CHECKING, Any
 
@@ -19,7 +19,7 @@ import casadi as ca
 import numpy as np
 import scipy.linalg as sla
 
-from .compiled import BatchFunction, BatchWorkspace, map_samples
+from .compiled import BatchFunction, BatchWorkspace, PickledFields, map_samples
 from .parameters import LINK_PARAMETERS, split_name
 from .regrouping import general_grouping
 
@@ -33,7 +33,7 @@ RANK_TOL = 1e-9
 
 
 @dataclass(frozen=True, eq=False)
-class BaseParameters:
+class BaseParameters(PickledFields):
     """Base parameters of a robot: beta = K chi, Phi chi = Phi_b beta (eq. 2 on the base set)."""
 
     robot: Robot
@@ -45,14 +45,6 @@ class BaseParameters:
     K_symbolic: ca.Function | None = None  # geometry symbols -> K (symbolic method)
     geometry_names: tuple[str, ...] = ()
     geometry_values: tuple[float, ...] = ()
-
-    def __getstate__(self) -> dict[str, Any]:
-        """The fields only: cached CasADi functions are rebuilt on first use (pickling for Dask workers)."""
-        return {f.name: getattr(self, f.name) for f in fields(self)}
-
-    def __setstate__(self, state: dict[str, Any]) -> None:
-        for key, value in state.items():
-            object.__setattr__(self, key, value)
 
     @property
     def nb(self) -> int:

@@ -14,6 +14,7 @@ import shutil
 import subprocess
 import tempfile
 import warnings
+from dataclasses import fields
 from pathlib import Path
 from typing import Any, Iterator, Sequence
 
@@ -128,6 +129,18 @@ def _dense_row_major(f: ca.Function, name: str) -> ca.Function:
     out = f.call(shaped)[0]
     # Common subexpression elimination: ~15 % fewer operations on the regressor.
     return ca.Function(name, args, [ca.cse(ca.densify(out.T))])
+
+
+class PickledFields:
+    """Mixin of a frozen dataclass holding cached CasADi functions (functools.cached_property):
+    pickles its fields only, so the caches are rebuilt on first use (pickling for Dask workers)."""
+
+    def __getstate__(self) -> dict[str, Any]:
+        return {f.name: getattr(self, f.name) for f in fields(self)}  # type: ignore[arg-type]
+
+    def __setstate__(self, state: dict[str, Any]) -> None:
+        for key, value in state.items():
+            object.__setattr__(self, key, value)
 
 
 class BatchFunction:

@@ -6,14 +6,14 @@ instance (like Pinocchio's Model, the description never changes once made).
 from __future__ import annotations
 
 import warnings
-from dataclasses import dataclass, field, fields, replace
+from dataclasses import dataclass, field, replace
 from functools import cached_property
 from typing import Any, Iterable, Sequence
 
 import casadi as ca
 import numpy as np
 
-from .compiled import BatchFunction, BatchWorkspace
+from .compiled import BatchFunction, BatchWorkspace, PickledFields
 from .geometry import forward_kinematics_function
 from .messages import plain
 from .newton_euler import inverse_dynamics_expression
@@ -80,7 +80,7 @@ class Coupling:
 
 
 @dataclass(frozen=True, eq=False)
-class Robot:
+class Robot(PickledFields):
     """A serial robot described by a Khalil-Kleinfinger table.
 
     Geometry: T(j-1, j) = Rot(x, alpha_j) Trans(x, d_j) Rot(z, theta_j) Trans(z, r_j);
@@ -117,14 +117,6 @@ class Robot:
     joint_names: tuple[str, ...] = ()
     nominal: Any = None
     flange: np.ndarray | None = None
-
-    def __getstate__(self) -> dict[str, Any]:
-        """The fields only: cached CasADi functions are rebuilt on first use (pickling for Dask workers)."""
-        return {f.name: getattr(self, f.name) for f in fields(self)}
-
-    def __setstate__(self, state: dict[str, Any]) -> None:
-        for key, value in state.items():
-            object.__setattr__(self, key, value)
 
     @property
     def gravity_vector(self) -> np.ndarray:

@@ -39,21 +39,17 @@ def geometry_symbols(robot) -> tuple[list, list, list[ca.SX], list[float]]:
     A prismatic joint's r is its variable, so it never appears in the rules and stays numeric.
     """
     d, r, syms, values = [], [], [], []
+
+    def length(value: float, label: str, free: bool) -> ca.SX | float:
+        if not free:
+            return 0.0
+        syms.append(ca.SX.sym(label))
+        values.append(value)
+        return syms[-1]
+
     for j in range(robot.n):
-        if robot.d[j] != 0.0:
-            s = ca.SX.sym(robot.d_labels[j])
-            syms.append(s)
-            values.append(robot.d[j])
-            d.append(s)
-        else:
-            d.append(0.0)
-        if robot.r[j] != 0.0 and robot.sigma[j] == 0:
-            s = ca.SX.sym(robot.r_labels[j])
-            syms.append(s)
-            values.append(robot.r[j])
-            r.append(s)
-        else:
-            r.append(0.0)
+        d.append(length(robot.d[j], robot.d_labels[j], robot.d[j] != 0.0))
+        r.append(length(robot.r[j], robot.r_labels[j], robot.r[j] != 0.0 and robot.sigma[j] == 0))
     return d, r, syms, values
 
 

@@ -246,39 +246,14 @@ def parse_robot(data: dict, source: str, lines: Lines | None = None) -> Robot:
     if "n" in data and data["n"] != n:
         raise RobotFileError(f"{where('', 'n')}: field 'n' says {data['n']} joints but there are {n} "
                              f"[[joints]] rows")
-    rows = []
-    d_labels, r_labels = [], []
-    for j, row in enumerate(joints, 1):
-        at = where("joints", index=j - 1)
-        if "sigma" not in row:
-            raise RobotFileError(f"{at}: missing field 'sigma'")
-        if row["sigma"] not in (0, 1) or isinstance(row["sigma"], bool):
-            raise RobotFileError(f"{where('joints', 'sigma', j - 1)}: unknown joint type sigma={row['sigma']!r} "
-                                 f"(0 revolute, 1 prismatic)")
-        for key in ("alpha", "theta"):
-            if key not in row and f"{key}_deg" not in row:
-                raise RobotFileError(f"{at}: missing field {key!r}")
-        rows.append((int(row["sigma"]), _angle(row, "alpha", at), _number(row, "d", at),
-                     _angle(row, "theta", at), _number(row, "r", at)))
-        d_labels.append(str(row.get("d_label", f"D{j}")))
-        r_labels.append(str(row.get("r_label", f"RL{j}")))
-    cols = list(zip(*rows))
+    cols, d_labels, r_labels = _parse_joints(joints, where)
 
     section = "controller" if "controller" in data else "staubli"
     offsets = _vector_either(data.get(section, {}), "offsets", n,
                              lambda key: where(section, key), np.zeros(n))
     limits = _parse_limits(data.get("limits", {}), n, offsets, lambda key: where("limits", key))
     gear, Rq, Rt = _parse_transmission(data.get("transmission", {}), n, lambda key: where("transmission", key))
-    coupling = None
-    if "coupling" in data:
-        c = data["coupling"]
-        pair = c.get("joints")
-        if not (isinstance(pair, list) and len(pair) == 2 and all(isinstance(x, int) for x in pair)
-                and 1 <= pair[0] <= n and 1 <= pair[1] <= n and pair[0] != pair[1]):
-            raise RobotFileError(f"{where('coupling', 'joints')}: field 'joints' must be two distinct "
-                                 f"joint numbers in 1..{n}")
-        coupling = Coupling((pair[0] - 1, pair[1] - 1),
-                            _sign_option(c.get("coulomb_sign", "paper"), where("coupling", "coulomb_sign")))
+    coupling = _parse_coupling(data["coupling"], n, where) if "coupling" in data else None
     spring = _parse_spring(data["spring"], n, source, lambda key: where("spring", key)) if "spring" in data else None
     names = data.get("joint_names", [])
     if not (isinstance(names, list) and all(isinstance(x, str) and x for x in names)
@@ -298,6 +273,38 @@ def parse_robot(data: dict, source: str, lines: Lines | None = None) -> Robot:
                  controller_offsets=offsets, gear_ratios=gear, Rq=Rq, Rt=Rt, spring=spring,
                  coupling=coupling, asymmetric_coulomb=asym, description=str(data.get("description", "")),
                  source=source, nominal=nominal, flange=flange, joint_names=tuple(names))
+
+
+def _parse_joints(joints: list, where: Any) -> tuple[list, list[str], list[str]]:
+    """The [[joints]] rows: columns (sigma, alpha, d, theta, r) and the d and r labels."""
+    rows = []
+    d_labels, r_labels = [], []
+    for j, row in enumerate(joints, 1):
+        at = where("joints", index=j - 1)
+        if "sigma" not in row:
+            raise RobotFileError(f"{at}: missing field 'sigma'")
+        if row["sigma"] not in (0, 1) or isinstance(row["sigma"], bool):
+            raise RobotFileError(f"{where('joints', 'sigma', j - 1)}: unknown joint type sigma={row['sigma']!r} "
+                                 f"(0 revolute, 1 prismatic)")
+        for key in ("alpha", "theta"):
+            if key not in row and f"{key}_deg" not in row:
+                raise RobotFileError(f"{at}: missing field {key!r}")
+        rows.append((int(row["sigma"]), _angle(row, "alpha", at), _number(row, "d", at),
+                     _angle(row, "theta", at), _number(row, "r", at)))
+        d_labels.append(str(row.get("d_label", f"D{j}")))
+        r_labels.append(str(row.get("r_label", f"RL{j}")))
+    return list(zip(*rows)), d_labels, r_labels
+
+
+def _parse_coupling(c: dict, n: int, where: Any) -> Coupling:
+    """The [coupling] table: the two coupled joints (1-based in the file) and the Coulomb sign."""
+    pair = c.get("joints")
+    if not (isinstance(pair, list) and len(pair) == 2 and all(isinstance(x, int) for x in pair)
+            and 1 <= pair[0] <= n and 1 <= pair[1] <= n and pair[0] != pair[1]):
+        raise RobotFileError(f"{where('coupling', 'joints')}: field 'joints' must be two distinct "
+                             f"joint numbers in 1..{n}")
+    return Coupling((pair[0] - 1, pair[1] - 1),
+                    _sign_option(c.get("coulomb_sign", "paper"), where("coupling", "coulomb_sign")))
 
 
 def _parse_limits(table: dict, n: int, controller_offsets: np.ndarray, where: Any) -> Limits:

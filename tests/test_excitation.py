@@ -5,6 +5,7 @@ regressor has 11 columns: ZZ1R MX1R MY1 ZZ2 MX2 MY2 IA2 FS1 FV1 FS2 FV2 (Lagrang
 """
 from __future__ import annotations
 
+import dataclasses
 import io
 import json
 from types import SimpleNamespace
@@ -19,7 +20,7 @@ from excitation.criterion import log_cond_surrogate, smooth_friction_regressor
 from excitation.fourier import FourierSeries
 from excitation.model import ExcitationModel, JointLimits
 from excitation.multistart import optimise_model
-from excitation.optimiser import OptimiserOptions
+from excitation.options import OptimiserOptions
 from excitation.via_points import ViaPointSpline
 
 L1, G = 0.5, 9.81
@@ -74,7 +75,7 @@ def toy_model(torque: bool = True, tau_max=(80.0, 30.0), z_min=None) -> Excitati
     return ExcitationModel(regressor=toy_regressor(), limits=toy_limits(tau_max), names=NAMES,
                            torque=toy_torque() if torque else None,
                            heights=toy_heights() if z_min is not None else None, z_min=z_min,
-                           staubli_offsets=np.array([0.0, np.pi / 2]), name="toy")
+                           controller_offsets=np.array([0.0, np.pi / 2]), name="toy")
 
 
 class ToyRobot(SimpleNamespace):
@@ -333,11 +334,30 @@ def test_save_round_trip_in_staubli_angles(tmp_path):
     assert data.shape == (4 * 250 + 1, 7)
     t, q, qd, qdd = traj.sample(250.0, closed=True)
     np.testing.assert_allclose(data[:, 0], t, atol=1e-9)
-    np.testing.assert_allclose(data[:, 1:3] - traj.staubli_offsets, q, atol=1e-8)
+    np.testing.assert_allclose(data[:, 1:3] - traj.controller_offsets, q, atol=1e-8)
     np.testing.assert_allclose(data[:, 2] - data[0, 2] + q[0, 1], q[:, 1], atol=1e-8)
     np.testing.assert_allclose(data[:, 3:5], qd, atol=1e-8)
     np.testing.assert_allclose(data[:, 5:7], qdd, atol=1e-8)
     assert [p.name for p in tmp_path.iterdir()] == ["traj.csv"]
+
+
+def test_former_staubli_offsets_spelling_warns_and_means_controller_offsets():
+    """The RX90 word is kept one release, as for rx90sym.Robot: keyword and attribute both warn."""
+    model = toy_model()
+    with pytest.warns(DeprecationWarning, match="controller_offsets"):
+        former = ExcitationModel(regressor=model.regressor, limits=model.limits, names=NAMES,
+                                 staubli_offsets=np.array([0.0, np.pi / 2]), name="toy")
+    np.testing.assert_array_equal(former.controller_offsets, model.controller_offsets)
+    with pytest.warns(DeprecationWarning, match="ExcitationModel.staubli_offsets"):
+        np.testing.assert_array_equal(model.staubli_offsets, [0.0, np.pi / 2])
+    traj = _any_trajectory()
+    with pytest.warns(DeprecationWarning, match="Trajectory.staubli_offsets"):
+        np.testing.assert_array_equal(traj.staubli_offsets, traj.controller_offsets)
+    again = dataclasses.replace(traj)  # the new keyword: no warning (warnings are errors here)
+    with pytest.warns(DeprecationWarning, match="Trajectory\\(staubli_offsets"):
+        excitation.Trajectory(traj.form, traj.coefficients, traj.cond, traj.criterion, usage=traj.usage,
+                              info=traj.info, staubli_offsets=traj.controller_offsets)
+    np.testing.assert_array_equal(again.controller_offsets, traj.controller_offsets)
 
 
 def test_save_json_summary(tmp_path):

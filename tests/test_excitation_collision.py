@@ -74,7 +74,8 @@ def test_optimised_trajectory_keeps_out_of_an_obstacle_it_would_hit(robot):
     bp = rx90sym.base_parameters(robot)
     chi = robot.parameter_vector(rx90sym.default_parameters(robot))
     from excitation.fourier import FourierSeries
-    from excitation.optimiser import OptimiserOptions, initial_free, start_rng
+    from excitation.optimiser import initial_free, start_rng
+    from excitation.options import OptimiserOptions
     from excitation.trajectory import sample_times
 
     # the optimiser's own starting motion (start 1 of seed 0): put the box where its tool goes

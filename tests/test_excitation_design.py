@@ -130,14 +130,14 @@ def test_controller_export_with_approach_move_holds_limits_by_finite_differences
     from test_excitation import toy_limits
 
     traj = excitation.random_feasible(toy_model(), FourierSeries(4.0, 3), seed=0, options=FAST)
-    start = traj.start_position() + traj.staubli_offsets + np.array([1.0, -0.8])
+    start = traj.start_position() + traj.controller_offsets + np.array([1.0, -0.8])
     limits = toy_limits()
     path = export_for_controller(traj, tmp_path / "ur.csv", "ur", limits, start)
     data = np.loadtxt(path, delimiter=",", skiprows=1)
     t, q = data[:, 0], data[:, 1:3]
     np.testing.assert_allclose(np.diff(t), 1 / 500.0, rtol=1e-9)            # UR servoj period
     np.testing.assert_allclose(q[0], start, atol=1e-12)
-    np.testing.assert_allclose(q[-1], traj.start_position() + traj.staubli_offsets, atol=1e-9)
+    np.testing.assert_allclose(q[-1], traj.start_position() + traj.controller_offsets, atol=1e-9)
     qd = np.diff(q, axis=0) * 500.0                                          # independent of the file's dq
     qdd = np.diff(qd, axis=0) * 500.0
     assert np.all(np.abs(qd) <= limits.qd_max * 1.001)

@@ -130,3 +130,14 @@ def test_deprecated_entry_points_warn_and_agree_with_fit(lib_fit, runs, rx90):
     with warnings.catch_warnings():
         warnings.simplefilter("error")
         identify.Processing()  # the record itself warns of nothing
+
+
+def test_a_bootstrap_sigma_the_draws_could_not_estimate_is_null_in_the_file_and_nan_again():
+    """A spring coefficient's bootstrap σ can be NaN (rank-deficient draws): the file stays JSON."""
+    import json as _json
+
+    from identify.fitting import Bootstrap
+    b = Bootstrap(np.array([0.5, np.nan, 2.0]), 0.5, 200, 0)
+    text = _json.dumps(b.to_json(), allow_nan=False)      # raised "Out of range float values" before
+    back = Bootstrap.from_json(_json.loads(text))
+    assert back.std[0] == 0.5 and np.isnan(back.std[1]) and back.std[2] == 2.0

@@ -303,6 +303,32 @@ def test_split_flag_only_for_a_held_out_part_that_continues_the_fitted_run():
 
     fitted = {"recordings": [{"source": "a.csv", "t_first_s": 0.0, "t_last_s": 6.0}]}
     assert [f["code"] for f in split_flags({**fitted, "heldout": {"source": "b.csv", "t_first_s": 6.02}})] \
-        == ["arbitrary-split"]
+        == ["heldout-continues-fit"]
     assert split_flags({**fitted, "heldout": {"source": "c.csv", "t_first_s": 0.0}}) == []  # another motion
     assert split_flags({**fitted, "heldout": None}) == []
+
+
+def test_held_out_data_in_which_nothing_moves_is_not_reported_as_a_zero_error():
+    """A validation file where no joint moves (the UR10e's p4 log) has no while-moving error: the
+    headline says so and gives the at-rest figure, never "0.0 %"."""
+    from identify.app.report.identify_page import identify_summary
+    still = {"robot": "ur10e", "method": "wls", "parameters": [], "model": {},
+             "validation": {"relative_error_pct": [100.9, 52.6, 12.0], "relative_error_pct_moving": [None, None, None]}}
+    head = identify_summary(still).headline
+    assert "0.0 %" not in head and "no held-out sample moves" in head and "100.9 %" in head
+    moving = dict(still, validation={"relative_error_pct": [20.0, 9.0, 3.0], "relative_error_pct_moving": [7.4, None, 5.0]})
+    assert "worst held-out error while moving 7.4 %" in identify_summary(moving).headline
+
+
+def test_a_constrained_payload_page_prints_no_sigma_of_the_unconstrained_fit():
+    """As on the command line: the constrained estimate has no σ of its own, so the page shows none."""
+    from identify.app.report.payload_pages import payload_page
+    params = [{"name": n, "value": v, "std": 0.004, "rel_std_pct": 0.2, "bootstrap_std": 0.006}
+              for n, v in (("MXc", 0.0), ("MYc", 0.0), ("MZc", 0.2), ("Mc", 2.804))]
+    record = {"method": 3, "robot_name": "ur10e", "payload": params, "constrained": False}
+    assert "± 0.004" in payload_page(record).summary.headline
+    page = payload_page(dict(record, constrained=True))
+    assert "±" not in page.summary.headline and "no σ of its own" in page.summary.headline
+    table = page.sections[0].blocks[0]
+    assert all(row[3] is None for row in table.rows)                                # σ eq. 13
+    assert all(row[4].value is None for row in table.rows if row[2])                # σr eq. 15

@@ -15,8 +15,6 @@ from ..common import UsageError, check_output, floats, load_robot, progress, rob
 
 
 def register(sub: Any) -> None:
-    import excitation
-
     sp = sub.add_parser("excite", help="optimise an excitation trajectory",
                         description="optimise an excitation trajectory (see docs/excitation.md)")
     sp.set_defaults(func=run)
@@ -32,6 +30,15 @@ def register(sub: Any) -> None:
                     help="Fourier harmonics (default 5; with --for payload the default is 10 via points)")
     sp.add_argument("--via-points", type=int, default=None,
                     help="optimise this many via points (quintic spline) instead of a Fourier series")
+    _add_search_options(sp)
+    _add_envelope_options(sp)
+    _add_limit_options(sp)
+
+
+def _add_search_options(sp: Any) -> None:
+    """Multi-start, criterion and where the starts run."""
+    import excitation
+
     sp.add_argument("--seed", type=int, default=0, help="seed of the multi-start, >= 0 (default 0)")
     sp.add_argument("--starts", type=int, default=2, help="number of starts (default 2)")
     sp.add_argument("--time-budget", type=float, default=None,
@@ -54,6 +61,10 @@ def register(sub: Any) -> None:
                          "in this process)")
     sp.add_argument("--scheduler", default=None,
                     help="run the starts on an existing Dask cluster (scheduler address, e.g. tcp://host:8786)")
+
+
+def _add_envelope_options(sp: Any) -> None:
+    """Collision, floor, controller output and the safety envelope's limits."""
     sp.add_argument("--obstacle", action="append", default=[], metavar="XMIN,YMIN,ZMIN,XMAX,YMAX,ZMAX",
                     help="an obstacle box [m, base frame] the link capsules must keep out of (repeatable)")
     sp.add_argument("--no-self-collision", action="store_true",
@@ -76,6 +87,10 @@ def register(sub: Any) -> None:
     sp.add_argument("--centre-pose", default=None,
                     help="pose the optimisation starts about (controller angles, rad, comma-separated; "
                          "default: the centre of the ranges, or the nearest pose inside the envelope)")
+
+
+def _add_limit_options(sp: Any) -> None:
+    """Experiment limits (joint ranges, speeds, accelerations, mounting margin) and outputs."""
     sp.add_argument("--position-limits", default=None, metavar="MIN1:MAX1,...",
                     help="experiment joint ranges (controller angles, rad), inside the robot's (default "
                          "90 %% of each range about its centre)")

@@ -58,19 +58,7 @@ def run(args: argparse.Namespace) -> int:
     from identify.io.recordings import read_recording
     from identify.payload import payload
 
-    if args.mass_tol is not None and args.mass is None:
-        raise UsageError("conflicting options: --mass-tol needs --mass")
-    if args.mass is not None and not args.constrained:
-        raise UsageError("conflicting options: --mass is used by the constrained fit; add --constrained")
-    if args.method == 1 and not args.robot_params:
-        raise UsageError("method 1 needs --robot-params FILE.json (the robot's identified parameters)")
-    if args.method == 1 and args.empty:
-        raise UsageError("conflicting options: method 1 uses --robot-params, not --empty recordings")
-    if args.method != 1 and args.robot_params:
-        raise UsageError(f"conflicting options: method {args.method} identifies the robot itself; "
-                         "--robot-params is for method 1")
-    if args.method != 3 and args.position_tol is not None:
-        raise UsageError("conflicting options: --position-tol is for method 3 (paired runs)")
+    _check_options(args)
     check_output(args.json)
     check_output(args.report)
     robot = load_robot(args, offsets=args.offsets, recordings=args.empty + args.loaded)
@@ -128,3 +116,20 @@ def _unconstrained_mass_flags(res: Any, std: np.ndarray) -> list:
     return [dataclasses.replace(f, message=f"{f.message.replace('the payload', 'the unconstrained payload')} "
                                 f"(the constrained fit gave {res['Mc']:.4g} kg)")
             for f in payload_flags(res.names, free, std) if f.code == "payload_mass_negative"]
+
+
+def _check_options(args: argparse.Namespace) -> None:
+    """Refuse option combinations a method does not use (UsageError: exit 2)."""
+    if args.mass_tol is not None and args.mass is None:
+        raise UsageError("conflicting options: --mass-tol needs --mass")
+    if args.mass is not None and not args.constrained:
+        raise UsageError("conflicting options: --mass is used by the constrained fit; add --constrained")
+    if args.method == 1 and not args.robot_params:
+        raise UsageError("method 1 needs --robot-params FILE.json (the robot's identified parameters)")
+    if args.method == 1 and args.empty:
+        raise UsageError("conflicting options: method 1 uses --robot-params, not --empty recordings")
+    if args.method != 1 and args.robot_params:
+        raise UsageError(f"conflicting options: method {args.method} identifies the robot itself; "
+                         "--robot-params is for method 1")
+    if args.method != 3 and args.position_tol is not None:
+        raise UsageError("conflicting options: --position-tol is for method 3 (paired runs)")

@@ -75,7 +75,9 @@ def excite_page(record: Mapping[str, Any], figures: Sequence[Figure] = (), more:
     if usage.get("min_clearance_m") is not None:
         facts.append(("Smallest clearance", f"{fmt(1e3 * usage['min_clearance_m'], 3)} mm"))
     if usage.get("min_height_m") is not None:
-        facts.append(("Lowest tool height", f"{fmt(usage['min_height_m'], 3)} m (floor {fmt(usage.get('z_min_m'))} m)"))
+        # The lowest of every checked point (frame origins, capsule ends, tool), not only the tool's.
+        facts.append(("Lowest checked point", f"z = {fmt(usage['min_height_m'], 3)} m in frame 0 "
+                                              f"(floor z = {fmt(usage.get('z_min_m'))} m)"))
     optimiser = record.get("optimiser") or {}
     sections = [Section("limits", "Limit usage", (usage_table(usage), *figures)), *more]
     items = [(k.replace("_", " "), "", v) for k, v in optimiser.items() if v not in (None, "") and not isinstance(v, dict)]

@@ -50,6 +50,10 @@ def _flags(record: Mapping[str, Any], data: Mapping[str, Any] | None) -> list[di
     flags += parameter_flags([p["name"] for p in params], [p.get("rel_std_pct") for p in params],
                              record.get("bootstrap_std"), [p.get("std") for p in params], record.get("cond"))
     flags += split_flags(data)
+    if record.get("method") == "consistent" and not record.get("prior"):
+        flags.append(flag("arbitrary-split", "warning", "no prior: how the links share what the data cannot see is "
+                          "arbitrary (the bodies are one physical choice among many)",
+                          "give the robot's nominal parameters (--prior FILE, or a [nominal] table in its file)"))
     share = (data or {}).get("moving_fraction") or []
     rest = [j for j, s in enumerate(share, start=1) if 1 - s > REST_SHARE_CHECK]
     if rest:
@@ -72,7 +76,7 @@ def split_flags(data: Mapping[str, Any] | None) -> list[dict]:
     for rec in (data or {}).get("recordings") or ():
         end = number(rec.get("t_last_s"))
         if start is not None and end is not None and 0 <= start - end <= SPLIT_GAP_S:
-            return [flag("arbitrary-split", "warning", f"the held-out data ({held.get('source')}) continue "
+            return [flag("heldout-continues-fit", "warning", f"the held-out data ({held.get('source')}) continue "
                          f"{rec.get('source')} (cut at t = {fmt(end, 4)} s): the same motion split at an "
                          "arbitrary point", "validate also on a different motion (another excitation, a "
                          "stop-and-go run)")]
@@ -81,11 +85,17 @@ def split_flags(data: Mapping[str, Any] | None) -> list[dict]:
 
 def _headline(record: Mapping[str, Any], flags: Sequence[Mapping[str, Any]]) -> str:
     val = record.get("validation") or {}
-    worst = max((number(v) or 0 for v in val.get("relative_error_pct_moving") or val.get("relative_error_pct") or []),
-                default=None)
+    moving = [m for m in (number(v) for v in val.get("relative_error_pct_moving") or []) if m is not None]
+    every = [m for m in (number(v) for v in val.get("relative_error_pct") or []) if m is not None]
+    if moving:
+        held = f"worst held-out error while moving {max(moving):.1f} %"
+    elif every:
+        # No joint moves in the held-out data: its error is all rest (static friction), never "0 %".
+        held = f"no held-out sample moves (worst error on all samples {max(every):.1f} %, at rest)"
+    else:
+        held = "no held-out check"
     errors = sum(f.get("severity") == "error" for f in flags)
     warnings = sum(f.get("severity") == "warning" for f in flags)
-    held = (f"worst held-out error while moving {worst:.1f} %" if worst is not None else "no held-out check")
     if errors:
         return f"Do not trust this model yet: {held}; {errors} error(s), {warnings} warning(s) below."
     if warnings:
@@ -109,7 +119,8 @@ def identify_summary(record: Mapping[str, Any]) -> Summary:
         facts.append(("Drive gains", f"{', '.join(fmt(k, 4) for k in gains['gains'])} N·m/A, "
                                      f"{gains.get('side', 'joint')} side"))
     if record.get("cost_increase_pct") is not None:
-        facts.append(("Consistent fit", f"cost +{fmt(record.get('cost_increase_pct'), 3)} % over WLS"))
+        facts.append(("Consistent fit", f"cost +{fmt(record.get('cost_increase_pct'), 3)} % over WLS; split "
+                                        + (str(record["split"]) if record.get("split") else "–")))
     val = record.get("validation") or {}
     return Summary(_headline(record, flags), tuple(facts), heldout_table(val) if val else None, tuple(flags),
                    next_steps(flags))

@@ -43,7 +43,12 @@ def _payload_flags(record: Mapping[str, Any], mass: float | None, std: float | N
 
 def payload_page(record: Mapping[str, Any], figures: Sequence[Figure] = ()) -> Page:
     """The payload report: Mc and its centre of mass first, then the parameter and pairing tables."""
-    params = {p["name"]: p for p in record.get("payload") or []}
+    payload = list(record.get("payload") or [])
+    if record.get("constrained"):
+        # A constrained estimate has no σ of its own: eq. 13's and the bootstrap's belong to the
+        # unconstrained fit, so the page shows none (as the command line does).
+        payload = [dict(p, std=None, rel_std_pct=None, bootstrap_std=None) for p in payload]
+    params = {p["name"]: p for p in payload}
     a_priori = record.get("a_priori") or None
     mass = number(params.get("Mc", {}).get("value"))
     std = number(params.get("Mc", {}).get("std"))
@@ -56,14 +61,16 @@ def payload_page(record: Mapping[str, Any], figures: Sequence[Figure] = ()) -> P
     table = Table("summary-payload", "Mass and centre of mass (frame of the last link)",
                   (Column("quantity", text=True), Column("unit", text=True), Column("a priori"),
                    Column("identified"), Column("σ", digits=3)), tuple(rows))
-    headline = (f"Payload mass {fmt(mass)} ± {fmt(std, 2)} kg" + (f" (a priori {fmt(prior)} kg)" if prior else "")
+    spread = f" ± {fmt(std, 2)}" if std is not None else ""
+    headline = (f"Payload mass {fmt(mass)}{spread} kg" + (" (constrained: no σ of its own)" if record.get("constrained")
+                                                          else "") + (f" (a priori {fmt(prior)} kg)" if prior else "")
                 + ("; see the flags." if any(f["severity"] in ("error", "warning") for f in flags) else "."))
     facts = [("Robot", str(record.get("robot_name", ""))),
              ("Method", f"{record.get('method')} (paper §IV)" + (", constrained" if record.get("constrained") else "")),
              *_recording_facts(record)]
     summary = Summary(headline, tuple(facts), table, tuple(flags), next_steps(flags))
     sections = [Section("payload", "Payload parameters", (
-        parameter_table(record.get("payload") or [], a_priori=a_priori or None, table_id="payload",
+        parameter_table(payload, a_priori=a_priori or None, table_id="payload",
                         caption="Payload parameters (frame of the last link, about its origin)"), *figures))]
     robot = record.get("robot")  # the robot's base parameters identified with the payload (methods 2, 4)
     if isinstance(robot, Mapping):

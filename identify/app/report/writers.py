@@ -16,10 +16,14 @@ from .page import write_page
 from .payload_pages import gains_page, payload_page
 
 
-def _prior(robot: rx90sym.Robot) -> dict[str, float] | None:
-    """The robot's nominal standard parameters (beside the consistent fit's bodies), None if unknown."""
+def _prior(robot: rx90sym.Robot, record: Mapping[str, Any]) -> dict[str, float] | None:
+    """The standard parameters of the consistent fit's prior (beside its bodies), None without one."""
+    prior = record.get("prior")
+    if not isinstance(prior, Mapping):
+        return None
+    source = str(prior.get("source", ""))
     try:
-        return rx90sym.nominal_parameters(robot)
+        return rx90sym.nominal_parameters(robot, source if Path(source).is_file() else None)
     except ValueError:
         return None
 
@@ -39,7 +43,7 @@ def write_identify_report(path: str | os.PathLike, robot: rx90sym.Robot, record:
     if validation is not None:
         figures["validation"] = [figure("fig-validation", f"Held-out torques on {validation.source} "
                                         "(grey: joint at rest)", torque_figure(validation, validation.source))]
-    prior = _prior(robot) if record.get("standard") else None
+    prior = _prior(robot, record) if record.get("standard") else None
     return write_page(path, identify_page(record, figures, prior, spring_text))
 
 
