@@ -333,7 +333,7 @@ def test_gains_of_a_mass_in_grams_are_refused(files, tmp_path, capsys):
     grams = 1000 * rx90sym.load_payload("tables_4")["Mc"]
     msg = refused(capsys, out, "gains", "--empty", files["empty_i.csv"], "--loaded", files["loaded_i.csv"],
                   "--mass", grams, "--json", out)
-    assert "torques the fitted gains give are far above" in msg and "--mass in g" in msg
+    assert "torques the fitted gains give are far above" in msg and "--mass in g" in msg and "[--mass in kg]" in msg
     code, _, err = rx90_cmd(capsys, "gains", "--empty", files["empty_i.csv"], "--loaded", files["loaded_i.csv"],
                             "--mass", grams / 1000, "--json", out)
     assert code == 0 and out.exists(), err  # the same runs with the mass in kg pass the check

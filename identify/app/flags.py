@@ -18,6 +18,8 @@ HINTS = {
     "consistency_margin_negative": "--method consistent",
     "payload_inertia_not_physical": "--constrained",
     "torque_scale": "--gains K1,..,Kn in N m/A",
+    "gains_scale": "--mass in kg",
+    "payload_mass_on_bound": "--mass, --mass-tol",
 }
 
 

@@ -112,7 +112,8 @@ def _torque_scale(gains: Any, robot: Any, recs: list) -> list[Flag]:
     """The torque-scale check identify and payload apply, on the torques the fitted gains make of
     the recordings' currents: gains scale with --mass, so a mass in g gives torques 1000x too large."""
     torques = [gains.torques(robot, r.current) for r in recs if r.current is not None]
-    return [dataclasses.replace(f, action="is --mass in g instead of kg? (the fitted gains scale with it)")
+    return [dataclasses.replace(f, code="gains_scale", action="is --mass in g instead of kg? (the fitted gains "
+                                "scale with it)")
             for f in torque_scale_flags(torques, robot, "torques the fitted gains give")]
 
 
