@@ -28,7 +28,7 @@ from rx90sym.recording import Recording, RecordingError
 from identify.io.blocks import DEFAULT_LOG_BLOCK
 from identify.io.columns import ColumnMap
 from identify.io.gains import apply_gains
-from identify.io.logs import (ABSURD, _check_header, _check_positions, _check_time, _check_velocities,
+from identify.io.logs import (ABSURD, _check_header, _check_positions, _check_increasing, _check_velocities,
                               _irregular, _Lines, _log_options, _parse, gains_label)
 from identify.signal.resampling import interpolate
 
@@ -264,7 +264,7 @@ def _checked(values: np.ndarray, numbers: list[int], new: int, cmap: ColumnMap, 
     """One block through the checks of :func:`identify.read_log`, as a recording in model angles."""
     t = values[:, cmap.t]
     if t.size >= 2:
-        _check_time(t, numbers, source)
+        _check_increasing(t, numbers, source)
     q_file = values[:, list(cmap.q)]
     q = np.asarray(robot.to_model(q_file), dtype=float) if conv == "controller" else q_file
     _check_positions(q, t, numbers, cmap, robot, source)

@@ -81,8 +81,9 @@ MOVING_SPAN = 0.05
 #: fraction of the derivative's RMS (measured on the UR10e logs: see docs/real-logs.md).
 VELOCITY_MISMATCH = 0.5
 
-def _check_time(t: np.ndarray, numbers: Sequence[int], source: str) -> None:
-    """Time increases (a gap is not an error: :func:`identify.signal.gaps.find_gaps`)."""
+def _check_increasing(t: np.ndarray, numbers: Sequence[int], source: str) -> None:
+    """Time increases (a gap is not an error: :func:`identify.signal.gaps.find_gaps`). A log's
+    rule; a recording's regular clock is checked by :func:`identify.io.checks._check_time`."""
     if t.size < 2:
         raise RecordingError(f"{source}: line {numbers[0]}: a log needs at least 2 rows")
     dt = np.diff(t)
@@ -286,7 +287,7 @@ def _recording(source: str, values: np.ndarray, numbers: list[int], cmap: Column
                conv: str, report: dict, max_gap: float, segments: bool, resample: float | None) -> Recording:
     """The checked rows as a recording: time, gaps, positions, velocities, then the grid."""
     t = values[:, cmap.t]
-    _check_time(t, numbers, source)
+    _check_increasing(t, numbers, source)
     found = find_gaps(t, numbers, max_gap)
     if not segments:
         _refuse_splits(found, source)
