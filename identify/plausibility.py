@@ -35,6 +35,12 @@ Warnings:
 - ``payload_inertia_not_physical`` — the payload's pseudo-inertia has a negative eigenvalue;
 - ``payload_mass_on_bound`` — the constrained mass sits on its bound (weighed mass ± tolerance,
   within :data:`BOUND_SHARE` of the tolerance): the data pull it outside, the bound set it.
+- ``bodies_far_from_prior`` — a consistent fit with a prior: a link's identified mass outside
+  [1/:data:`PRIOR_MASS_RATIO`, :data:`PRIOR_MASS_RATIO`] x its prior mass (wrong robot, gains or
+  units; or a link the motion hardly excites);
+- ``consistent_cost_high`` — a consistent fit with a prior costs more than
+  :data:`CONSISTENT_COST_PCT` % over WLS: no physical body near the prior explains the data (a
+  wrong robot, model or gains). Thresholds measured: docs/plausibility.md.
 
 With the constrained payload fit, ``payload_mass_negative`` judges the unconstrained estimate too
 (the constraints would hide swapped runs behind a small positive mass).
@@ -43,14 +49,15 @@ from __future__ import annotations
 
 import re
 from dataclasses import dataclass
-from typing import Sequence
+from typing import Mapping, Sequence
 
 import numpy as np
 
 import rx90sym
 
 __all__ = ["Flag", "PlausibilityError", "raise_errors", "gain_flags", "payload_flags", "torque_scale_flags",
-           "residual_flags", "estimate_flags", "mass_bound_flags", "margin_flags", "static_gravity_flags", "TORQUE_LOW", "TORQUE_HIGH", "RESIDUAL_SHARE", "RESIDUAL_FLOOR",
+           "residual_flags", "estimate_flags", "mass_bound_flags", "margin_flags", "static_gravity_flags", "prior_flags",
+           "PRIOR_MASS_RATIO", "CONSISTENT_COST_PCT", "TORQUE_LOW", "TORQUE_HIGH", "RESIDUAL_SHARE", "RESIDUAL_FLOOR",
            "SIGMAS"]
 
 #: Every joint's torque peak below this fraction of its limit: torques of the wrong scale.
@@ -71,6 +78,11 @@ REST_SAMPLES = 25
 GRAVITY_SHARE = 0.1
 #: Measured / nominal gravity at rest outside [1/GRAVITY_RATIO, GRAVITY_RATIO] is refused.
 GRAVITY_RATIO = 3.0
+#: An identified link mass outside [1/PRIOR_MASS_RATIO, PRIOR_MASS_RATIO] x its prior mass is flagged.
+PRIOR_MASS_RATIO = 3.0
+#: A consistent fit with a prior costing more than this many % over WLS is flagged
+#: (docs/plausibility.md: good fits measured far below, the UR10e read as a TX40 at 20 %).
+CONSISTENT_COST_PCT = 5.0
 #: How many sigma below zero a non-negative quantity may lie before it is flagged.
 SIGMAS = 3.0
 # Plain parameters that physics wants >= 0: masses, diagonal inertias, rotor inertias, viscous
@@ -293,4 +305,32 @@ def static_gravity_flags(recordings: Sequence, robot: rx90sym.Robot, nominal: di
             flags.append(Flag("static_gravity", "error", f"at rest, joint {j + 1}'s torque is {s:.3g} x the gravity of "
                               f"robot {robot.name}'s nominal parameters ({len(Q)} samples at rest; expected "
                               f"{1 / GRAVITY_RATIO:.2g}..{GRAVITY_RATIO:g})", f"check {cause}", joint=int(j) + 1))
+    return flags
+
+
+def prior_flags(standard: Mapping[str, float], prior: Mapping[str, float], cost_increase_pct: float,
+                robot_name: str = "") -> list[Flag]:
+    """A consistent fit against its prior (the robot's nominal parameters, SI).
+
+    standard: the identified standard parameters (name -> value; masses ``M<j>`` in kg);
+    prior: the prior's values (same names); cost_increase_pct: the consistent fit's weighted
+    residual over WLS's, % (ConsistentResult.cost_increase_pct). Links whose prior mass is not
+    positive are not judged.
+    """
+    flags = []
+    links = sorted((k[1:] for k in prior if re.fullmatch(r"M\d+", k) and prior[k] > 0 and k in standard), key=int)
+    for j in links:
+        m, m0 = float(standard[f"M{j}"]), float(prior[f"M{j}"])
+        ratio = m / m0
+        if not 1 / PRIOR_MASS_RATIO <= ratio <= PRIOR_MASS_RATIO:
+            flags.append(Flag("bodies_far_from_prior", "warning", f"link {j}'s identified mass {m:.3g} kg is "
+                              f"{ratio:.3g} x its prior mass {m0:.3g} kg (expected {1 / PRIOR_MASS_RATIO:.2g}.."
+                              f"{PRIOR_MASS_RATIO:g})", "check the robot (is it the one recorded?), the drive "
+                              "gains and the units; or the link is poorly excited", parameter=f"M{j}"))
+    if np.isfinite(cost_increase_pct) and cost_increase_pct > CONSISTENT_COST_PCT:
+        robot = f"robot {robot_name}'s " if robot_name else "the "
+        flags.append(Flag("consistent_cost_high", "warning", f"the consistent fit costs {cost_increase_pct:.3g} % "
+                          f"more than WLS (at most {CONSISTENT_COST_PCT:g} %): no physical bodies near {robot}prior "
+                          "explain the data", "check the robot (is it the one recorded?), its model and the drive "
+                          "gains"))
     return flags

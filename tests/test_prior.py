@@ -82,3 +82,35 @@ def test_the_ellipsoid_condition_is_the_mass_weighted_quadric():
     np.testing.assert_allclose(pseudo_inertia(body.vector()), J, atol=1e-12)
     expected = sum(m * (1 - (x - e.centre) @ e.A @ (x - e.centre)) for x, m in zip(points, masses))
     assert np.trace(J @ e.quadric()) == pytest.approx(expected, rel=1e-12)
+
+
+def test_a_wrong_prior_is_flagged_and_the_right_one_is_not(rx90, twin_fit):
+    """bodies_far_from_prior / consistent_cost_high (identify.plausibility.prior_flags), as the
+    identify command computes them (its _fit_flags): the twin against its own parameters (the
+    right robot file) gives neither (cost +0.04 %); against a prior whose bodies are 5x heavier
+    (a robot file of another, heavier arm) links are flagged, each with both masses and the ratio.
+    (The RX90 file's [nominal] table is not the twin's truth: against it the fit costs +330 % and
+    both flags are raised, docs/plausibility.md.)"""
+    from identify.app.commands.identify_cmd import _fit_flags
+    from identify.plausibility import CONSISTENT_COST_PCT, PRIOR_MASS_RATIO
+
+    recs, wls, _, covariance = twin_fit
+    truth = rx90sym.default_parameters(rx90)
+    # Mass, first moments and inertias x5: the same centres of mass and shapes, 5x heavier bodies.
+    heavy = {k: 5 * v if k.startswith(("M", "XX", "XY", "XZ", "YY", "YZ", "ZZ")) else v for k, v in truth.items()}
+    codes = {}
+    for name, values in (("right", truth), ("heavy", heavy)):
+        prior = PhysicalPrior(values, name)
+        f = fit(rx90, recs, method="consistent", base=wls.base, observation=wls.observation,
+                physical_prior=prior, covariance=covariance)
+        flags = _fit_flags(f, "consistent", prior)
+        codes[name] = [fl.code for fl in flags]
+        ratios = [f.result.standard[f"M{j}"] / values[f"M{j}"] for j in range(1, 7) if values[f"M{j}"] > 0]
+        print(name, f"cost +{f.result.cost_increase_pct:.3f} %", np.round(ratios, 3), codes[name])
+        if name == "right":
+            assert f.result.cost_increase_pct < CONSISTENT_COST_PCT / 2
+            assert all(1 / PRIOR_MASS_RATIO <= r <= PRIOR_MASS_RATIO for r in ratios)
+        else:
+            far = [fl for fl in flags if fl.code == "bodies_far_from_prior"]
+            assert far and all(fl.severity == "warning" and "x its prior mass" in fl.message for fl in far)
+    assert not {"bodies_far_from_prior", "consistent_cost_high"} & set(codes["right"])

@@ -20,6 +20,8 @@ HINTS = {
     "torque_scale": "--gains K1,..,Kn in N m/A",
     "gains_scale": "--mass in kg",
     "payload_mass_on_bound": "--mass, --mass-tol",
+    "bodies_far_from_prior": "--robot, --gains",
+    "consistent_cost_high": "--robot, --gains",
 }
 
 

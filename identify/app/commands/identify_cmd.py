@@ -16,7 +16,7 @@ import numpy as np
 import rx90sym
 from identify.observation.processing import DEFAULT_MIN_VELOCITY, DEFAULT_REST, REST_POLICIES, Processing
 from identify.io.blocks import DEFAULT_BLOCK
-from identify.plausibility import estimate_flags, residual_flags, static_gravity_flags, torque_scale_flags
+from identify.plausibility import estimate_flags, prior_flags, residual_flags, static_gravity_flags, torque_scale_flags
 
 from ..flags import flag_lines, given_gain_flags, settle
 from ..common import (UsageError, check_output, convention_option, progress, read_recordings, robot_option,
@@ -187,7 +187,7 @@ def run(args: argparse.Namespace) -> int:
         result = fit(robot, recs, processing_of(args, sb is None), args.method, base=sb, gains=gains,
                      convention=args.convention, spring_source=args.spring, **options)
     result = result.bootstrapped(args.bootstrap_seed)
-    result = result.with_flags([*flags, *_fit_flags(result, args.method)])
+    result = result.with_flags([*flags, *_fit_flags(result, args.method, prior)])
     if args.essential:
         result = result.with_essential()
     if val_rec is not None:
@@ -222,9 +222,10 @@ def physical_prior(args: argparse.Namespace, robot: rx90sym.Robot) -> Any:
     return PhysicalPrior(values, source)
 
 
-def _fit_flags(f: Fit, method: str) -> list:
+def _fit_flags(f: Fit, method: str, prior: Any = None) -> list:
     """A joint the model does not explain stops the run; non-physical WLS estimates are flagged
-    (judged with the larger of eq. 13's and the bootstrap's sigma)."""
+    (judged with the larger of eq. 13's and the bootstrap's sigma); a consistent fit with a prior
+    (a PhysicalPrior) is judged against it (link masses, cost over WLS)."""
     obs, res = f.observation, f.result
     if obs is None:  # fitted in blocks: ‖Y_j‖² is the joint system's residual at x = 0
         torque_rms = np.array([np.sqrt(s.rss(np.zeros(s.columns)) / s.rows) for s in res.joint_systems])
@@ -234,6 +235,8 @@ def _fit_flags(f: Fit, method: str) -> list:
     flags = settle(residual_flags(res.residual_rms, torque_rms, f.robot.limits.tau_max[:torque_rms.size]))
     if method != "consistent":
         flags += settle(estimate_flags(res.names, res.values, np.fmax(res.std, f.bootstrap.std)))
+    elif prior is not None:
+        flags += settle(prior_flags(res.standard, prior.values, res.cost_increase_pct, f.robot.name))
     return flags
 
 
