@@ -56,8 +56,8 @@ import numpy as np
 import rx90sym
 
 __all__ = ["Flag", "PlausibilityError", "raise_errors", "gain_flags", "payload_flags", "torque_scale_flags",
-           "residual_flags", "estimate_flags", "mass_bound_flags", "margin_flags", "static_gravity_flags", "prior_flags",
-           "PRIOR_MASS_RATIO", "CONSISTENT_COST_PCT", "TORQUE_LOW", "TORQUE_HIGH", "RESIDUAL_SHARE", "RESIDUAL_FLOOR",
+           "residual_flags", "estimate_flags", "mass_bound_flags", "margin_flags", "static_gravity_flags",
+           "prior_flags", "PRIOR_MASS_RATIO", "CONSISTENT_COST_PCT", "TORQUE_LOW", "TORQUE_HIGH", "RESIDUAL_SHARE", "RESIDUAL_FLOOR",
            "SIGMAS"]
 
 #: Every joint's torque peak below this fraction of its limit: torques of the wrong scale.
