@@ -128,17 +128,26 @@ def print_policies(title: str, table: dict) -> None:
             print(f"{'':<38}Nm " + _cells(rms, "8.3f"))
 
 
-def main(argv: list[str] | None = None) -> int:
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+def data_folder(argv: list[str] | None, doc: str) -> Path | None:
+    """The UR10e data folder from ``--data`` (default ../shared/data/ur10e), None (said on stderr)
+    when its runs are not there: one command line for this script and ur10e_prior.py."""
+    ap = argparse.ArgumentParser(description=doc.splitlines()[0])
     ap.add_argument("--data", type=Path, default=DATA)
     args = ap.parse_args(argv)
     if not (args.data / EMPTY[0]).exists():
         print(f"no UR10e data in {args.data}", file=sys.stderr)
+        return None
+    return args.data
+
+
+def main(argv: list[str] | None = None) -> int:
+    data = data_folder(argv, __doc__)
+    if data is None:
         return 2
     start = time.perf_counter()
     robot = robots()[False]
-    fit, val = held_out(robot, torques(args.data / EMPTY[0], EMPTY[1], robot),
-                        torques(args.data / HELD_OUT[0], HELD_OUT[1], robot), estimate_delay=True)
+    fit, val = held_out(robot, torques(data / EMPTY[0], EMPTY[1], robot),
+                        torques(data / HELD_OUT[0], HELD_OUT[1], robot), estimate_delay=True)
     print(f"1. Fit: rows {EMPTY[1][0]}..{EMPTY[1][1]} of {EMPTY[0]}, source gains, rx90 identify defaults")
     print(f"   {fit.observation.summary()}".replace("\n", "\n   "))
     print(f"   cut-off {fit.cutoff:.4g} Hz, rate {fit.observation.rate:g} Hz, "
@@ -149,17 +158,17 @@ def main(argv: list[str] | None = None) -> int:
 
     print()
     print_policies(f"2. Rest policies on {HELD_OUT[0]} (all samples; fit on rows {EMPTY[1][0]}..{EMPTY[1][1]}):",
-                   policy_table(args.data, EMPTY[1], HELD_OUT))
+                   policy_table(data, EMPTY[1], HELD_OUT))
     print()
-    half = policy_table(args.data, (EMPTY[1][0], SECOND_HALF[0] - 1), (EMPTY[0], SECOND_HALF))
+    half = policy_table(data, (EMPTY[1][0], SECOND_HALF[0] - 1), (EMPTY[0], SECOND_HALF))
     moving = half["zero-coulomb", False][1].moving_fraction
     print_policies(f"3. Fit on rows {EMPTY[1][0]}..{SECOND_HALF[0] - 1}, predict rows "
                    f"{SECOND_HALF[0]}..{SECOND_HALF[1]} of {EMPTY[0]} (moving: "
                    + " ".join(f"{100 * f:.0f}%" for f in moving) + "):", half)
 
     print("\n4. Rest threshold (zero-coulomb, no offsets) on the split of part 3: error per joint [%]")
-    fit_rec = torques(args.data / EMPTY[0], (EMPTY[1][0], SECOND_HALF[0] - 1), robot)
-    val_rec = torques(args.data / EMPTY[0], SECOND_HALF, robot)
+    fit_rec = torques(data / EMPTY[0], (EMPTY[1][0], SECOND_HALF[0] - 1), robot)
+    val_rec = torques(data / EMPTY[0], SECOND_HALF, robot)
     mask = half["zero-coulomb", False][1].moving
     for threshold in THRESHOLDS:
         _, v = held_out(robot, fit_rec, val_rec, min_velocity=threshold)
@@ -168,7 +177,7 @@ def main(argv: list[str] | None = None) -> int:
               + f"\n   {'':6s} moving (0.05)" + _cells(rel, "8.1f"))
 
     print(f"\n5. Payload mass on the whole 14-harmonic pair (weighed {MASS} kg):")
-    for name, m in payload_masses(args.data).items():
+    for name, m in payload_masses(data).items():
         cells = [f"method {k}: {m[k][0]:.3f} ± {m[k][1]:.3f} kg ({100 * (m[k][0] / MASS - 1):+.1f} %)"
                  for k in (3, 4)]
         print(f"   {name:22s}", "   ".join(cells))

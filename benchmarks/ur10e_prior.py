@@ -21,7 +21,6 @@ Usage: PYTHONPATH=. python benchmarks/ur10e_prior.py [--data DIR]   (~1 min)
 """
 from __future__ import annotations
 
-import argparse
 import sys
 import time
 from pathlib import Path
@@ -33,7 +32,7 @@ from identify import fit
 from identify.estimation.consistency.prior import PhysicalPrior
 from identify.estimation.consistency.prior_fit import unseen_distance
 from rx90sym.rigid_body import RigidBody
-from ur10e_heldout import SOURCE_GAINS, gains_bench, torques   # this folder (the script's own)
+from ur10e_heldout import SOURCE_GAINS, data_folder, gains_bench, torques   # this folder (the script's own)
 
 DATA = gains_bench.DATA
 EMPTY = gains_bench.EMPTY
@@ -88,14 +87,11 @@ def _v(x, fmt: str = "+.3f") -> str:
 
 
 def main(argv: list[str] | None = None) -> int:
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--data", type=Path, default=DATA)
-    args = ap.parse_args(argv)
-    if not (args.data / EMPTY[0]).exists():
-        print(f"no UR10e data in {args.data}", file=sys.stderr)
+    data = data_folder(argv, __doc__)
+    if data is None:
         return 2
     start = time.perf_counter()
-    f = figures(args.data)
+    f = figures(data)
     robot, prior = f["robot"], f["prior"]
     print(f"Fit rows {FIT_ROWS[0]}..{FIT_ROWS[1]}, predict rows {VAL_ROWS[0]}..{VAL_ROWS[1]} of {EMPTY[0]}; "
           f"gains (README) " + " ".join(f"{k:.4g}" for k in f["gains"]))
