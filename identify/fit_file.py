@@ -9,7 +9,6 @@ says which layout a file has; a file without it, or of an unknown version, is re
 from __future__ import annotations
 
 import hashlib
-import json
 from dataclasses import MISSING, asdict, dataclass
 from importlib import metadata
 from pathlib import Path
@@ -17,6 +16,7 @@ from typing import Any
 
 import numpy as np
 
+from rx90sym.files import read_json
 import rx90sym
 
 from identify.io.gains import DriveGains
@@ -118,12 +118,7 @@ class FitModel:
 
 def read_fit_file(path: str | Path) -> dict[str, Any]:
     """The parsed fit file, its layout checked (ValueError naming the file otherwise)."""
-    try:
-        data = json.loads(Path(path).read_text(encoding="utf-8"))
-    except OSError as exc:
-        raise ValueError(f"{path}: cannot read the fit file ({exc.strerror})") from None
-    except json.JSONDecodeError as exc:
-        raise ValueError(f"{path}: not valid JSON ({exc})") from None
+    data = read_json(path)   # ValueError naming the file (and line, column)
     if not isinstance(data, dict) or "parameters" not in data:
         raise ValueError(f"{path}: not a fit file (no 'parameters')")
     version = data.get("schema_version")

@@ -16,10 +16,10 @@ nominal parameters: they are the twin's, reached through :func:`twin_parameter_f
 """
 from __future__ import annotations
 
-import json
 from pathlib import Path
 from typing import Any, Mapping
 
+from .files import read_json
 from .description import Robot
 from .nominal_table import NominalError, nominal_values
 from .parameters import checked_values, split_name
@@ -85,13 +85,7 @@ def read_parameter_file(robot: Robot, path: str | Path) -> dict[str, float]:
     Torque offsets OFFj may be absent (0). Values in SI units (kg, m, kg m, kg m^2, N m ...).
     """
     path = Path(path)
-    try:
-        data = json.loads(path.read_text(encoding="utf-8"))
-    except OSError as exc:
-        raise ValueError(f"{path}: cannot read parameter file ({exc.strerror or exc})") from None
-    except json.JSONDecodeError as exc:
-        raise ValueError(f"{path}: not valid JSON (line {exc.lineno}, column {exc.colno}: "
-                         f"{exc.msg})") from None
+    data = read_json(path)   # ValueError naming the file (and line, column)
     if not isinstance(data, dict):
         raise ValueError(f"{path}: expected a JSON object of parameter names to numbers")
     if isinstance(data.get("robot"), str) and data["robot"] != robot.name:

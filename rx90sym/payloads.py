@@ -6,7 +6,6 @@ columns Wc of the observation matrix are link n's ten inertial columns).
 """
 from __future__ import annotations
 
-import json
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, Mapping
 
@@ -26,7 +25,7 @@ Payload = Mapping[str, float]
 
 def bundled_payloads() -> list[str]:
     """Names of the payloads shipped with the package ("tables_4", "tables_5")."""
-    return sorted(_read_json(PAYLOADS_FILE).get("payloads", {}))
+    return sorted(read_json(PAYLOADS_FILE).get("payloads", {}))
 
 
 def load_payload(name_or_path: str | Path) -> dict[str, float]:
@@ -40,10 +39,10 @@ def load_payload(name_or_path: str | Path) -> dict[str, float]:
     if path.suffix.lower() == ".json" or path.exists():
         if not path.exists():
             raise ValueError(f"{path}: payload file not found")
-        data = _read_json(path)
+        data = read_json(path)
         table = data.get("parameters", data) if isinstance(data, dict) else data
         return validate_payload(table, str(path))
-    payloads = _read_json(PAYLOADS_FILE).get("payloads", {})
+    payloads = read_json(PAYLOADS_FILE).get("payloads", {})
     if str(name_or_path) not in payloads:
         raise ValueError(f"unknown payload {str(name_or_path)!r}: not a file and not one of the "
                          f"bundled payloads {sorted(payloads)}")
@@ -85,6 +84,3 @@ def add_payload(robot: Robot, chi: Any, payload: str | Path | Payload) -> np.nda
     chi[payload_regressor_columns(robot)] += payload_matrix(robot) @ np.array([values[p] for p in PAYLOAD_NAMES])
     return chi
 
-
-def _read_json(path: Path) -> Any:
-    return read_json(path)

@@ -141,3 +141,15 @@ def test_a_bootstrap_sigma_the_draws_could_not_estimate_is_null_in_the_file_and_
     text = _json.dumps(b.to_json(), allow_nan=False)      # raised "Out of range float values" before
     back = Bootstrap.from_json(_json.loads(text))
     assert back.std[0] == 0.5 and np.isnan(back.std[1]) and back.std[2] == 2.0
+
+
+def test_a_fit_file_or_gains_file_that_is_not_json_is_named_with_its_line_and_column(tmp_path):
+    """One JSON reader (rx90sym.files.read_json) for fit, gains and parameter files: the file, the
+    line and the column of the fault in the message."""
+    import rx90sym
+    from identify.io.gains import read_gains
+    bad = tmp_path / "broken.json"
+    bad.write_text('{"parameters": [\n  1, 2,\n]}\n')
+    for read in (identify.load_fit, lambda p: read_gains(p, rx90sym.load_robot("rx90"))):
+        with pytest.raises(ValueError, match=r"broken\.json: not valid JSON \(line 3, column 1"):
+            read(bad)

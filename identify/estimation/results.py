@@ -10,6 +10,7 @@ from typing import Any
 
 import numpy as np
 
+from rx90sym.files import read_json
 from rx90sym.recording import frozen_array
 
 from identify.estimation.compression import CompressedSystem
@@ -208,10 +209,7 @@ class IdentificationResult:
     def from_json(cls, path: str | Path) -> "IdentificationResult":
         """Read a file written by :meth:`to_json`."""
         path = Path(path)
-        try:
-            data = json.loads(path.read_text(encoding="utf-8"))
-        except json.JSONDecodeError as err:
-            raise ValueError(f"{path}: not valid JSON ({err})") from None
+        data = read_json(path)   # ValueError naming the file (and line, column)
         try:
             return cls.from_dict(data)
         except ValueError as err:

@@ -20,12 +20,12 @@ Only ``gains`` is required; ``side`` defaults to ``"joint"``, offsets to 0.
 """
 from __future__ import annotations
 
-import json
 from dataclasses import dataclass, field, replace
 from pathlib import Path
 
 import numpy as np
 
+from rx90sym.files import read_json
 import rx90sym
 from rx90sym.recording import Recording, RecordingError, frozen_array
 
@@ -95,10 +95,7 @@ def read_gains(spec: str | Path, robot: rx90sym.Robot) -> DriveGains:
     """
     text = str(spec)
     if text.lower().endswith(".json") or Path(text).is_file():
-        try:
-            data = json.loads(Path(text).read_text())
-        except (OSError, json.JSONDecodeError) as exc:
-            raise ValueError(f"{text}: cannot read drive gains ({exc})") from None
+        data = read_json(text)   # ValueError naming the file (and line, column)
         if not isinstance(data, dict) or "gains" not in data:
             raise ValueError(f"{text}: no 'gains' list (the output of rx90 gains --json)")
         declared = str(data.get("robot") or "")
