@@ -6,7 +6,7 @@ from __future__ import annotations
 
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -14,6 +14,9 @@ from identify.estimation.consistency.lmi import ConsistencyReport, consistency_r
 from identify.estimation.consistency.problem import (DEFAULT_SOLVER_OPTIONS, NULL_SPACE_WEIGHT, SOLVERS, ComBoxes, ConsistencyError,
                       ConsistentProblem, Interval, MassBounds, build_consistent_problem, check_rss_outside,
                       prior_indices, solve_problem)
+
+if TYPE_CHECKING:  # prior.py imports this package's lmi: only for the annotation
+    from identify.estimation.consistency.prior import PhysicalPrior
 
 __all__ = ["ConsistentSolution", "consistent_least_squares"]
 
@@ -85,7 +88,7 @@ def consistent_least_squares(
     solver_options: Mapping[str, Any] | None = None,
     tol: float = 1e-9,
     null_space_weight: float = NULL_SPACE_WEIGHT,
-    physical_prior: Any = None,
+    physical_prior: PhysicalPrior | None = None,
 ) -> ConsistentSolution:
     """Physically consistent least squares over the standard parameters.
 

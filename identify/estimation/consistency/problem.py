@@ -12,7 +12,7 @@ import time
 import warnings
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import cvxpy as cp
 import numpy as np
@@ -21,6 +21,9 @@ from rx90sym.messages import plain
 
 from identify.estimation.consistency.errors import ConsistencyError  # noqa: F401 (raised here, re-exported)
 from identify.estimation.consistency.lmi import body_indices, nonnegative_indices, pseudo_inertia
+
+if TYPE_CHECKING:  # prior.py imports this package's lmi: only for the annotation
+    from identify.estimation.consistency.prior import PhysicalPrior
 
 __all__ = ["DEFAULT_SOLVER_OPTIONS", "SOLVERS", "ConsistencyError", "ConsistentProblem",
            "build_consistent_problem", "null_space", "solve_problem"]
@@ -109,7 +112,7 @@ def build_consistent_problem(
     nonnegative: Sequence[str] = ("IA", "FV", "FS"),
     null_space_weight: float = NULL_SPACE_WEIGHT,
     objective_scale: str = "noise",
-    physical_prior: Any = None,
+    physical_prior: PhysicalPrior | None = None,
 ) -> ConsistentProblem:
     """Build the conic problem behind :func:`consistent_least_squares` (same arguments).
 
