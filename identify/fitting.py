@@ -122,7 +122,7 @@ class Fit:
         return self.model.min_velocity
 
     @property
-    def rest(self) -> str:
+    def rest(self) -> str | tuple[str, ...]:
         return self.model.rest
 
     @property
@@ -279,14 +279,13 @@ def fit(robot: rx90sym.Robot, recordings: Sequence[Any], processing: Processing 
     base = base if base is not None else rx90sym.base_parameters(robot)
     options = p.observation_options()
     choice = None
-    if p.cross_validate and observation is None:
+    if p.cross_validates and observation is None:
         from identify.observation.cross_validation import choose_processing
 
         choice = choose_processing(robot, recordings, base=base, min_velocity=p.min_velocity, rest=p.rest,
                                    spring=p.spring, default_decimate=p.decimate_to)
         c = choice.chosen
-        options.update(cutoff=c.cutoff, decimate_to=c.decimate_to, rest=c.rest or p.rest,
-                       min_velocity=(p.min_velocity or DEFAULT_MIN_VELOCITY) if c.rest else None)
+        options.update(cutoff=c.cutoff, decimate_to=c.decimate_to, rest=c.rest or options["rest"])
     found = None
     if observation is None and (p.estimate_delay or p.delay == "auto"):
         found = estimate_delay(robot, recordings, base=base, **options)

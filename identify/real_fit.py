@@ -21,5 +21,5 @@ def fit_recordings(robot: rx90sym.Robot, recordings: Sequence[Any], method: str 
     warnings.warn("identify.fit_recordings is deprecated: use identify.fit(robot, recordings, "
                   "Processing(...), method)", DeprecationWarning, stacklevel=2)
     processing = Processing(cutoff=cutoff, decimate_to=decimate_to, min_velocity=min_velocity, rest=rest,
-                            delay=delay, estimate_delay=estimate, spring=spring)
+                            delay=delay, estimate_delay=estimate, spring=spring, cross_validate=False)
     return fit(robot, recordings, processing, method, base=base, **consistent_options)

@@ -16,11 +16,14 @@ the position filter, with the decimation to about 2.5 fc so that the parallel fi
 
 The grid is small: the knee times (0.5, 0.7, 1, 1.4, 2), within [2 Hz, 40 % of Nyquist], each
 decimated to max(2.5 fc, 25 Hz), and the default processing (the automatic cut-off with the
-default decimation); where the fit leaves the rest policy open, the policies zero-coulomb,
-presliding and none are then scored at the best cut-off. Cut-offs are scored from the knee
-outwards and no further one is started once ``time_cap`` seconds are spent (those left are listed
-as not scored); the rest policies are always scored. Bridged samples and rest rows follow the
-fit's rules (the same rows as W).
+default decimation). Where the fit leaves the rest policy open, every policy that keeps the rest
+rows (:data:`SCORED_REST`: zero-coulomb, presliding, none, and any later one of
+``REST_POLICIES``) is first scored at the knee, and each joint takes the policy of its lowest
+per-joint score (the Coulomb column of joint j enters joint j's rows only: the choice is nearly
+separable); the cut-offs are then scored with that per-joint policy. Cut-offs are scored from the
+knee outwards and no further one is started once ``time_cap`` seconds are spent (those left are
+listed as not scored); the rest policies are always scored. Bridged samples and rest rows follow
+the fit's rules (the same rows as W).
 """
 from __future__ import annotations
 
@@ -35,9 +38,10 @@ import rx90sym
 
 from identify.observation.matrix import (DECIMATION_PASSBAND, DEFAULT_MIN_VELOCITY, automatic_cutoff, column_regressor,
                                          filtered_motions, stack_rows)
+from identify.observation.processing import REST_POLICIES, RestPolicy, drops_rest, rest_label
 from identify.signal.filtering import choose_cutoff, lowpass
 
-__all__ = ["Candidate", "ProcessingChoice", "GRID_FACTORS", "DEFAULT_BLOCKS", "DEFAULT_TIME_CAP",
+__all__ = ["Candidate", "ProcessingChoice", "GRID_FACTORS", "DEFAULT_BLOCKS", "DEFAULT_TIME_CAP", "SCORED_REST",
            "candidate_grid", "choose_processing"]
 
 #: Cut-offs of the grid, as multiples of the position-spectrum knee.
@@ -46,27 +50,31 @@ GRID_FACTORS = (0.5, 0.7, 1.0, 1.4, 2.0)
 DEFAULT_BLOCKS = 5
 #: Lowest rate a candidate decimates to, Hz (enough rows per block for the fits and the scores).
 MIN_DECIMATED_RATE = 25.0
-#: Seconds after which no further candidate is scored.
+#: Seconds after which no further cut-off is scored.
 DEFAULT_TIME_CAP = 60.0
+#: The rest policies scored where the fit leaves it open: every one that keeps the rest rows (a
+#: dropped row is not predicted the way it is scored).
+SCORED_REST = tuple(r for r in REST_POLICIES if r != "drop")
 
 
 @dataclass(frozen=True)
 class Candidate:
-    """One processing: cut-off [Hz], decimation target [Hz] (None: none), rest policy (None: no
-    rest handling, every row a moving one; "" while not set: the caller's), its cross-validated
+    """One processing: cut-off [Hz], decimation target [Hz] (None: none), rest policy, one or one per
+    joint (None: no rest threshold, every row a moving one), its cross-validated
     score (mean over joints of the relative held-back error, %; nan: not scored), per joint (%),
     and the seconds it took."""
 
     cutoff: float
     decimate_to: float | None
-    rest: str | None = None
+    rest: RestPolicy | None = None
     score: float = math.nan
     per_joint: tuple[float, ...] = ()
     seconds: float = 0.0
     label: str = ""
 
     def to_dict(self) -> dict[str, Any]:
-        return {"cutoff_hz": self.cutoff, "decimate_to_hz": self.decimate_to, "rest": self.rest,
+        rest = list(self.rest) if isinstance(self.rest, tuple) else self.rest
+        return {"cutoff_hz": self.cutoff, "decimate_to_hz": self.decimate_to, "rest": rest,
                 "score_pct": None if math.isnan(self.score) else self.score,
                 "per_joint_pct": list(self.per_joint), "seconds": self.seconds, "label": self.label}
 
@@ -74,7 +82,8 @@ class Candidate:
 @dataclass(frozen=True)
 class ProcessingChoice:
     """The candidates scored, the chosen one (lowest score), the knee [Hz], the reference
-    bandwidth [Hz], the number of blocks and the time spent [s]."""
+    bandwidth [Hz], the number of blocks, the time spent [s] and, where the rest policy was open,
+    the per-joint scores [%] of each policy at the knee (``rest_scores``)."""
 
     candidates: tuple[Candidate, ...]
     chosen: Candidate
@@ -82,24 +91,46 @@ class ProcessingChoice:
     reference_hz: float
     blocks: int
     seconds: float
+    rest_scores: tuple[tuple[str, tuple[float, ...]], ...] = ()
 
     def table(self) -> str:
+        n = max((len(c.per_joint) for c in self.candidates), default=0)
         head = (f"processing chosen by {self.blocks}-block cross-validation (scored at {self.reference_hz:.3g} Hz; "
-                f"knee {self.knee:.3g} Hz)\n  cut-off [Hz]  decimate to [Hz]  rest policy   held-back error [%]")
+                f"knee {self.knee:.3g} Hz; {self.seconds:.1f} s)\n  cut-off [Hz]  decimate to [Hz]  "
+                f"held-back error [%]" + "".join(f"{'j' + str(j + 1):>7}" for j in range(n)) + "  rest policy")
         lines = [head]
         for c in self.candidates:
             mark = " <- chosen" if c is self.chosen else ""
             score = (("-" if c.label.strip().startswith("not") else "not scored (time cap)")
                      if math.isnan(c.score) else f"{c.score:.3f}")
             dec = "none" if c.decimate_to is None else f"{c.decimate_to:.4g}"
-            lines.append(f"  {c.cutoff:12.4g}  {dec:>16}  {c.rest or 'none':<12}  {score:>19}"
+            joints = "".join(f"{v:7.2f}" for v in c.per_joint) if c.per_joint else " " * 7 * n
+            lines.append(f"  {c.cutoff:12.4g}  {dec:>16}  {score:>19}{joints}  {_rest_text(c.rest)}"
                          f"{' ' + c.label if c.label else ''}{mark}")
-        return "\n".join(lines)
+        return "\n".join(lines + ["  " + self.reason()])
+
+    def reason(self) -> str:
+        """Why the chosen processing: its score against the others, and each joint's rest policy."""
+        c = self.chosen
+        scored = [x for x in self.candidates if not math.isnan(x.score)]
+        dec = "no decimation" if c.decimate_to is None else f"decimation to {c.decimate_to:.4g} Hz"
+        out = (f"chosen: cut-off {c.cutoff:.4g} Hz, {dec}, rest {_rest_text(c.rest)}: the lowest held-back "
+               f"error ({c.score:.3f} %) of {len(scored)} candidates scored")
+        if self.rest_scores:
+            out += ("; rest per joint: the policy of lowest per-joint score at the knee ("
+                    + "; ".join(f"j{j + 1} " + ", ".join(f"{name} {v[j]:.2f}" for name, v in self.rest_scores)
+                                for j in range(len(self.rest_scores[0][1]))) + " %)")
+        return out
 
     def to_dict(self) -> dict[str, Any]:
         return {"method": "blocked cross-validation", "blocks": self.blocks, "reference_hz": self.reference_hz,
                 "knee_hz": self.knee, "seconds": self.seconds, "chosen": self.chosen.to_dict(),
+                "reason": self.reason(), "rest_scores_pct": {name: list(v) for name, v in self.rest_scores},
                 "candidates": [c.to_dict() for c in self.candidates], "table": self.table()}
+
+
+def _rest_text(rest: RestPolicy | None) -> str:
+    return "no threshold" if rest is None else rest_label(rest)
 
 
 def _rate(recordings: Sequence[Any]) -> float:
@@ -169,14 +200,14 @@ def _fold_wls(factors: dict[tuple[int, int], tuple[np.ndarray, int]], held: int,
 def _score(robot: rx90sym.Robot, recordings: Sequence[Any], cand: Candidate, base: Any, reference: float,
            blocks: int, options: dict) -> tuple[float, tuple[float, ...]]:
     names, regressor = column_regressor(robot, base)
-    min_velocity = (options["min_velocity"] or DEFAULT_MIN_VELOCITY) if cand.rest is not None else None
+    min_velocity = options["min_velocity"] if cand.rest is not None else None
     rest = cand.rest or "zero-coulomb"
     motions, _, _ = filtered_motions(robot, recordings, cand.cutoff, cand.decimate_to, options["spring"],
                                      regressor, names, min_velocity, rest, 0.0)
     start = min(float(m.t[0]) for m in motions)
     span = max(float(m.t[-1]) for m in motions) - start + 1e-9
     ids = [_blocks_of(m.t, start, span, blocks) for m in motions]
-    drop = min_velocity is not None and rest == "drop"
+    drop = min_velocity is not None and drops_rest(rest)
     n = robot.n
     # One compression per (block, joint): [R | z] of the QR of [W | Y] (eq. 10 on few rows).
     blocks_R = _compressed_blocks(motions, ids, blocks, drop, n)
@@ -203,17 +234,17 @@ def _score(robot: rx90sym.Robot, recordings: Sequence[Any], cand: Candidate, bas
 
 
 def choose_processing(robot: rx90sym.Robot, recordings: Sequence[Any], base: Any = None,
-                      min_velocity: float | None = None, rest: str = "zero-coulomb", spring: bool = True,
-                      blocks: int = DEFAULT_BLOCKS, time_cap: float = DEFAULT_TIME_CAP,
-                      default_decimate: float | None = 50.0, rest_open: bool = True,
+                      min_velocity: float | None = DEFAULT_MIN_VELOCITY, rest: RestPolicy | None = None,
+                      spring: bool = True, blocks: int = DEFAULT_BLOCKS, time_cap: float = DEFAULT_TIME_CAP,
+                      default_decimate: float | None = 50.0,
                       candidates: Sequence[Candidate] | None = None) -> ProcessingChoice:
     """Score the candidate processings (module docstring) and choose the lowest held-back error.
 
-    min_velocity [rad/s], rest, spring: the fit's rest threshold, policy and spring (the rows of W);
-    rest_open: the rest policy is open too (the robot file fixes none): the other policies
-    ("zero-coulomb", "presliding", none) are scored at the best cut-off;
-    blocks: contiguous blocks (>= 2); time_cap [s]: no candidate is started after it (the first is
-    always scored); candidates: another grid (default :func:`candidate_grid`).
+    min_velocity [rad/s], spring: the fit's rest threshold (None: no rest handling) and spring (the
+    rows of W); rest: the fit's rest policy, one or one per joint, or None (open: chosen per joint
+    among :data:`SCORED_REST`); blocks: contiguous blocks (>= 2); time_cap [s]: no cut-off is
+    started after it (the first is always scored); candidates: another grid (default
+    :func:`candidate_grid`).
     """
     if blocks < 2:
         raise ValueError(f"cross-validation needs at least 2 blocks, got {blocks}")
@@ -223,18 +254,34 @@ def choose_processing(robot: rx90sym.Robot, recordings: Sequence[Any], base: Any
     reference = min(c.cutoff for c in grid)
     options = {"min_velocity": min_velocity, "spring": spring}
     start = time.perf_counter()
-    given = rest if min_velocity is not None else None
-    first = _run(robot, recordings, [replace(c, rest=given) for c in grid], base, reference, blocks, options,
-                 start, time_cap, always_first=True)
-    best = _best(first)
-    # Second stage, at the best cut-off: the rest policies the fit leaves open (and none at all).
-    others = [r for r in ("zero-coulomb", "presliding", None) if r != given] if rest_open else []
-    second = _run(robot, recordings, [replace(best, rest=r, score=math.nan, per_joint=(), label="")
-                                      for r in others], base, reference, blocks, options, start, math.inf)
+    first: list[Candidate] = []
+    rest_scores: tuple[tuple[str, tuple[float, ...]], ...] = ()
+    if min_velocity is None:
+        rest = None
+    elif rest is None:
+        # First stage, at the knee: every policy that keeps the rest rows; each joint takes its best.
+        first = _run(robot, recordings, [replace(grid[0], rest=r) for r in SCORED_REST], base, reference, blocks,
+                     options, start, math.inf)
+        valid = [c for c in first if c.per_joint]
+        if valid:
+            rest_scores = tuple((str(c.rest), c.per_joint) for c in valid)
+            rest = _per_joint_rest(valid)
+        else:
+            rest = "zero-coulomb"
+    second = _run(robot, recordings, [replace(c, rest=rest) for c in grid if (c.cutoff, c.decimate_to, rest) not in
+                                      {(f.cutoff, f.decimate_to, f.rest) for f in first}],
+                  base, reference, blocks, options, start, time_cap, always_first=True)
     scored = first + second
     chosen = _best(scored)
     ordered = tuple(sorted(scored, key=lambda c: c.cutoff))
-    return ProcessingChoice(ordered, chosen, knee, reference, blocks, time.perf_counter() - start)
+    return ProcessingChoice(ordered, chosen, knee, reference, blocks, time.perf_counter() - start, rest_scores)
+
+
+def _per_joint_rest(scored: Sequence[Candidate]) -> RestPolicy:
+    """Each joint's policy of lowest per-joint score (one name when they all agree)."""
+    n = len(scored[0].per_joint)
+    policies = tuple(str(min(scored, key=lambda c: c.per_joint[j]).rest) for j in range(n))
+    return policies[0] if len(set(policies)) == 1 else policies
 
 
 def _best(scored: Sequence[Candidate]) -> Candidate:
