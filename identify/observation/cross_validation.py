@@ -8,11 +8,14 @@ the position filter, with the decimation to about 2.5 fc so that the parallel fi
 1. the recordings' time span is cut into ``blocks`` contiguous blocks of equal duration;
 2. for each block, the base parameters are fitted (WLS) on the rows of the other blocks and the
    torques of the held-back block are predicted;
-3. predicted and measured torques of the held-back block are both low-passed at one common
-   **reference bandwidth** (the grid's lowest cut-off), so that a candidate is neither rewarded nor
-   punished for the noise its own filter lets through; the score of joint j is
-   100 ||LP(Y_j - W_j beta)|| / ||LP(Y_j)|| over every held-back block, the candidate's score the
-   mean over joints.
+3. every candidate is scored at one **common rate** (the grid's highest decimated rate): the rows
+   of W and Y are decimated to it whatever the candidate's own decimation, so the held-back
+   torque Y is the same signal for every candidate (its noise is common: no candidate is rewarded
+   or punished for the noise its own filter lets through), while the noise the candidate's
+   cut-off lets into its prediction counts; the score of joint j is 100 ||Y_j - W_j beta|| /
+   ||Y_j|| over every held-back block, the candidate's score the mean over joints. (An earlier
+   version low-passed prediction and torque at the lowest cut-off: it hid the prediction noise of
+   the high cut-offs, and on the Panda twin kept 20 Hz where 5 Hz was 5x better.)
 
 The grid is small: the knee times (0.5, 0.7, 1, 1.4, 2), within [2 Hz, 40 % of Nyquist], each
 decimated to max(2.5 fc, 25 Hz), and the default processing (the automatic cut-off with the
@@ -45,7 +48,7 @@ import rx90sym
 from identify.observation.matrix import (DECIMATION_PASSBAND, DEFAULT_MIN_VELOCITY, automatic_cutoff, column_regressor,
                                          filtered_motions, stack_rows)
 from identify.observation.processing import DEFAULT_REST, REST_POLICIES, RestPolicy, drops_rest, rest_label
-from identify.signal.filtering import choose_cutoff, lowpass
+from identify.signal.filtering import choose_cutoff
 
 __all__ = ["Candidate", "ProcessingChoice", "GRID_FACTORS", "DEFAULT_BLOCKS", "DEFAULT_TIME_CAP", "SCORED_REST",
            "candidate_grid", "choose_processing"]
@@ -61,8 +64,9 @@ DEFAULT_LABEL = "(default)"
 #: Seconds after which no further cut-off is scored.
 DEFAULT_TIME_CAP = 60.0
 #: The rest policies scored where the fit leaves it open: every one that keeps the rest rows (a
-#: dropped row is not predicted the way it is scored).
-SCORED_REST = tuple(r for r in REST_POLICIES if r != "drop")
+#: dropped row is not predicted the way it is scored) and predicts a long rest from more than the
+#: sign of noise ("none" does not: a joint held still in new data would flip by ±FS).
+SCORED_REST = tuple(r for r in REST_POLICIES if r not in ("drop", "none"))
 
 
 @dataclass(frozen=True)
@@ -97,14 +101,15 @@ class ProcessingChoice:
     candidates: tuple[Candidate, ...]
     chosen: Candidate
     knee: float
-    reference_hz: float
+    reference_hz: float | None
     blocks: int
     seconds: float
     rest_scores: tuple[tuple[str, tuple[float, ...]], ...] = ()
 
     def table(self) -> str:
         n = max((len(c.per_joint) for c in self.candidates), default=0)
-        head = (f"processing chosen by {self.blocks}-block cross-validation (scored at {self.reference_hz:.3g} Hz; "
+        head = (f"processing chosen by {self.blocks}-block cross-validation (scored at "
+                f"{'the full rate' if self.reference_hz is None else f'{self.reference_hz:.4g} Hz'}; "
                 f"knee {self.knee:.3g} Hz; {self.seconds:.1f} s)\n  cut-off [Hz]  decimate to [Hz]  "
                 f"held-back error [%]" + "".join(f"{'j' + str(j + 1):>7}" for j in range(n)) + "  rest policy")
         lines = [head]
@@ -138,7 +143,7 @@ class ProcessingChoice:
         return out
 
     def to_dict(self) -> dict[str, Any]:
-        return {"method": "blocked cross-validation", "blocks": self.blocks, "reference_hz": self.reference_hz,
+        return {"method": "blocked cross-validation", "blocks": self.blocks, "scoring_rate_hz": self.reference_hz,
                 "knee_hz": self.knee, "seconds": self.seconds, "chosen": self.chosen.to_dict(),
                 "reason": self.reason(), "rest_scores_pct": {name: list(v) for name, v in self.rest_scores},
                 "candidates": [c.to_dict() for c in self.candidates], "table": self.table()}
@@ -169,6 +174,12 @@ def candidate_grid(recordings: Sequence[Any], default_decimate: float | None = 5
     out = [c for c in out if abs(c.cutoff - default.cutoff) > 1e-9 * default.cutoff
            or c.decimate_to != default.decimate_to]
     return knee, out[:1] + [default] + out[1:]
+
+
+def _scoring_rate(grid: Sequence[Candidate]) -> float | None:
+    """The common rate every candidate is scored at [Hz]: the highest decimated rate of the grid
+    (None: one candidate is not decimated), so that every held-back torque is the same signal."""
+    return None if any(c.decimate_to is None for c in grid) else max(c.decimate_to for c in grid)
 
 
 def _blocks_of(t: np.ndarray, start: float, span: float, blocks: int) -> np.ndarray:
@@ -212,13 +223,14 @@ def _fold_wls(factors: dict[tuple[int, int], tuple[np.ndarray, int]], held: int,
     return beta
 
 
-def _score(robot: rx90sym.Robot, recordings: Sequence[Any], cand: Candidate, base: Any, reference: float,
+def _score(robot: rx90sym.Robot, recordings: Sequence[Any], cand: Candidate, base: Any, reference: float | None,
            blocks: int, options: dict) -> tuple[float, tuple[float, ...], tuple[tuple[float, ...], ...]]:
-    """(score, per joint, per held-back block and joint), relative errors in %."""
+    """(score, per joint, per held-back block and joint), relative errors in %; the rows decimated
+    to the common scoring rate ``reference`` [Hz] (None: not decimated), whatever the candidate's."""
     names, regressor = column_regressor(robot, base)
     min_velocity = options["min_velocity"] if cand.rest is not None else None
     rest = cand.rest or "zero-coulomb"
-    motions, _, _ = filtered_motions(robot, recordings, cand.cutoff, cand.decimate_to, options["spring"],
+    motions, _, _ = filtered_motions(robot, recordings, cand.cutoff, reference, options["spring"],
                                      regressor, names, min_velocity, rest, 0.0)
     start = min(float(m.t[0]) for m in motions)
     span = max(float(m.t[-1]) for m in motions) - start + 1e-9
@@ -234,13 +246,9 @@ def _score(robot: rx90sym.Robot, recordings: Sequence[Any], cand: Candidate, bas
             continue
         for m, i in zip(motions, ids):
             held = np.flatnonzero(i == b)
-            if held.size < 16:  # too short for the reference filter
-                continue
             pred = m.Phi[held] @ beta
             meas = m.Y[held]
             ok = m.measured[held] if m.measured is not None else np.ones(held.size, dtype=bool)
-            if reference < 0.5 * m.rate * 0.99:
-                pred, meas = lowpass(pred, m.rate, reference), lowpass(meas, m.rate, reference)
             err2[b] += np.sum((pred - meas)[ok] ** 2, axis=0)
             ref2[b] += np.sum(meas[ok] ** 2, axis=0)
     if not np.any(ref2 > 0):
@@ -269,7 +277,7 @@ def choose_processing(robot: rx90sym.Robot, recordings: Sequence[Any], base: Any
     base = base if base is not None else rx90sym.base_parameters(robot)
     knee, grid = candidate_grid(recordings, default_decimate)
     grid = list(candidates) if candidates is not None else grid
-    reference = min(c.cutoff for c in grid)
+    reference = _scoring_rate(grid)
     options = {"min_velocity": min_velocity, "spring": spring}
     start = time.perf_counter()
     first: list[Candidate] = []

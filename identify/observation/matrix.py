@@ -28,7 +28,7 @@ import numpy as np
 import rx90sym
 
 from identify.observation.friction import presliding_state
-from identify.observation.processing import (DEFAULT_MIN_VELOCITY, DEFAULT_REST, REST_POLICIES, RestPolicy, drops_rest,
+from identify.observation.processing import (CROSSING_SECONDS, CROSSING_TRAVEL, DEFAULT_MIN_VELOCITY, DEFAULT_REST, REST_POLICIES, RestPolicy, drops_rest,
                                              rest_label, rest_per_joint)
 from identify.signal.filtering import EDGE_PERIODS, choose_cutoff, decimate, decimation_plan, derivatives
 
@@ -234,7 +234,7 @@ def filtered_motion(robot: rx90sym.Robot, rec: Any, cutoff: float | None = None,
         moving = np.abs(speed) >= min_velocity
         if not (Phi.flags.owndata and Phi.flags.writeable):  # a reused workspace's view: not ours to change
             Phi = np.array(Phi, copy=True)
-        usable = _rest_rows(robot, names, speed, d.q, Phi, min_velocity, policies)
+        usable = _rest_rows(robot, names, speed, d.q, Phi, min_velocity, policies, d.rate)
         dropped = np.array([r == "drop" for r in policies])
         usable[:, dropped] &= moving[:, dropped]
     plan = decimation_plan(d.rate, decimate_to)
@@ -260,11 +260,12 @@ BRIDGED_SHARE = 0.25
 
 
 def _rest_rows(robot: rx90sym.Robot, names: Sequence[str] | None, speed: np.ndarray, q: np.ndarray,
-               Phi: np.ndarray, min_velocity: float, policies: tuple[str, ...]) -> np.ndarray:
+               Phi: np.ndarray, min_velocity: float, policies: tuple[str, ...], rate: float) -> np.ndarray:
     """(S, n) rows kept: for a "drop" joint those whose Coulomb drivers all move, every row of the
     others; sets the Coulomb entries of ``Phi`` (in place) where their driver rests, after the
     policy of the row's joint: 0 ("zero-coulomb"), the presliding state of the filtered positions
-    ``q`` ("presliding"; the position history, never the torque), unchanged ("none", "drop")."""
+    ``q`` ("presliding"; the position history, never the torque), 0 over rests longer than
+    CROSSING_SECONDS at ``rate`` [Hz] ("crossing"), unchanged ("none", "drop")."""
     usable = np.ones(speed.shape, dtype=bool)
     for term in coulomb_terms(robot, names if names is not None else robot.parameter_names):
         driver_moving = np.abs(speed @ np.asarray(term.driver)) >= min_velocity
@@ -273,10 +274,29 @@ def _rest_rows(robot: rx90sym.Robot, names: Sequence[str] | None, speed: np.ndar
             usable[:, term.row] &= driver_moving
         elif rest == "zero-coulomb":
             Phi[~driver_moving, term.row, term.column] = 0.0
+        elif rest == "crossing":
+            still = ~driver_moving & ~_passes(~driver_moving, q @ np.asarray(term.driver), CROSSING_SECONDS * rate)
+            Phi[still, term.row, term.column] = 0.0
         elif rest == "presliding":
             z = presliding_state(q @ np.asarray(term.driver))
             Phi[~driver_moving, term.row, term.column] = z[~driver_moving]
     return usable
+
+
+def _passes(mask: np.ndarray, q: np.ndarray, longest: float) -> np.ndarray:
+    """(S,) True inside the runs of True of ``mask`` (below the rest threshold) that are motions:
+    shorter than ``longest`` samples or spanning CROSSING_TRAVEL of the positions ``q`` [rad]."""
+    edges = np.flatnonzero(np.diff(np.concatenate([[0], mask.astype(np.int8), [0]])))
+    starts, ends = edges[::2], edges[1::2]
+    if starts.size == 0:
+        return np.zeros(mask.size, dtype=bool)
+    padded, bounds = np.append(q, q[-1]), np.column_stack([starts, ends]).ravel()  # [start, end) of each run
+    travel = (np.maximum.reduceat(padded, bounds) - np.minimum.reduceat(padded, bounds))[::2]
+    short = ((ends - starts) < longest) | (travel >= CROSSING_TRAVEL)
+    out = np.zeros(mask.size + 1, dtype=np.int32)
+    np.add.at(out, starts[short], 1)
+    np.add.at(out, ends[short], -1)
+    return np.cumsum(out[:-1]) > 0
 
 
 def _measured_rows(measured: np.ndarray | None, kept: slice, factor: int) -> np.ndarray | None:
