@@ -24,6 +24,7 @@ from dataclasses import dataclass, field
 from typing import Any, Callable, Sequence
 
 import numpy as np
+from scipy.ndimage import maximum_filter1d, minimum_filter1d
 
 import rx90sym
 
@@ -284,19 +285,18 @@ def _rest_rows(robot: rx90sym.Robot, names: Sequence[str] | None, speed: np.ndar
 
 
 def _passes(mask: np.ndarray, q: np.ndarray, longest: float) -> np.ndarray:
-    """(S,) True inside the runs of True of ``mask`` (below the rest threshold) that are motions:
-    shorter than ``longest`` samples or spanning CROSSING_TRAVEL of the positions ``q`` [rad]."""
+    """(S,) True where ``mask`` (below the rest threshold) is a motion: inside a run shorter than
+    ``longest`` samples, or where the positions ``q`` [rad] span CROSSING_TRAVEL or more within
+    ``longest`` samples around (a slow motion, or the moments after a stop)."""
+    size = max(1, int(longest))
+    span = maximum_filter1d(q, size, mode="nearest") - minimum_filter1d(q, size, mode="nearest")
     edges = np.flatnonzero(np.diff(np.concatenate([[0], mask.astype(np.int8), [0]])))
     starts, ends = edges[::2], edges[1::2]
-    if starts.size == 0:
-        return np.zeros(mask.size, dtype=bool)
-    padded, bounds = np.append(q, q[-1]), np.column_stack([starts, ends]).ravel()  # [start, end) of each run
-    travel = (np.maximum.reduceat(padded, bounds) - np.minimum.reduceat(padded, bounds))[::2]
-    short = ((ends - starts) < longest) | (travel >= CROSSING_TRAVEL)
+    short = (ends - starts) < longest
     out = np.zeros(mask.size + 1, dtype=np.int32)
     np.add.at(out, starts[short], 1)
     np.add.at(out, ends[short], -1)
-    return np.cumsum(out[:-1]) > 0
+    return mask & ((np.cumsum(out[:-1]) > 0) | (span >= CROSSING_TRAVEL))
 
 
 def _measured_rows(measured: np.ndarray | None, kept: slice, factor: int) -> np.ndarray | None:
