@@ -26,7 +26,7 @@ REST_POLICIES = ("drop", "zero-coulomb", "presliding", "none", "crossing")
 #: Longest pass below the rest threshold [s] that "crossing" treats as a motion (docs/real-logs.md).
 CROSSING_SECONDS = 0.5
 #: Position range [rad] over which a longer pass below the threshold is a slow motion, not a rest.
-CROSSING_TRAVEL = 2e-3
+CROSSING_TRAVEL = 5e-4
 #: The policy where none is given and none is chosen by cross-validation.
 DEFAULT_REST = "zero-coulomb"
 #: One policy for every joint, or one per joint (joint 1 first).
