@@ -110,7 +110,7 @@ class ProcessingChoice:
         n = max((len(c.per_joint) for c in self.candidates), default=0)
         head = (f"processing chosen by {self.blocks}-block cross-validation (scored at "
                 f"{'the full rate' if self.reference_hz is None else f'{self.reference_hz:.4g} Hz'}; "
-                f"knee {self.knee:.3g} Hz; {self.seconds:.1f} s)\n  cut-off [Hz]  decimate to [Hz]  "
+                f"knee {self.knee:.3g} Hz)\n  cut-off [Hz]  decimate to [Hz]  "
                 f"held-back error [%]" + "".join(f"{'j' + str(j + 1):>7}" for j in range(n)) + "  rest policy")
         lines = [head]
         for c in self.candidates:
