@@ -27,8 +27,8 @@ separable); the cut-offs are then scored with that per-joint policy.
 
 **The default unless clearly beaten**: a policy replaces zero-coulomb on a joint, and a candidate
 replaces the default processing, only when its held-back error is lower by more than the standard
-error of the paired difference over the blocks; a difference within the blocks' spread keeps the
-default (on the TX40, 19.0 and 20 Hz score 7.20 and 7.22 % while the held-out error of joint 1
+error of the paired difference over the blocks (or, for the processing, by more than
+:data:`CLEAR_MARGIN` of the default's score); a smaller difference keeps the default (on the TX40, 19.0 and 20 Hz score 7.20 and 7.22 % while the held-out error of joint 1
 moves by 10 % between them: the scores cannot tell them apart). Cut-offs are scored from the
 knee outwards and no further one is started once ``time_cap`` seconds are spent (those left are
 listed as not scored); the rest policies are always scored. Bridged samples and rest rows follow
@@ -59,6 +59,8 @@ GRID_FACTORS = (0.5, 0.7, 1.0, 1.4, 2.0)
 DEFAULT_BLOCKS = 5
 #: Lowest rate a candidate decimates to, Hz (enough rows per block for the fits and the scores).
 MIN_DECIMATED_RATE = 25.0
+#: A cut-off also replaces the default's when its score is lower by this share of the default's.
+CLEAR_MARGIN = 0.02
 #: Label of the default processing's candidate (the automatic cut-off and decimation).
 DEFAULT_LABEL = "(default)"
 #: Seconds after which no further cut-off is scored.
@@ -132,7 +134,7 @@ class ProcessingChoice:
         why = (f"the lowest held-back error ({c.score:.3f} %) of {len(scored)} candidates scored, clearly below "
                f"the default's" if c is best and c.label != DEFAULT_LABEL else
                f"the default: the lowest held-back error ({best.score:.3f} %, cut-off {best.cutoff:.4g} Hz) is not "
-               f"below it ({c.score:.3f} %) by more than the blocks' spread" if c is not best else
+               f"below it ({c.score:.3f} %) by more than the blocks' spread nor by {100 * CLEAR_MARGIN:g} %" if c is not best else
                f"the default, the lowest held-back error ({c.score:.3f} %) of {len(scored)} candidates scored")
         out = f"chosen: cut-off {c.cutoff:.4g} Hz, {dec}, rest {_rest_text(c.rest)}: {why}"
         if self.rest_scores:
@@ -297,7 +299,7 @@ def choose_processing(robot: rx90sym.Robot, recordings: Sequence[Any], base: Any
     scored = first + second
     chosen = _best(scored)
     default = next((c for c in second if c.label == DEFAULT_LABEL and c.per_block), None)
-    if default is not None and not _clearly_better(chosen, default):
+    if default is not None and not (_clearly_better(chosen, default) or chosen.score < (1 - CLEAR_MARGIN) * default.score):
         chosen = default
     ordered = tuple(sorted(scored, key=lambda c: c.cutoff))
     return ProcessingChoice(ordered, chosen, knee, reference, blocks, time.perf_counter() - start, rest_scores)
