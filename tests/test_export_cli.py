@@ -52,7 +52,11 @@ def test_exported_urdf_and_mjcf_reproduce_the_fits_inverse_dynamics(fits, tmp_pa
     fit = json.loads((folder / "id.json").read_text())["standard"]
     chi = robot.parameter_vector(fit)
     side = json.loads(urdf.with_name("ur10e.actuation.json").read_text())
-    IA = np.array([side["joints"][f"joint{j}"]["IA"] for j in range(1, 7)])
+    # The exported joints carry the robot's ROS names, so a /joint_states message drives them.
+    assert list(side["joints"]) == list(robot.ros_joint_names()) == ["shoulder_pan_joint", "shoulder_lift_joint",
+                                                                     "elbow_joint", "wrist_1_joint", "wrist_2_joint",
+                                                                     "wrist_3_joint"]
+    IA = np.array([side["joints"][name]["IA"] for name in robot.ros_joint_names()])
     model, data = pinocchio_of(urdf, robot)
     mj = mujoco.MjModel.from_xml_path(str(mjcf))
     mj.opt.disableflags |= int(mujoco.mjtDisableBit.mjDSBL_CONSTRAINT | mujoco.mjtDisableBit.mjDSBL_FRICTIONLOSS)
