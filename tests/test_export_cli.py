@@ -103,6 +103,7 @@ def _payload_json(path: Path, values: dict, flange: dict) -> Path:
     ("other robot", "not 'panda'"),
     ("no folder", "output folder"),
     ("payload not physical", "--constrained"),
+    ("franka form for a UR payload", "not in the form or the flange frame of a franka controller"),
     ("nothing asked", "nothing to export"),
 ])
 def test_bad_input_exits_2_with_a_message_and_writes_nothing(fits, tmp_path, capsys, case, needle):
@@ -118,6 +119,11 @@ def test_bad_input_exits_2_with_a_message_and_writes_nothing(fits, tmp_path, cap
         load = rx90sym.load_payload("tables_4")
         flange = flange_payload(robot, {**load, "ZZc": 5.0}).to_dict()
         args[case] = [str(_payload_json(tmp_path / "p.json", load, flange)), "--ur", str(out / "p.script")]
+    if case == "franka form for a UR payload":
+        load = rx90sym.load_payload("tables_4")
+        flange = flange_payload(robot, load).to_dict()
+        args[case] = [str(_payload_json(tmp_path / "p.json", load, flange)), "--ur", str(out / "p.script"),
+                      "--franka", str(out / "p.json")]
     assert main(["export", *args[case]]) == 2
     err = capsys.readouterr().err
     assert needle in err and err.count("\n") == 1, err
