@@ -4,8 +4,9 @@ Joint positions, velocities and accelerations are linear in the coefficients, so
 optimisation grid they are linear constraints (:func:`kinematic_constraints`).
 Motor torques come from the inverse dynamic model with the nominal parameters minus the spring
 torque (:func:`torque_constraints`), Cartesian heights, speeds and clearances from the forward
-geometric model (envelope_rows.py): nonlinear. On the optimisation grid every limit is tightened by a margin (the trajectory also moves
-between grid points, see :func:`kinematic_grid_rate`); :func:`check_limits` then verifies the true
+geometric model (envelope_rows.py): nonlinear. On the optimisation grid every limit is tightened
+by a margin (the trajectory also moves between grid points, see :func:`kinematic_grid_rate`);
+:func:`check_limits` then verifies the true
 limits, without margin, on an independent fine grid (1 kHz by default), which is what decides
 feasibility; :func:`violation_times` tells the optimiser where to add constraints when it fails.
 """

@@ -7,8 +7,9 @@ from the previous one: the cond surrogate f_p for each p of ``OptimiserOptions.p
 exact second derivatives of the criterion through the mapped regressor would cost far more per
 iteration than they save in iterations for ~50 variables.
 
-Constraints: the kinematic limits (linear in Z) and the floor on a grid fine enough for the margins
-to cover what happens between samples; the torque limits (nonlinear, with the most expensive
+Constraints: the kinematic limits (linear in Z) and the safety envelope's rows (heights, capsule
+clearances, Cartesian speeds: envelope_rows.py, whose Jacobian goes through the joint samples) on a
+grid fine enough for the margins to cover what happens between samples; the torque limits (nonlinear, with the most expensive
 Jacobian, and rarely active on the RX90) lazily, cutting-plane style: every start is verified on the fine grid
 (true limits, no margin), and if a limit is exceeded the worst times of each violated stretch join
 the constraint set and the last stage is re-solved (``repairs`` rounds). Only verified starts
