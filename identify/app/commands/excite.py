@@ -314,9 +314,10 @@ def _save(args: argparse.Namespace, traj: Any, robot: rx90sym.Robot, start_pose:
         if problems:
             raise ValueError(f"Franka export refused: {problems[0]}")
     if args.program is not None:
-        if args.controller == "ur":
-            n_lead = len(q) - len(traj.sample(rate, closed=True)[0])  # the approach: done by movej
-            cp.write_urscript(args.program, q[n_lead:], rate, start_pose)
+        if args.controller == "ur":  # the approach and the return: done by movej
+            n_traj = len(traj.sample(rate, closed=True)[0])
+            n_lead = (len(q) - n_traj) // 2
+            cp.write_urscript(args.program, q[n_lead:n_lead + n_traj], rate, start_pose)
         else:
             cp.write_franka(args.program, q)
     ce.write_samples(args.out, t, q, qd, qdd)
