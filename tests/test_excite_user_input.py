@@ -85,3 +85,12 @@ def test_report_says_usage_is_of_the_experiments_limits():
         "torque within 5 % of its limit on joint(s) 1": "warning"}  # torque limits are the robot's own
     bare = excite_page({"limits_usage": usage}).summary.flags  # no envelope: the robot's own limits
     assert {f["severity"] for f in bare} == {"warning"} and len(bare) == 3
+
+
+def test_a_start_pose_below_the_base_is_refused_naming_the_urdf_link(tmp_path, capsys):
+    # shoulder lift +90 deg: the upper arm (0.425 m in ur5.urdf) hangs straight down from the shoulder
+    code, err = _excite(tmp_path, capsys, "--robot", UR5, "--tip", "tool0", "--acceleration", "6",
+                        "--controller", "ur", "--start-pose", "0,1.5708,0,0,0,0")
+    assert code == 2, err
+    assert "outside the safety envelope: origin of frame 3 (link forearm_link) at z = -0.4250 m" in err, err
+    assert "(z in frame 0, where the mounting plane is z = -0.08916 m)" in err  # ur5.urdf: shoulder 0.089159

@@ -13,7 +13,7 @@ import numpy as np
 import rx90sym
 
 from ..common import UsageError, check_output, floats, load_robot, progress, robot_option
-from .excite_poses import check_pose, check_ranges, check_start_pose, envelope_lines
+from .excite_poses import check_pose, check_ranges, check_start_pose, envelope_lines, name_frames
 
 
 def register(sub: Any) -> None:
@@ -137,7 +137,10 @@ def run(args: argparse.Namespace) -> int:
     check_start_pose(robot, None, start_pose)
     collision = _collision(args, robot)
     base = rx90sym.base_parameters(robot)
-    model, described = excitation.safe_model(robot, chi, base, envelope, collision)
+    try:
+        model, described = excitation.safe_model(robot, chi, base, envelope, collision)
+    except ValueError as exc:  # a centre pose or a floor the arm cannot hold, naming the point
+        raise UsageError(name_frames(robot, str(exc))) from None
     check_start_pose(robot, model, start_pose)
     for line in envelope_lines(robot, described):
         progress(line)

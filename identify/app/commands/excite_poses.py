@@ -2,6 +2,7 @@
 envelope works in model angles; a message quotes what the user typed)."""
 from __future__ import annotations
 
+import re
 from typing import Any
 
 import numpy as np
@@ -46,7 +47,7 @@ def check_start_pose(robot: rx90sym.Robot, model: Any, start_pose: Any) -> None:
     bad = [v for v in pose_violations(model, np.asarray(start_pose) - robot.controller_offsets)
            if "outside the experiment" not in v]
     if bad:
-        raise UsageError(f"--start-pose is outside the safety envelope: {bad[0]}")
+        raise UsageError(name_frames(robot, f"--start-pose is outside the safety envelope: {bad[0]}"))
 
 
 def envelope_lines(robot: rx90sym.Robot, described: dict[str, Any]) -> list[str]:
@@ -61,3 +62,22 @@ def envelope_lines(robot: rx90sym.Robot, described: dict[str, Any]) -> list[str]
     if described.get("centre_pose_rad") is not None:
         shown["centre_pose_rad"] = (np.asarray(described["centre_pose_rad"]) + offsets).tolist()
     return [line.replace(" [deg]:", " [deg, controller angles]:") for line in excitation.envelope_lines(shown)]
+
+
+def name_frames(robot: rx90sym.Robot, message: str) -> str:
+    """An envelope refusal in the user's terms: a URDF robot's "origin of frame j" named with its
+    link ("origin of frame 3 (link forearm_link)": the user knows the links, not the model's frame
+    numbers), and heights said to be in frame 0, with where the mounting plane lies in it."""
+    from excitation.robot_geometry import arm_geometry
+
+    links = robot.urdf.links if robot.urdf is not None else ()
+
+    def named(m: re.Match) -> str:
+        j = int(m.group(1))
+        return f"{m.group(0)} (link {links[j - 1]})" if 1 <= j <= len(links) else m.group(0)
+
+    if links:
+        message = re.sub(r"origin of frame (\d+)", named, message)
+    if "lowest allowed z" in message:
+        message += f" (z in frame 0, where the mounting plane is z = {arm_geometry(robot).mounting_z:.4g} m)"
+    return message
