@@ -60,7 +60,7 @@ def envelope_lines(robot: rx90sym.Robot, described: dict[str, Any]) -> list[str]
     shown = dict(described)
     shown["position_limits_rad"] = (np.asarray(described["position_limits_rad"]) + offsets[:, None]).tolist()
     if described.get("centre_pose_rad") is not None:
-        shown["centre_pose_rad"] = (np.asarray(described["centre_pose_rad"]) + offsets).tolist()
+        shown["centre_pose_rad"] = (np.round(np.asarray(described["centre_pose_rad"]) + offsets, 9) + 0.0).tolist()
     return [line.replace(" [deg]:", " [deg, controller angles]:") for line in excitation.envelope_lines(shown)]
 
 
