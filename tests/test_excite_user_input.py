@@ -56,9 +56,15 @@ def test_refusals_quote_the_controller_angles_the_user_typed(tmp_path, capsys, e
 
 
 def test_printed_envelope_is_in_controller_angles(tmp_path, capsys):
-    # --complement of a missing file fails after the envelope is printed, before any optimisation
+    # a --complement recording that cannot be read fails after the envelope is printed, before any
+    # optimisation (a missing one is refused before anything: see the first assertion)
     code, err = _excite(tmp_path, capsys, "--robot", "rx90", "--complement", str(tmp_path / "missing.csv"))
-    assert code == 2 and "missing.csv" in err
+    assert code == 2 and "--complement: " in err and "missing.csv: no such file" in err and "safety envelope" not in err
+    bad = tmp_path / "bad.csv"
+    bad.write_text("t,q1\n0,0\n")
+    code, err = _excite(tmp_path, capsys, "--robot", "rx90", "--complement", str(bad))
+    bad.unlink()
+    assert code == 2 and "bad.csv" in err, err
     q2 = np.degrees(0.9 * RX90_Q2)  # 90 % of +-137.5 deg about the centre 0
     assert f"joint ranges [deg, controller angles]: [-144, 144], [{-q2:.0f}, {q2:.0f}]," in err, err
     assert "centre pose [deg, controller angles]: 0.0, 0.0, 0.0, 0.0" in err, err  # the model's is 0, -90, 90

@@ -6,6 +6,7 @@ import contextlib
 import dataclasses
 import sys
 import warnings
+from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -225,6 +226,9 @@ def _check_options(args: argparse.Namespace) -> None:
         raise UsageError("--controller-rate is for --controller ur, a rate > 0 Hz (500 e-Series, 125 CB3)")
     if args.payload is not None and args.target != "payload":
         raise UsageError("--payload is for --for payload")
+    for path in args.complement or ():  # read after the envelope is built: refused now, not then
+        if not Path(path).is_file():
+            raise UsageError(f"--complement: {path}: no such file")
 
 
 def _collision(args: argparse.Namespace, robot: rx90sym.Robot) -> Any:
