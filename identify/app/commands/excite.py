@@ -146,7 +146,7 @@ def run(args: argparse.Namespace) -> int:
     for line in envelope_lines(robot, described):
         progress(line)
     if args.target == "payload":
-        return _payload(args, robot, base, chi, noise, collision, start_pose, envelope, model)
+        return _payload(args, robot, base, chi, noise, collision, start_pose, envelope, (model, described))
     complement = [_motion(path, robot) for path in args.complement or ()]
     with _client(args) as client:
         traj = excitation.optimise(
@@ -165,8 +165,13 @@ def run(args: argparse.Namespace) -> int:
     if skipped:
         progress(f"{len(skipped)} start(s) skipped by the time budget: {', '.join(map(str, skipped))}")
     print(f"cond = {traj.cond:.2f} (base observation matrix at 250 Hz), criterion {criterion} = "
-          f"{traj.info.criterion_value:.4g}; written {args.out}")
+          f"{traj.info.criterion_value:.4g}; written {_written(args)}")
     return 0
+
+
+def _written(args: argparse.Namespace) -> str:
+    """The files this run wrote, in the order of the options (--out first)."""
+    return ", ".join(p for p in (args.out, args.program, args.json, args.report) if p is not None)
 
 
 def _report(args: argparse.Namespace, robot: rx90sym.Robot, model: Any, traj: Any, described: dict) -> None:
@@ -331,8 +336,10 @@ def _save(args: argparse.Namespace, traj: Any, robot: rx90sym.Robot, start_pose:
 
 
 def _payload(args: argparse.Namespace, robot: rx90sym.Robot, base: Any, chi: Any, noise: Any,
-             collision: Any, start_pose: Any, envelope: Any, model: Any) -> int:
-    """--for payload: optimise, save, report the predicted sigma by methods 3 and 4."""
+             collision: Any, start_pose: Any, envelope: Any, safe: tuple[Any, dict]) -> int:
+    """--for payload: optimise, save, report the predicted sigma by methods 3 and 4 (safe: the
+    envelope's model and description)."""
+    model, described = safe
     from excitation.api import default_noise, optimise_payload
     from excitation.payload_design import payload_sigma
     from rx90sym.files import write_json
@@ -352,10 +359,11 @@ def _payload(args: argparse.Namespace, robot: rx90sym.Robot, base: Any, chi: Any
         noise = default_noise(robot.limits)
     sigma = payload_sigma(robot, base.regressor, traj, noise)
     _save(args, traj, robot, start_pose, model)
+    _report(args, robot, model, traj, described)
     if args.json:
         write_json(args.json, {**traj.summary(), "payload_reference": str(payload),
                                "noise_std_nm": np.asarray(noise).tolist(), "payload_sigma": sigma})
-    print(f"payload motion {traj.duration:g} s written {args.out}; predicted sigma (same motion empty "
+    print(f"payload motion {traj.duration:g} s written {_written(args)}; predicted sigma (same motion empty "
           f"and loaded, methods 3 and 4 agree):")
     print("  " + ", ".join(f"{n} {sigma['method_3'][n]:.3g}" for n in ("Mc", "MZc", "XXc", "YYc")))
     return 0
