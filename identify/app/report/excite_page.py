@@ -94,7 +94,9 @@ def excite_page(record: Mapping[str, Any], figures: Sequence[Figure] = (), more:
         facts.append(("Smallest clearance", f"{fmt(1e3 * usage['min_clearance_m'], 3)} mm"))
     if usage.get("min_height_m") is not None:
         # The lowest of every checked point (frame origins, capsule ends, tool), not only the tool's.
-        facts.append(("Lowest checked point", f"z = {fmt(usage['min_height_m'], 3)} m in frame 0 "
+        plane = (record.get("envelope") or {}).get("mounting_plane_z_m")
+        above = "" if plane is None else f", {fmt(usage['min_height_m'] - plane, 3)} m above the mounting plane"
+        facts.append(("Lowest checked point", f"z = {fmt(usage['min_height_m'], 3)} m in frame 0{above} "
                                               f"(floor z = {fmt(usage.get('z_min_m'))} m)"))
     optimiser = record.get("optimiser") or {}
     envelope = record.get("envelope") or None
