@@ -109,7 +109,8 @@ def _add_limit_options(sp: Any) -> None:
     sp.add_argument("--report", default=None,
                     help="HTML report of the envelope: tool path, speeds and accelerations against "
                          "their limits, distances to the floor and between links along time")
-    sp.add_argument("--out", required=True, help="trajectory CSV (controller angles, 250 Hz)")
+    sp.add_argument("--out", required=True, help="trajectory CSV (controller angles; 250 Hz, or the "
+                                                 "controller's rate with --controller, approach and return included)")
     sp.add_argument("--json", help="coefficients and summary as JSON")
 
 
