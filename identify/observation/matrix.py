@@ -27,6 +27,7 @@ import numpy as np
 import rx90sym
 
 from identify.observation.friction import presliding_state
+from identify.observation.friction_model import PRESLIDING_PREFIX, STRIBECK_PREFIX, friction_base
 from identify.observation.processing import DEFAULT_MIN_VELOCITY, DEFAULT_REST, REST_POLICIES
 from identify.signal.filtering import EDGE_PERIODS, choose_cutoff, decimate, decimation_plan, derivatives
 
@@ -259,15 +260,30 @@ def _rest_rows(robot: rx90sym.Robot, names: Sequence[str] | None, speed: np.ndar
     where their driver rests: 0 ("zero-coulomb") or the presliding state of the filtered positions
     ``q`` ("presliding"; the position history, never the torque)."""
     usable = np.ones(speed.shape, dtype=bool)
-    for term in coulomb_terms(robot, names if names is not None else robot.parameter_names):
+    names = tuple(names if names is not None else robot.parameter_names)
+    for term in coulomb_terms(robot, names):
         driver_moving = np.abs(speed @ np.asarray(term.driver)) >= min_velocity
         usable[:, term.row] &= driver_moving
-        if rest == "zero-coulomb":
-            Phi[~driver_moving, term.row, term.column] = 0.0
-        elif rest == "presliding":
+        if rest == "drop":
+            continue
+        still = ~driver_moving
+        # The moving friction (Coulomb, smooth or Stribeck) says nothing at rest.
+        for column in [term.column] + _named(names, STRIBECK_PREFIX, term.row):
+            Phi[still, term.row, column] = 0.0
+        own = _named(names, PRESLIDING_PREFIX, term.row)
+        if rest == "presliding" and (not own or term.driver[term.row] == 1 == sum(map(abs, term.driver))):
+            # z of the joint's own positions times its magnitude FPj (a motor's Coulomb term, e.g.
+            # the coupling's FSM, adds none); without an FPj column (columns built by hand), FS's.
             z = presliding_state(q @ np.asarray(term.driver))
-            Phi[~driver_moving, term.row, term.column] = z[~driver_moving]
+            for column in own or [term.column]:
+                Phi[still, term.row, column] = z[still]
     return usable
+
+
+def _named(names: Sequence[str], prefix: str, row: int) -> list[int]:
+    """The column of parameter ``prefix`` of joint ``row`` + 1 among ``names`` ([] when absent)."""
+    name = f"{prefix}{row + 1}"
+    return [names.index(name)] if name in names else []
 
 
 def _measured_rows(measured: np.ndarray | None, kept: slice, factor: int) -> np.ndarray | None:
@@ -332,9 +348,10 @@ def stack_rows(blocks: Sequence[np.ndarray], Ys: Sequence[np.ndarray], min_veloc
 
 
 def column_regressor(robot: rx90sym.Robot, base: Any = None, columns: Sequence[str] | None = None,
-                     ) -> tuple[tuple[str, ...], Callable[..., np.ndarray]]:
+                     rest: str | None = None) -> tuple[tuple[str, ...], Callable[..., np.ndarray]]:
     """(names, regressor_batch) of the columns of W: the base parameters of ``robot`` (or ``base``),
-    or the standard parameters ``columns``."""
+    or the standard parameters ``columns``; with ``rest="presliding"`` the base gets the presliding
+    magnitudes FPj (:func:`presliding_base`)."""
     # One reused buffer for the full-rate regressor of every recording (no fresh (N, n, c) array each).
     if columns is not None:
         idx = robot.parameter_index(columns)
@@ -343,10 +360,19 @@ def column_regressor(robot: rx90sym.Robot, base: Any = None, columns: Sequence[s
         def regressor(Q: np.ndarray, QD: np.ndarray, QDD: np.ndarray) -> np.ndarray:
             return workspace.evaluate(Q, QD, QDD)[:, :, idx]
         return tuple(columns), regressor
-    base = base if base is not None else rx90sym.base_parameters(robot)
+    base = presliding_base(robot, base, rest)
     if hasattr(base, "regressor_workspace"):
         return tuple(base.names), base.regressor_workspace().evaluate
     return tuple(base.names), base.regressor_batch
+
+
+def presliding_base(robot: rx90sym.Robot, base: Any = None, rest: str | None = None) -> Any:
+    """The columns a fit with rest policy ``rest`` uses: ``base`` (default: the symbolic base
+    parameters of ``robot``) and, for "presliding", one magnitude FPj per joint with a Coulomb term."""
+    base = base if base is not None else rx90sym.base_parameters(robot)
+    if rest != "presliding":
+        return base
+    return friction_base(base, coulomb_terms(robot, base.names), presliding=True)
 
 
 def observation_matrix(robot: rx90sym.Robot, recordings: Sequence[Any], cutoff: float | None = None,
@@ -369,12 +395,13 @@ def observation_matrix(robot: rx90sym.Robot, recordings: Sequence[Any], cutoff: 
         recordings = [recordings]
     if not recordings:
         raise ValueError("observation_matrix: no recordings given")
-    names, regressor = column_regressor(robot, base, columns)
+    names, regressor = column_regressor(robot, base, columns, rest if min_velocity is not None else None)
     cutoff = cutoff if cutoff is not None else automatic_cutoff(recordings, decimate_to)
     motions, skipped, _ = filtered_motions(robot, recordings, cutoff, decimate_to, spring, regressor, names,
                                         min_velocity, rest, delay)  # one filtering for every segment
     keep = [m.rows(min_velocity is not None and rest == "drop") for m in motions]
     W, Y, joint, samples = stack_rows([m.Phi for m in motions], [m.Y for m in motions], masks=keep)
+    W, names, empty = _without_empty_presliding(W, names)
     rates = tuple(m.rate for m in motions)
     if max(rates) > min(rates) * (1 + 1e-3):
         raise ValueError(f"recordings have different rates after decimation: "
@@ -382,5 +409,19 @@ def observation_matrix(robot: rx90sym.Robot, recordings: Sequence[Any], cutoff: 
     moving = np.concatenate([m.moving for m in motions])
     return Observation(W, Y, joint, names, samples, tuple(m.cutoff for m in motions), rates,
                        rates[0], tuple(m.source for m in motions), sum(len(m.Y) for m in motions),
-                       tuple(m.note for m in motions) + skipped, min_velocity, rest,
+                       tuple(m.note for m in motions) + skipped + empty, min_velocity, rest,
                        moving.mean(axis=0) if min_velocity is not None else None)
+
+
+def _without_empty_presliding(W: np.ndarray, names: Sequence[str]) -> tuple[np.ndarray, tuple[str, ...], tuple[str, ...]]:
+    """W and names without the presliding columns FPj that are 0 on every row (joint j never rests
+    after a motion in these recordings: nothing identifies its magnitude, a prediction counts it as
+    0), and a note naming them."""
+    empty = [c for c, name in enumerate(names)
+             if name.startswith(PRESLIDING_PREFIX) and name[len(PRESLIDING_PREFIX):].isdigit() and not np.any(W[:, c])]
+    if not empty:
+        return W, tuple(names), ()
+    keep = [c for c in range(len(names)) if c not in empty]
+    note = (f"presliding magnitude(s) {', '.join(names[c] for c in empty)} left out: the joint never rests "
+            f"after a motion in these recordings")
+    return W[:, keep], tuple(names[c] for c in keep), (note,)

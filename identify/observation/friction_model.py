@@ -1,0 +1,112 @@
+"""The friction columns of W beyond Coulomb + viscous: smooth forms and the presliding magnitude.
+
+:class:`FrictionBase` wraps the base parameters (any object with ``names`` and
+``regressor_batch``, like :class:`identify.observation.spring_fit.BaseWithSpring`):
+
+- form "tanh" / "stribeck" (:data:`identify.observation.friction.FRICTION_FORMS`): each Coulomb
+  column sign(v) becomes tanh(v/vs), or sign(v)·(1 − e) with a column FSTj = sign(v)·e,
+  e = exp(−(v/vs)²), for the joint's velocity scale vs [rad/s];
+- ``presliding``: one column FPj per joint with a Coulomb term: 0 here, filled at rest by the
+  presliding state z of the position history (identify.observation.matrix, ``rest="presliding"``),
+  so the rest torque is z·FPj with its own magnitude and the moving rows keep the Coulomb model;
+- form "probe" (internal): the Coulomb columns hold the driver speed itself, so that one
+  observation matrix gives separable least squares the (filtered, decimated) speed of every row.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, replace
+from functools import cached_property
+from typing import Any, Sequence
+
+import numpy as np
+
+from identify.observation.friction import DEFAULT_FRICTION, FRICTION_FORMS, friction_columns
+
+__all__ = ["FrictionBase", "PRESLIDING_PREFIX", "STRIBECK_PREFIX", "friction_base"]
+
+#: Column names: FPj the presliding magnitude [N·m] of joint j, FSTj its Stribeck (breakaway) level [N·m].
+PRESLIDING_PREFIX = "FP"
+STRIBECK_PREFIX = "FST"
+
+
+@dataclass(frozen=True, eq=False)
+class FrictionBase:
+    """Base parameters with friction columns (module docstring); usable as ``base`` everywhere.
+
+    base: the wrapped columns; terms: (row, column, driver) of each Coulomb entry of ``base``
+    (identify.observation.matrix.coulomb_terms); form: "coulomb" | "tanh" | "stribeck" | "probe";
+    scales: velocity scale vs [rad/s] per joint (0-based index) for the smooth forms;
+    presliding: add the FPj columns.
+    """
+
+    base: Any
+    terms: tuple[tuple[int, int, tuple[float, ...]], ...]
+    form: str = DEFAULT_FRICTION
+    scales: tuple[float, ...] | None = None
+    presliding: bool = False
+
+    def __post_init__(self) -> None:
+        if self.form not in FRICTION_FORMS + ("probe",):
+            raise ValueError(f"friction form must be one of {FRICTION_FORMS}, got {self.form!r}")
+        if self.form in ("tanh", "stribeck"):
+            rows = sorted({row for row, _, _ in self.terms})
+            if self.scales is None or any(not (row < len(self.scales) and self.scales[row] > 0) for row in rows):
+                raise ValueError(f"friction form {self.form!r} needs a positive velocity scale [rad/s] for "
+                                 f"joints {', '.join(str(r + 1) for r in rows)}, got {self.scales!r}")
+
+    @cached_property
+    def rows(self) -> tuple[int, ...]:
+        """Joints (0-based) with a Coulomb term, in order."""
+        return tuple(sorted({row for row, _, _ in self.terms}))
+
+    @cached_property
+    def names(self) -> tuple[str, ...]:
+        extra = [f"{STRIBECK_PREFIX}{r + 1}" for r in self.rows] if self.form == "stribeck" else []
+        extra += [f"{PRESLIDING_PREFIX}{r + 1}" for r in self.rows] if self.presliding else []
+        return tuple(self.base.names) + tuple(extra)
+
+    @property
+    def nb(self) -> int:
+        return len(self.names)
+
+    def regressor_batch(self, Q: Any, QD: Any, QDD: Any, out: np.ndarray | None = None) -> np.ndarray:
+        """[Phi_b with the Coulomb columns of the form, FST columns, FP columns (0)]: (N, n, nb)."""
+        Phi_b = self.base.regressor_batch(Q, QD, QDD)
+        full = np.zeros(Phi_b.shape[:2] + (self.nb,))
+        c = Phi_b.shape[2]
+        full[:, :, :c] = Phi_b
+        QD = np.asarray(QD, dtype=float)
+        for row, column, driver in self.terms:
+            v = QD @ np.asarray(driver)
+            if self.form == "probe":
+                full[:, row, column] = v
+            elif self.form in ("tanh", "stribeck"):
+                cols, _ = friction_columns(self.form, v, self.scales[row])
+                full[:, row, column] = cols[:, 0]
+                if self.form == "stribeck":
+                    full[:, row, self.names.index(f"{STRIBECK_PREFIX}{row + 1}")] = cols[:, 1]
+        if out is not None:
+            out[...] = full
+            return out
+        return full
+
+    def without_form(self) -> "FrictionBase | Any":
+        """The Coulomb + viscous columns (the wrapped base, keeping the presliding columns)."""
+        return replace(self, form=DEFAULT_FRICTION, scales=None) if self.presliding else self.base
+
+
+def friction_base(base: Any, terms: Sequence[Any], form: str | None = None, scales: Sequence[float] | None = None,
+                  presliding: bool = False) -> Any:
+    """``base`` with the friction columns of ``form`` (None: keep the form of a FrictionBase, else
+    Coulomb) and, with ``presliding``, the FPj columns; ``base`` itself when nothing is added.
+    terms: the Coulomb entries of ``base`` (CoulombTerm, or (row, column, driver))."""
+    if isinstance(base, FrictionBase):
+        form = base.form if form is None else form
+        scales = base.scales if scales is None and form == base.form else scales
+        presliding = presliding or base.presliding
+        base = base.base
+    form = form or DEFAULT_FRICTION
+    if form == DEFAULT_FRICTION and not presliding:
+        return base
+    rows = tuple((t.row, t.column, tuple(t.driver)) if hasattr(t, "row") else tuple(t) for t in terms)
+    return FrictionBase(base, rows, form, tuple(float(s) for s in scales) if scales is not None else None, presliding)
