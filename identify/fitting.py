@@ -23,7 +23,9 @@ from identify.plausibility import Flag
 from identify.estimation.results import IdentificationResult, json_number
 from identify.fit_file import SCHEMA_VERSION, FitModel, gains_of, read_fit_file, robot_of
 from identify.io.gains import DriveGains
-from identify.observation.matrix import Observation, observation_matrix
+from identify.observation.friction import DEFAULT_FRICTION
+from identify.observation.friction_model import friction_base
+from identify.observation.matrix import Observation, coulomb_terms, observation_matrix
 from identify.io.recordings import layout_summary
 from identify.observation.processing import DEFAULT_MIN_VELOCITY, Processing
 from identify.signal.delay import DelayEstimate, estimate_delay
@@ -219,7 +221,11 @@ class Fit:
         asymmetric = tuple(j for j in range(rob.n) if f"FSP{j + 1}" in result.names)
         if asymmetric != tuple(rob.asymmetric_coulomb):
             rob = rob.with_options(asymmetric_coulomb=asymmetric)
-        return cls(rob, result, processing, model, rx90sym.base_parameters(rob),
+        base = rx90sym.base_parameters(rob)
+        if model.friction is not None:  # the smooth form's columns at the scales found
+            base = friction_base(base, coulomb_terms(rob, base.names), model.friction["form"],
+                                 [np.nan if v is None else v for v in model.friction["velocity_scale"]])
+        return cls(rob, result, processing, model, base,
                    delay_estimate_s=data.get("delay_estimate_s"), spring=data.get("spring"),
                    bootstrap=bootstrap, essential=essential, flags=flags,
                    recordings=tuple(data.get("recordings", [])), choice=data.get("processing_choice"))
@@ -266,6 +272,9 @@ def fit(robot: rx90sym.Robot, recordings: Sequence[Any], processing: Processing 
     if block is not None or client is not None:
         from identify.stream_fit import fit_in_blocks
 
+        if processing is not None and processing.friction != DEFAULT_FRICTION:
+            raise ValueError(f"fit: friction form {processing.friction!r} searches its velocity scales on whole "
+                             f"recordings, not block by block: give friction 'coulomb', or no block")
         if processing is not None and processing.cross_validate:
             raise ValueError("fit: the cross-validated processing is chosen on whole recordings, not block by "
                              "block: give a cut-off and a rest policy, or no block")
@@ -291,19 +300,36 @@ def fit(robot: rx90sym.Robot, recordings: Sequence[Any], processing: Processing 
     if observation is None and (p.estimate_delay or p.delay == "auto"):
         found = estimate_delay(robot, recordings, base=base, **options)
     lag = found.delay if p.delay == "auto" else float(p.delay)
+    base, scales = _friction_form(robot, recordings, base, p.friction, observation, dict(options, delay=lag))
     obs = observation if observation is not None else observation_matrix(robot, recordings, delay=lag,
                                                                          base=base, **options)
     result = _solve(robot, obs, base, method, consistent_options)
     model = FitModel.of(robot, convention=convention, gains=gains.to_dict() if gains is not None else None,
                         rest=options["rest"], min_velocity=options["min_velocity"],
                         spring=spring_source or _spring_label(robot, base),
-                        cutoff_hz=obs.cutoffs[0], decimate_to_hz=options["decimate_to"], rate_hz=obs.rate, delay_s=lag)
+                        cutoff_hz=obs.cutoffs[0], decimate_to_hz=options["decimate_to"], rate_hz=obs.rate, delay_s=lag,
+                        friction=scales.to_json() if scales is not None else None)
     from identify.observation.spring_fit import BaseWithSpring, spring_summary
 
     spring = spring_summary(robot, base if isinstance(base, BaseWithSpring) else None, result, recordings)[0]
     return Fit(robot, result, p, model, base, obs, found, found.delay if found is not None else None, spring,
                recordings=tuple(layout_summary(r) for r in recordings if hasattr(r, "measured_mask")),
                choice=choice.to_dict() if choice is not None else None)
+
+
+def _friction_form(robot: rx90sym.Robot, recordings: Sequence[Any], base: Any, form: str,
+                   observation: Observation | None, options: dict[str, Any]) -> tuple[Any, Any]:
+    """(columns, velocity scales) of the friction ``form``: ``base`` and None for Coulomb; else
+    the velocity scale per joint by separable least squares and the base with the form's columns."""
+    if form == DEFAULT_FRICTION:
+        return base, None
+    if observation is not None:
+        raise ValueError(f"fit: friction form {form!r} searches its velocity scales on the recordings: "
+                         f"give recordings, not an observation matrix")
+    from identify.estimation.separable import velocity_scales
+
+    scales = velocity_scales(robot, recordings, base, form, **options)
+    return friction_base(base, coulomb_terms(robot, base.names), form, scales.scales), scales
 
 
 def _honest_covariance(obs: Observation, result: IdentificationResult) -> np.ndarray:

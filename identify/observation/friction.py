@@ -18,7 +18,6 @@ from __future__ import annotations
 from functools import lru_cache
 from typing import Any
 
-import casadi as ca
 import numpy as np
 
 __all__ = ["DEFAULT_FRICTION", "FRICTION_FORMS", "PRESLIDING_TRAVEL", "friction_columns", "friction_function",
@@ -49,9 +48,11 @@ FRICTION_FORMS = ("coulomb", "tanh", "stribeck")
 DEFAULT_FRICTION = "coulomb"
 
 
-def _form_expression(form: str) -> tuple[Any, Any, Any]:
+def _form_expression(form: str) -> tuple[Any, Any, Any]:  # CasADi SX
     """(v, vs, columns) CasADi symbols: the friction columns of one Coulomb term at speed v
     [rad/s] for the velocity scale vs [rad/s] (FS's column first, then FST's for Stribeck)."""
+    import casadi as ca  # here: a command's --help does not pay for CasADi
+
     v, vs = ca.SX.sym("v"), ca.SX.sym("vs")
     if form == "tanh":
         return v, vs, ca.tanh(v / vs)
@@ -62,13 +63,14 @@ def _form_expression(form: str) -> tuple[Any, Any, Any]:
 
 
 @lru_cache(maxsize=None)
-def friction_function(form: str) -> "ca.Function":
+def friction_function(form: str) -> Any:
     """CasADi function (v, vs) -> (columns, d columns / d vs) of a smooth friction form, for
     row vectors v (1, N) and a scalar vs: columns (k, N), k = 1 (tanh) or 2 (stribeck). The
     derivative is CasADi's (separable least squares' outer gradient)."""
+    import casadi as ca
+
     v, vs, cols = _form_expression(form)
-    f = ca.Function(f"friction_{form}", [v, vs], [cols, ca.jacobian(cols, vs)])
-    return f
+    return ca.Function(f"friction_{form}", [v, vs], [cols, ca.jacobian(cols, vs)])
 
 
 def friction_columns(form: str, v: np.ndarray, vs: float) -> tuple[np.ndarray, np.ndarray]:

@@ -22,7 +22,7 @@ import numpy as np
 
 from identify.observation.friction import DEFAULT_FRICTION, FRICTION_FORMS, friction_columns
 
-__all__ = ["FrictionBase", "PRESLIDING_PREFIX", "STRIBECK_PREFIX", "friction_base"]
+__all__ = ["FrictionBase", "PRESLIDING_PREFIX", "STRIBECK_PREFIX", "friction_base", "own_terms"]
 
 #: Column names: FPj the presliding magnitude [N·m] of joint j, FSTj its Stribeck (breakaway) level [N·m].
 PRESLIDING_PREFIX = "FP"
@@ -33,8 +33,8 @@ STRIBECK_PREFIX = "FST"
 class FrictionBase:
     """Base parameters with friction columns (module docstring); usable as ``base`` everywhere.
 
-    base: the wrapped columns; terms: (row, column, driver) of each Coulomb entry of ``base``
-    (identify.observation.matrix.coulomb_terms); form: "coulomb" | "tanh" | "stribeck" | "probe";
+    base: the wrapped columns; terms: (row, column, driver) of each Coulomb entry of ``base`` driven
+    by its own joint (identify.observation.matrix.coulomb_terms, :func:`own_terms`); form: "coulomb" | "tanh" | "stribeck" | "probe";
     scales: velocity scale vs [rad/s] per joint (0-based index) for the smooth forms;
     presliding: add the FPj columns.
     """
@@ -95,6 +95,16 @@ class FrictionBase:
         return replace(self, form=DEFAULT_FRICTION, scales=None) if self.presliding else self.base
 
 
+def own_terms(terms: Sequence[Any]) -> tuple[Any, ...]:
+    """The Coulomb entries driven by their own joint's speed (FSj in row j): the ones a smooth form,
+    a Stribeck level or a presliding magnitude applies to; a motor's (the coupling's FSM) keeps sign(q̇)."""
+    def driver(t: Any) -> tuple[int, tuple[float, ...]]:
+        return (t.row, tuple(t.driver)) if hasattr(t, "row") else (t[0], tuple(t[2]))
+
+    return tuple(t for t in terms
+                 if driver(t)[1][driver(t)[0]] == 1 and sum(abs(x) for x in driver(t)[1]) == 1)
+
+
 def friction_base(base: Any, terms: Sequence[Any], form: str | None = None, scales: Sequence[float] | None = None,
                   presliding: bool = False) -> Any:
     """``base`` with the friction columns of ``form`` (None: keep the form of a FrictionBase, else
@@ -108,5 +118,5 @@ def friction_base(base: Any, terms: Sequence[Any], form: str | None = None, scal
     form = form or DEFAULT_FRICTION
     if form == DEFAULT_FRICTION and not presliding:
         return base
-    rows = tuple((t.row, t.column, tuple(t.driver)) if hasattr(t, "row") else tuple(t) for t in terms)
+    rows = tuple((t.row, t.column, tuple(t.driver)) if hasattr(t, "row") else tuple(t) for t in own_terms(terms))
     return FrictionBase(base, rows, form, tuple(float(s) for s in scales) if scales is not None else None, presliding)

@@ -27,7 +27,7 @@ import numpy as np
 import rx90sym
 
 from identify.observation.friction import presliding_state
-from identify.observation.friction_model import PRESLIDING_PREFIX, STRIBECK_PREFIX, friction_base
+from identify.observation.friction_model import PRESLIDING_PREFIX, STRIBECK_PREFIX, friction_base, own_terms
 from identify.observation.processing import DEFAULT_MIN_VELOCITY, DEFAULT_REST, REST_POLICIES
 from identify.signal.filtering import EDGE_PERIODS, choose_cutoff, decimate, decimation_plan, derivatives
 
@@ -271,7 +271,7 @@ def _rest_rows(robot: rx90sym.Robot, names: Sequence[str] | None, speed: np.ndar
         for column in [term.column] + _named(names, STRIBECK_PREFIX, term.row):
             Phi[still, term.row, column] = 0.0
         own = _named(names, PRESLIDING_PREFIX, term.row)
-        if rest == "presliding" and (not own or term.driver[term.row] == 1 == sum(map(abs, term.driver))):
+        if rest == "presliding" and (not own or own_terms([term])):
             # z of the joint's own positions times its magnitude FPj (a motor's Coulomb term, e.g.
             # the coupling's FSM, adds none); without an FPj column (columns built by hand), FS's.
             z = presliding_state(q @ np.asarray(term.driver))
