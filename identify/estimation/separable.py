@@ -10,7 +10,8 @@ gradient needs only ∂W/∂s at β̂ (β̂ optimal), from CasADi (identify.obse
 Procedure (:func:`velocity_scales`): one observation matrix whose Coulomb columns hold the
 filtered, decimated driver speed v of every row (``FrictionBase`` form "probe"); a scan of a
 common scale over a log grid gives each joint its start (the joint's own residual); L-BFGS-B in
-log s, bounded to [:data:`SCALE_BOUNDS`], refines all scales together. σ of each scale: the
+log s, bounded to :data:`SCALE_BOUNDS` (the lower bound raised to half the 2nd percentile of the joint's
+speeds: below it a column fits a handful of rows), refines all scales together. σ of each scale: the
 Gauss-Newton covariance σ²(JᵀJ)⁻¹ of the weighted residual in (β, s), σ² its variance.
 The columns are evaluated on the decimated speed (f(Dv) for the parallel-filtered D·f(v): equal
 where the speed changes slowly over the decimation filter, i.e. for vs above the speed change in
@@ -37,6 +38,8 @@ __all__ = ["SCALE_BOUNDS", "VelocityScales", "velocity_scales", "scales_from_obs
 #: 2 rad/s it is a second viscous term on the speeds of an arm.
 SCALE_BOUNDS = (1e-4, 2.0)
 _GRID = np.geomspace(1e-3, 1.0, 13)
+#: Share of a joint's moving rows that must lie below its velocity scale (see _log_bounds).
+LOW_SPEED_SHARE = 0.02
 
 
 @dataclass(frozen=True)
@@ -145,6 +148,21 @@ class _Problem:
         return 0.5 * float(r @ r), r, A, ds
 
 
+def _log_bounds(prob: _Problem) -> tuple[np.ndarray, np.ndarray]:
+    """log bounds of each joint's scale: :data:`SCALE_BOUNDS`, the lower one raised to half the
+    :data:`LOW_SPEED_SHARE` quantile of the joint's moving speeds: below it the low-speed
+    zone (|v| < 2 vs) holds a handful of rows and its column fits their noise (e.g. the rows where the
+    filtered speed has the wrong sign around a reversal), not a friction law."""
+    lo = []
+    for j in prob.joints:
+        v = np.abs(np.concatenate([e[2] for e in prob.entries[j]]))
+        v = v[v > 0]
+        # The form departs from sign(v) up to about 2 vs: that zone must hold the share of rows.
+        lo.append(max(SCALE_BOUNDS[0], float(np.quantile(v, LOW_SPEED_SHARE)) / 2 if v.size else 0.0))
+    lo = np.minimum(np.array(lo), SCALE_BOUNDS[1] / 10)
+    return np.log(lo), np.full(len(lo), np.log(SCALE_BOUNDS[1]))
+
+
 def scales_from_observation(obs: Observation, terms: Sequence[Any], form: str, n: int) -> VelocityScales:
     """The velocity scales of ``form`` from a probe observation (Coulomb columns = driver speed)."""
     # Eq. 11's weights from a first fit at a middle scale (the probe's own columns are speeds,
@@ -154,13 +172,13 @@ def scales_from_observation(obs: Observation, terms: Sequence[Any], form: str, n
     W = np.hstack([obs.W[:, plain.fixed], A])
     first = weighted_least_squares(W, obs.Y, obs.joint, [f"c{k}" for k in range(W.shape[1])])
     prob = _Problem.build(obs, terms, form, first.weights)
-    lo, hi = np.log(SCALE_BOUNDS)
+    lo, hi = _log_bounds(prob)
     # Start: a common scale over the grid, each joint taking the one its own rows prefer.
     per_joint = []
     for s in _GRID:
         r = prob.solve(np.full(len(prob.joints), s))[1]
         per_joint.append([float(r[obs.joint == j] @ r[obs.joint == j]) for j in prob.joints])
-    u0 = np.log(_GRID[np.argmin(np.array(per_joint), axis=0)])
+    u0 = np.clip(np.log(_GRID[np.argmin(np.array(per_joint), axis=0)]), lo, hi)
 
     def cost(u: np.ndarray) -> tuple[float, np.ndarray]:
         s = np.exp(u)
@@ -168,7 +186,7 @@ def scales_from_observation(obs: Observation, terms: Sequence[Any], form: str, n
         # Variable projection: dF/ds_j = −rᵀ ∂(DW)/∂s_j β̂ (β̂ optimal); in log s times s_j.
         return f, -(r @ ds) * s
 
-    best = minimize(cost, u0, jac=True, method="L-BFGS-B", bounds=[(lo, hi)] * len(u0))
+    best = minimize(cost, u0, jac=True, method="L-BFGS-B", bounds=list(zip(lo, hi)))
     s = np.exp(best.x)
     f, r, A, ds = prob.solve(s)
     J = np.hstack([obs.W[:, prob.fixed] * prob.d[:, None], A, ds])   # ∂(D·model)/∂(β, s): Gauss-Newton
@@ -178,7 +196,7 @@ def scales_from_observation(obs: Observation, terms: Sequence[Any], form: str, n
     out_s, out_std, out_b = np.full(n, np.nan), np.full(n, np.nan), [False] * n
     for k, j in enumerate(prob.joints):
         out_s[j], out_std[j] = s[k], std[k]
-        out_b[j] = bool(min(best.x[k] - lo, hi - best.x[k]) < 1e-3)
+        out_b[j] = bool(min(best.x[k] - lo[k], hi[k] - best.x[k]) < 1e-3)
     return VelocityScales(form, tuple(out_s), tuple(out_std), tuple(out_b), f)
 
 
