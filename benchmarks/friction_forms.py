@@ -5,8 +5,8 @@ Printed, per (friction form, rest policy):
 1. twin stop-and-go (RX90, 30 s at 200 Hz, 1 s moves and 1 s holds, true friction a Dahl
    presliding state of 5 mrad times FSj, 1 % torque noise; tests/test_presliding.py's twin): fit on
    the first 2/3, all-sample held-out error [%] of the last third, per seed;
-2. TX40: fit on the first 6 s, held-out RMS while moving and on all samples [N·m]
-   (benchmarks/tx40_heldout.py's split; today's zero-coulomb Coulomb while moving:
+2. TX40 (bundled file, offsets): fit on the first 6 s, held-out RMS while moving and on all samples
+   [N·m] (benchmarks/tx40_heldout.py's split and part 2a; today's zero-coulomb Coulomb while moving:
    1.806 / 1.761 / 1.171 / 0.563 / 1.041 / 0.691);
 3. UR10e 14-harmonic run: fit on rows 195..2566, held-out rows 2567..5375 (motion, then 4.4 s at
    rest; benchmarks/ur10e_heldout.py part 3): errors [%] on all samples and while moving (the
@@ -33,6 +33,7 @@ from rx90sym.recording import Recording
 #: (label, friction form, Processing options of the rest handling).
 CASES = (("coulomb, zero-coulomb", "coulomb", {"rest": "zero-coulomb"}),
          ("coulomb, presliding", "coulomb", {"rest": "presliding"}),
+         ("tanh, zero-coulomb", "tanh", {"rest": "zero-coulomb"}),
          ("tanh, no rest handling", "tanh", {"min_velocity": None}),
          ("tanh, presliding", "tanh", {"rest": "presliding"}),
          ("stribeck, no rest handling", "stribeck", {"min_velocity": None}))
@@ -48,7 +49,7 @@ def _load(name: str, folder: str = "benchmarks") -> ModuleType:
 
 
 def _row(label: str, values: np.ndarray, fmt: str = "7.2f") -> str:
-    return f"  {label:<28}" + "".join(f"{v:{fmt}}" for v in values)
+    return f"  {label:<30}" + "".join(f"{v:{fmt}}" for v in values)
 
 
 def twin(seeds: int) -> None:
@@ -68,7 +69,7 @@ def twin(seeds: int) -> None:
 
 def tx40() -> None:
     bench = _load("tx40_heldout")
-    robot = rx90sym.load_robot("tx40")
+    robot = rx90sym.load_robot("tx40", offsets=True)   # as tx40_heldout.py's part 2
     rec = bench.load(None, robot)
     print("2. TX40, fit on the first 6 s: held-out RMS [N·m] while moving | all samples")
     for label, form, rest in CASES:

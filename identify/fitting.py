@@ -284,6 +284,11 @@ def fit(robot: rx90sym.Robot, recordings: Sequence[Any], processing: Processing 
     if method not in METHODS:
         raise ValueError(f"fit: method must be one of {METHODS}, got {method!r}")
     p = processing if processing is not None else Processing()
+    if method == "consistent" and (p.friction != DEFAULT_FRICTION or p.rest == "presliding"):
+        # Its standard parameters are what a URDF/MJCF holds: Coulomb (FS) and viscous (FV) friction.
+        raise ValueError(f"fit: the consistent method fits bodies with Coulomb + viscous friction (what a URDF or "
+                         f"MJCF holds), not friction form {p.friction!r} with rest policy {p.rest!r}: use "
+                         f"friction 'coulomb' and rest 'zero-coulomb' or 'drop', or method 'wls'")
     recordings = list(recordings) if isinstance(recordings, (list, tuple)) else [recordings]
     base = base if base is not None else rx90sym.base_parameters(robot)
     options = p.observation_options()
