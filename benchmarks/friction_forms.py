@@ -52,6 +52,15 @@ def _row(label: str, values: np.ndarray, fmt: str = "7.2f") -> str:
     return f"  {label:<30}" + "".join(f"{v:{fmt}}" for v in values)
 
 
+def _friction_note(f) -> str:
+    """The velocity scales [rad/s] and presliding travels [mrad] a fit found."""
+    found = f.model.friction or {}
+    note = f"  vs {np.round(found['velocity_scale'], 4).tolist()}" if "velocity_scale" in found else ""
+    if "presliding_travel" in found:
+        note += "  δ " + " ".join("-" if d is None else f"{1e3 * d:g}" for d in found["presliding_travel"])
+    return note
+
+
 def twin(seeds: int) -> None:
     t_mod = _load("test_presliding", "tests")
     robot = rx90sym.load_robot("rx90")
@@ -64,7 +73,7 @@ def twin(seeds: int) -> None:
                                          dq=qd, robot=robot.name), 2 / 3)
         for label, form, rest in CASES:
             f = fit(robot, [fit_part], Processing(friction=form, estimate_delay=False, **rest), base=base)
-            print(_row(f"seed {seed} {label}", f.predict(held).relative_error_pct))
+            print(_row(f"seed {seed} {label}", f.predict(held).relative_error_pct) + _friction_note(f))
 
 
 def tx40() -> None:
@@ -75,7 +84,7 @@ def tx40() -> None:
     for label, form, rest in CASES:
         start = time.perf_counter()
         moving, every, f = bench.heldout(robot, rec, friction=form, **rest)
-        scales = f"  vs {np.round(f.model.friction['velocity_scale'], 4).tolist()}" if f.model.friction else ""
+        scales = _friction_note(f)
         print(_row(label, moving, "7.3f") + " |" + "".join(f"{v:7.3f}" for v in every)
               + f"  ({time.perf_counter() - start:.0f} s){scales}")
 
@@ -99,7 +108,7 @@ def ur10e() -> None:
         values = dict(zip(f.result.names, f.result.values))
         fs = np.array([values[f"FS{j}"] for j in range(1, 7)])
         p4 = f.predict(static).rms_error
-        scales = f"  vs {np.round(f.model.friction['velocity_scale'], 4).tolist()}" if f.model.friction else ""
+        scales = _friction_note(f)
         fp = [values.get(f"FP{j}", np.nan) for j in range(1, 7)]
         print(_row(label, v.relative_error_pct, "6.1f") + " |" + "".join(f"{x:6.1f}" for x in moving) + scales)
         print(_row("  p4 error / FS", p4 / fs, "6.2f") + "   FP " + " ".join(f"{x:.2f}" for x in fp))

@@ -23,7 +23,7 @@ from identify.plausibility import Flag
 from identify.estimation.results import IdentificationResult, json_number
 from identify.fit_file import SCHEMA_VERSION, FitModel, gains_of, read_fit_file, robot_of
 from identify.io.gains import DriveGains
-from identify.observation.friction import DEFAULT_FRICTION
+from identify.observation.friction import DEFAULT_FRICTION, PRESLIDING_TRAVEL
 from identify.observation.friction_model import friction_base
 from identify.observation.matrix import Observation, coulomb_terms, observation_matrix
 from identify.io.recordings import layout_summary
@@ -222,9 +222,12 @@ class Fit:
         if asymmetric != tuple(rob.asymmetric_coulomb):
             rob = rob.with_options(asymmetric_coulomb=asymmetric)
         base = rx90sym.base_parameters(rob)
-        if model.friction is not None:  # the smooth form's columns at the scales found
-            base = friction_base(base, coulomb_terms(rob, base.names), model.friction["form"],
-                                 [np.nan if v is None else v for v in model.friction["velocity_scale"]])
+        if model.friction is not None:  # the friction columns found: smooth form's scales, presliding travels
+            fr = model.friction
+            scales = [np.nan if v is None else v for v in fr["velocity_scale"]] if "velocity_scale" in fr else None
+            travels = _defaulted(fr["presliding_travel"]) if "presliding_travel" in fr else None
+            base = friction_base(base, coulomb_terms(rob, base.names), fr["form"], scales,
+                                 presliding=travels is not None, travels=travels)
         return cls(rob, result, processing, model, base,
                    delay_estimate_s=data.get("delay_estimate_s"), spring=data.get("spring"),
                    bootstrap=bootstrap, essential=essential, flags=flags,
@@ -305,7 +308,7 @@ def fit(robot: rx90sym.Robot, recordings: Sequence[Any], processing: Processing 
     if observation is None and (p.estimate_delay or p.delay == "auto"):
         found = estimate_delay(robot, recordings, base=base, **options)
     lag = found.delay if p.delay == "auto" else float(p.delay)
-    base, scales = _friction_form(robot, recordings, base, p.friction, observation, dict(options, delay=lag))
+    base, friction = _friction_form(robot, recordings, base, p.friction, observation, dict(options, delay=lag))
     obs = observation if observation is not None else observation_matrix(robot, recordings, delay=lag,
                                                                          base=base, **options)
     result = _solve(robot, obs, base, method, consistent_options)
@@ -313,7 +316,7 @@ def fit(robot: rx90sym.Robot, recordings: Sequence[Any], processing: Processing 
                         rest=options["rest"], min_velocity=options["min_velocity"],
                         spring=spring_source or _spring_label(robot, base),
                         cutoff_hz=obs.cutoffs[0], decimate_to_hz=options["decimate_to"], rate_hz=obs.rate, delay_s=lag,
-                        friction=scales.to_json() if scales is not None else None)
+                        friction=friction)
     from identify.observation.spring_fit import BaseWithSpring, spring_summary
 
     spring = spring_summary(robot, base if isinstance(base, BaseWithSpring) else None, result, recordings)[0]
@@ -323,18 +326,35 @@ def fit(robot: rx90sym.Robot, recordings: Sequence[Any], processing: Processing 
 
 
 def _friction_form(robot: rx90sym.Robot, recordings: Sequence[Any], base: Any, form: str,
-                   observation: Observation | None, options: dict[str, Any]) -> tuple[Any, Any]:
-    """(columns, velocity scales) of the friction ``form``: ``base`` and None for Coulomb; else
-    the velocity scale per joint by separable least squares and the base with the form's columns."""
-    if form == DEFAULT_FRICTION:
+                   observation: Observation | None, options: dict[str, Any]) -> tuple[Any, dict | None]:
+    """(columns, the fit file's ``model.friction``) of the friction ``form`` and the rest policy in
+    ``options``: a smooth form's velocity scale per joint and the presliding travel per joint, both
+    by separable least squares (identify.estimation.separable); ``base`` and None for Coulomb
+    without presliding."""
+    presliding = options["rest"] == "presliding" and options["min_velocity"] is not None
+    if form == DEFAULT_FRICTION and not presliding or observation is not None:
+        if observation is not None and form != DEFAULT_FRICTION:
+            raise ValueError(f"fit: friction form {form!r} searches its velocity scales on the recordings: "
+                             f"give recordings, not an observation matrix")
         return base, None
-    if observation is not None:
-        raise ValueError(f"fit: friction form {form!r} searches its velocity scales on the recordings: "
-                         f"give recordings, not an observation matrix")
-    from identify.estimation.separable import velocity_scales
+    from identify.estimation.separable import presliding_travels, velocity_scales
 
-    scales = velocity_scales(robot, recordings, base, form, **options)
-    return friction_base(base, coulomb_terms(robot, base.names), form, scales.scales), scales
+    record: dict[str, Any] = {"form": form}
+    terms = coulomb_terms(robot, base.names)
+    if form != DEFAULT_FRICTION:
+        scales = velocity_scales(robot, recordings, base, form, **options)
+        base = friction_base(base, terms, form, scales.scales)
+        record.update(scales.to_json())
+    if presliding:
+        travels = presliding_travels(robot, recordings, base, **options)
+        base = friction_base(base, terms, presliding=True, travels=_defaulted(travels.travels))
+        record.update(travels.to_json())
+    return base, record
+
+
+def _defaulted(travels: Sequence[float | None]) -> list[float]:
+    """Travels [rad] with the default where none was chosen (the joint never rests: no FPj column)."""
+    return [PRESLIDING_TRAVEL if v is None or not np.isfinite(v) else float(v) for v in travels]
 
 
 def _honest_covariance(obs: Observation, result: IdentificationResult) -> np.ndarray:

@@ -29,10 +29,11 @@ from scipy.optimize import minimize
 import rx90sym
 from identify.estimation.least_squares import weighted_least_squares
 from identify.observation.friction import friction_columns
-from identify.observation.friction_model import FrictionBase, own_terms
+from identify.observation.friction_model import PRESLIDING_PREFIX, FrictionBase, own_terms
 from identify.observation.matrix import Observation, coulomb_terms, observation_matrix
 
-__all__ = ["SCALE_BOUNDS", "VelocityScales", "velocity_scales", "scales_from_observation"]
+__all__ = ["SCALE_BOUNDS", "TRAVEL_CANDIDATES", "PreslidingTravels", "VelocityScales", "presliding_travels",
+           "velocity_scales", "scales_from_observation"]
 
 #: Velocity scales searched [rad/s]: below 1e-4 the form is sign(q̇) on any logged speed; above
 #: 2 rad/s it is a second viscous term on the speeds of an arm.
@@ -216,3 +217,69 @@ def velocity_scales(robot: rx90sym.Robot, recordings: Sequence[Any], base: Any, 
     probe = FrictionBase(inner, tuple((t.row, t.column, t.driver) for t in terms), "probe")
     obs = observation_matrix(robot, recordings, base=probe, **options)
     return scales_from_observation(obs, terms, form, robot.n)
+
+
+# ---------------------------------------------------------------- presliding travel per joint
+#: Presliding travels δ tried for every joint [rad] (docs/real-logs.md: the UR10e prefers the short
+#: ones, the twin's Dahl state has 5 mrad).
+TRAVEL_CANDIDATES = (0.25e-3, 0.5e-3, 1e-3, 2e-3, 5e-3, 10e-3)
+
+
+@dataclass(frozen=True)
+class PreslidingTravels:
+    """The presliding travel δ [rad] per joint (nan: no presliding column, e.g. never at rest),
+    chosen among ``candidates`` [rad] by the fit's weighted cost (``cost``: per joint, per
+    candidate, the others at their choice)."""
+
+    travels: tuple[float, ...]
+    candidates: tuple[float, ...]
+    cost: tuple[tuple[float, ...], ...]
+
+    def to_json(self) -> dict[str, Any]:
+        return {"presliding_travel": [float(v) if np.isfinite(v) else None for v in self.travels],
+                "presliding_candidates": list(self.candidates),
+                "presliding_cost": [[float(c) if np.isfinite(c) else None for c in row] for row in self.cost]}
+
+
+def presliding_travels(robot: rx90sym.Robot, recordings: Sequence[Any], base: Any,
+                       candidates: Sequence[float] = TRAVEL_CANDIDATES, **options: Any) -> PreslidingTravels:
+    """The presliding travel per joint, separable like the velocity scales: FPj is linear, δ_j
+    one of ``candidates`` [rad]. One observation matrix holds a column FPj_k per candidate (rest
+    policy "presliding" in ``options``, the fit's other observation options); the other columns
+    are projected out once and each joint's δ is chosen by coordinate descent on the weighted cost
+    (two sweeps; eq. 11's weights from the fit at the middle candidate)."""
+    inner = base.base if isinstance(base, FrictionBase) else base
+    terms = own_terms(coulomb_terms(robot, inner.names))
+    form = base.form if isinstance(base, FrictionBase) else "coulomb"
+    scales = base.scales if isinstance(base, FrictionBase) else None
+    probe = FrictionBase(inner, tuple((t.row, t.column, t.driver) for t in terms), form, scales, True,
+                         None, tuple(float(d) for d in candidates))
+    obs = observation_matrix(robot, recordings, base=probe, **options)
+    names = list(obs.names)
+    columns = {t.row: [names.index(f"{PRESLIDING_PREFIX}{t.row + 1}_{k}") if f"{PRESLIDING_PREFIX}{t.row + 1}_{k}"
+                       in names else None for k in range(len(candidates))] for t in terms}
+    columns = {j: c for j, c in columns.items() if all(x is not None for x in c)}
+    choice = {j: len(candidates) // 2 for j in columns}
+    chosen = sorted(c for j in columns for c in columns[j])
+    fixed = [c for c in range(len(names)) if c not in chosen]
+    first = weighted_least_squares(obs.W[:, fixed + [columns[j][choice[j]] for j in columns]], obs.Y, obs.joint,
+                                   [names[c] for c in fixed] + [f"FP{j + 1}" for j in columns])
+    d = np.asarray(first.weights)[obs.joint]
+    Q = np.linalg.qr(obs.W[:, fixed] * d[:, None])[0]
+    b = obs.Y * d
+    b = b - Q @ (Q.T @ b)
+
+    def cost(pick: dict[int, int]) -> float:
+        A = obs.W[:, [columns[j][pick[j]] for j in columns]] * d[:, None]
+        A = A - Q @ (Q.T @ A)
+        r = b - A @ np.linalg.lstsq(A, b, rcond=None)[0]
+        return 0.5 * float(r @ r)
+
+    table = {j: [np.nan] * len(candidates) for j in columns}
+    for _ in range(2):
+        for j in columns:
+            table[j] = [cost({**choice, j: k}) for k in range(len(candidates))]
+            choice[j] = int(np.argmin(table[j]))
+    travels = tuple(float(candidates[choice[j]]) if j in choice else np.nan for j in range(robot.n))
+    return PreslidingTravels(travels, tuple(float(c) for c in candidates),
+                             tuple(tuple(table.get(j, [np.nan] * len(candidates))) for j in range(robot.n)))

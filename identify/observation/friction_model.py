@@ -6,9 +6,11 @@
 - form "tanh" / "stribeck" (:data:`identify.observation.friction.FRICTION_FORMS`): each Coulomb
   column sign(v) becomes tanh(v/vs), or sign(v)·(1 − e) with a column FSTj = sign(v)·e,
   e = exp(−(v/vs)²), for the joint's velocity scale vs [rad/s];
-- ``presliding``: one column FPj per joint with a Coulomb term: 0 here, filled at rest by the
-  presliding state z of the position history (identify.observation.matrix, ``rest="presliding"``),
-  so the rest torque is z·FPj with its own magnitude and the moving rows keep the Coulomb model;
+- ``presliding``: one column FPj per joint with a Coulomb term holding the presliding state z of
+  the joint's positions (identify.observation.friction, travel ``travels[j]``), kept on the rest
+  rows only (identify.observation.matrix, ``rest="presliding"``), so the rest torque is z·FPj with
+  its own magnitude and the moving rows keep the Coulomb model; with ``candidates``, one column
+  FPj_k per candidate travel k instead (the travel search, identify.estimation.separable);
 - form "probe" (internal): the Coulomb columns hold the driver speed itself, so that one
   observation matrix gives separable least squares the (filtered, decimated) speed of every row.
 """
@@ -20,7 +22,8 @@ from typing import Any, Sequence
 
 import numpy as np
 
-from identify.observation.friction import DEFAULT_FRICTION, FRICTION_FORMS, friction_columns
+from identify.observation.friction import (DEFAULT_FRICTION, FRICTION_FORMS, PRESLIDING_TRAVEL, friction_columns,
+                                          presliding_state)
 
 __all__ = ["FrictionBase", "PRESLIDING_PREFIX", "STRIBECK_PREFIX", "friction_base", "own_terms"]
 
@@ -36,7 +39,9 @@ class FrictionBase:
     base: the wrapped columns; terms: (row, column, driver) of each Coulomb entry of ``base`` driven
     by its own joint (identify.observation.matrix.coulomb_terms, :func:`own_terms`); form: "coulomb" | "tanh" | "stribeck" | "probe";
     scales: velocity scale vs [rad/s] per joint (0-based index) for the smooth forms;
-    presliding: add the FPj columns.
+    presliding: add the FPj columns; travels: presliding travel δ [rad] per joint (None:
+    PRESLIDING_TRAVEL); candidates: travels [rad] tried for every joint, one column FPj_k each
+    (the search; None: one column FPj at ``travels``).
     """
 
     base: Any
@@ -44,6 +49,8 @@ class FrictionBase:
     form: str = DEFAULT_FRICTION
     scales: tuple[float, ...] | None = None
     presliding: bool = False
+    travels: tuple[float, ...] | None = None
+    candidates: tuple[float, ...] | None = None
 
     def __post_init__(self) -> None:
         if self.form not in FRICTION_FORMS + ("probe",):
@@ -62,8 +69,19 @@ class FrictionBase:
     @cached_property
     def names(self) -> tuple[str, ...]:
         extra = [f"{STRIBECK_PREFIX}{r + 1}" for r in self.rows] if self.form == "stribeck" else []
-        extra += [f"{PRESLIDING_PREFIX}{r + 1}" for r in self.rows] if self.presliding else []
+        if self.presliding:
+            extra += [name for r in self.rows for name, _ in self.presliding_columns(r)]
         return tuple(self.base.names) + tuple(extra)
+
+    def travel(self, row: int) -> float:
+        """Presliding travel δ [rad] of joint ``row`` (0-based)."""
+        return float(self.travels[row]) if self.travels is not None else PRESLIDING_TRAVEL
+
+    def presliding_columns(self, row: int) -> list[tuple[str, float]]:
+        """(name, travel δ [rad]) of joint ``row``'s presliding column(s)."""
+        if self.candidates is None:
+            return [(f"{PRESLIDING_PREFIX}{row + 1}", self.travel(row))]
+        return [(f"{PRESLIDING_PREFIX}{row + 1}_{k}", float(d)) for k, d in enumerate(self.candidates)]
 
     @property
     def nb(self) -> int:
@@ -85,6 +103,11 @@ class FrictionBase:
                 full[:, row, column] = cols[:, 0]
                 if self.form == "stribeck":
                     full[:, row, self.names.index(f"{STRIBECK_PREFIX}{row + 1}")] = cols[:, 1]
+            if self.presliding:
+                # z on every sample of the position history; the rest mask keeps it at rest only.
+                position = np.asarray(Q, dtype=float) @ np.asarray(driver)
+                for name, travel in self.presliding_columns(row):
+                    full[:, row, self.names.index(name)] = presliding_state(position, travel)
         if out is not None:
             out[...] = full
             return out
@@ -106,17 +129,20 @@ def own_terms(terms: Sequence[Any]) -> tuple[Any, ...]:
 
 
 def friction_base(base: Any, terms: Sequence[Any], form: str | None = None, scales: Sequence[float] | None = None,
-                  presliding: bool = False) -> Any:
+                  presliding: bool = False, travels: Sequence[float] | None = None) -> Any:
     """``base`` with the friction columns of ``form`` (None: keep the form of a FrictionBase, else
-    Coulomb) and, with ``presliding``, the FPj columns; ``base`` itself when nothing is added.
+    Coulomb) and, with ``presliding``, the FPj columns (travels [rad] per joint; None: those of a
+    FrictionBase, else PRESLIDING_TRAVEL); ``base`` itself when nothing is added.
     terms: the Coulomb entries of ``base`` (CoulombTerm, or (row, column, driver))."""
     if isinstance(base, FrictionBase):
         form = base.form if form is None else form
         scales = base.scales if scales is None and form == base.form else scales
         presliding = presliding or base.presliding
+        travels = base.travels if travels is None else travels
         base = base.base
     form = form or DEFAULT_FRICTION
     if form == DEFAULT_FRICTION and not presliding:
         return base
     rows = tuple((t.row, t.column, tuple(t.driver)) if hasattr(t, "row") else tuple(t) for t in own_terms(terms))
-    return FrictionBase(base, rows, form, tuple(float(s) for s in scales) if scales is not None else None, presliding)
+    return FrictionBase(base, rows, form, tuple(float(s) for s in scales) if scales is not None else None, presliding,
+                        tuple(float(d) for d in travels) if travels is not None else None)

@@ -270,20 +270,24 @@ def _rest_rows(robot: rx90sym.Robot, names: Sequence[str] | None, speed: np.ndar
         # The moving friction (Coulomb, smooth or Stribeck) says nothing at rest.
         for column in [term.column] + _named(names, STRIBECK_PREFIX, term.row):
             Phi[still, term.row, column] = 0.0
-        own = _named(names, PRESLIDING_PREFIX, term.row)
-        if rest == "presliding" and (not own or own_terms([term])):
-            # z of the joint's own positions times its magnitude FPj (a motor's Coulomb term, e.g.
-            # the coupling's FSM, adds none); without an FPj column (columns built by hand), FS's.
+        own = _named(names, PRESLIDING_PREFIX, term.row) if own_terms([term]) else []
+        if own:
+            # FPj holds z of the joint's own positions (FrictionBase): kept at rest only, with this policy.
+            for column in own:
+                Phi[driver_moving if rest == "presliding" else slice(None), term.row, column] = 0.0
+        elif rest == "presliding" and not _named(names, PRESLIDING_PREFIX, term.row):
+            # Columns built by hand, without FPj: z in FS's column (shared magnitude). A motor's
+            # Coulomb term (the coupling's FSM) beside an FPj adds nothing at rest.
             z = presliding_state(q @ np.asarray(term.driver))
-            for column in own or [term.column]:
-                Phi[still, term.row, column] = z[still]
+            Phi[still, term.row, term.column] = z[still]
     return usable
 
 
 def _named(names: Sequence[str], prefix: str, row: int) -> list[int]:
-    """The column of parameter ``prefix`` of joint ``row`` + 1 among ``names`` ([] when absent)."""
+    """The column(s) of parameter ``prefix`` of joint ``row`` + 1 among ``names``: the name itself,
+    or its candidates ``NAME_k`` ([] when absent)."""
     name = f"{prefix}{row + 1}"
-    return [names.index(name)] if name in names else []
+    return [c for c, n in enumerate(names) if n == name or (n.startswith(name + "_") and n[len(name) + 1:].isdigit())]
 
 
 def _measured_rows(measured: np.ndarray | None, kept: slice, factor: int) -> np.ndarray | None:
@@ -370,7 +374,7 @@ def presliding_base(robot: rx90sym.Robot, base: Any = None, rest: str | None = N
     """The columns a fit with rest policy ``rest`` uses: ``base`` (default: the symbolic base
     parameters of ``robot``) and, for "presliding", one magnitude FPj per joint with a Coulomb term."""
     base = base if base is not None else rx90sym.base_parameters(robot)
-    if rest != "presliding":
+    if rest != "presliding" or getattr(base, "presliding", False):
         return base
     return friction_base(base, coulomb_terms(robot, base.names), presliding=True)
 
@@ -418,7 +422,8 @@ def _without_empty_presliding(W: np.ndarray, names: Sequence[str]) -> tuple[np.n
     after a motion in these recordings: nothing identifies its magnitude, a prediction counts it as
     0), and a note naming them."""
     empty = [c for c, name in enumerate(names)
-             if name.startswith(PRESLIDING_PREFIX) and name[len(PRESLIDING_PREFIX):].isdigit() and not np.any(W[:, c])]
+             if name.startswith(PRESLIDING_PREFIX) and name[len(PRESLIDING_PREFIX):].replace("_", "").isdigit()
+             and not np.any(W[:, c])]
     if not empty:
         return W, tuple(names), ()
     keep = [c for c in range(len(names)) if c not in empty]

@@ -255,10 +255,13 @@ def _print_fit(f: Fit, recs: list, auto_delay: bool, prior: Any = None) -> None:
                   f"packets (not fitted), {lay['stale_rows'] or 0} stale rows dropped when read")
     if f.choice is not None:
         print(f.choice["table"])
-    if f.model.friction is not None:
+    if f.model.friction is not None and "velocity_scale" in f.model.friction:
         from identify.estimation.separable import VelocityScales
 
         print(VelocityScales.from_json(f.model.friction).summary())
+    if f.model.friction is not None and "presliding_travel" in f.model.friction:
+        print("presliding travel [mrad] per joint, chosen on the fit's cost: "
+              + " ".join("-" if d is None else f"{1e3 * d:g}" for d in f.model.friction["presliding_travel"]))
     print(f"filtering: cut-off {f.cutoff:.4g} Hz, rate {f.model.rate_hz:.6g} Hz"
           + (f" (decimated to {f.decimate_to:g} Hz)" if f.decimate_to else " (no decimation)")
           + f", torque delay {1e3 * f.delay:.3g} ms compensated")
