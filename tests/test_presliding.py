@@ -71,7 +71,7 @@ def test_presliding_predicts_rest_better_than_coulomb_zero_on_every_joint(rx90, 
         fits[rest] = fit(rx90, [fit_part], Processing(rest=rest, estimate_delay=False), base=rx90_base)
         errors[rest] = fits[rest].predict(held).relative_error_pct
     # Measured over seeds 0-2 (benchmarks/friction_forms.py part 1): presliding with its own magnitude
-    # 0.13-0.28 x the error of Coulomb = 0 at rest on every joint.
+    # 0.13-0.24 x the error of Coulomb = 0 at rest on every joint.
     assert np.all(errors["presliding"] < 0.5 * errors["zero-coulomb"]), errors
     # Its magnitudes FPj are the true presliding level FSj: measured within 7 % over seeds 0-2
     # (the play operator's sharp knee against Dahl's exponential one).
