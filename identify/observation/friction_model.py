@@ -16,16 +16,19 @@
 """
 from __future__ import annotations
 
-from dataclasses import dataclass, replace
+from dataclasses import dataclass
 from functools import cached_property
 from typing import Any, Sequence
 
 import numpy as np
 
+import rx90sym
+
 from identify.observation.friction import (DEFAULT_FRICTION, FRICTION_FORMS, PRESLIDING_TRAVEL, friction_columns,
                                           presliding_state)
 
-__all__ = ["FrictionBase", "PRESLIDING_PREFIX", "STRIBECK_PREFIX", "friction_base", "own_terms"]
+__all__ = ["CoulombTerm", "FrictionBase", "PRESLIDING_PREFIX", "STRIBECK_PREFIX", "coulomb_terms", "friction_base",
+           "own_terms", "presliding_base", "without_empty_presliding"]
 
 #: Column names: FPj the presliding magnitude [N·m] of joint j, FSTj its Stribeck (breakaway) level [N·m].
 PRESLIDING_PREFIX = "FP"
@@ -113,10 +116,6 @@ class FrictionBase:
             return out
         return full
 
-    def without_form(self) -> "FrictionBase | Any":
-        """The Coulomb + viscous columns (the wrapped base, keeping the presliding columns)."""
-        return replace(self, form=DEFAULT_FRICTION, scales=None) if self.presliding else self.base
-
 
 def own_terms(terms: Sequence[Any]) -> tuple[Any, ...]:
     """The Coulomb entries driven by their own joint's speed (FSj in row j): the ones a smooth form,
@@ -146,3 +145,65 @@ def friction_base(base: Any, terms: Sequence[Any], form: str | None = None, scal
     rows = tuple((t.row, t.column, tuple(t.driver)) if hasattr(t, "row") else tuple(t) for t in own_terms(terms))
     return FrictionBase(base, rows, form, tuple(float(s) for s in scales) if scales is not None else None, presliding,
                         tuple(float(d) for d in travels) if travels is not None else None)
+
+
+@dataclass(frozen=True)
+class CoulombTerm:
+    """One Coulomb entry of the regressor: parameter ``name`` (column ``column``) in joint ``row``'s
+    equation, whose sign is that of the speed ``driver @ qd`` (a joint, or a motor for FSM terms)."""
+
+    name: str
+    column: int
+    row: int
+    driver: tuple[float, ...]
+
+
+def coulomb_terms(robot: rx90sym.Robot, names: Sequence[str]) -> tuple[CoulombTerm, ...]:
+    """The Coulomb entries among the parameter columns ``names`` (standard or base names).
+
+    FSj (and FSPj, FSNj of an asymmetric joint) acts on row j with the sign of q̇j; the coupling's FSMb acts on rows a and b with the sign
+    of the motor speed q̇a + q̇b (``coulomb_sign = "motor"``) or of q̇b in row a and q̇a in row b
+    (``"paper"``, eqs. 17-18).
+    """
+    n = robot.n
+    unit = np.eye(n)
+    out = []
+    for c, name in enumerate(names):
+        try:
+            kind, j = rx90sym.parameters.split_name(name)
+        except ValueError:
+            continue
+        if kind in ("FS", "FSP", "FSN") and 1 <= j <= n:
+            out.append(CoulombTerm(name, c, j - 1, tuple(unit[j - 1])))
+        elif kind == "FSM" and robot.coupling is not None and j == robot.coupling.joints[1] + 1:
+            a, b = robot.coupling.joints
+            if robot.coupling.coulomb_sign == "motor":
+                drivers = {a: unit[a] + unit[b], b: unit[a] + unit[b]}
+            else:
+                drivers = {a: unit[b], b: unit[a]}
+            out += [CoulombTerm(name, c, row, tuple(w)) for row, w in drivers.items()]
+    return tuple(out)
+
+
+def presliding_base(robot: rx90sym.Robot, base: Any = None, rest: str | None = None) -> Any:
+    """The columns a fit with rest policy ``rest`` uses: ``base`` (default: the symbolic base
+    parameters of ``robot``) and, for "presliding", one magnitude FPj per joint with a Coulomb term."""
+    base = base if base is not None else rx90sym.base_parameters(robot)
+    if rest != "presliding" or getattr(base, "presliding", False):
+        return base
+    return friction_base(base, coulomb_terms(robot, base.names), presliding=True)
+
+
+def without_empty_presliding(W: np.ndarray, names: Sequence[str]) -> tuple[np.ndarray, tuple[str, ...], tuple[str, ...]]:
+    """W and names without the presliding columns FPj that are 0 on every row (joint j never rests
+    after a motion in these recordings: nothing identifies its magnitude, a prediction counts it as
+    0), and a note naming them."""
+    empty = [c for c, name in enumerate(names)
+             if name.startswith(PRESLIDING_PREFIX) and name[len(PRESLIDING_PREFIX):].replace("_", "").isdigit()
+             and not np.any(W[:, c])]
+    if not empty:
+        return W, tuple(names), ()
+    keep = [c for c in range(len(names)) if c not in empty]
+    note = (f"presliding magnitude(s) {', '.join(names[c] for c in empty)} left out: the joint never rests "
+            f"after a motion in these recordings")
+    return W[:, keep], tuple(names[c] for c in keep), (note,)

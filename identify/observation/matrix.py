@@ -27,53 +27,16 @@ import numpy as np
 import rx90sym
 
 from identify.observation.friction import presliding_state
-from identify.observation.friction_model import PRESLIDING_PREFIX, STRIBECK_PREFIX, friction_base, own_terms
+from identify.observation.friction_model import (PRESLIDING_PREFIX, STRIBECK_PREFIX, CoulombTerm, coulomb_terms, own_terms,
+                                                presliding_base, without_empty_presliding)
 from identify.observation.processing import DEFAULT_MIN_VELOCITY, DEFAULT_REST, REST_POLICIES
 from identify.signal.filtering import EDGE_PERIODS, choose_cutoff, decimate, decimation_plan, derivatives
 
 __all__ = ["DECIMATION_PASSBAND", "automatic_cutoff", "DEFAULT_MIN_VELOCITY", "DEFAULT_REST", "REST_POLICIES", "CoulombTerm", "FilteredMotion", "Observation",
-           "coulomb_terms", "filtered_motion", "filtered_motions", "observation_matrix", "stack_rows"]
+           "coulomb_terms", "filtered_motion", "filtered_motions", "observation_matrix", "presliding_base", "stack_rows"]
 
 # Rest threshold and policy (measured on the TX40 and the twin: docs/real-data-identification.md):
 # defined once, with the other processing defaults, in identify.observation.processing.
-
-
-@dataclass(frozen=True)
-class CoulombTerm:
-    """One Coulomb entry of the regressor: parameter ``name`` (column ``column``) in joint ``row``'s
-    equation, whose sign is that of the speed ``driver @ qd`` (a joint, or a motor for FSM terms)."""
-
-    name: str
-    column: int
-    row: int
-    driver: tuple[float, ...]
-
-
-def coulomb_terms(robot: rx90sym.Robot, names: Sequence[str]) -> tuple[CoulombTerm, ...]:
-    """The Coulomb entries among the parameter columns ``names`` (standard or base names).
-
-    FSj (and FSPj, FSNj of an asymmetric joint) acts on row j with the sign of q̇j; the coupling's FSMb acts on rows a and b with the sign
-    of the motor speed q̇a + q̇b (``coulomb_sign = "motor"``) or of q̇b in row a and q̇a in row b
-    (``"paper"``, eqs. 17-18).
-    """
-    n = robot.n
-    unit = np.eye(n)
-    out = []
-    for c, name in enumerate(names):
-        try:
-            kind, j = rx90sym.parameters.split_name(name)
-        except ValueError:
-            continue
-        if kind in ("FS", "FSP", "FSN") and 1 <= j <= n:
-            out.append(CoulombTerm(name, c, j - 1, tuple(unit[j - 1])))
-        elif kind == "FSM" and robot.coupling is not None and j == robot.coupling.joints[1] + 1:
-            a, b = robot.coupling.joints
-            if robot.coupling.coulomb_sign == "motor":
-                drivers = {a: unit[a] + unit[b], b: unit[a] + unit[b]}
-            else:
-                drivers = {a: unit[b], b: unit[a]}
-            out += [CoulombTerm(name, c, row, tuple(w)) for row, w in drivers.items()]
-    return tuple(out)
 
 
 @dataclass(frozen=True, eq=False)
@@ -370,15 +333,6 @@ def column_regressor(robot: rx90sym.Robot, base: Any = None, columns: Sequence[s
     return tuple(base.names), base.regressor_batch
 
 
-def presliding_base(robot: rx90sym.Robot, base: Any = None, rest: str | None = None) -> Any:
-    """The columns a fit with rest policy ``rest`` uses: ``base`` (default: the symbolic base
-    parameters of ``robot``) and, for "presliding", one magnitude FPj per joint with a Coulomb term."""
-    base = base if base is not None else rx90sym.base_parameters(robot)
-    if rest != "presliding" or getattr(base, "presliding", False):
-        return base
-    return friction_base(base, coulomb_terms(robot, base.names), presliding=True)
-
-
 def observation_matrix(robot: rx90sym.Robot, recordings: Sequence[Any], cutoff: float | None = None,
                        decimate_to: float | None = 50.0, base: Any = None,
                        columns: Sequence[str] | None = None, spring: bool = True,
@@ -405,7 +359,7 @@ def observation_matrix(robot: rx90sym.Robot, recordings: Sequence[Any], cutoff: 
                                         min_velocity, rest, delay)  # one filtering for every segment
     keep = [m.rows(min_velocity is not None and rest == "drop") for m in motions]
     W, Y, joint, samples = stack_rows([m.Phi for m in motions], [m.Y for m in motions], masks=keep)
-    W, names, empty = _without_empty_presliding(W, names)
+    W, names, empty = without_empty_presliding(W, names)
     rates = tuple(m.rate for m in motions)
     if max(rates) > min(rates) * (1 + 1e-3):
         raise ValueError(f"recordings have different rates after decimation: "
@@ -416,17 +370,3 @@ def observation_matrix(robot: rx90sym.Robot, recordings: Sequence[Any], cutoff: 
                        tuple(m.note for m in motions) + skipped + empty, min_velocity, rest,
                        moving.mean(axis=0) if min_velocity is not None else None)
 
-
-def _without_empty_presliding(W: np.ndarray, names: Sequence[str]) -> tuple[np.ndarray, tuple[str, ...], tuple[str, ...]]:
-    """W and names without the presliding columns FPj that are 0 on every row (joint j never rests
-    after a motion in these recordings: nothing identifies its magnitude, a prediction counts it as
-    0), and a note naming them."""
-    empty = [c for c, name in enumerate(names)
-             if name.startswith(PRESLIDING_PREFIX) and name[len(PRESLIDING_PREFIX):].replace("_", "").isdigit()
-             and not np.any(W[:, c])]
-    if not empty:
-        return W, tuple(names), ()
-    keep = [c for c in range(len(names)) if c not in empty]
-    note = (f"presliding magnitude(s) {', '.join(names[c] for c in empty)} left out: the joint never rests "
-            f"after a motion in these recordings")
-    return W[:, keep], tuple(names[c] for c in keep), (note,)
