@@ -265,15 +265,18 @@ def presliding_travels(robot: rx90sym.Robot, recordings: Sequence[Any], base: An
     first = weighted_least_squares(obs.W[:, fixed + [columns[j][choice[j]] for j in columns]], obs.Y, obs.joint,
                                    [names[c] for c in fixed] + [f"FP{j + 1}" for j in columns])
     d = np.asarray(first.weights)[obs.joint]
+    # The fixed columns projected out once; a choice's cost from the Gram matrix of the candidates.
     Q = np.linalg.qr(obs.W[:, fixed] * d[:, None])[0]
+    A = obs.W[:, chosen] * d[:, None]
     b = obs.Y * d
-    b = b - Q @ (Q.T @ b)
+    A, b = A - Q @ (Q.T @ A), b - Q @ (Q.T @ b)
+    G, g, bb = A.T @ A, A.T @ b, float(b @ b)
+    where = {c: k for k, c in enumerate(chosen)}
 
     def cost(pick: dict[int, int]) -> float:
-        A = obs.W[:, [columns[j][pick[j]] for j in columns]] * d[:, None]
-        A = A - Q @ (Q.T @ A)
-        r = b - A @ np.linalg.lstsq(A, b, rcond=None)[0]
-        return 0.5 * float(r @ r)
+        idx = [where[columns[j][pick[j]]] for j in columns]
+        x = np.linalg.lstsq(G[np.ix_(idx, idx)], g[idx], rcond=None)[0]
+        return 0.5 * (bb - float(g[idx] @ x))   # ½‖b − A x‖² at the least-squares x
 
     table = {j: [np.nan] * len(candidates) for j in columns}
     for _ in range(2):
