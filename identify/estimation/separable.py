@@ -10,12 +10,16 @@ gradient needs only ∂W/∂s at β̂ (β̂ optimal), from CasADi (identify.obse
 Procedure (:func:`velocity_scales`): one observation matrix whose Coulomb columns hold the
 filtered, decimated driver speed v of every row (``FrictionBase`` form "probe"); a scan of a
 common scale over a log grid gives each joint its start (the joint's own residual); L-BFGS-B in
-log s, bounded to :data:`SCALE_BOUNDS` (the lower bound raised to half the 2nd percentile of the joint's
-speeds: below it a column fits a handful of rows), refines all scales together. σ of each scale: the
-Gauss-Newton covariance σ²(JᵀJ)⁻¹ of the weighted residual in (β, s), σ² its variance.
+log s, bounded to :data:`SCALE_BOUNDS` (the lower bound raised to half the 2nd percentile of the
+joint's speeds: below it a column fits a handful of rows), refines all scales together. σ of each
+scale: the Gauss-Newton covariance σ²(JᵀJ)⁻¹ of the weighted residual in (β, s), σ² its variance.
 The columns are evaluated on the decimated speed (f(Dv) for the parallel-filtered D·f(v): equal
 where the speed changes slowly over the decimation filter, i.e. for vs above the speed change in
 a few decimated periods); the fit itself then uses the exact parallel-filtered columns.
+
+The presliding travel δ per joint (:func:`presliding_travels`) is separable the same way: the
+magnitude FPj is linear, δ_j one of :data:`TRAVEL_CANDIDATES`, chosen by coordinate descent on the
+projected cost (z is piecewise linear in 1/δ: a grid, not a gradient).
 """
 from __future__ import annotations
 

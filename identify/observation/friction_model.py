@@ -39,8 +39,9 @@ STRIBECK_PREFIX = "FST"
 class FrictionBase:
     """Base parameters with friction columns (module docstring); usable as ``base`` everywhere.
 
-    base: the wrapped columns; terms: (row, column, driver) of each Coulomb entry of ``base`` driven
-    by its own joint (identify.observation.matrix.coulomb_terms, :func:`own_terms`); form: "coulomb" | "tanh" | "stribeck" | "probe";
+    base: the wrapped columns; terms: (row, column, driver) of each Coulomb entry of ``base``
+    driven by its own joint (:func:`coulomb_terms`, :func:`own_terms`); form: "coulomb" | "tanh" |
+    "stribeck" | "probe";
     scales: velocity scale vs [rad/s] per joint (0-based index) for the smooth forms;
     presliding: add the FPj columns; travels: presliding travel δ [rad] per joint (None:
     PRESLIDING_TRAVEL); candidates: travels [rad] tried for every joint, one column FPj_k each
