@@ -14,8 +14,8 @@ import numpy as np
 
 import rx90sym
 
-from identify.observation.matrix import automatic_cutoff, filtered_motions
-from identify.observation.processing import RestPolicy, predicted_rest
+from identify.observation.matrix import automatic_cutoff, filtered_motions, presliding_base
+from identify.observation.processing import RestPolicy, has_policy, predicted_rest
 from identify.estimation.results import IdentificationResult, json_number
 
 __all__ = ["Validation", "predict", "validate"]
@@ -115,9 +115,10 @@ def predict(robot: rx90sym.Robot, result: IdentificationResult, recording: Any, 
     cutoff [Hz], decimate_to [Hz]: give those of the fit (None: chosen on this recording);
     min_velocity [rad/s]: rest threshold (Coulomb term 0 at rest, errors also while moving);
     delay [s]: torque lag compensated as in the fit; rest: the fit's rest policy, one or one per joint
-    (every sample is predicted: "drop" takes Coulomb 0 at rest, the others as in the fit).
+    (every sample is predicted: "drop" takes Coulomb 0 at rest; "presliding" the presliding state
+    times FPj; the others as in the fit).
     """
-    base = base if base is not None else rx90sym.base_parameters(robot)
+    base = presliding_base(robot, base, rest if has_policy(rest, "presliding") and min_velocity is not None else None)
     beta = base_vector(result, base, robot)
     cutoff = cutoff if cutoff is not None else automatic_cutoff([recording], decimate_to)
     motions, _, _ = filtered_motions(robot, [recording], cutoff, decimate_to, spring, base.regressor_batch,

@@ -230,9 +230,10 @@ def _score(robot: rx90sym.Robot, recordings: Sequence[Any], cand: Candidate, bas
            blocks: int, options: dict) -> tuple[float, tuple[float, ...], tuple[tuple[float, ...], ...]]:
     """(score, per joint, per held-back block and joint), relative errors in %; the rows decimated
     to the common scoring rate ``reference`` [Hz] (None: not decimated), whatever the candidate's."""
-    names, regressor = column_regressor(robot, base)
     min_velocity = options["min_velocity"] if cand.rest is not None else None
     rest = cand.rest or "zero-coulomb"
+    # A presliding joint gets its magnitude FPj (travel PRESLIDING_TRAVEL), as in the fit.
+    names, regressor = column_regressor(robot, base, rest=rest if min_velocity is not None else None)
     motions, _, _ = filtered_motions(robot, recordings, cand.cutoff, reference, options["spring"],
                                      regressor, names, min_velocity, rest, 0.0)
     start = min(float(m.t[0]) for m in motions)
@@ -265,13 +266,13 @@ def _score(robot: rx90sym.Robot, recordings: Sequence[Any], cand: Candidate, bas
 def choose_processing(robot: rx90sym.Robot, recordings: Sequence[Any], base: Any = None,
                       min_velocity: float | None = DEFAULT_MIN_VELOCITY, rest: RestPolicy | None = None,
                       spring: bool = True, blocks: int = DEFAULT_BLOCKS, time_cap: float = DEFAULT_TIME_CAP,
-                      default_decimate: float | None = 50.0,
-                      candidates: Sequence[Candidate] | None = None) -> ProcessingChoice:
+                      default_decimate: float | None = 50.0, candidates: Sequence[Candidate] | None = None,
+                      policies: Sequence[str] = SCORED_REST) -> ProcessingChoice:
     """Score the candidate processings (module docstring) and choose the lowest held-back error.
 
     min_velocity [rad/s], spring: the fit's rest threshold (None: no rest handling) and spring (the
     rows of W); rest: the fit's rest policy, one or one per joint, or None (open: chosen per joint
-    among :data:`SCORED_REST`); blocks: contiguous blocks (>= 2); time_cap [s]: no cut-off is
+    among ``policies``, default :data:`SCORED_REST`); blocks: contiguous blocks (>= 2); time_cap [s]: no cut-off is
     started after it (the first is always scored); candidates: another grid (default
     :func:`candidate_grid`).
     """
@@ -289,7 +290,7 @@ def choose_processing(robot: rx90sym.Robot, recordings: Sequence[Any], base: Any
         rest = None
     elif rest is None:
         # First stage, at the knee: every policy that keeps the rest rows; each joint takes its best.
-        first = _run(robot, recordings, [replace(grid[0], rest=r) for r in SCORED_REST], base, reference, blocks,
+        first = _run(robot, recordings, [replace(grid[0], rest=r) for r in policies], base, reference, blocks,
                      options, start, math.inf)
         valid = [c for c in first if c.per_joint]
         rest_scores = tuple((str(c.rest), c.per_joint) for c in valid)

@@ -10,8 +10,11 @@ import math
 from dataclasses import asdict, dataclass, fields
 from typing import Any
 
-__all__ = ["Processing", "REST_POLICIES", "CROSSING_SECONDS", "CROSSING_TRAVEL", "DEFAULT_MIN_VELOCITY", "DEFAULT_REST", "DEFAULT_DECIMATE_TO",
-           "RestPolicy", "rest_per_joint", "drops_rest", "predicted_rest", "rest_label"]
+from identify.observation.friction import DEFAULT_FRICTION, FRICTION_FORMS
+
+__all__ = ["Processing", "FRICTION_FORMS", "REST_POLICIES", "CROSSING_SECONDS", "CROSSING_TRAVEL",
+           "DEFAULT_MIN_VELOCITY", "DEFAULT_REST", "DEFAULT_DECIMATE_TO", "RestPolicy", "rest_per_joint",
+           "drops_rest", "has_policy", "predicted_rest", "rest_label"]
 
 #: Rest threshold [rad/s]: a joint slower than this is at rest (its Coulomb sign is unknown).
 DEFAULT_MIN_VELOCITY = 0.05
@@ -42,9 +45,14 @@ def rest_per_joint(rest: RestPolicy | None, n: int) -> tuple[str, ...]:
     return policies
 
 
+def has_policy(rest: RestPolicy | None, name: str) -> bool:
+    """Whether some joint follows policy ``name``."""
+    return rest == name or (not isinstance(rest, str) and rest is not None and name in rest)
+
+
 def drops_rest(rest: RestPolicy | None) -> bool:
     """Whether some joint's rest rows are dropped (its rows then follow ``FilteredMotion.usable``)."""
-    return rest == "drop" or (not isinstance(rest, str) and rest is not None and "drop" in rest)
+    return has_policy(rest, "drop")
 
 
 def predicted_rest(rest: RestPolicy | None) -> RestPolicy:
@@ -81,13 +89,16 @@ class Processing:
     decimate_to [Hz]: rate after parallel filtering (None or 0: no decimation);
     min_velocity [rad/s]: rest threshold (None or 0: no rest handling);
     rest: "drop" (rest rows removed) | "zero-coulomb" (kept with Coulomb term 0) | "presliding"
-    (kept with the presliding state) | "none" (kept as they are), or a tuple of them, one per
-    joint; None: open (chosen per joint by the cross-validation, else :data:`DEFAULT_REST`);
+    (kept with the presliding state times its own magnitude FPj) | "none" (kept as they are) |
+    "crossing" (see REST_POLICIES), or a tuple of them, one per joint; None: open (chosen per joint
+    by the cross-validation, else :data:`DEFAULT_REST`);
     delay: torque lag behind the positions [s] compensated, or "auto" (estimated);
     estimate_delay: estimate the lag even when it is not compensated, to report it (~40
     least-squares fits);
     spring: add the robot's spring torque to the measured torque (False when the spring is
     identified with the other parameters);
+    friction: the friction form of the moving rows, one of FRICTION_FORMS ("coulomb"; "tanh",
+    "stribeck": velocity scale per joint by separable least squares, identify.estimation.separable);
     cross_validate: choose the cut-off, the decimation and (where ``rest`` is None) the rest
     policy per joint on the torques by blocked cross-validation
     (:mod:`identify.observation.cross_validation`; ``cutoff`` must be None); None (default): on
@@ -103,6 +114,7 @@ class Processing:
     estimate_delay: bool = True
     spring: bool = True
     cross_validate: bool | None = None
+    friction: str = DEFAULT_FRICTION
 
     def __post_init__(self) -> None:
         # 0 means "none" for the rate and the threshold: one spelling inside (None).
@@ -114,6 +126,8 @@ class Processing:
                 raise ValueError(f"processing: {name} must be a positive number or None, got {value!r}")
         if self.cross_validate and self.cutoff is not None:
             raise ValueError("processing: a cut-off is given and cross_validate asks to choose one: give one of them")
+        if self.friction not in FRICTION_FORMS:
+            raise ValueError(f"processing: friction must be one of {FRICTION_FORMS}, got {self.friction!r}")
         object.__setattr__(self, "rest", _check_rest(self.rest, "processing"))
         if not (self.delay == "auto" or (isinstance(self.delay, (int, float)) and math.isfinite(self.delay))):
             raise ValueError(f"processing: delay must be 'auto' or a number of seconds, got {self.delay!r}")
