@@ -297,12 +297,10 @@ def fit(robot: rx90sym.Robot, recordings: Sequence[Any], processing: Processing 
     options = p.observation_options()
     choice = None
     if p.cross_validates and observation is None:
-        from identify.observation.cross_validation import SCORED_REST, choose_processing
+        from identify.observation.cross_validation import choose_processing
 
-        # The consistent method's bodies hold Coulomb + viscous only: no presliding magnitude to choose.
-        scored = tuple(r for r in SCORED_REST if method != "consistent" or r != "presliding")
         choice = choose_processing(robot, recordings, base=base, min_velocity=p.min_velocity, rest=p.rest,
-                                   spring=p.spring, default_decimate=p.decimate_to, policies=scored)
+                                   spring=p.spring, default_decimate=p.decimate_to)
         c = choice.chosen
         options.update(cutoff=c.cutoff, decimate_to=c.decimate_to, rest=c.rest or options["rest"])
     found = None

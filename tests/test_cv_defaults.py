@@ -12,6 +12,7 @@ import pytest
 import rx90sym
 from conftest import benchmark_module
 from identify import Processing, fit, load_fit, predict, split
+from identify.observation.cross_validation import choose_processing
 from motions import multisine
 from rx90sym.recording import Recording
 from test_presliding import dahl, stop_and_go
@@ -63,13 +64,16 @@ def test_the_rest_policy_is_chosen_per_joint_from_the_twins_friction(rx90, rx90_
     tau = rx90.regressor_batch(q, qd, qdd) @ (chi * no_coulomb) + fs * state - rx90.spring_torque_batch(q)[:, :, 0]
     tau += 0.01 * np.sqrt(np.mean(tau**2, axis=0)) * np.random.default_rng(100).normal(size=tau.shape)
     fit_part, _ = split(Recording(t=t, q=q, tau=tau, dq=qd, robot=rx90.name), 2 / 3)
-    f = fit(rx90, [fit_part], Processing(estimate_delay=False), base=rx90_base)
-    assert f.rest[:3] == ("presliding",) * 3, f.choice["reason"]
+    # presliding is scored on request only (not by the defaults: SCORED_REST says why)
+    choice = choose_processing(rx90, [fit_part], base=rx90_base, policies=("zero-coulomb", "presliding", "crossing"))
+    rest = choice.chosen.rest
+    assert rest[:3] == ("presliding",) * 3, choice.reason()
     # Joints 4-6: no hold torque; below the threshold at the end of each move the friction still
     # follows the motion, which crossing keeps (measured, seed 0: crossing on joints 5, 6; presliding
     # on joint 4, 8.8 % against 9.7 % for zero-coulomb, its FP4 fitting that tail).
-    assert sum(r != "presliding" for r in f.rest[3:]) >= 2, f.choice["reason"]
-    assert "rest per joint" in f.choice["reason"] and f.choice["rest_scores_pct"]
+    assert sum(r != "presliding" for r in rest[3:]) >= 2, choice.reason()
+    f = fit(rx90, [fit_part], Processing(estimate_delay=False), base=rx90_base)  # the defaults: no presliding
+    assert "presliding" not in f.rest and f.choice["rest_scores_pct"] and "rest per joint" in f.choice["reason"]
 
 
 def test_a_per_joint_rest_policy_round_trips_through_the_fit_file(rx90, rx90_base, tmp_path):
