@@ -65,8 +65,9 @@ def test_block_fit_of_a_lossy_log_equals_the_in_memory_fit(panda, lossy, tmp_pat
     base = rx90sym.base_parameters(panda)
     out = tmp_path / "rec.csv"
     convert_log(path, panda, cols, out, resample=1000.0, convention="model", block=LINES)
-    ref = identify.fit(panda, [whole], base=base).bootstrapped(0)
-    blocks = identify.fit(panda, [str(out)], base=base, block=SAMPLES)
+    p = identify.Processing(estimate_delay=False)  # the delay search in blocks: tests/test_long_logs.py
+    ref = identify.fit(panda, [whole], p, base=base).bootstrapped(0)
+    blocks = identify.fit(panda, [str(out)], p, base=base, block=SAMPLES)
     assert blocks.streamed.blocks >= 6 and blocks.cutoff == ref.cutoff
     assert blocks.result.rows == ref.result.rows
     scale = np.abs(ref.result.values).max()
@@ -77,7 +78,7 @@ def test_block_fit_of_a_lossy_log_equals_the_in_memory_fit(panda, lossy, tmp_pat
     # The same fit with the bridged samples taken as measured moves by far more than the tolerance:
     # the comparison above can fail.
     kept = identify.Recording(t=whole.t, q=whole.q, tau=whole.tau, dq=whole.dq, robot=panda.name, segment=whole.segment)
-    off = identify.fit(panda, [kept], base=base, block=SAMPLES)
+    off = identify.fit(panda, [kept], p, base=base, block=SAMPLES)
     assert off.result.rows > ref.result.rows
     assert np.max(np.abs(off.result.values - ref.result.values)) > 1e-6 * scale
 
