@@ -99,3 +99,21 @@ def test_no_segments_refuses_a_long_gap_on_the_block_path(panda, lossy, tmp_path
     printed = capsys.readouterr().out
     assert code == 0 and "1 segment(s)" in printed and "stale rows dropped" in printed
     assert identify.read_recording(out, panda).n_segments == 1
+
+
+@pytest.mark.slow
+def test_report_of_a_long_lossy_log(panda, lossy, tmp_path):
+    """``rx90 identify --report`` on a recording longer than --block: the figures from the recording read
+    again block by block; the data facts (duration, samples) those of the whole recording."""
+    from identify.app.report.cells import fmt
+
+    path, cols, _ = lossy
+    out = tmp_path / "rec.csv"
+    convert_log(path, panda, cols, out, resample=1000.0, convention="model", block=LINES)
+    rec = identify.read_recording(out, panda)
+    html = tmp_path / "id.html"
+    assert main(["identify", str(out), "--robot", "panda", "--block", str(SAMPLES), "--report", str(html)]) == 0
+    text = html.read_text()
+    assert f"{fmt(rec.t[-1] - rec.t[0], 4)} s, {rec.n_samples} samples" in text
+    for fig in ("fig-parameters", "fig-torques", "fig-residuals", "fig-trajectory"):
+        assert f"id='{fig}'" in text or f'id="{fig}"' in text, fig
