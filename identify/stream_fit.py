@@ -156,6 +156,17 @@ def _accumulate(robot: rx90sym.Robot, sources: Sequence[BlockSource], plans: Seq
     return factors, moving, count
 
 
+def _plans(scans: Sequence[Any], cutoff: float, settings: StreamSettings) -> tuple[list[list[Plan]], tuple[str, ...]]:
+    """The windows of every segment of every recording (per recording), and the notes naming the segments
+    left out; recordings of different rates after decimation are refused."""
+    planned = [plan_windows(s, cutoff, settings) for s in scans]
+    rates = [p.rate for src_plans, _ in planned for p in src_plans]
+    if max(rates) > min(rates) * (1 + 1e-3):
+        raise ValueError(f"recordings have different rates after decimation: {', '.join(f'{r:g}' for r in rates)} Hz; "
+                         f"give decimate_to")
+    return [p for p, _ in planned], tuple(note for _, notes in planned for note in notes)
+
+
 def fit_streamed(robot: rx90sym.Robot, recordings: Sequence[Any], method: str = "wls", base: Any = None,
                  cutoff: float | None = None, decimate_to: float | None = 50.0,
                  min_velocity: float | None = DEFAULT_MIN_VELOCITY, rest: str = DEFAULT_REST,
@@ -184,16 +195,11 @@ def fit_streamed(robot: rx90sym.Robot, recordings: Sequence[Any], method: str = 
     settings = StreamSettings(cutoff, decimate_to or None, min_velocity or None, rest,
                               0.0 if delay == "auto" else float(delay), spring, int(block))
     scans, fc = scan_all(sources, settings)
-    planned = [plan_windows(s, fc, replace(settings, delay=0.02 if (estimate or delay == "auto") else settings.delay))
-               for s in scans]
-    plans = [p for p, _ in planned]
+    search = estimate or delay == "auto"
+    plans, skipped = _plans(scans, fc, replace(settings, delay=0.02 if search else settings.delay))
     flat = [p for src_plans in plans for p in src_plans]
-    rates = [p.rate for p in flat]
-    if max(rates) > min(rates) * (1 + 1e-3):
-        raise ValueError(f"recordings have different rates after decimation: {', '.join(f'{r:g}' for r in rates)} Hz; "
-                         f"give decimate_to")
     grid, step = delay_grid(max(1.0 / s.rate for s in scans))
-    lags = tuple(grid) if (estimate or delay == "auto") else ()
+    lags = tuple(grid) if search else ()
     total = sum(p.samples for p in flat)
     bblock = max(1, int(round(bootstrap.block_s * flat[0].rate))) if bootstrap else 0
     make_boot = (lambda: SegmentBootstrap(total, bblock, robot.n, len(base.names), bootstrap.draws, bootstrap.seed)
@@ -210,7 +216,7 @@ def fit_streamed(robot: rx90sym.Robot, recordings: Sequence[Any], method: str = 
     result = solve_joint_systems(factors.systems(0), base.names, weighted=method != "ols")
     if method == "consistent":
         result = consistent_fit(robot, result, base, **consistent_options)
-    notes = tuple(p.note for p in flat) + tuple(note for _, skipped in planned for note in skipped)
+    notes = tuple(p.note for p in flat) + skipped
     return StreamedFit(result, fc, flat[0].rate, notes, tuple(s.source for s in scans), total,
                        moving / total if settings.min_velocity is not None else None, found, settings.delay,
                        boot.std(result.weights) if boot is not None else None, bblock, settings, count,

@@ -3,14 +3,21 @@
 :func:`convert_log` does what :func:`identify.read_log` then :func:`identify.write_recording` do,
 holding one block of lines at a time: lines are read and numbered in Python (comments, header),
 each block's numbers parsed by pyarrow's CSV parser (C++, multithreaded; a block it refuses is
-parsed again by the whole-log parser, whose message names the bad lines), checked with the
-whole-log checks (each block starts with the previous block's last row, so steps and jumps across
-blocks are checked too), resampled when asked (see :class:`_Resampler`), and appended to the output
-through the atomic writer: an error leaves no file behind.
+parsed again by the whole-log parser, whose message names the bad lines), stale rows dropped (each
+block's first row compared with the previous block's last), checked with the whole-log checks
+(each block after the previous block's last kept row, so steps, jumps and gaps across blocks are
+checked too), gaps bridged or split into segments (:mod:`identify.signal.gaps`; a new segment gets
+its own grid), resampled when asked (see :class:`_Resampler`), and appended to the output through
+the atomic writer: an error leaves no file behind. The output always has a ``segment`` column
+(and ``measured`` when resampled): the blocks to come may need them; the stale-row count goes in a
+header field filled in at the end.
 
 Differences from the whole-log reader, by construction: the median time step (irregular-step and
-gap checks, report) is each block's; the recorded-velocity check compares each block's RMS; with
-``t_from``/``t_to`` every row is parsed, so a corrupt row outside the window stops the conversion.
+gap checks, a gap's ``periods``, the report) is each block's, so a step is a lost packet when it is
+longer than 1.5 of its block's median step (the same steps as on the whole log unless the clock
+drifts by a third of a period between blocks); the recorded-velocity check compares each block's
+RMS; with ``t_from``/``t_to`` every row is parsed, so a corrupt row outside the window stops the
+conversion.
 """
 from __future__ import annotations
 
@@ -203,7 +210,8 @@ class _Report:
     def result(self, max_gap: float) -> dict[str, Any]:
         gaps = LogGaps(tuple(self.gaps), np.array([self.segments - 1]), max_gap).summary()
         return {"lines": [self.first_line, self.last_line], "rows": self.rows, "stale_rows": self.stale,
-                "stale_lines": self.stale_lines, "rate_hz": self.inside_count / self.inside_sum,
+                "stale_lines": self.stale_lines,
+                "rate_hz": self.inside_count / self.inside_sum if self.inside_sum else float("nan"),
                 "median_step_s": float(np.median(self.medians)), "largest_gap_s": self.gap,
                 "largest_gap_lines": self.gap_lines, "irregular_steps": self.irregular, "gaps": gaps,
                 "bridged_samples": self.bridged, "samples": self.samples}
@@ -246,7 +254,8 @@ class _LogStream:
         t = values[:, self.cmap.t]
         if t.size >= 2:
             _check_increasing(t, numbers, self.source)
-        found = find_gaps(t, numbers, self.max_gap)
+        found = (find_gaps(t, numbers, self.max_gap) if t.size >= 2
+                 else LogGaps((), np.zeros(t.size, np.int64), self.max_gap))
         if not self.segments:
             _refuse_splits(found, self.source)
         rec = _checked(values, numbers, self.cmap, self.robot, self.conv, self.source)

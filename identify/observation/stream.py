@@ -183,7 +183,8 @@ def scan(src: BlockSource, block: int, floor: float | None) -> Scan:
         steps.add(np.diff(t if last_t is None else np.r_[last_t, t]))
         last_t = t[-1:]
         bridged += int(np.sum(~rec.measured_mask[new:]))
-        seg = int(rec.meta.get("segment0", 0)) + (rec.segment[new:] if rec.segment is not None else np.zeros(t.size, int))
+        seg = int(rec.meta.get("segment0", 0)) + (rec.segment[new:] if rec.segment is not None
+                                                  else np.zeros(t.size, np.int64))
         for number in np.unique(seg):
             rows = np.flatnonzero(seg == number)
             if current is None or number != len(done):
