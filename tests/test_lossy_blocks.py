@@ -49,6 +49,8 @@ def test_block_conversion_gives_the_whole_readers_recording_and_counts(panda, lo
     assert [(g["lines"], g["bridged"]) for g in report["gaps"]["gaps"]] == \
         [(g["lines"], g["bridged"]) for g in log["gaps"]["gaps"]]
     assert report["gaps"]["segments"] == log["gaps"]["segments"] == 3
+    assert report["gaps"]["bridged_gaps"] == log["gaps"]["bridged_gaps"]
+    assert report["gaps"]["gaps_total"] == len(log["gaps"]["gaps"])
     # The grid and every signal as the whole reader's (Hermite splines are local: bit for bit here).
     for name in ("t", "q", "dq", "tau"):
         np.testing.assert_allclose(getattr(got, name), getattr(whole, name), rtol=0, atol=1e-13)

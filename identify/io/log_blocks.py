@@ -186,7 +186,8 @@ class _Report:
         self.stale_lines: list[int] = []
         self.inside_sum, self.inside_count = 0.0, 0
         self.gap, self.gap_lines, self.medians = -1.0, [0, 0], []
-        self.gaps: list[Gap] = []
+        self.gaps: list[Gap] = []  # the first _GAPS_KEPT, the rest counted: memory bounded
+        self.gap_count, self.bridged_gaps, self.lost_periods = 0, 0, 0.0
         self.segments = 1
 
     def add(self, t: np.ndarray, numbers: list[int], found: LogGaps) -> None:
@@ -195,7 +196,10 @@ class _Report:
         if self.first_line is None:
             self.first_line = numbers[0]
         self.last_line = numbers[-1]
-        self.gaps += found.gaps
+        self.gaps += found.gaps[:max(0, _GAPS_KEPT - len(self.gaps))]
+        self.gap_count += len(found.gaps)
+        self.bridged_gaps += len(found.bridged)
+        self.lost_periods += float(sum(g.periods - 1.0 for g in found.bridged))
         self.segments += int(found.segment[-1])
         if dt.size:
             step = float(np.median(dt))
@@ -208,7 +212,9 @@ class _Report:
                 self.gap, self.gap_lines = float(dt[k]), [numbers[k], numbers[k + 1]]
 
     def result(self, max_gap: float) -> dict[str, Any]:
-        gaps = LogGaps(tuple(self.gaps), np.array([self.segments - 1]), max_gap).summary()
+        gaps = {**LogGaps(tuple(self.gaps), np.array([self.segments - 1]), max_gap).summary(),
+                "bridged_gaps": self.bridged_gaps, "bridged_lost_periods": self.lost_periods,
+                "gaps_total": self.gap_count}
         return {"lines": [self.first_line, self.last_line], "rows": self.rows, "stale_rows": self.stale,
                 "stale_lines": self.stale_lines,
                 "rate_hz": self.inside_count / self.inside_sum if self.inside_sum else float("nan"),
@@ -334,6 +340,8 @@ def convert_log(path: str | os.PathLike[str], robot: rx90sym.Robot, columns: str
             "gains": None if drive is None else gains_label(drive), "convention": conv, "blocks_of_lines": block}
 
 
+#: Gaps listed one by one in the report of a log converted in blocks (the counts cover them all).
+_GAPS_KEPT = 10_000
 #: Characters kept for the stale-row count in the header.
 _COUNT_WIDTH = 20
 

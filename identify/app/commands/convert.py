@@ -202,13 +202,13 @@ def _print_log(name: str, log: dict, what_else: str) -> str:
         lines.append(f"stale rows dropped (exact repeats of the previous row): {log['stale_rows']} (lines "
                      f"{shown}{', ...' if log['stale_rows'] > len(log['stale_lines']) else ''})")
     if gaps["gaps"]:
-        lines.append(f"lost packets: {len(gaps['gaps'])} gaps; {gaps['bridged_gaps']} up to {gaps['max_gap_s']:g} s "
+        lines.append(f"lost packets: {gaps.get('gaps_total', len(gaps['gaps']))} gaps; {gaps['bridged_gaps']} up to {gaps['max_gap_s']:g} s "
                      f"bridged ({log['bridged_samples']} samples interpolated, never used as measurements), "
                      f"{gaps['segments']} segment(s)")
         lines += [f"  gap of {g['duration_s']:g} s ({g['periods']:.3g} steps) between lines {g['lines'][0]} and "
                   f"{g['lines'][1]}: {'bridged' if g['bridged'] else 'new segment'}" for g in gaps["gaps"][:_GAPS_SHOWN]]
-        if len(gaps["gaps"]) > _GAPS_SHOWN:
-            lines.append(f"  ... and {len(gaps['gaps']) - _GAPS_SHOWN} more gaps")
+        if gaps.get("gaps_total", len(gaps["gaps"])) > _GAPS_SHOWN:
+            lines.append(f"  ... and {gaps.get('gaps_total', len(gaps['gaps'])) - _GAPS_SHOWN} more gaps")
     return "\n".join(lines)
 
 
