@@ -8,7 +8,6 @@ says which layout a file has; a file without it, or of an unknown version, is re
 """
 from __future__ import annotations
 
-import hashlib
 from dataclasses import MISSING, asdict, dataclass
 from importlib import metadata
 from pathlib import Path
@@ -16,7 +15,7 @@ from typing import Any
 
 import numpy as np
 
-from rx90sym.files import read_json
+from rx90sym.files import file_sha256, read_json
 import rx90sym
 
 from identify.io.gains import DriveGains
@@ -31,10 +30,7 @@ SCHEMA_VERSION = 2
 
 def robot_file_hash(robot: rx90sym.Robot) -> str | None:
     """SHA-256 of the robot file the description was read from (None for a robot built in memory)."""
-    path = Path(robot.source) if robot.source else None
-    if path is None or not path.is_file():
-        return None
-    return hashlib.sha256(path.read_bytes()).hexdigest()
+    return file_sha256(robot.source) if robot.source else None
 
 
 def toolkit_version() -> str:

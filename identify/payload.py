@@ -26,7 +26,7 @@ import rx90sym
 from rx90sym.parameters import PAYLOAD_NAMES
 
 from identify.estimation.consistency import ConsistencyError, pseudo_inertia
-from identify.estimation.bootstrap import bootstrap_std
+from identify.estimation.bootstrap import bootstrap_estimates, bootstrap_std
 from identify.estimation.least_squares import compress, solve_system, weighted_least_squares
 from identify.observation.processing import Processing
 from identify.signal.filtering import choose_cutoff
@@ -142,7 +142,9 @@ def payload(robot: rx90sym.Robot, method: int, empty: Sequence[Any] = (), loaded
     fit, robot_fit, rows = solve(robot, base, empty, loaded, robot_params=robot_params, options=options)
     values, std, rel = _payload_part(fit)
     boot = None
-    if rows is not None and bootstrap_seed is not None:
+    if callable(rows) and bootstrap_seed is not None:  # method 2: a difference of two fits
+        boot = rows(bootstrap_seed)
+    elif rows is not None and bootstrap_seed is not None:
         rate = options.get("decimate_to", 50.0) or loaded[0].rate
         boot = bootstrap_std(*rows, fit.weights, rate, bootstrap_seed)[[fit.names.index(n) for n in PAYLOAD_NAMES]]
     if constrained:
@@ -238,8 +240,8 @@ def _method_2(robot, base, empty, loaded, options, **_):
 
     kw = {k: options[k] for k in ("cutoff", "decimate_to", "spring", "min_velocity", "delay") if k in options}
     processing = Processing(**{"min_velocity": None, "rest": "drop", "estimate_delay": False, **kw})
-    fit_v = fit(robot, empty, processing, base=base).result
-    fit_t = fit(robot, loaded, processing, base=base).result
+    empty_fit, loaded_fit = fit(robot, empty, processing, base=base), fit(robot, loaded, processing, base=base)
+    fit_v, fit_t = empty_fit.result, loaded_fit.result
     delta = fit_t.values - fit_v.values                    # eq. 23
     cov = fit_t.covariance + fit_v.covariance
     Kc = grouping_relations(robot, base)
@@ -260,7 +262,21 @@ def _method_2(robot, base, empty, loaded, options, **_):
     fit = IdentificationResult(PAYLOAD_NAMES, sol.values, std, 100 * std / np.abs(sol.values),
                                sol.sigma_rho, sol.cond, sol.cond_unweighted, np.zeros(0), np.zeros(0),
                                len(rows), "payload-2", covc)
-    return fit, fit_t, None  # no rows: a combination of two fits (their bootstrap is not pooled here)
+
+    def bootstrap(seed: int) -> np.ndarray:
+        # Each run's segment bootstrap (independent draws: two experiments), their difference per
+        # draw (eq. 23) through the same whitened relations (eqs. 24-27): the spread of the payload.
+        draws = [bootstrap_estimates(f.observation.W, f.observation.Y, f.observation.joint, f.observation.samples,
+                                     f.result.weights, f.observation.rate, seed + k)
+                 for k, f in enumerate((empty_fit, loaded_fit))]
+        deltas = (draws[1] - draws[0])[:, rows]
+        deltas = deltas[~np.isnan(deltas).any(axis=1)]  # rank-deficient draws
+        if deltas.shape[0] < 2:
+            return np.full(len(PAYLOAD_NAMES), np.nan)
+        chi, *_ = np.linalg.lstsq(A, np.linalg.solve(L, deltas.T), rcond=None)
+        return np.nanstd(chi.T, axis=0, ddof=1)
+
+    return fit, fit_t, bootstrap
 
 
 def _constrained(fit: IdentificationResult, mass: float | None, mass_tol: float) -> np.ndarray:

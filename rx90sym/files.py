@@ -6,6 +6,7 @@ is atomic), flushed to disk, then renamed over the target; on any error it is re
 """
 from __future__ import annotations
 
+import hashlib
 import json
 import os
 import tempfile
@@ -52,3 +53,12 @@ def read_json(path: str | os.PathLike) -> Any:
         raise ValueError(f"{path}: not valid JSON (line {exc.lineno}, column {exc.colno}: {exc.msg})") from None
     except OSError as exc:
         raise ValueError(f"{path}: cannot read ({exc.strerror or exc})") from None
+
+
+def file_sha256(path: str | os.PathLike) -> str | None:
+    """SHA-256 (hex) of a file's bytes; None when it is not a readable file (a recording built in memory)."""
+    p = Path(path)
+    try:
+        return hashlib.sha256(p.read_bytes()).hexdigest() if p.is_file() else None
+    except OSError:
+        return None

@@ -11,6 +11,7 @@ robot file, the tip link of a URDF robot) about its origin. Controllers want (Un
 """
 from __future__ import annotations
 
+import re
 from dataclasses import dataclass
 from typing import Any, Mapping
 
@@ -20,7 +21,7 @@ from .description import Robot
 from .model_export import payload_in_flange
 from .rigid_body import RigidBody, physical_problem
 
-__all__ = ["FlangePayload", "flange_payload", "franka_load", "ur_script"]
+__all__ = ["FlangePayload", "controller_family", "flange_payload", "franka_load", "ur_script"]
 
 
 @dataclass(frozen=True, eq=False)
@@ -83,7 +84,25 @@ def flange_payload(robot: Robot, payload: Mapping[str, float]) -> FlangePayload:
     return FlangePayload(robot.name, frame, float(body.m), cog, I, _problem(float(body.m), I))
 
 
-def _checked(p: FlangePayload) -> None:
+def controller_family(robot_name: str) -> str | None:
+    """The controller whose payload form a robot takes, told by its name: "ur" (ur3, ur5e, ur10e,
+    ...), "franka" (panda, fr3), "staubli" (rx.., tx..), None when the name does not tell."""
+    name = robot_name.strip().lower()
+    if re.match(r"ur\d", name):
+        return "ur"
+    if name.startswith(("panda", "fr3", "franka")):
+        return "franka"
+    if re.match(r"(rx|tx)\d", name) or name.startswith("staubli"):
+        return "staubli"
+    return None
+
+
+def _checked(p: FlangePayload, family: str) -> None:
+    # The flange frame is the robot's own: another maker's controller would read it in its frame.
+    known = controller_family(p.robot)
+    if known is not None and known != family:
+        raise ValueError(f"the payload was identified on robot '{p.robot}' (a {known} controller): it is not "
+                         f"in the form or the flange frame of a {family} controller")
     if p.problem is not None:
         raise ValueError(f"the payload is not a physical rigid body ({p.problem}); identify it with the "
                          f"constrained fit (pseudo-inertia positive semidefinite)")
@@ -92,7 +111,7 @@ def _checked(p: FlangePayload) -> None:
 def ur_script(p: FlangePayload) -> str:
     """URScript: ``set_target_payload(m, [cx, cy, cz], [Ixx, Iyy, Izz, Ixy, Ixz, Iyz])`` (UR's
     e-Series; mass kg, CoG m from the tool flange, inertia kg m^2 at the CoG in flange axes)."""
-    _checked(p)
+    _checked(p, "ur")
     cog = ", ".join(repr(float(x)) for x in p.cog)
     inertia = ", ".join(repr(x) for x in p.inertia_list())
     return f"set_target_payload({float(p.mass)!r}, [{cog}], [{inertia}])\n"
@@ -101,7 +120,7 @@ def ur_script(p: FlangePayload) -> str:
 def franka_load(p: FlangePayload) -> dict[str, Any]:
     """Franka's load, as libfranka's ``Robot::setLoad(load_mass, F_x_Cload, load_inertia)`` takes
     it: mass [kg], CoG [m] in the flange frame F, inertia [kg m^2] at the CoG, 3x3 column-major."""
-    _checked(p)
+    _checked(p, "franka")
     return {"load_mass": float(p.mass), "F_x_Cload": [float(x) for x in p.cog],
             "load_inertia": [float(x) for x in p.inertia.T.reshape(-1)],
             "note": "libfranka Robot::setLoad(load_mass, F_x_Cload, load_inertia); inertia about the CoG, "

@@ -214,6 +214,13 @@ def common_notes(robot: Robot) -> tuple[str, ...]:
     return tuple(notes)
 
 
+def export_joint_names(robot: Robot) -> tuple[str, ...]:
+    """The joints' names in exported URDF/MJCF files and their companion JSON: the robot's ROS
+    names (robot file ``joint_names``, a URDF's own joints), so that a ``/joint_states`` message
+    drives the exported model as it is; ``joint1`` ... ``jointn`` when the robot has none."""
+    return robot.ros_joint_names() or tuple(f"joint{j + 1}" for j in range(robot.n))
+
+
 def companion(robot: Robot, chi: np.ndarray, model_file: str | Path, kind: str,
               notes: Sequence[str] = ()) -> dict[str, Any]:
     """The companion JSON of an exported model file (``kind`` "urdf" or "mjcf"): every joint's
@@ -221,7 +228,7 @@ def companion(robot: Robot, chi: np.ndarray, model_file: str | Path, kind: str,
     (``notes``: the file kind's own, e.g. from :func:`actuation`)."""
     v = _values(robot, chi)
     IA, FV, FS = joint_terms(robot, chi)
-    names = robot.urdf.joints if robot.urdf is not None else [f"joint{j + 1}" for j in range(robot.n)]
+    names = export_joint_names(robot)
     joints = {name: {"IA": float(IA[j]), "FV": float(FV[j]), "FS": float(FS[j])} for j, name in enumerate(names)}
     extra = {name: v[name] for name in robot.parameter_names[_K * robot.n:]}
     return {

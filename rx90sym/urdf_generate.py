@@ -16,7 +16,7 @@ import math
 import numpy as np
 
 from .description import GRAVITY, Robot
-from .model_export import fmt, joint_origin, limits_in_controller_angles, rpy
+from .model_export import export_joint_names, fmt, joint_origin, limits_in_controller_angles, rpy
 from .rigid_body import RigidBody
 
 # URDF requires effort and velocity on a revolute/prismatic <limit>: an unknown one is this.
@@ -86,12 +86,13 @@ def generated_urdf(robot: Robot, bodies: list[RigidBody], damping: np.ndarray, f
                   f"    {_origin(R0, np.zeros(3))}", "  </joint>"]
     lines.append('  <link name="base_link"/>')
     lower, upper = limits_in_controller_angles(robot)
+    names = export_joint_names(robot)
     for j in range(robot.n):
         parent = "base_link" if j == 0 else f"link{j}"
         kind = "prismatic" if robot.sigma[j] else (
             "revolute" if math.isfinite(lower[j]) and math.isfinite(upper[j]) else "continuous")
         R, p = joint_origin(robot, j)
-        lines += [f'  <joint name="joint{j + 1}" type="{kind}">', f'    <parent link="{parent}"/>',
+        lines += [f'  <joint name="{names[j]}" type="{kind}">', f'    <parent link="{parent}"/>',
                   f'    <child link="link{j + 1}"/>', f"    {_origin(R, p)}", '    <axis xyz="0 0 1"/>',
                   f"    {_limit_xml(robot, j, lower[j], upper[j])}",
                   f"    {dynamics_xml(damping[j], friction[j])}", "  </joint>",

@@ -218,11 +218,18 @@ def test_gains_end_to_end(tmp_path):
     data = json.loads((tmp_path / "g.json").read_text())
     k, s = np.array(data["gains"]), np.array(data["std"], dtype=float)
     assert np.all(np.abs(k[:5] - [0.5, 0.6, 0.4, 0.3, 0.25]) < 3 * s[:5]) and data["flagged"] == [6]
-    proc = run("payload", "--method", "3", "--empty", "e.csv", "--loaded", "l.csv", "--gains", "g.json",
+    assert [(d["role"], d["source"]) for d in data["fitted_on"]] == [("empty", "e.csv"), ("loaded", "l.csv")]
+    (tmp_path / "l2.csv").write_bytes((tmp_path / "l.csv").read_bytes())  # the same run, another name
+    proc = run("payload", "--method", "3", "--empty", "e.csv", "--loaded", "l2.csv", "--gains", "g.json",
                "--json", "p.json", cwd=tmp_path)
     assert proc.returncode == 0, proc.stderr
-    mc = {p["name"]: p["value"] for p in json.loads((tmp_path / "p.json").read_text())["payload"]}["Mc"]
+    result = json.loads((tmp_path / "p.json").read_text())
+    mc = {p["name"]: p["value"] for p in result["payload"]}["Mc"]
     assert abs(mc - 4.275) < 0.05 * 4.275
+    # The gains were fitted on these very runs: Mc checks nothing there, and the run says so.
+    circular = [f for f in result["flags"] if f["code"] == "gains_circular"]
+    assert len(circular) == 1 and "e.csv, l2.csv" in circular[0]["message"], result["flags"]
+    assert "gains_circular" in proc.stderr or "fitted on e.csv" in proc.stderr
 
 
 def test_predict_replays_the_identifications_processing(workdir):

@@ -52,7 +52,11 @@ def test_exported_urdf_and_mjcf_reproduce_the_fits_inverse_dynamics(fits, tmp_pa
     fit = json.loads((folder / "id.json").read_text())["standard"]
     chi = robot.parameter_vector(fit)
     side = json.loads(urdf.with_name("ur10e.actuation.json").read_text())
-    IA = np.array([side["joints"][f"joint{j}"]["IA"] for j in range(1, 7)])
+    # The exported joints carry the robot's ROS names, so a /joint_states message drives them.
+    assert list(side["joints"]) == list(robot.ros_joint_names()) == ["shoulder_pan_joint", "shoulder_lift_joint",
+                                                                     "elbow_joint", "wrist_1_joint", "wrist_2_joint",
+                                                                     "wrist_3_joint"]
+    IA = np.array([side["joints"][name]["IA"] for name in robot.ros_joint_names()])
     model, data = pinocchio_of(urdf, robot)
     mj = mujoco.MjModel.from_xml_path(str(mjcf))
     mj.opt.disableflags |= int(mujoco.mjtDisableBit.mjDSBL_CONSTRAINT | mujoco.mjtDisableBit.mjDSBL_FRICTIONLOSS)
@@ -99,6 +103,7 @@ def _payload_json(path: Path, values: dict, flange: dict) -> Path:
     ("other robot", "not 'panda'"),
     ("no folder", "output folder"),
     ("payload not physical", "--constrained"),
+    ("franka form for a UR payload", "not in the form or the flange frame of a franka controller"),
     ("nothing asked", "nothing to export"),
 ])
 def test_bad_input_exits_2_with_a_message_and_writes_nothing(fits, tmp_path, capsys, case, needle):
@@ -114,6 +119,11 @@ def test_bad_input_exits_2_with_a_message_and_writes_nothing(fits, tmp_path, cap
         load = rx90sym.load_payload("tables_4")
         flange = flange_payload(robot, {**load, "ZZc": 5.0}).to_dict()
         args[case] = [str(_payload_json(tmp_path / "p.json", load, flange)), "--ur", str(out / "p.script")]
+    if case == "franka form for a UR payload":
+        load = rx90sym.load_payload("tables_4")
+        flange = flange_payload(robot, load).to_dict()
+        args[case] = [str(_payload_json(tmp_path / "p.json", load, flange)), "--ur", str(out / "p.script"),
+                      "--franka", str(out / "p.json")]
     assert main(["export", *args[case]]) == 2
     err = capsys.readouterr().err
     assert needle in err and err.count("\n") == 1, err

@@ -14,6 +14,7 @@ import pytest
 
 import rx90sym
 from rx90sym.mjcf_export import write_mjcf
+from rx90sym.model_export import export_joint_names
 
 from conftest import random_chi
 
@@ -62,7 +63,7 @@ def coupling_terms(robot, qd, qdd, chi):
 
 def pinocchio_of(path: Path, robot) -> tuple:
     full = pin.buildModelFromUrdf(str(path))
-    keep = set(robot.urdf.joints) if robot.urdf is not None else {f"joint{j}" for j in range(1, robot.n + 1)}
+    keep = set(export_joint_names(robot))
     lock = [i for i in range(1, full.njoints) if full.names[i] not in keep]
     model = pin.buildReducedModel(full, lock, pin.neutral(full)) if lock else full
     return model, model.createData()

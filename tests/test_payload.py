@@ -167,3 +167,17 @@ def test_robot_estimates_of_methods_2_and_4_are_in_the_json(rx90, estimates):
         names = {p["name"] for p in d["robot"]["parameters"]}
         assert "ZZ1R" in names and all(p["std"] is not None for p in d["robot"]["parameters"])
     assert estimates["tables_4"][3].to_dict()["robot"] is None
+
+
+@pytest.mark.parametrize("name", PAYLOADS)
+def test_method_2_has_a_bootstrap_sigma_like_the_others(estimates, name):
+    # Method 2 is a difference of two fits: its bootstrap draws each run's refits and takes the
+    # spread of the payload their differences give (eqs. 23-27). On the twin's white noise it must
+    # agree with eq. 13's sigma, as the bootstrap of the single-fit methods does.
+    est = estimates[name][2]
+    boot = est.bootstrap_std
+    assert boot is not None and np.all(np.isfinite(boot)), boot
+    for key in ("Mc", "MZc", "XXc", "YYc", "ZZc"):
+        i = est.names.index(key)
+        ratio = boot[i] / est.std[i]
+        assert 0.5 < ratio < 2.0, (key, ratio)

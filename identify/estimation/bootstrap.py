@@ -9,13 +9,39 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["SegmentBootstrap", "segment_bootstrap_std", "bootstrap_std", "BLOCK_S", "DRAWS"]
+__all__ = ["SegmentBootstrap", "segment_bootstrap_std", "segment_bootstrap_estimates", "bootstrap_std",
+           "bootstrap_estimates", "BLOCK_S", "DRAWS"]
 
 #: Block length, s: longer than the residual's correlation (filtered at 20-30 Hz, decimated to
 #: 50 Hz: a few samples), short enough for ~100 blocks in a 50 s run.
 BLOCK_S = 0.5
 #: Number of bootstrap refits (the sigma of a sigma estimate from 200 draws is ~5 %).
 DRAWS = 200
+
+
+def segment_bootstrap_estimates(W: np.ndarray, Y: np.ndarray, joint: np.ndarray, samples: np.ndarray,
+                                weights: np.ndarray, block: int, draws: int = 200, seed: int = 0,
+                                instruments: np.ndarray | None = None) -> np.ndarray:
+    """The ``draws`` segment-bootstrap refits themselves, (draws, c) (a NaN row where a draw was
+    rank deficient): for estimates that combine several fits (payload method 2's difference of
+    two runs), whose spread is that of the combined draws. Arguments as :func:`segment_bootstrap_std`."""
+    if block < 1 or draws < 2:
+        raise ValueError(f"block must be >= 1 sample and draws >= 2, got {block} and {draws}")
+    w = np.asarray(weights, dtype=float)[np.asarray(joint)]
+    Ww, Yw = W * w[:, None], Y * w
+    Zw = Ww if instruments is None else np.asarray(instruments) * w[:, None]
+    ids = np.asarray(samples) // block
+    blocks = np.unique(ids)
+    c = W.shape[1]
+    # Per-block normal (or instrumental) equations: a draw is then a weighted sum, not a new QR.
+    A = np.zeros((blocks.size, c, c))
+    g = np.zeros((blocks.size, c))
+    for k, b in enumerate(blocks):
+        rows = ids == b
+        A[k] = Zw[rows].T @ Ww[rows]
+        g[k] = Zw[rows].T @ Yw[rows]
+    counts = _draw_counts(blocks.size, draws, seed)
+    return _estimates(np.tensordot(counts, A, axes=1), counts @ g)
 
 
 def segment_bootstrap_std(W: np.ndarray, Y: np.ndarray, joint: np.ndarray, samples: np.ndarray,
@@ -34,23 +60,8 @@ def segment_bootstrap_std(W: np.ndarray, Y: np.ndarray, joint: np.ndarray, sampl
     Returns:
         (c,) standard deviations, units of the parameters (NaN where a draw was rank deficient).
     """
-    if block < 1 or draws < 2:
-        raise ValueError(f"block must be >= 1 sample and draws >= 2, got {block} and {draws}")
-    w = np.asarray(weights, dtype=float)[np.asarray(joint)]
-    Ww, Yw = W * w[:, None], Y * w
-    Zw = Ww if instruments is None else np.asarray(instruments) * w[:, None]
-    ids = np.asarray(samples) // block
-    blocks = np.unique(ids)
-    c = W.shape[1]
-    # Per-block normal (or instrumental) equations: a draw is then a weighted sum, not a new QR.
-    A = np.zeros((blocks.size, c, c))
-    g = np.zeros((blocks.size, c))
-    for k, b in enumerate(blocks):
-        rows = ids == b
-        A[k] = Zw[rows].T @ Ww[rows]
-        g[k] = Zw[rows].T @ Yw[rows]
-    counts = _draw_counts(blocks.size, draws, seed)
-    return _spread(np.tensordot(counts, A, axes=1), counts @ g)
+    estimates = segment_bootstrap_estimates(W, Y, joint, samples, weights, block, draws, seed, instruments)
+    return np.nanstd(estimates, axis=0, ddof=1)
 
 
 def _draw_counts(blocks: int, draws: int, seed: int) -> np.ndarray:
@@ -59,14 +70,19 @@ def _draw_counts(blocks: int, draws: int, seed: int) -> np.ndarray:
     return np.stack([np.bincount(rng.integers(0, blocks, blocks), minlength=blocks) for _ in range(draws)])
 
 
-def _spread(M: np.ndarray, g: np.ndarray) -> np.ndarray:
-    """Standard deviation of the refits ``M_d⁻¹·g_d`` (NaN for a rank-deficient draw)."""
+def _estimates(M: np.ndarray, g: np.ndarray) -> np.ndarray:
+    """The refits ``M_d⁻¹·g_d``, (draws, c) (a NaN row for a rank-deficient draw)."""
     c = M.shape[-1]
     estimates = np.full((M.shape[0], c), np.nan)
     for i in range(M.shape[0]):
         if np.linalg.matrix_rank(M[i]) == c:
             estimates[i] = np.linalg.solve(M[i], g[i])
-    return np.nanstd(estimates, axis=0, ddof=1)
+    return estimates
+
+
+def _spread(M: np.ndarray, g: np.ndarray) -> np.ndarray:
+    """Standard deviation of the refits ``M_d⁻¹·g_d`` (NaN where every draw was rank deficient)."""
+    return np.nanstd(_estimates(M, g), axis=0, ddof=1)
 
 
 class SegmentBootstrap:
@@ -117,3 +133,10 @@ def bootstrap_std(W: np.ndarray, Y: np.ndarray, joint: np.ndarray, samples: np.n
     gains and the consistent fit."""
     block = max(1, int(round(BLOCK_S * rate)))
     return segment_bootstrap_std(W, Y, joint, samples, weights, block, DRAWS, seed, instruments)
+
+
+def bootstrap_estimates(W: np.ndarray, Y: np.ndarray, joint: np.ndarray, samples: np.ndarray,
+                        weights: np.ndarray, rate: float, seed: int = 0) -> np.ndarray:
+    """:func:`segment_bootstrap_estimates` with the toolkit's blocks (BLOCK_S) and DRAWS refits."""
+    block = max(1, int(round(BLOCK_S * rate)))
+    return segment_bootstrap_estimates(W, Y, joint, samples, weights, block, DRAWS, seed)

@@ -14,7 +14,7 @@ import json
 from typing import Any
 
 from rx90sym.files import atomic_write, read_json
-from rx90sym.flange_payload import FlangePayload, franka_load, ur_script
+from rx90sym.flange_payload import FlangePayload, controller_family, franka_load, ur_script
 from rx90sym.mjcf_export import mjcf_export
 from rx90sym.model_export import companion_path, write_model
 from rx90sym.urdf_export import urdf_export
@@ -79,6 +79,9 @@ def _payload(args: argparse.Namespace, data: dict) -> int:
     if load.problem is not None:
         raise ValueError(f"{args.input}: the payload is not a physical rigid body ({load.problem}): a controller "
                          f"refuses it; identify it with rx90 payload --constrained")
+    if controller_family(load.robot) is None:
+        progress(f"warning: the robot name '{load.robot}' does not tell its controller: check that the payload's "
+                 f"flange frame ({load.frame}) is the one the controller expects")
     texts = {}
     if args.ur:
         texts[args.ur] = ur_script(load)

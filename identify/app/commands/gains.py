@@ -7,7 +7,7 @@ from typing import Any
 
 import numpy as np
 
-from rx90sym.files import write_json
+from rx90sym.files import file_sha256, write_json
 from identify.drive_gains import DEFAULT_METHOD, FLAG_PCT, GAIN_METHODS
 from identify.signal.pairing import POSITION_TOLERANCE
 
@@ -97,8 +97,12 @@ def run(args: argparse.Namespace) -> int:
         print(flag_lines(flags))
     if reference is not None:
         print(_comparison(res.gains.gains, reference, res.gains.side))
+    # The runs the gains were fitted on: a payload identified on the same runs with these gains
+    # returns the mass the gains were scaled to (rx90 payload warns: not an independent check).
+    fitted_on = [{"role": role, "source": r.source, "sha256": file_sha256(r.source) if r.source else None}
+                 for role, runs in (("empty", empty), ("loaded", loaded)) for r in runs]
     if args.json:
-        write_json(args.json, {**res.to_dict(), "flags": [f.to_json() for f in flags]})
+        write_json(args.json, {**res.to_dict(), "fitted_on": fitted_on, "flags": [f.to_json() for f in flags]})
     if args.report:
         from ..report.writers import write_gains_report
 

@@ -72,6 +72,8 @@ def run(args: argparse.Namespace) -> int:
 
     empty = [read(p) for p in args.empty]
     loaded = [read(p) for p in args.loaded]
+    if gains is not None:
+        flags += settle(circular_gain_flags(gains, args.empty + args.loaded))
     if gains is not None and all(r.current is None for r in empty + loaded):
         raise UsageError(f"--gains {args.gains}: none of the recordings holds motor currents")
     flags += settle(torque_scale_flags([r.tau for r in empty + loaded if r.tau is not None], robot))
@@ -133,3 +135,20 @@ def _check_options(args: argparse.Namespace) -> None:
                          "--robot-params is for method 1")
     if args.method != 3 and args.position_tol is not None:
         raise UsageError("conflicting options: --position-tol is for method 3 (paired runs)")
+
+
+def circular_gain_flags(gains: Any, paths: list[str]) -> list:
+    """A warning when a recording of this payload run is one the drive gains were fitted on
+    (``fitted_on`` of rx90 gains --json, matched by content): the gains were scaled to the known
+    mass on it, so the payload's Mc there returns that mass and checks nothing."""
+    from identify.plausibility import Flag
+    from rx90sym.files import file_sha256
+
+    fitted = {d.get("sha256"): d.get("source") for d in gains.extra.get("fitted_on") or () if d.get("sha256")}
+    shared = [p for p in paths if file_sha256(p) in fitted]
+    if not shared:
+        return []
+    return [Flag("gains_circular", "warning",
+                 f"the drive gains were fitted on {', '.join(shared)}: on the same runs the payload's Mc returns the "
+                 f"mass the gains were scaled to and is not an independent check",
+                 "fit the gains on some runs and identify the payload on others (docs/drive-gains.md)")]

@@ -59,16 +59,35 @@ def residual_figure(validation: Any, title: str) -> Any:
 
 
 def parameter_figure(result: Any, truth: dict | None = None, title: str = "Parameters with 2σ") -> Any:
-    """Estimates with their 2 sigma bars (and the truth when known)."""
+    """Estimates with their 2 sigma bars (and the truth when known), every bar inside the axes.
+
+    Values of one sign within a factor 30 of each other (drive gains) get a linear axis, so that
+    their differences show; others a symmetric log axis whose linear part is 1e-3 of the largest
+    magnitude (a payload's Mc of kilograms beside its near-zero inertia products)."""
     plt = _pyplot()
     c = len(result.names)
     fig, ax = plt.subplots(figsize=(max(8, 0.22 * c), 4))
     x = np.arange(c)
-    ax.errorbar(x, result.values, yerr=2 * result.std, fmt="o", ms=3, capsize=2, label="estimate ± 2σ")
+    values = np.asarray(result.values, dtype=float)
+    bars = 2 * np.nan_to_num(np.asarray(result.std, dtype=float), nan=0.0)
+    ax.errorbar(x, values, yerr=bars, fmt="o", ms=3, capsize=2, label="estimate ± 2σ")
+    shown = [values - bars, values + bars]
     if truth:
-        ax.plot(x, [truth.get(n, np.nan) for n in result.names], "x", color="k", ms=4, label="truth")
+        ref = np.array([truth.get(n, np.nan) for n in result.names], dtype=float)
+        ax.plot(x, ref, "x", color="k", ms=4, label="truth")
+        shown.append(ref)
+    ends = np.concatenate(shown)
+    ends = ends[np.isfinite(ends)]
+    mags = np.abs(values[np.isfinite(values) & (values != 0)])
+    one_sign = mags.size == values.size and (np.all(values > 0) or np.all(values < 0))
+    if one_sign and mags.max() <= 30 * mags.min():
+        pad = 0.08 * (ends.max() - ends.min() or abs(ends.max()) or 1.0)
+        ax.set_ylim(ends.min() - pad, ends.max() + pad)
+    elif ends.size:
+        top = float(np.abs(ends).max()) or 1.0
+        ax.set_yscale("symlog", linthresh=1e-3 * top)
+        ax.set_ylim(min(ends.min(), 0.0) * 1.5 - 1e-3 * top, max(ends.max(), 0.0) * 1.5 + 1e-3 * top)
     ax.set_xticks(x, result.names, rotation=90, fontsize=7)
-    ax.set_yscale("symlog", linthresh=0.05)
     ax.axhline(0, color="0.7", lw=0.5)
     ax.legend(fontsize=8)
     ax.set_title(title)
