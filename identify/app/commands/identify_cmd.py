@@ -307,12 +307,16 @@ def _write_long_report(args: argparse.Namespace, f: Fit) -> None:
     samples = [lay["samples"] for lay in f.recordings]
     thin = [block_source(path, f.robot, args.convention, f.gains).thinned(args.block, -(-n // REPORT_POINTS))
             for path, n in zip(args.recordings, samples)]
-    fitted = f.predict(args.recordings[0])
-    every = slice(None, None, -(-fitted.t.size // REPORT_POINTS))
-    shown = replace(fitted, t=fitted.t[every], measured=fitted.measured[every], predicted=fitted.predicted[every],
-                    moving=fitted.moving[every])
+
+    def shown(v: Any) -> Any:  # the torques of the figures: every k-th decimated sample
+        every = slice(None, None, -(-v.t.size // REPORT_POINTS))
+        return replace(v, t=v.t[every], measured=v.measured[every], predicted=v.predicted[every],
+                       moving=v.moving[every])
+
     record = {**f.to_json(), "data": data_record(thin, f.streamed, f.validation, samples)}
-    write_identify_report(args.report, f.robot, record, f.result, thin[0], f.validation, shown, _spring_text(f, []))
+    held = shown(f.validation) if f.validation is not None else None
+    write_identify_report(args.report, f.robot, record, f.result, thin[0], held, shown(f.predict(args.recordings[0])),
+                          _spring_text(f, []))
 
 
 def data_record(recs: list, obs: Any, validation: Any = None, samples: list[int] | None = None) -> dict:
