@@ -77,6 +77,10 @@ def test_block_fit_of_a_lossy_log_equals_the_in_memory_fit(panda, lossy, tmp_pat
     np.testing.assert_allclose(blocks.bootstrap.std, ref.bootstrap.std, rtol=1e-8)
     layout = dict(ref.recordings[0], source="rec.csv")
     assert blocks.recordings == (layout,) and layout["segments"] == 3
+    # The prediction block by block (measured samples only, segment by segment) as in memory.
+    streamed, memory = blocks.predict(str(out)), ref.predict(whole)
+    np.testing.assert_array_equal(streamed.t, memory.t)
+    np.testing.assert_allclose(streamed.predicted, memory.predicted, rtol=0, atol=1e-8 * np.abs(memory.predicted).max())
     # The same fit with the bridged samples taken as measured moves by far more than the tolerance:
     # the comparison above can fail.
     kept = identify.Recording(t=whole.t, q=whole.q, tau=whole.tau, dq=whole.dq, robot=panda.name, segment=whole.segment)
