@@ -57,6 +57,16 @@ def test_block_conversion_gives_the_whole_readers_recording_and_counts(panda, lo
     np.testing.assert_array_equal(got.measured_mask, whole.measured_mask)
     np.testing.assert_array_equal(got.segment, whole.segment)
     assert got.meta["log"]["stale_rows"] == log["stale_rows"]
+    # Blocks ending one, two or three rows into a segment (its first kept row alone in a block, when
+    # the next is stale): the same recording.
+    t = np.loadtxt(path, delimiter=",", usecols=0)
+    after = int(np.argmax(np.diff(t))) + 1  # the first row after the longest gap
+    for lines in (after + 1, after + 2, after + 3):
+        convert_log(path, panda, cols, out, resample=1000.0, convention="model", block=lines)
+        again = identify.read_recording(out, panda)
+        np.testing.assert_array_equal(again.t, whole.t)
+        np.testing.assert_array_equal(again.segment, whole.segment)
+        np.testing.assert_allclose(again.q, whole.q, rtol=0, atol=1e-13)
 
 
 def test_block_fit_of_a_lossy_log_equals_the_in_memory_fit(panda, lossy, tmp_path):

@@ -119,7 +119,8 @@ class _Resampler:
     def feed(self, rec: Recording | None, last: bool) -> Recording | None:
         """The grid points ``rec`` completes (``last``: the segment ends with it; ``rec`` None: flush)."""
         buf = rec if self.buffer is None else (self.buffer if rec is None else _joined(self.buffer, rec))
-        if buf is None:
+        if buf is None or (buf.t.size < 2 and not last):  # a segment's first row alone: wait for the next
+            self.buffer = buf
             return None
         if self.t0 is None:
             self.t0 = float(buf.t[0])
