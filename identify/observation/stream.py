@@ -22,7 +22,7 @@ Every quantity downstream (incremental QR, bootstrap, validation) consumes piece
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, replace
+from dataclasses import dataclass
 from typing import Any, Callable, Iterator, Sequence
 
 import numpy as np
