@@ -10,12 +10,13 @@ with the same seed for every configuration, adding the envelope's parts one at a
   speed       + Cartesian speed <= 1 m/s at the tool point and every capsule end
   full        + self-collision of the URDF's capsules (the default of rx90 excite)
 
-Columns: time of the start [s], IPOPT iterations, cond(W), the criterion, and the predicted
+Columns: wall-clock and CPU time of the start [s] (CPU time suffers less from other processes on
+a loaded machine), IPOPT iterations, wall time per iteration [ms], cond(W), the criterion, and the predicted
 relative sigma of each parameter group (median over the group, %, eq. 15 with the default noise
 of 1 % of each torque limit; groups and reference magnitudes as docs/excitation.md). The ratio
 full / none of the time per start is the figure the issue's target (<= 2x) refers to.
 
-    python benchmarks/bench_envelope.py [--seed 0] [--duration 20] [--json out.json]
+    python benchmarks/bench_envelope.py [--seed 0 [1 ...]] [--only none full] [--duration 20] [--json out.json]
 
 With --every-robot: ``rx90 excite`` with its defaults (one start) on every bundled robot and the
 UR5 URDF: time, cond, the largest torque usage, the smallest clearance and height margin, the
@@ -90,9 +91,51 @@ def every_robot(duration: float) -> None:
                   f"{usage['max_point_speed_m_s']:6.3f}  {'; '.join(warns) or 'none'}", flush=True)
 
 
+def run_configs(robot, chi, base, args: argparse.Namespace, seed: int) -> list[dict]:
+    """One start of each configuration with ``seed``: times, iterations, cond, criterion, sigmas."""
+    import excitation
+    from excitation.options import OptimiserOptions
+
+    rows = []
+    for name, model in models(robot, chi, base):
+        if args.only and name not in args.only:
+            continue
+        objective = excitation.make_objective(model, "sigma", nominal_base=base.beta(chi))
+        options = OptimiserOptions(criterion=objective)
+        t0, c0 = time.perf_counter(), time.process_time()
+        traj = excitation.optimise_model(model, excitation.FourierSeries(args.duration, args.harmonics),
+                                         seed=seed, starts=1, options=options, progress=args.progress)
+        elapsed, cpu = time.perf_counter() - t0, time.process_time() - c0
+        rows.append({"config": name, "seed": seed, "time_s": elapsed, "cpu_s": cpu,
+                     "iterations": traj.info.iterations, "cond": traj.cond,
+                     "criterion": traj.info.criterion_value, "sigma_percent": group_sigma(traj, model, objective)})
+        print(f"{name}: {elapsed:.1f} s", flush=True)
+    return rows
+
+
+def print_table(rows: list[dict], args: argparse.Namespace, seed: int) -> dict[str, float] | None:
+    """The table of one seed; returns the full / none ratios (wall, CPU) when both ran."""
+    groups = list(rows[0]["sigma_percent"])
+    print(f"\nUR5 URDF, {args.duration:g} s, {args.harmonics} harmonics, seed {seed}, one start each")
+    print(f"{'config':8s} {'s/start':>8s} {'cpu s':>6s} {'iter':>5s} {'ms/it':>6s} {'cond':>8s} {'crit':>7s} "
+          + " ".join(f"{g[:22]:>22s}" for g in groups))
+    for r in rows:
+        print(f"{r['config']:8s} {r['time_s']:8.1f} {r['cpu_s']:6.1f} {r['iterations']:5d} "
+              f"{1e3 * r['time_s'] / max(r['iterations'], 1):6.0f} {r['cond']:8.1f} {r['criterion']:7.3f} "
+              + " ".join(f"{r['sigma_percent'][g]:22.3g}" for g in groups))
+    by = {r["config"]: r for r in rows}
+    if "none" not in by or "full" not in by:
+        return None
+    full, none = by["full"], by["none"]
+    per_it = (full["time_s"] / max(full["iterations"], 1)) / (none["time_s"] / max(none["iterations"], 1))
+    print(f"ratio full / none (time per start): {full['time_s'] / none['time_s']:.2f} (target <= 2); "
+          f"CPU time {full['cpu_s'] / none['cpu_s']:.2f}; time per IPOPT iteration {per_it:.2f}")
+    return {"wall": full["time_s"] / none["time_s"], "cpu": full["cpu_s"] / none["cpu_s"]}
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--seed", type=int, default=0)
+    parser.add_argument("--seed", type=int, nargs="+", default=[0], help="one start per seed and configuration")
     parser.add_argument("--duration", type=float, default=20.0)
     parser.add_argument("--harmonics", type=int, default=5)
     parser.add_argument("--only", nargs="*", default=None, help="run only these configurations")
@@ -104,39 +147,24 @@ def main() -> None:
         every_robot(args.duration)
         return
 
-    import excitation
     import rx90sym
-    from excitation.options import OptimiserOptions
 
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")  # the URDF's missing acceleration limits: given below
         robot = rx90sym.load_robot(UR5, tip="tool0", acceleration=2.0 * 3.15)
     chi = robot.parameter_vector(rx90sym.nominal_parameters(robot))
     base = rx90sym.base_parameters(robot)
-    rows = []
-    for name, model in models(robot, chi, base):
-        if args.only and name not in args.only:
-            continue
-        objective = excitation.make_objective(model, "sigma", nominal_base=base.beta(chi))
-        options = OptimiserOptions(criterion=objective)
-        t0 = time.perf_counter()
-        traj = excitation.optimise_model(model, excitation.FourierSeries(args.duration, args.harmonics),
-                                         seed=args.seed, starts=1, options=options, progress=args.progress)
-        elapsed = time.perf_counter() - t0
-        rows.append({"config": name, "time_s": elapsed, "iterations": traj.info.iterations,
-                     "cond": traj.cond, "criterion": traj.info.criterion_value,
-                     "sigma_percent": group_sigma(traj, model, objective)})
-        print(f"{name}: {elapsed:.1f} s", flush=True)
-    groups = list(rows[0]["sigma_percent"])
-    print(f"\nUR5 URDF, {args.duration:g} s, {args.harmonics} harmonics, seed {args.seed}, one start each")
-    print(f"{'config':8s} {'s/start':>8s} {'iter':>5s} {'cond':>8s} {'crit':>7s} "
-          + " ".join(f"{g[:22]:>22s}" for g in groups))
-    for r in rows:
-        print(f"{r['config']:8s} {r['time_s']:8.1f} {r['iterations']:5d} {r['cond']:8.1f} {r['criterion']:7.3f} "
-              + " ".join(f"{r['sigma_percent'][g]:22.3g}" for g in groups))
-    times = {r["config"]: r["time_s"] for r in rows}
-    if "none" in times and "full" in times:
-        print(f"ratio full / none (time per start): {times['full'] / times['none']:.2f} (target <= 2)")
+    rows, ratios = [], []
+    for seed in args.seed:
+        seed_rows = run_configs(robot, chi, base, args, seed)
+        rows += seed_rows
+        ratio = print_table(seed_rows, args, seed)
+        if ratio is not None:
+            ratios.append(ratio)
+    if len(ratios) > 1:
+        wall, cpu = (np.array([r[k] for r in ratios]) for k in ("wall", "cpu"))
+        print(f"\nover seeds {', '.join(map(str, args.seed))}: ratio full / none per start "
+              f"{', '.join(f'{v:.2f}' for v in wall)} (mean {wall.mean():.2f}); CPU time mean {cpu.mean():.2f}")
     if args.json:
         Path(args.json).write_text(json.dumps(rows, indent=1))
 

@@ -22,8 +22,8 @@ radius r apart), radius sqrt(r^2 + (spacing/2)^2) so that the balls contain the 
 pair of capsules (and each capsule and box) gives ONE smooth row, the soft minimum
 -k log sum exp(-d/k) (k = SOFT_MIN) of its ball-pair clearances d (ball-centre distance minus
 the inflated radii, or the box's signed distance minus the inflated radius): never above the true
-minimum, so never optimistic. The optimiser imposes these rows on its constraint grid from the
-start (constraints.kinematic_constraints); :func:`capsule_clearances` gives the exact distances
+minimum, so never optimistic. The optimiser imposes them on its constraint grid from the start,
+merged into one soft minimum per sample (envelope_rows.py); :func:`capsule_clearances` gives the exact distances
 for the check (segment-segment distance, box distance by a fine sampling of the segment).
 """
 from __future__ import annotations

@@ -1,11 +1,12 @@
 """Limits an excitation trajectory must hold at every sample, symbolic (for IPOPT) and numeric.
 
 Joint positions, velocities and accelerations are linear in the coefficients, so on the
-optimisation grid they are linear constraints (:func:`kinematic_constraints`, with the floor).
+optimisation grid they are linear constraints (:func:`kinematic_constraints`).
 Motor torques come from the inverse dynamic model with the nominal parameters minus the spring
-torque (:func:`torque_constraints`), Cartesian heights from the forward geometric model: both
-nonlinear. On the optimisation grid every limit is tightened by a margin (the trajectory also moves
-between grid points, see :func:`kinematic_grid_rate`); :func:`check_limits` then verifies the true
+torque (:func:`torque_constraints`), Cartesian heights, speeds and clearances from the forward
+geometric model (envelope_rows.py): nonlinear. On the optimisation grid every limit is tightened
+by a margin (the trajectory also moves between grid points, see :func:`kinematic_grid_rate`);
+:func:`check_limits` then verifies the true
 limits, without margin, on an independent fine grid (1 kHz by default), which is what decides
 feasibility; :func:`violation_times` tells the optimiser where to add constraints when it fails.
 """
@@ -159,51 +160,15 @@ class _Rows:
 def kinematic_constraints(model: ExcitationModel, q: ca.MX, qd: ca.MX, qdd: ca.MX,
                           margins: Margins) -> tuple[ca.MX, np.ndarray, np.ndarray]:
     """(g, lbg, ubg) on MX samples (n x N): position, velocity and acceleration limits with
-    margins (linear in the coefficients), and the envelope's rows when the model has them: the
-    lowest point above the floor (forward kinematics; a soft minimum over the points, one row per
-    sample), capsule clearances >= margins.clearance [m] (one smooth row per pair or capsule and
-    box, collision.py) and the fastest point's squared Cartesian speed (a soft maximum, one row
-    per sample): imposed from the start, since a repair from a point in collision rarely
-    recovers. The 1 kHz check verifies every point exactly."""
+    margins (linear in the coefficients). The envelope's nonlinear rows (heights, clearances,
+    Cartesian speeds) are envelope_rows.py's; the 1 kHz check verifies every point exactly."""
     lim = model.limits
     rows = _Rows()
     lo, hi = position_bounds(model, margins.position)
     rows.add(q, lo, hi)
     for expr, bound, m in ((qd, lim.qd_max, margins.velocity), (qdd, lim.qdd_max, margins.acceleration)):
         rows.add(expr, -(1.0 - m) * bound, (1.0 - m) * bound)
-    if model.heights is not None and model.z_min is not None and q.shape[1] > 0:
-        z = _smooth_extreme(model.heights, -HEIGHT_SOFTNESS).map(q.shape[1], "serial")(q)
-        rows.add(z, np.full(1, model.z_min + margins.height), np.full(1, np.inf))
-    clearance = None if model.collision is None else model.collision.clearance
-    if clearance is not None and q.shape[1] > 0:  # one smooth row per capsule pair: from the start
-        c = clearance.map(q.shape[1], "serial")(q)
-        k = c.shape[0]
-        rows.add(c, np.full(k, margins.clearance), np.full(k, np.inf))
-    if model.speeds is not None and q.shape[1] > 0:  # squared speeds: smooth, active at once
-        v2 = _smooth_extreme(model.speeds, SPEED_SOFTNESS).map(q.shape[1], "serial")(q, qd)
-        # Cartesian speeds are not band-limited like the joint motion (the Bernstein bound of
-        # kinematic_grid_rate does not cover them): 5 % kept on the grid (2 % let the TX40's tool
-        # reach 1.0024 m/s between grid points on the 1 kHz check).
-        keep = max(margins.velocity, SPEED_MARGIN)
-        rows.add(v2, np.full(1, -np.inf), np.full(1, ((1.0 - keep) * model.speed_max) ** 2))
     return rows.result()
-
-
-HEIGHT_SOFTNESS = 0.002  # [m]: the lowest point's soft minimum is at most 2 mm x log(count) low
-SPEED_SOFTNESS = 0.005   # [m^2/s^2]: the fastest point's soft maximum of squared speeds
-SPEED_MARGIN = 0.05      # fraction of the Cartesian speed limit kept on the constraint grid
-
-
-def _smooth_extreme(f: ca.Function, k: float) -> ca.Function:
-    """One smooth row per sample instead of one per point: k log sum exp(v / k) of f's outputs,
-    never below their maximum (k > 0) or, k < 0, never above their minimum: conservative, and
-    IPOPT's linear algebra no longer grows with the number of points (20 height rows per sample
-    made a 10 s UR5 start 9x slower)."""
-    sym = [ca.SX.sym(f.name_in(i), f.size1_in(i)) for i in range(f.n_in())]
-    v = f(*sym)
-    if v.shape[0] == 1:
-        return f
-    return ca.Function(f"{f.name()}_extreme", sym, [k * ca.logsumexp(v / k)], f.name_in(), ["extreme"])
 
 
 def torque_constraints(model: ExcitationModel, q: ca.MX, qd: ca.MX, qdd: ca.MX,

@@ -3,8 +3,8 @@
 Controllers stream set-points at a fixed rate: a UR's servoj at 500 Hz, a Franka's joint
 position interface at 1 kHz, which also bounds the jerk (libfranka's documented joint jerk
 limits, FRANKA_JERK_MAX). The file has the same columns as Trajectory.save (t, q, dq, ddq in
-controller angles), sampled at the controller's period, with an approach move first when a
-start pose is given: a quintic rest-to-rest move s(tau) = 10 tau^3 - 15 tau^4 + 6 tau^5, whose
+controller angles), sampled at the controller's period, with an approach move first and the
+same move back at the end when a start pose is given: a quintic rest-to-rest move s(tau) = 10 tau^3 - 15 tau^4 + 6 tau^5, whose
 peaks are 1.875 D/T (velocity), 5.7735 D/T^2 (acceleration), 60 D/T^3 (jerk) for a step D over T,
 so T is the smallest multiple of the period that keeps every joint within its limits.
 """
@@ -60,9 +60,9 @@ def approach_samples(q_from: np.ndarray, q_to: np.ndarray, duration: float, rate
 
 def controller_samples(trajectory: Any, controller: str | Controller, limits: Any, start_pose: Any = None
                        ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-    """(t, q, qd, qdd) at the controller's rate in controller angles, after an approach move from
-    ``start_pose`` (controller angles [rad], None: no approach; the robot must then be at the
-    trajectory's start). limits: qd_max, qdd_max (n,) [rad/s, rad/s^2] for the approach. Raises
+    """(t, q, qd, qdd) at the controller's rate in controller angles, between an approach move from
+    ``start_pose`` and the return to it (controller angles [rad], None: neither; the robot must
+    then be at the trajectory's start, where it also ends). limits: qd_max, qdd_max (n,) [rad/s, rad/s^2] for the approach. Raises
     ValueError naming the joint and the time when the controller's jerk limit is exceeded."""
     ctrl = CONTROLLERS[controller] if isinstance(controller, str) else controller
     offsets = trajectory.controller_offsets
@@ -77,7 +77,13 @@ def controller_samples(trajectory: Any, controller: str | Controller, limits: An
         duration = approach_duration(start, q[0], np.asarray(limits.qd_max), np.asarray(limits.qdd_max),
                                      jerk, 1.0 / ctrl.rate)
         ta, qa, qda, qdda = approach_samples(start, q[0], duration, ctrl.rate)
-        parts = [(ta, qa, qda, qdda), (t + duration, q, qd, qdd)]
+        # The return: the same quintic back along the same path (the trajectory ends where it
+        # starts), its first sample dropped (it is the trajectory's last) and the start pose added.
+        tb, qb, qdb, qddb = approach_samples(q[-1], start, duration, ctrl.rate)
+        zero = np.zeros((1, trajectory.n))
+        back = (np.r_[tb[1:], duration] + duration + t[-1], np.vstack([qb[1:], start]),
+                np.vstack([qdb[1:], zero]), np.vstack([qddb[1:], zero]))
+        parts = [(ta, qa, qda, qdda), (t + duration, q, qd, qdd), back]
     t, q, qd, qdd = (np.concatenate(x) for x in zip(*parts))
     if ctrl.jerk_max is not None:
         jerk = np.diff(qdd, axis=0) * ctrl.rate

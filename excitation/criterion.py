@@ -118,7 +118,10 @@ def smooth_friction_regressor(regressor: ca.Function, names: Sequence[str] | Non
         if all(np.allclose(phi[:, fs], np.sign(phi[:, fv])) for phi in checks):
             good.append((fs, fv))
         else:
-            warnings.warn(f"smooth friction: column {names[fs]} is not sign({names[fv]}); kept exact")
+            # e.g. the coupling's "motor" form: FSM6 = sign(qd5 + qd6), FVM6 = qd6 / qd5 per row
+            warnings.warn(f"smooth friction: column {names[fs]} is not sign({names[fv]}) (a coupling's 'motor' "
+                          f"Coulomb form?): that column stays exact (not smoothed) in the criterion; the "
+                          f"limits are not affected")
     sym = symbols_like(regressor)
     phi = regressor(*sym)
     for fs, fv in good:

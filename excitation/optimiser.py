@@ -7,8 +7,9 @@ from the previous one: the cond surrogate f_p for each p of ``OptimiserOptions.p
 exact second derivatives of the criterion through the mapped regressor would cost far more per
 iteration than they save in iterations for ~50 variables.
 
-Constraints: the kinematic limits (linear in Z) and the floor on a grid fine enough for the margins
-to cover what happens between samples; the torque limits (nonlinear, with the most expensive
+Constraints: the kinematic limits (linear in Z) and the safety envelope's rows (heights, capsule
+clearances, Cartesian speeds: envelope_rows.py, whose Jacobian goes through the joint samples) on a
+grid fine enough for the margins to cover what happens between samples; the torque limits (nonlinear, with the most expensive
 Jacobian, and rarely active on the RX90) lazily, cutting-plane style: every start is verified on the fine grid
 (true limits, no margin), and if a limit is exceeded the worst times of each violated stretch join
 the constraint set and the last stage is re-solved (``repairs`` rounds). Only verified starts
@@ -25,6 +26,7 @@ import numpy as np
 
 from .constraints import (Margins, check_limits, kinematic_constraints, position_bounds, range_centre,
                           torque_constraints, violation_times)
+from .envelope_rows import sample_rows, through_samples
 from .criterion import symbols_like, gram_expression, regressor_samples, smooth_friction_regressor
 from .objective import numeric_information
 from .model import ExcitationModel
@@ -89,9 +91,11 @@ class _Problem:
                                   objective.row_weights(model.n))
         info = objective.information(gram_expression(regressor, *samples(self.grid)), form.duration)
         g_kin, lo_kin, hi_kin = kinematic_constraints(model, *samples(self.kinematic_times), options.margins)
+        g_env, lo_env, hi_env = self._envelope(x)
         g_dyn, lo_dyn, hi_dyn = torque_constraints(model, *samples(self.torque_times), options.margins)
-        g = ca.vertcat(g_kin, g_dyn)
-        self.lbg, self.ubg = np.concatenate([lo_kin, lo_dyn]), np.concatenate([hi_kin, hi_dyn])
+        g = ca.vertcat(g_kin, g_env, g_dyn)
+        self.lbg = np.concatenate([lo_kin, lo_env, lo_dyn])
+        self.ubg = np.concatenate([hi_kin, hi_env, hi_dyn])
         self.deadline = _Deadline(x.numel(), g.numel())
         ipopt = {"ipopt.hessian_approximation": "limited-memory", "ipopt.max_iter": options.max_iter,
                  "ipopt.tol": options.tol, "ipopt.acceptable_tol": options.acceptable_tol,
@@ -103,6 +107,19 @@ class _Problem:
         self.stage_values = ca.Function("stages", [x], objectives)
         self.solvers = [ca.nlpsol(f"excitation_{c.replace('-', '_')}{p}", "ipopt", {"x": x, "f": f, "g": g}, ipopt)
                         for (c, p), f in zip(options.stages, objectives)]
+
+    def _envelope(self, x: ca.MX) -> tuple[ca.MX, np.ndarray, np.ndarray]:
+        """The envelope's rows on the constraint grid (heights, clearances, Cartesian speeds:
+        imposed from the start, since a repair from a point in collision rarely recovers), with
+        the chain-rule Jacobian of envelope_rows.py."""
+        m = self.options.margins
+        rows = sample_rows(self.model, m.velocity, m.height, m.clearance)
+        if rows is None or self.kinematic_times.size == 0:
+            return ca.MX(0, 1), np.zeros(0), np.zeros(0)
+        f, lo, hi = rows
+        bq, bd, _ = self.form.basis(self.kinematic_times)
+        g = through_samples(f, bq @ self.rest, bd @ self.rest, self.model.n)(x)
+        return g, np.tile(lo, self.kinematic_times.size), np.tile(hi, self.kinematic_times.size)
 
     def with_extra_times(self, times: np.ndarray) -> "_Problem":
         """The same problem with every limit also imposed at ``times`` [s]; the first time round,

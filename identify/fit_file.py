@@ -51,7 +51,8 @@ class FitModel:
     offsets: torque offsets OFFj identified; spring: "default" | "none" | "identify" |
     "identify-k" | a table file; cutoff_hz (the one used, also when chosen on the data),
     decimate_to_hz (None: no decimation), rate_hz (achieved), delay_s: torque lag compensated;
-    tip: the tip link of a URDF robot (None otherwise).
+    tip: the tip link of a URDF robot (None otherwise); friction: the smooth friction form and its
+    velocity scales (identify.estimation.separable.VelocityScales.to_json; None: Coulomb).
     """
 
     robot: str
@@ -70,6 +71,7 @@ class FitModel:
     rate_hz: float
     delay_s: float
     tip: str | None = None
+    friction: dict | None = None
 
     @classmethod
     def of(cls, robot: rx90sym.Robot, **fields: Any) -> "FitModel":

@@ -23,7 +23,9 @@ from identify.plausibility import Flag
 from identify.estimation.results import IdentificationResult, json_number
 from identify.fit_file import SCHEMA_VERSION, FitModel, gains_of, read_fit_file, robot_of
 from identify.io.gains import DriveGains
-from identify.observation.matrix import Observation, observation_matrix
+from identify.observation.friction import DEFAULT_FRICTION, PRESLIDING_TRAVEL
+from identify.observation.friction_model import friction_base
+from identify.observation.matrix import Observation, coulomb_terms, observation_matrix
 from identify.io.recordings import layout_summary
 from identify.observation.processing import DEFAULT_MIN_VELOCITY, Processing
 from identify.signal.delay import DelayEstimate, estimate_delay
@@ -219,7 +221,14 @@ class Fit:
         asymmetric = tuple(j for j in range(rob.n) if f"FSP{j + 1}" in result.names)
         if asymmetric != tuple(rob.asymmetric_coulomb):
             rob = rob.with_options(asymmetric_coulomb=asymmetric)
-        return cls(rob, result, processing, model, rx90sym.base_parameters(rob),
+        base = rx90sym.base_parameters(rob)
+        if model.friction is not None:  # the friction columns found: smooth form's scales, presliding travels
+            fr = model.friction
+            scales = [np.nan if v is None else v for v in fr["velocity_scale"]] if "velocity_scale" in fr else None
+            travels = _defaulted(fr["presliding_travel"]) if "presliding_travel" in fr else None
+            base = friction_base(base, coulomb_terms(rob, base.names), fr["form"], scales,
+                                 presliding=travels is not None, travels=travels)
+        return cls(rob, result, processing, model, base,
                    delay_estimate_s=data.get("delay_estimate_s"), spring=data.get("spring"),
                    bootstrap=bootstrap, essential=essential, flags=flags,
                    recordings=tuple(data.get("recordings", [])), choice=data.get("processing_choice"))
@@ -266,6 +275,9 @@ def fit(robot: rx90sym.Robot, recordings: Sequence[Any], processing: Processing 
     if block is not None or client is not None:
         from identify.stream_fit import fit_in_blocks
 
+        if processing is not None and processing.friction != DEFAULT_FRICTION:
+            raise ValueError(f"fit: friction form {processing.friction!r} searches its velocity scales on whole "
+                             f"recordings, not block by block: give friction 'coulomb', or no block")
         if processing is not None and processing.cross_validate:
             raise ValueError("fit: the cross-validated processing is chosen on whole recordings, not block by "
                              "block: give a cut-off and a rest policy, or no block")
@@ -275,6 +287,11 @@ def fit(robot: rx90sym.Robot, recordings: Sequence[Any], processing: Processing 
     if method not in METHODS:
         raise ValueError(f"fit: method must be one of {METHODS}, got {method!r}")
     p = processing if processing is not None else Processing()
+    if method == "consistent" and (p.friction != DEFAULT_FRICTION or p.rest == "presliding"):
+        # Its standard parameters are what a URDF/MJCF holds: Coulomb (FS) and viscous (FV) friction.
+        raise ValueError(f"fit: the consistent method fits bodies with Coulomb + viscous friction (what a URDF or "
+                         f"MJCF holds), not friction form {p.friction!r} with rest policy {p.rest!r}: use "
+                         f"friction 'coulomb' and rest 'zero-coulomb' or 'drop', or method 'wls'")
     recordings = list(recordings) if isinstance(recordings, (list, tuple)) else [recordings]
     base = base if base is not None else rx90sym.base_parameters(robot)
     options = p.observation_options()
@@ -291,19 +308,53 @@ def fit(robot: rx90sym.Robot, recordings: Sequence[Any], processing: Processing 
     if observation is None and (p.estimate_delay or p.delay == "auto"):
         found = estimate_delay(robot, recordings, base=base, **options)
     lag = found.delay if p.delay == "auto" else float(p.delay)
+    base, friction = _friction_form(robot, recordings, base, p.friction, observation, dict(options, delay=lag))
     obs = observation if observation is not None else observation_matrix(robot, recordings, delay=lag,
                                                                          base=base, **options)
     result = _solve(robot, obs, base, method, consistent_options)
     model = FitModel.of(robot, convention=convention, gains=gains.to_dict() if gains is not None else None,
                         rest=options["rest"], min_velocity=options["min_velocity"],
                         spring=spring_source or _spring_label(robot, base),
-                        cutoff_hz=obs.cutoffs[0], decimate_to_hz=options["decimate_to"], rate_hz=obs.rate, delay_s=lag)
+                        cutoff_hz=obs.cutoffs[0], decimate_to_hz=options["decimate_to"], rate_hz=obs.rate, delay_s=lag,
+                        friction=friction)
     from identify.observation.spring_fit import BaseWithSpring, spring_summary
 
     spring = spring_summary(robot, base if isinstance(base, BaseWithSpring) else None, result, recordings)[0]
     return Fit(robot, result, p, model, base, obs, found, found.delay if found is not None else None, spring,
                recordings=tuple(layout_summary(r) for r in recordings if hasattr(r, "measured_mask")),
                choice=choice.to_dict() if choice is not None else None)
+
+
+def _friction_form(robot: rx90sym.Robot, recordings: Sequence[Any], base: Any, form: str,
+                   observation: Observation | None, options: dict[str, Any]) -> tuple[Any, dict | None]:
+    """(columns, the fit file's ``model.friction``) of the friction ``form`` and the rest policy in
+    ``options``: a smooth form's velocity scale per joint and the presliding travel per joint, both
+    by separable least squares (identify.estimation.separable); ``base`` and None for Coulomb
+    without presliding."""
+    presliding = options["rest"] == "presliding" and options["min_velocity"] is not None
+    if form == DEFAULT_FRICTION and not presliding or observation is not None:
+        if observation is not None and form != DEFAULT_FRICTION:
+            raise ValueError(f"fit: friction form {form!r} searches its velocity scales on the recordings: "
+                             f"give recordings, not an observation matrix")
+        return base, None
+    from identify.estimation.separable import presliding_travels, velocity_scales
+
+    record: dict[str, Any] = {"form": form}
+    terms = coulomb_terms(robot, base.names)
+    if form != DEFAULT_FRICTION:
+        scales = velocity_scales(robot, recordings, base, form, **options)
+        base = friction_base(base, terms, form, scales.scales)
+        record.update(scales.to_json())
+    if presliding:
+        travels = presliding_travels(robot, recordings, base, **options)
+        base = friction_base(base, terms, presliding=True, travels=_defaulted(travels.travels))
+        record.update(travels.to_json())
+    return base, record
+
+
+def _defaulted(travels: Sequence[float | None]) -> list[float]:
+    """Travels [rad] with the default where none was chosen (the joint never rests: no FPj column)."""
+    return [PRESLIDING_TRAVEL if v is None or not np.isfinite(v) else float(v) for v in travels]
 
 
 def _honest_covariance(obs: Observation, result: IdentificationResult) -> np.ndarray:

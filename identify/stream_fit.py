@@ -27,7 +27,7 @@ from identify.estimation.incremental_qr import JointFactors, stacked_rows
 from identify.estimation.least_squares import solve_joint_systems
 from identify.estimation.results import IdentificationResult
 from identify.io.blocks import BlockSource, block_source
-from identify.observation.matrix import DEFAULT_MIN_VELOCITY, DEFAULT_REST, column_regressor
+from identify.observation.matrix import DEFAULT_MIN_VELOCITY, DEFAULT_REST, column_regressor, presliding_base
 from identify.observation.stream import (DEFAULT_BLOCK, Piece, Plan, StreamSettings, piece, plan_windows, scan_all,
                                          windows_in_order)
 from identify.signal.delay import DelayEstimate, delay_grid, joint_log_rms, refined_delay
@@ -190,7 +190,7 @@ def fit_streamed(robot: rx90sym.Robot, recordings: Sequence[Any], method: str = 
         raise ValueError(f"delay must be 'auto' or a number of seconds, got {delay!r}")
     if int(block) != block or block < 1000:
         raise ValueError(f"block must be a whole number of samples >= 1000, got {block!r}")
-    base = base if base is not None else rx90sym.base_parameters(robot)
+    base = presliding_base(robot, base, rest if min_velocity else None)  # FPj columns with "presliding"
     sources = [block_source(r, robot, convention, gains) for r in recordings]
     settings = StreamSettings(cutoff, decimate_to or None, min_velocity or None, rest,
                               0.0 if delay == "auto" else float(delay), spring, int(block))
@@ -231,7 +231,7 @@ def predict_streamed(robot: rx90sym.Robot, result: IdentificationResult, recordi
                      convention: str | None = None, gains: Any = None, rest: str = "zero-coulomb") -> Validation:
     """:func:`identify.predict` on a recording of any length: predicted and measured torques block by block
     (only the decimated torques are held, n columns at the decimated rate)."""
-    base = base if base is not None else rx90sym.base_parameters(robot)
+    base = presliding_base(robot, base, rest if min_velocity else None)
     beta = base_vector(result, base, robot)
     src = block_source(recording, robot, convention, gains)
     # As identify.predict: the fit's presliding state at rest, else the Coulomb term 0 at rest.

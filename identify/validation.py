@@ -14,7 +14,7 @@ import numpy as np
 
 import rx90sym
 
-from identify.observation.matrix import automatic_cutoff, filtered_motions
+from identify.observation.matrix import automatic_cutoff, filtered_motions, presliding_base
 from identify.estimation.results import IdentificationResult, json_number
 
 __all__ = ["Validation", "predict", "validate"]
@@ -114,9 +114,9 @@ def predict(robot: rx90sym.Robot, result: IdentificationResult, recording: Any, 
     cutoff [Hz], decimate_to [Hz]: give those of the fit (None: chosen on this recording);
     min_velocity [rad/s]: rest threshold (Coulomb term 0 at rest, errors also while moving);
     delay [s]: torque lag compensated as in the fit; rest: the fit's rest policy ("presliding":
-    the presliding state at rest, any other: Coulomb 0 at rest).
+    the presliding state times FPj at rest, any other: Coulomb 0 at rest).
     """
-    base = base if base is not None else rx90sym.base_parameters(robot)
+    base = presliding_base(robot, base, rest if rest == "presliding" and min_velocity is not None else None)
     beta = base_vector(result, base, robot)
     cutoff = cutoff if cutoff is not None else automatic_cutoff([recording], decimate_to)
     motions, _, _ = filtered_motions(robot, [recording], cutoff, decimate_to, spring, base.regressor_batch,

@@ -137,14 +137,16 @@ def test_controller_export_with_approach_move_holds_limits_by_finite_differences
     t, q = data[:, 0], data[:, 1:3]
     np.testing.assert_allclose(np.diff(t), 1 / 500.0, rtol=1e-9)            # UR servoj period
     np.testing.assert_allclose(q[0], start, atol=1e-12)
-    np.testing.assert_allclose(q[-1], traj.start_position() + traj.controller_offsets, atol=1e-9)
+    np.testing.assert_allclose(q[-1], start, atol=1e-12)  # the return: back to the start pose
     qd = np.diff(q, axis=0) * 500.0                                          # independent of the file's dq
     qdd = np.diff(qd, axis=0) * 500.0
     assert np.all(np.abs(qd) <= limits.qd_max * 1.001)
     assert np.all(np.abs(qdd) <= limits.qdd_max * 1.01)
     n_traj = int(round(4.0 * 500)) + 1
-    approach = t.size - n_traj
+    approach = (t.size - n_traj) // 2  # the same move there and back
     assert approach > 0 and t[approach] == pytest.approx(approach / 500.0)
+    for k in (approach, approach + n_traj - 1):  # the trajectory's first and last rows: its start
+        np.testing.assert_allclose(q[k], traj.start_position() + traj.controller_offsets, atol=1e-9)
     with pytest.raises(ValueError, match=r"joint \d jerk .* at t = .* exceeds the limit 1 rad/s\^3"):
         export_for_controller(traj, tmp_path / "f.csv", Controller("strict", 1000.0, (1.0, 1.0)), limits, start)
     assert not (tmp_path / "f.csv").exists()

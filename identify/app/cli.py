@@ -6,6 +6,7 @@ is not the user's (a solver that did not converge is reported, never returned as
 from __future__ import annotations
 
 import argparse
+import re
 import sys
 import warnings
 from typing import Sequence
@@ -27,9 +28,27 @@ def build_parser() -> argparse.ArgumentParser:
     return p
 
 
+# A value list that starts with a minus sign ("-1.5,0,..." or "-2:2,...") after an option.
+_NEGATIVE_LIST = re.compile(r"^-\.?\d.*[,:]")
+
+
+def join_negative_values(argv: Sequence[str]) -> list[str]:
+    """``--start-pose -1.5,0,...`` as ``--start-pose=-1.5,0,...``: argparse takes a plain negative
+    number as a value but reads a comma or colon list starting with '-' as an unknown option
+    ("expected one argument"), which refused every pose or range whose first value is negative."""
+    out: list[str] = []
+    for arg in argv:
+        before = out[-1] if out else ""
+        if before.startswith("--") and "=" not in before and _NEGATIVE_LIST.match(arg):
+            out[-1] = f"{before}={arg}"
+        else:
+            out.append(arg)
+    return out
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     parser = build_parser()
-    args = parser.parse_args(argv)
+    args = parser.parse_args(join_negative_values(sys.argv[1:] if argv is None else argv))
 
     def show_warning(message, category, filename, lineno, file=None, line=None) -> None:
         print(f"[{PROG}] warning: {message}", file=sys.stderr, flush=True)

@@ -166,9 +166,11 @@ def convention_option(sp: argparse.ArgumentParser) -> None:
                          "default: the file's header, else controller")
 
 
-def robot_option(sp: argparse.ArgumentParser, default: str | None = "rx90", source: str = "") -> None:
+def robot_option(sp: argparse.ArgumentParser, default: str | None = "rx90", source: str = "",
+                 acceleration_default: str = "10 rad/s^2, 2 m/s^2") -> None:
     """``--robot``: a bundled robot name, a robot file or a URDF; ``--tip``: a URDF's end link.
-    ``default`` None: no default robot (``source`` says where the robot is taken from instead)."""
+    ``default`` None: no default robot (``source`` says where the robot is taken from instead).
+    ``acceleration_default``: what the command uses when a URDF's --acceleration is not given."""
     text = (f"(default {default})" if default is not None else
             f"(default: {source})" if source else "(required)")
     # args.robot stays None unless given: the robot line says "default", not "from --robot".
@@ -178,7 +180,7 @@ def robot_option(sp: argparse.ArgumentParser, default: str | None = "rx90", sour
                                   "(default: the only leaf link)")
     sp.add_argument("--acceleration", metavar="A|A1,..,An",
                     help="with a URDF --robot: joint acceleration limits [rad/s^2; m/s^2 prismatic], one "
-                         "number or one per joint (a URDF has none; default 10 rad/s^2, 2 m/s^2)")
+                         f"number or one per joint (a URDF has none; default {acceleration_default})")
 
 
 def read_recordings(paths: list[str], robot: rx90sym.Robot, convention: str | None, gains: Any) -> list:

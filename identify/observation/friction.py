@@ -15,9 +15,13 @@ Coulomb entry unchanged.
 """
 from __future__ import annotations
 
+from functools import lru_cache
+from typing import Any
+
 import numpy as np
 
-__all__ = ["PRESLIDING_TRAVEL", "presliding_state"]
+__all__ = ["DEFAULT_FRICTION", "FRICTION_FORMS", "PRESLIDING_TRAVEL", "friction_columns", "friction_function",
+           "presliding_state"]
 
 #: Travel (rad) over which the presliding state goes from one sign to the other (docs/real-logs.md).
 PRESLIDING_TRAVEL = 2e-3
@@ -33,3 +37,47 @@ def presliding_state(q: np.ndarray, travel: float = PRESLIDING_TRAVEL) -> np.nda
     for k, s in enumerate(steps, start=1):
         z[k] = min(1.0, max(-1.0, z[k - 1] + s))
     return z
+
+
+# ---------------------------------------------------------------- friction while moving
+#: Friction forms of the moving rows (docs/real-logs.md): "coulomb" FS·sign(q̇); "tanh" the smooth
+#: Coulomb FS·tanh(q̇/vs); "stribeck" (FS + (FST − FS)·exp(−(q̇/vs)²))·sign(q̇). The last two are
+#: linear in FS (FST) for a given velocity scale vs [rad/s], found by separable least squares
+#: (identify.estimation.separable). The cross-validation grid iterates this tuple.
+FRICTION_FORMS = ("coulomb", "tanh", "stribeck")
+DEFAULT_FRICTION = "coulomb"
+
+
+def _form_expression(form: str) -> tuple[Any, Any, Any]:  # CasADi SX
+    """(v, vs, columns) CasADi symbols: the friction columns of one Coulomb term at speed v
+    [rad/s] for the velocity scale vs [rad/s] (FS's column first, then FST's for Stribeck)."""
+    import casadi as ca  # here: a command's --help does not pay for CasADi
+
+    v, vs = ca.SX.sym("v"), ca.SX.sym("vs")
+    if form == "tanh":
+        return v, vs, ca.tanh(v / vs)
+    if form == "stribeck":
+        e = ca.exp(-(v / vs) ** 2)
+        return v, vs, ca.vertcat(ca.sign(v) * (1 - e), ca.sign(v) * e)   # FS·(1 − e)·sgn + FST·e·sgn
+    raise ValueError(f"friction form must be one of {FRICTION_FORMS[1:]} to have a velocity scale, got {form!r}")
+
+
+@lru_cache(maxsize=None)
+def friction_function(form: str) -> Any:
+    """CasADi function (v, vs) -> (columns, d columns / d vs) of a smooth friction form, for
+    row vectors v (1, N) and a scalar vs: columns (k, N), k = 1 (tanh) or 2 (stribeck). The
+    derivative is CasADi's (separable least squares' outer gradient)."""
+    import casadi as ca
+
+    v, vs, cols = _form_expression(form)
+    return ca.Function(f"friction_{form}", [v, vs], [cols, ca.jacobian(cols, vs)])
+
+
+def friction_columns(form: str, v: np.ndarray, vs: float) -> tuple[np.ndarray, np.ndarray]:
+    """(columns (N, k), derivatives (N, k)) of ``form`` at the speeds v (N,) [rad/s], scale vs [rad/s]."""
+    if not (np.isfinite(vs) and vs > 0):
+        raise ValueError(f"friction velocity scale must be a positive speed in rad/s, got {vs!r}")
+    v = np.asarray(v, dtype=float).reshape(-1)
+    f = friction_function(form).map(max(v.size, 1))
+    cols, dcols = f(v.reshape(1, -1), vs)
+    return np.asarray(cols).T, np.asarray(dcols).T

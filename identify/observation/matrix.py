@@ -27,52 +27,16 @@ import numpy as np
 import rx90sym
 
 from identify.observation.friction import presliding_state
+from identify.observation.friction_model import (PRESLIDING_PREFIX, STRIBECK_PREFIX, CoulombTerm, coulomb_terms, own_terms,
+                                                presliding_base, without_empty_presliding)
 from identify.observation.processing import DEFAULT_MIN_VELOCITY, DEFAULT_REST, REST_POLICIES
 from identify.signal.filtering import EDGE_PERIODS, choose_cutoff, decimate, decimation_plan, derivatives
 
 __all__ = ["DECIMATION_PASSBAND", "automatic_cutoff", "DEFAULT_MIN_VELOCITY", "DEFAULT_REST", "REST_POLICIES", "CoulombTerm", "FilteredMotion", "Observation",
-           "coulomb_terms", "filtered_motion", "filtered_motions", "observation_matrix", "stack_rows"]
+           "coulomb_terms", "filtered_motion", "filtered_motions", "observation_matrix", "presliding_base", "stack_rows"]
 
 # Rest threshold and policy (measured on the TX40 and the twin: docs/real-data-identification.md):
 # defined once, with the other processing defaults, in identify.observation.processing.
-
-
-@dataclass(frozen=True)
-class CoulombTerm:
-    """One Coulomb entry of the regressor: parameter ``name`` (column ``column``) in joint ``row``'s
-    equation, whose sign is that of the speed ``driver @ qd`` (a joint, or a motor for FSM terms)."""
-
-    name: str
-    column: int
-    row: int
-    driver: tuple[float, ...]
-
-
-def coulomb_terms(robot: rx90sym.Robot, names: Sequence[str]) -> tuple[CoulombTerm, ...]:
-    """The Coulomb entries among the parameter columns ``names`` (standard or base names).
-
-    FSj (and FSPj, FSNj of an asymmetric joint) acts on row j with the sign of q̇j; the coupling's FSMb acts on rows a and b with the sign
-    of the motor speed q̇a + q̇b (``coulomb_sign = "motor"``) or of q̇b in row a and q̇a in row b
-    (``"paper"``, eqs. 17-18).
-    """
-    n = robot.n
-    unit = np.eye(n)
-    out = []
-    for c, name in enumerate(names):
-        try:
-            kind, j = rx90sym.parameters.split_name(name)
-        except ValueError:
-            continue
-        if kind in ("FS", "FSP", "FSN") and 1 <= j <= n:
-            out.append(CoulombTerm(name, c, j - 1, tuple(unit[j - 1])))
-        elif kind == "FSM" and robot.coupling is not None and j == robot.coupling.joints[1] + 1:
-            a, b = robot.coupling.joints
-            if robot.coupling.coulomb_sign == "motor":
-                drivers = {a: unit[a] + unit[b], b: unit[a] + unit[b]}
-            else:
-                drivers = {a: unit[b], b: unit[a]}
-            out += [CoulombTerm(name, c, row, tuple(w)) for row, w in drivers.items()]
-    return tuple(out)
 
 
 @dataclass(frozen=True, eq=False)
@@ -259,15 +223,34 @@ def _rest_rows(robot: rx90sym.Robot, names: Sequence[str] | None, speed: np.ndar
     where their driver rests: 0 ("zero-coulomb") or the presliding state of the filtered positions
     ``q`` ("presliding"; the position history, never the torque)."""
     usable = np.ones(speed.shape, dtype=bool)
-    for term in coulomb_terms(robot, names if names is not None else robot.parameter_names):
+    names = tuple(names if names is not None else robot.parameter_names)
+    for term in coulomb_terms(robot, names):
         driver_moving = np.abs(speed @ np.asarray(term.driver)) >= min_velocity
         usable[:, term.row] &= driver_moving
-        if rest == "zero-coulomb":
-            Phi[~driver_moving, term.row, term.column] = 0.0
-        elif rest == "presliding":
+        if rest == "drop":
+            continue
+        still = ~driver_moving
+        # The moving friction (Coulomb, smooth or Stribeck) says nothing at rest.
+        for column in [term.column] + _named(names, STRIBECK_PREFIX, term.row):
+            Phi[still, term.row, column] = 0.0
+        own = _named(names, PRESLIDING_PREFIX, term.row) if own_terms([term]) else []
+        if own:
+            # FPj holds z of the joint's own positions (FrictionBase): kept at rest only, with this policy.
+            for column in own:
+                Phi[driver_moving if rest == "presliding" else slice(None), term.row, column] = 0.0
+        elif rest == "presliding" and not _named(names, PRESLIDING_PREFIX, term.row):
+            # Columns built by hand, without FPj: z in FS's column (shared magnitude). A motor's
+            # Coulomb term (the coupling's FSM) beside an FPj adds nothing at rest.
             z = presliding_state(q @ np.asarray(term.driver))
-            Phi[~driver_moving, term.row, term.column] = z[~driver_moving]
+            Phi[still, term.row, term.column] = z[still]
     return usable
+
+
+def _named(names: Sequence[str], prefix: str, row: int) -> list[int]:
+    """The column(s) of parameter ``prefix`` of joint ``row`` + 1 among ``names``: the name itself,
+    or its candidates ``NAME_k`` ([] when absent)."""
+    name = f"{prefix}{row + 1}"
+    return [c for c, n in enumerate(names) if n == name or (n.startswith(name + "_") and n[len(name) + 1:].isdigit())]
 
 
 def _measured_rows(measured: np.ndarray | None, kept: slice, factor: int) -> np.ndarray | None:
@@ -332,9 +315,10 @@ def stack_rows(blocks: Sequence[np.ndarray], Ys: Sequence[np.ndarray], min_veloc
 
 
 def column_regressor(robot: rx90sym.Robot, base: Any = None, columns: Sequence[str] | None = None,
-                     ) -> tuple[tuple[str, ...], Callable[..., np.ndarray]]:
+                     rest: str | None = None) -> tuple[tuple[str, ...], Callable[..., np.ndarray]]:
     """(names, regressor_batch) of the columns of W: the base parameters of ``robot`` (or ``base``),
-    or the standard parameters ``columns``."""
+    or the standard parameters ``columns``; with ``rest="presliding"`` the base gets the presliding
+    magnitudes FPj (:func:`presliding_base`)."""
     # One reused buffer for the full-rate regressor of every recording (no fresh (N, n, c) array each).
     if columns is not None:
         idx = robot.parameter_index(columns)
@@ -343,7 +327,7 @@ def column_regressor(robot: rx90sym.Robot, base: Any = None, columns: Sequence[s
         def regressor(Q: np.ndarray, QD: np.ndarray, QDD: np.ndarray) -> np.ndarray:
             return workspace.evaluate(Q, QD, QDD)[:, :, idx]
         return tuple(columns), regressor
-    base = base if base is not None else rx90sym.base_parameters(robot)
+    base = presliding_base(robot, base, rest)
     if hasattr(base, "regressor_workspace"):
         return tuple(base.names), base.regressor_workspace().evaluate
     return tuple(base.names), base.regressor_batch
@@ -369,12 +353,13 @@ def observation_matrix(robot: rx90sym.Robot, recordings: Sequence[Any], cutoff: 
         recordings = [recordings]
     if not recordings:
         raise ValueError("observation_matrix: no recordings given")
-    names, regressor = column_regressor(robot, base, columns)
+    names, regressor = column_regressor(robot, base, columns, rest if min_velocity is not None else None)
     cutoff = cutoff if cutoff is not None else automatic_cutoff(recordings, decimate_to)
     motions, skipped, _ = filtered_motions(robot, recordings, cutoff, decimate_to, spring, regressor, names,
                                         min_velocity, rest, delay)  # one filtering for every segment
     keep = [m.rows(min_velocity is not None and rest == "drop") for m in motions]
     W, Y, joint, samples = stack_rows([m.Phi for m in motions], [m.Y for m in motions], masks=keep)
+    W, names, empty = without_empty_presliding(W, names)
     rates = tuple(m.rate for m in motions)
     if max(rates) > min(rates) * (1 + 1e-3):
         raise ValueError(f"recordings have different rates after decimation: "
@@ -382,5 +367,6 @@ def observation_matrix(robot: rx90sym.Robot, recordings: Sequence[Any], cutoff: 
     moving = np.concatenate([m.moving for m in motions])
     return Observation(W, Y, joint, names, samples, tuple(m.cutoff for m in motions), rates,
                        rates[0], tuple(m.source for m in motions), sum(len(m.Y) for m in motions),
-                       tuple(m.note for m in motions) + skipped, min_velocity, rest,
+                       tuple(m.note for m in motions) + skipped + empty, min_velocity, rest,
                        moving.mean(axis=0) if min_velocity is not None else None)
+

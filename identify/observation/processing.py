@@ -10,7 +10,9 @@ import math
 from dataclasses import asdict, dataclass, fields
 from typing import Any
 
-__all__ = ["Processing", "REST_POLICIES", "DEFAULT_MIN_VELOCITY", "DEFAULT_REST", "DEFAULT_DECIMATE_TO"]
+from identify.observation.friction import DEFAULT_FRICTION, FRICTION_FORMS
+
+__all__ = ["Processing", "FRICTION_FORMS", "REST_POLICIES", "DEFAULT_MIN_VELOCITY", "DEFAULT_REST", "DEFAULT_DECIMATE_TO"]
 
 #: Rest threshold [rad/s]: a joint slower than this is at rest (its Coulomb sign is unknown).
 DEFAULT_MIN_VELOCITY = 0.05
@@ -29,12 +31,15 @@ class Processing:
     cutoff [Hz]: Butterworth cut-off for q (None: chosen on the recordings, then recorded);
     decimate_to [Hz]: rate after parallel filtering (None or 0: no decimation);
     min_velocity [rad/s]: rest threshold (None or 0: no rest handling);
-    rest: "drop" (rest rows removed) | "zero-coulomb" (kept with Coulomb term 0);
+    rest: "drop" (rest rows removed) | "zero-coulomb" (kept with Coulomb term 0) | "presliding"
+    (kept with the presliding state times its own magnitude FPj);
     delay: torque lag behind the positions [s] compensated, or "auto" (estimated);
     estimate_delay: estimate the lag even when it is not compensated, to report it (~40
     least-squares fits);
     spring: add the robot's spring torque to the measured torque (False when the spring is
     identified with the other parameters);
+    friction: the friction form of the moving rows, one of FRICTION_FORMS ("coulomb"; "tanh",
+    "stribeck": velocity scale per joint by separable least squares, identify.estimation.separable);
     cross_validate: choose the cut-off, the decimation and the rest policy on the torques by
     blocked cross-validation (:mod:`identify.observation.cross_validation`; ``cutoff`` must be
     None); the fit records the choice and its candidate table.
@@ -48,6 +53,7 @@ class Processing:
     estimate_delay: bool = True
     spring: bool = True
     cross_validate: bool = False
+    friction: str = DEFAULT_FRICTION
 
     def __post_init__(self) -> None:
         # 0 means "none" for the rate and the threshold: one spelling inside (None).
@@ -59,6 +65,8 @@ class Processing:
                 raise ValueError(f"processing: {name} must be a positive number or None, got {value!r}")
         if self.cross_validate and self.cutoff is not None:
             raise ValueError("processing: a cut-off is given and cross_validate asks to choose one: give one of them")
+        if self.friction not in FRICTION_FORMS:
+            raise ValueError(f"processing: friction must be one of {FRICTION_FORMS}, got {self.friction!r}")
         if self.rest not in REST_POLICIES:
             raise ValueError(f"processing: rest must be one of {REST_POLICIES}, got {self.rest!r}")
         if not (self.delay == "auto" or (isinstance(self.delay, (int, float)) and math.isfinite(self.delay))):

@@ -5,6 +5,8 @@ import argparse
 import contextlib
 import dataclasses
 import sys
+import warnings
+from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -12,13 +14,14 @@ import numpy as np
 import rx90sym
 
 from ..common import UsageError, check_output, floats, load_robot, progress, robot_option
+from .excite_poses import check_pose, check_ranges, check_start_pose, envelope_lines, name_frames
 
 
 def register(sub: Any) -> None:
     sp = sub.add_parser("excite", help="optimise an excitation trajectory",
                         description="optimise an excitation trajectory (see docs/excitation.md)")
     sp.set_defaults(func=run)
-    robot_option(sp)
+    robot_option(sp, acceleration_default="2 x each joint's velocity limit per second, at most 10 rad/s^2")
     sp.add_argument("--duration", type=float, default=None,
                     help="duration [s] (default 20, or 10 with --for payload)")
     sp.add_argument("--for", dest="target", choices=("robot", "payload"), default="robot",
@@ -106,7 +109,8 @@ def _add_limit_options(sp: Any) -> None:
     sp.add_argument("--report", default=None,
                     help="HTML report of the envelope: tool path, speeds and accelerations against "
                          "their limits, distances to the floor and between links along time")
-    sp.add_argument("--out", required=True, help="trajectory CSV (controller angles, 250 Hz)")
+    sp.add_argument("--out", required=True, help="trajectory CSV (controller angles; 250 Hz, or the "
+                                                 "controller's rate with --controller, approach and return included)")
     sp.add_argument("--json", help="coefficients and summary as JSON")
 
 
@@ -116,7 +120,7 @@ def run(args: argparse.Namespace) -> int:
     for path in (args.out, args.json, args.program, args.report):
         check_output(path)
     _check_options(args)
-    robot = load_robot(args)
+    robot = _load_robot(args)
     params = rx90sym.nominal_parameters(robot, args.params)
     chi = None if params is None else robot.parameter_vector(params)
     if chi is None:
@@ -132,15 +136,18 @@ def run(args: argparse.Namespace) -> int:
         raise UsageError("--noise-std: values must be > 0 N m")
     start_pose = None if args.start_pose is None else floats(args.start_pose, "--start-pose", robot.n)
     envelope = _envelope(args, robot)
-    _check_start_pose(robot, None, start_pose)
+    check_start_pose(robot, None, start_pose)
     collision = _collision(args, robot)
     base = rx90sym.base_parameters(robot)
-    model, described = excitation.safe_model(robot, chi, base, envelope, collision)
-    _check_start_pose(robot, model, start_pose)
-    for line in excitation.envelope_lines(described):
+    try:
+        model, described = excitation.safe_model(robot, chi, base, envelope, collision)
+    except ValueError as exc:  # a centre pose or a floor the arm cannot hold, naming the point
+        raise UsageError(name_frames(robot, str(exc))) from None
+    check_start_pose(robot, model, start_pose)
+    for line in envelope_lines(robot, described):
         progress(line)
     if args.target == "payload":
-        return _payload(args, robot, base, chi, noise, collision, start_pose, envelope, model)
+        return _payload(args, robot, base, chi, noise, collision, start_pose, envelope, (model, described))
     complement = [_motion(path, robot) for path in args.complement or ()]
     with _client(args) as client:
         traj = excitation.optimise(
@@ -159,15 +166,19 @@ def run(args: argparse.Namespace) -> int:
     if skipped:
         progress(f"{len(skipped)} start(s) skipped by the time budget: {', '.join(map(str, skipped))}")
     print(f"cond = {traj.cond:.2f} (base observation matrix at 250 Hz), criterion {criterion} = "
-          f"{traj.info.criterion_value:.4g}; written {args.out}")
+          f"{traj.info.criterion_value:.4g}; written {_written(args)}")
     return 0
+
+
+def _written(args: argparse.Namespace) -> str:
+    """The files this run wrote, in the order of the options (--out first)."""
+    return ", ".join(p for p in (args.out, args.program, args.json, args.report) if p is not None)
 
 
 def _report(args: argparse.Namespace, robot: rx90sym.Robot, model: Any, traj: Any, described: dict) -> None:
     """--report: the envelope as applied, its worst values and figures along time."""
     if args.report is None:
         return
-    import excitation
     from excitation import envelope_report as er
     from excitation.robot_geometry import arm_geometry
 
@@ -177,7 +188,7 @@ def _report(args: argparse.Namespace, robot: rx90sym.Robot, model: Any, traj: An
 
     series = er.along_time(robot, model, traj, arm_geometry(robot).tool_point)
     envelope = Section("envelope", "Safety envelope along the trajectory", (
-        Text(tuple(excitation.envelope_lines(described))), envelope_table(er.worst(series)),
+        Text(tuple(envelope_lines(robot, described))), envelope_table(er.worst(series)),
         *(figure(i, caption, fig) for i, caption, fig in er.figures(series))))
     write_page(args.report, excite_page({**traj.summary(), "robot": robot.name}, (), (envelope,)))
 
@@ -221,6 +232,9 @@ def _check_options(args: argparse.Namespace) -> None:
         raise UsageError("--controller-rate is for --controller ur, a rate > 0 Hz (500 e-Series, 125 CB3)")
     if args.payload is not None and args.target != "payload":
         raise UsageError("--payload is for --for payload")
+    for path in args.complement or ():  # read after the envelope is built: refused now, not then
+        if not Path(path).is_file():
+            raise UsageError(f"--complement: {path}: no such file")
 
 
 def _collision(args: argparse.Namespace, robot: rx90sym.Robot) -> Any:
@@ -240,8 +254,22 @@ def _collision(args: argparse.Namespace, robot: rx90sym.Robot) -> Any:
     return collision
 
 
+def _load_robot(args: argparse.Namespace) -> rx90sym.Robot:
+    """The robot of --robot. A URDF without --acceleration: the loader's warning (its generic
+    default) is dropped, since the envelope replaces that default with its own and says so
+    (one warning, not two that disagree)."""
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        robot = load_robot(args)
+    for w in caught:
+        if not (robot.urdf is not None and "has no acceleration limits" in str(w.message)):
+            warnings.warn_explicit(w.message, w.category, w.filename, w.lineno)
+    return robot
+
+
 def _envelope(args: argparse.Namespace, robot: rx90sym.Robot) -> Any:
-    """The safety envelope from the options (angles converted from controller to model)."""
+    """The safety envelope from the options (angles converted from controller to model; every
+    refusal names the controller angles the user typed)."""
     import excitation
 
     offsets = robot.controller_offsets
@@ -252,8 +280,9 @@ def _envelope(args: argparse.Namespace, robot: rx90sym.Robot) -> Any:
             raise UsageError(f"--position-limits: expected {robot.n} MIN:MAX pairs (rad, controller angles), "
                              f"got {args.position_limits!r}")
         values = floats(",".join(v for p in pairs for v in p), "--position-limits").reshape(-1, 2)
+        check_ranges(robot, values)
         limits = tuple(map(tuple, values - offsets[:, None]))
-    centre = None if args.centre_pose is None else floats(args.centre_pose, "--centre-pose", robot.n) - offsets
+    centre = None if args.centre_pose is None else floats(args.centre_pose, "--centre-pose", robot.n)
     urdf_default = robot.urdf is not None and getattr(args, "acceleration", None) is None
     if urdf_default:
         progress("warning: the URDF gives no acceleration limits: the excitation uses the conservative "
@@ -263,33 +292,15 @@ def _envelope(args: argparse.Namespace, robot: rx90sym.Robot) -> Any:
                                ("max_speed", args.max_tool_speed), ("velocity_scale", args.velocity_scale),
                                ("acceleration_scale", args.acceleration_scale)) if v is not None}
     try:
-        envelope = excitation.Envelope(position_limits=limits, centre=None if centre is None else tuple(centre),
+        envelope = excitation.Envelope(position_limits=limits,
+                                       centre=None if centre is None else tuple(centre - offsets),
                                        urdf_acceleration=urdf_default, **given)
-        envelope.joint_limits(robot.limits)  # refuses empty or too wide ranges now, before any work
+        experiment = envelope.joint_limits(robot.limits)  # refuses empty or too wide ranges now, before any work
     except ValueError as exc:
         raise UsageError(str(exc)) from None
+    if centre is not None:
+        check_pose("--centre-pose", robot, centre, experiment.q_min, experiment.q_max, "experiment's")
     return envelope
-
-
-def _check_start_pose(robot: rx90sym.Robot, model: Any, start_pose: Any) -> None:
-    """A --start-pose must lie in the robot's ranges and (model given) inside the envelope,
-    naming the point that leaves it."""
-    from excitation.envelope import pose_violations
-
-    if start_pose is None:
-        return
-    q = np.asarray(start_pose) - robot.controller_offsets
-    lim = robot.limits
-    for j in range(robot.n):
-        if not lim.q_min[j] <= q[j] <= lim.q_max[j]:
-            raise UsageError(f"--start-pose: joint {j + 1} at {start_pose[j]:.6g} rad is outside the robot's "
-                             f"range [{lim.q_min[j] + robot.controller_offsets[j]:.6g}, "
-                             f"{lim.q_max[j] + robot.controller_offsets[j]:.6g}] rad (controller angles)")
-    if model is None:  # the ranges only (the envelope needs the model)
-        return
-    bad = [v for v in pose_violations(model, q) if "outside the experiment" not in v]
-    if bad:
-        raise UsageError(f"--start-pose is outside the safety envelope: {bad[0]}")
 
 
 def _save(args: argparse.Namespace, traj: Any, robot: rx90sym.Robot, start_pose: Any, model: Any) -> None:
@@ -316,17 +327,20 @@ def _save(args: argparse.Namespace, traj: Any, robot: rx90sym.Robot, start_pose:
         if problems:
             raise ValueError(f"Franka export refused: {problems[0]}")
     if args.program is not None:
-        if args.controller == "ur":
-            n_lead = len(q) - len(traj.sample(rate, closed=True)[0])  # the approach: done by movej
-            cp.write_urscript(args.program, q[n_lead:], rate, start_pose)
+        if args.controller == "ur":  # the approach and the return: done by movej
+            n_traj = len(traj.sample(rate, closed=True)[0])
+            n_lead = (len(q) - n_traj) // 2
+            cp.write_urscript(args.program, q[n_lead:n_lead + n_traj], rate, start_pose)
         else:
             cp.write_franka(args.program, q)
     ce.write_samples(args.out, t, q, qd, qdd)
 
 
 def _payload(args: argparse.Namespace, robot: rx90sym.Robot, base: Any, chi: Any, noise: Any,
-             collision: Any, start_pose: Any, envelope: Any, model: Any) -> int:
-    """--for payload: optimise, save, report the predicted sigma by methods 3 and 4."""
+             collision: Any, start_pose: Any, envelope: Any, safe: tuple[Any, dict]) -> int:
+    """--for payload: optimise, save, report the predicted sigma by methods 3 and 4 (safe: the
+    envelope's model and description)."""
+    model, described = safe
     from excitation.api import default_noise, optimise_payload
     from excitation.payload_design import payload_sigma
     from rx90sym.files import write_json
@@ -346,10 +360,11 @@ def _payload(args: argparse.Namespace, robot: rx90sym.Robot, base: Any, chi: Any
         noise = default_noise(robot.limits)
     sigma = payload_sigma(robot, base.regressor, traj, noise)
     _save(args, traj, robot, start_pose, model)
+    _report(args, robot, model, traj, described)
     if args.json:
         write_json(args.json, {**traj.summary(), "payload_reference": str(payload),
                                "noise_std_nm": np.asarray(noise).tolist(), "payload_sigma": sigma})
-    print(f"payload motion {traj.duration:g} s written {args.out}; predicted sigma (same motion empty "
+    print(f"payload motion {traj.duration:g} s written {_written(args)}; predicted sigma (same motion empty "
           f"and loaded, methods 3 and 4 agree):")
     print("  " + ", ".join(f"{n} {sigma['method_3'][n]:.3g}" for n in ("Mc", "MZc", "XXc", "YYc")))
     return 0

@@ -14,7 +14,8 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 import rx90sym
-from identify.observation.processing import DEFAULT_MIN_VELOCITY, DEFAULT_REST, REST_POLICIES, Processing
+from identify.observation.processing import (DEFAULT_MIN_VELOCITY, DEFAULT_REST, FRICTION_FORMS, REST_POLICIES,
+                                             Processing)
 from identify.io.blocks import DEFAULT_BLOCK
 from identify.plausibility import estimate_flags, prior_flags, residual_flags, static_gravity_flags, torque_scale_flags
 
@@ -80,7 +81,10 @@ def register(sub: Any) -> None:
                          f"(default {DEFAULT_MIN_VELOCITY:g}; 0: no rest handling)")
     sp.add_argument("--rest", choices=REST_POLICIES, default=DEFAULT_REST,
                     help=f"rest samples: drop their rows, keep them with Coulomb = 0, or with the presliding "
-                         f"state of the position history (default {DEFAULT_REST})")
+                         f"state of the position history times its own magnitude FPj (default {DEFAULT_REST})")
+    sp.add_argument("--friction", choices=FRICTION_FORMS, default=FRICTION_FORMS[0],
+                    help="friction while moving: Coulomb sign(q̇), smooth tanh(q̇/vs) or Stribeck, the velocity "
+                         "scale vs per joint found by separable least squares (default coulomb)")
     sp.add_argument("--delay", type=_delay, default=0.0,
                     help="torque lag behind the positions: 'auto' (estimated) or seconds (default 0; "
                          "the estimate is always reported)")
@@ -149,7 +153,8 @@ def processing_of(args: argparse.Namespace, spring: bool) -> Processing:
     """The Processing the options ask for (the library's defaults where they say nothing)."""
     return Processing(cutoff=args.cutoff, decimate_to=None if args.no_decimate else args.decimate_to,
                       min_velocity=args.min_velocity, rest=args.rest, delay=args.delay,
-                      estimate_delay=True, spring=spring, cross_validate=args.cross_validate)
+                      estimate_delay=True, spring=spring, cross_validate=args.cross_validate,
+                      friction=args.friction)
 
 
 def run(args: argparse.Namespace) -> int:
@@ -247,6 +252,13 @@ def _print_fit(f: Fit, recs: list, auto_delay: bool, prior: Any = None) -> None:
                   f"packets (not fitted), {lay['stale_rows'] or 0} stale rows dropped when read")
     if f.choice is not None:
         print(f.choice["table"])
+    if f.model.friction is not None and "velocity_scale" in f.model.friction:
+        from identify.estimation.separable import VelocityScales
+
+        print(VelocityScales.from_json(f.model.friction).summary())
+    if f.model.friction is not None and "presliding_travel" in f.model.friction:
+        print("presliding travel [mrad] per joint, chosen on the fit's cost: "
+              + " ".join("-" if d is None else f"{1e3 * d:g}" for d in f.model.friction["presliding_travel"]))
     print(f"filtering: cut-off {f.cutoff:.4g} Hz, rate {f.model.rate_hz:.6g} Hz"
           + (f" (decimated to {f.decimate_to:g} Hz)" if f.decimate_to else " (no decimation)")
           + f", torque delay {1e3 * f.delay:.3g} ms compensated")

@@ -22,8 +22,20 @@ def _usage_mark(value: Any) -> str:
     return "" if x is None else "ok" if x <= USAGE_CHECK else "check" if x <= 1.0 else "poor"
 
 
-def usage_table(usage: Mapping[str, Any], table_id: str = "limits") -> Table:
-    """Per joint: max |x| / limit of position, velocity, acceleration and torque, in % (marked)."""
+def _of_what(envelope: Mapping[str, Any] | None) -> str:
+    """Which limits the usage is a fraction of: the safety envelope's (rx90 excite's JSON
+    ``envelope``), narrower than the robot's, or the robot's own."""
+    if not envelope:
+        return ""
+    return (f" Limits are the experiment's (safety envelope): velocity {fmt(envelope.get('velocity_scale'))} x "
+            f"and acceleration {fmt(envelope.get('acceleration_scale'))} x the robot's, positions inside the "
+            "experiment's ranges; torques the robot's.")
+
+
+def usage_table(usage: Mapping[str, Any], table_id: str = "limits",
+                envelope: Mapping[str, Any] | None = None) -> Table:
+    """Per joint: max |x| / limit of position, velocity, acceleration and torque, in % (marked);
+    ``envelope`` (the JSON's) says the limits are the experiment's, not the robot's."""
     lists = {k: usage.get(k) if isinstance(usage.get(k), list) else [] for k in _KINDS}
     n = max(len(v) for v in lists.values())
     lists = {k: v or [None] * n for k, v in lists.items()}
@@ -31,7 +43,7 @@ def usage_table(usage: Mapping[str, Any], table_id: str = "limits") -> Table:
                            for k in _KINDS)) for j in range(n))
     cols = (Column("joint", decimals=0), *(Column(k, "%", decimals=0) for k in _KINDS))
     note = (f"Checked at {fmt(usage.get('checked_at_hz'))} Hz; ✓ ≤ {100 * USAGE_CHECK:.0f} %, ! up to the limit, "
-            "✗ beyond. Positions: excursion over half the range about its centre.")
+            "✗ beyond. Positions: excursion over half the range about its centre." + _of_what(envelope))
     return Table(table_id, "Limit usage: max |x| / limit", cols, rows, note)
 
 
@@ -43,10 +55,16 @@ def _flags(record: Mapping[str, Any]) -> list[dict]:
     if isinstance(usage.get("torque"), str):  # the note saying why torques were not checked
         flags.append(flag("torque-unchecked", "warning", usage["torque"],
                           "give nominal parameters so the torques are checked"))
+    scaled = record.get("envelope") or {}  # the experiment's limits: already below the robot's
     for k in _KINDS:
         values = usage.get(k) if isinstance(usage.get(k), list) else []
         close = [j for j, v in enumerate(values, start=1) if _usage_mark(v) == "check"]
-        if close:
+        if close and scaled and k != "torque":
+            why = (f"the experiment's limit is {fmt(scaled.get(k + '_scale'))} x the robot's" if k != "position"
+                   else "the experiment's ranges lie inside the robot's")
+            flags.append(flag("limit-close", "info", f"{k} within {100 - 100 * USAGE_CHECK:.0f} % of the experiment's "
+                              f"limit on joint(s) {', '.join(map(str, close))} ({why})"))
+        elif close:
             flags.append(flag("limit-close", "warning", f"{k} within {100 - 100 * USAGE_CHECK:.0f} % of its limit "
                               f"on joint(s) {', '.join(map(str, close))}", "run it first at reduced speed"))
     return flags
@@ -76,13 +94,16 @@ def excite_page(record: Mapping[str, Any], figures: Sequence[Figure] = (), more:
         facts.append(("Smallest clearance", f"{fmt(1e3 * usage['min_clearance_m'], 3)} mm"))
     if usage.get("min_height_m") is not None:
         # The lowest of every checked point (frame origins, capsule ends, tool), not only the tool's.
-        facts.append(("Lowest checked point", f"z = {fmt(usage['min_height_m'], 3)} m in frame 0 "
+        plane = (record.get("envelope") or {}).get("mounting_plane_z_m")
+        above = "" if plane is None else f", {fmt(usage['min_height_m'] - plane, 3)} m above the mounting plane"
+        facts.append(("Lowest checked point", f"z = {fmt(usage['min_height_m'], 3)} m in frame 0{above} "
                                               f"(floor z = {fmt(usage.get('z_min_m'))} m)"))
     optimiser = record.get("optimiser") or {}
-    sections = [Section("limits", "Limit usage", (usage_table(usage), *figures)), *more]
+    envelope = record.get("envelope") or None
+    sections = [Section("limits", "Limit usage", (usage_table(usage, envelope=envelope), *figures)), *more]
     items = [(k.replace("_", " "), "", v) for k, v in optimiser.items() if v not in (None, "") and not isinstance(v, dict)]
     if items:
         sections.append(Section("optimiser", "Optimiser", (key_values("optimiser", "How it was optimised", items),)))
     return Page(f"Excitation trajectory{' for ' + str(record['robot']) if record.get('robot') else ''}",
-                "rx90 excite", Summary(headline, tuple(facts), usage_table(usage, "summary-limits"), tuple(flags),
+                "rx90 excite", Summary(headline, tuple(facts), usage_table(usage, "summary-limits", envelope), tuple(flags),
                                        next_steps(flags)), tuple(sections))
