@@ -105,7 +105,8 @@ class Envelope:
                                      f"min {a:.6g} rad (zero or negative width)")
                 if a < lo[j] + offsets[j] - 1e-12 or b > hi[j] + offsets[j] + 1e-12:
                     raise ValueError(f"position limits of joint {j + 1}: [{a:.6g}, {b:.6g}] rad leave the robot's "
-                                     f"range [{lo[j] + offsets[j]:.6g}, {hi[j] + offsets[j]:.6g}] rad (controller angles)")
+                                     f"range [{lo[j] + offsets[j]:.6g}, {hi[j] + offsets[j]:.6g}] rad "
+                                     f"(controller angles)")
             q_lo, q_hi = given[:, 0] - offsets, given[:, 1] - offsets
         if self.centre is not None:
             bad = range_violations(np.asarray(self.centre, float), q_lo + offsets, q_hi + offsets, "experiment's")
@@ -179,7 +180,8 @@ def envelope_model(model: ExcitationModel, robot: rx90sym.Robot, envelope: Envel
                    margins: Margins = Margins()) -> ExcitationModel:
     """``model`` within the envelope: experiment limits, heights, speeds, collisions, centre."""
     heights, h_names, speeds, s_names = envelope_functions(robot, geometry, collision.capsules)
-    out = dataclasses.replace(model, limits=envelope.joint_limits(robot.limits, model.controller_offsets), heights=heights,
+    limits = envelope.joint_limits(robot.limits, model.controller_offsets)
+    out = dataclasses.replace(model, limits=limits, heights=heights,
                               z_min=envelope.z_min(geometry), speeds=speeds, speed_max=envelope.max_speed,
                               collision=collision, point_names=(h_names, s_names), centre=None)
     if envelope.centre is not None:  # given in controller angles

@@ -180,5 +180,6 @@ def test_height_refusal_gives_the_users_floor_and_the_optimisers_margin_apart():
     below = height_violation("tool point", 0.08, 0.1, 0.01)
     assert "at z = 0.0800 m, below the lowest allowed z = 0.1000 m (the optimiser keeps a further 0.01 m)" in below
     inside = height_violation("tool point", 0.105, 0.1, 0.01)  # above the floor, within the optimiser's margin
-    assert "below" not in inside and "less than the optimiser's further 0.01 m above the lowest allowed z = 0.1000 m" in inside
+    assert "below" not in inside
+    assert "less than the optimiser's further 0.01 m above the lowest allowed z = 0.1000 m" in inside
     assert height_violation("tool point", 0.08, 0.1, 0.0).endswith("below the lowest allowed z = 0.1000 m")
