@@ -18,6 +18,12 @@ full / none of the time per start is the figure the issue's target (<= 2x) refer
 
     python benchmarks/bench_envelope.py [--seed 0 [1 ...]] [--only none full] [--duration 20] [--json out.json]
 
+--variant NAME:KEY=VALUE[,KEY=VALUE...] adds a configuration NAME: ``full`` with these extra
+IPOPT options (e.g. ``--variant adaptive:mu_strategy=adaptive``), run in the same loop and
+seeds, with its own ratio against ``none``. --start-room F adds ``room``: ``full`` whose random
+starts are pulled towards the centre pose until they hold F x the optimiser's height, clearance
+and speed margins (F = 1: the code's starts), the experiment of docs/excitation.md.
+
 With --every-robot: ``rx90 excite`` with its defaults (one start) on every bundled robot and the
 UR5 URDF: time, cond, the largest torque usage, the smallest clearance and height margin, the
 fastest point, and any warning that a check is off (there should be none).
@@ -27,6 +33,7 @@ fastest point, and any warning that a check is off (there should be none).
 from __future__ import annotations
 
 import argparse
+import contextlib
 import dataclasses
 import json
 import time
@@ -36,6 +43,9 @@ from pathlib import Path
 import numpy as np
 
 UR5 = Path(__file__).resolve().parents[1] / "tests" / "data" / "urdf" / "ur5.urdf"
+
+
+MODELS = ("none", "limits", "height", "speed", "full")
 
 
 def models(robot, chi, base):
@@ -91,20 +101,60 @@ def every_robot(duration: float) -> None:
                   f"{usage['max_point_speed_m_s']:6.3f}  {'; '.join(warns) or 'none'}", flush=True)
 
 
+def parse_variant(text: str) -> tuple[str, tuple[tuple[str, object], ...]]:
+    """NAME:KEY=VALUE,... -> (NAME, IPOPT options); numbers become float or int."""
+    name, _, rest = text.partition(":")
+    pairs = []
+    for item in filter(None, rest.split(",")):
+        key, _, value = item.partition("=")
+        for kind in (int, float, str):
+            try:
+                pairs.append((key.strip(), kind(value.strip())))
+                break
+            except ValueError:
+                continue
+    return name, tuple(pairs)
+
+
+@contextlib.contextmanager
+def start_room(factor: float):
+    """Within it, random starts hold ``factor`` x the optimiser's height, clearance and speed
+    margins (a patch of excitation.envelope.shrink_to_envelope, for this experiment only)."""
+    from excitation import envelope
+
+    original = envelope.shrink_to_envelope
+
+    def shrink(model, form, z, z_centre, times, margins, tries=12):
+        wide = dataclasses.replace(margins, height=factor * margins.height, velocity=factor * margins.velocity,
+                                   clearance=factor * margins.clearance)
+        return original(model, form, z, z_centre, times, wide, tries)
+
+    envelope.shrink_to_envelope = shrink if factor != 1.0 else original
+    try:
+        yield
+    finally:
+        envelope.shrink_to_envelope = original
+
+
 def run_configs(robot, chi, base, args: argparse.Namespace, seed: int) -> list[dict]:
     """One start of each configuration with ``seed``: times, iterations, cond, criterion, sigmas."""
     import excitation
     from excitation.options import OptimiserOptions
 
     rows = []
-    for name, model in models(robot, chi, base):
-        if args.only and name not in args.only:
+    configs = [(name, model, ()) for name, model in models(robot, chi, base)]
+    full = next(model for name, model, _ in configs if name == "full")
+    configs += [(name, full, extra) for name, extra in map(parse_variant, args.variant)]
+    configs += [("room", full, ())] if args.start_room else []
+    for name, model, extra in configs:
+        if args.only and name not in args.only and extra == () and name != "room":
             continue
         objective = excitation.make_objective(model, "sigma", nominal_base=base.beta(chi))
-        options = OptimiserOptions(criterion=objective)
+        options = OptimiserOptions(criterion=objective, ipopt=extra)
         t0, c0 = time.perf_counter(), time.process_time()
-        traj = excitation.optimise_model(model, excitation.FourierSeries(args.duration, args.harmonics),
-                                         seed=seed, starts=1, options=options, progress=args.progress)
+        with start_room(args.start_room if name == "room" else 1.0):
+            traj = excitation.optimise_model(model, excitation.FourierSeries(args.duration, args.harmonics),
+                                             seed=seed, starts=1, options=options, progress=args.progress)
         elapsed, cpu = time.perf_counter() - t0, time.process_time() - c0
         rows.append({"config": name, "seed": seed, "time_s": elapsed, "cpu_s": cpu,
                      "iterations": traj.info.iterations, "cond": traj.cond,
@@ -124,13 +174,30 @@ def print_table(rows: list[dict], args: argparse.Namespace, seed: int) -> dict[s
               f"{1e3 * r['time_s'] / max(r['iterations'], 1):6.0f} {r['cond']:8.1f} {r['criterion']:7.3f} "
               + " ".join(f"{r['sigma_percent'][g]:22.3g}" for g in groups))
     by = {r["config"]: r for r in rows}
-    if "none" not in by or "full" not in by:
+    if "none" not in by:
         return None
-    full, none = by["full"], by["none"]
-    per_it = (full["time_s"] / max(full["iterations"], 1)) / (none["time_s"] / max(none["iterations"], 1))
-    print(f"ratio full / none (time per start): {full['time_s'] / none['time_s']:.2f} (target <= 2); "
-          f"CPU time {full['cpu_s'] / none['cpu_s']:.2f}; time per IPOPT iteration {per_it:.2f}")
-    return {"wall": full["time_s"] / none["time_s"], "cpu": full["cpu_s"] / none["cpu_s"]}
+    none, out = by["none"], {}
+    for name in [r["config"] for r in rows if r["config"] not in MODELS[:-1]]:
+        full = by[name]
+        per_it = (full["time_s"] / max(full["iterations"], 1)) / (none["time_s"] / max(none["iterations"], 1))
+        print(f"ratio {name} / none (time per start): {full['time_s'] / none['time_s']:.2f} (target <= 2); "
+              f"CPU time {full['cpu_s'] / none['cpu_s']:.2f}; time per IPOPT iteration {per_it:.2f}")
+        out[name] = {"wall": full["time_s"] / none["time_s"], "cpu": full["cpu_s"] / none["cpu_s"]}
+    return out or None
+
+
+def summarise(rows: list[dict], ratios: list[dict], seeds: list[int]) -> None:
+    """Per configuration over the seeds: ratios against none, iterations, median sigma per group."""
+    print(f"\nover seeds {', '.join(map(str, seeds))}:")
+    for name in ratios[0]:
+        wall, cpu = (np.array([r[name][k] for r in ratios]) for k in ("wall", "cpu"))
+        mine = [r for r in rows if r["config"] == name]
+        sig = {g: float(np.median([r["sigma_percent"][g] for r in mine])) for g in mine[0]["sigma_percent"]}
+        print(f"  {name}: ratio / none per start {', '.join(f'{v:.2f}' for v in wall)} (mean {wall.mean():.2f}); "
+              f"CPU mean {cpu.mean():.2f}; iterations {', '.join(str(r['iterations']) for r in mine)}; "
+              f"median sigma % " + ", ".join(f"{g} {v:.3g}" for g, v in sig.items()))
+    none = [r for r in rows if r["config"] == "none"]
+    print(f"  none: iterations {', '.join(str(r['iterations']) for r in none)}")
 
 
 def main() -> None:
@@ -139,6 +206,10 @@ def main() -> None:
     parser.add_argument("--duration", type=float, default=20.0)
     parser.add_argument("--harmonics", type=int, default=5)
     parser.add_argument("--only", nargs="*", default=None, help="run only these configurations")
+    parser.add_argument("--variant", nargs="*", default=[], metavar="NAME:KEY=VALUE,...",
+                        help="also run full with these extra IPOPT options")
+    parser.add_argument("--start-room", type=float, default=None, metavar="F",
+                        help="also run full with starts holding F x the optimiser's margins")
     parser.add_argument("--progress", action="store_true", help="a line per start on stderr")
     parser.add_argument("--json", help="also write the figures to this JSON file")
     parser.add_argument("--every-robot", action="store_true", help="default rx90 excite on every robot")
@@ -162,9 +233,7 @@ def main() -> None:
         if ratio is not None:
             ratios.append(ratio)
     if len(ratios) > 1:
-        wall, cpu = (np.array([r[k] for r in ratios]) for k in ("wall", "cpu"))
-        print(f"\nover seeds {', '.join(map(str, args.seed))}: ratio full / none per start "
-              f"{', '.join(f'{v:.2f}' for v in wall)} (mean {wall.mean():.2f}); CPU time mean {cpu.mean():.2f}")
+        summarise(rows, ratios, args.seed)
     if args.json:
         Path(args.json).write_text(json.dumps(rows, indent=1))
 

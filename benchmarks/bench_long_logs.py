@@ -10,6 +10,7 @@ measured on the two shortest logs as the reference.
 
     python benchmarks/bench_long_logs.py                 # 21 s, 3.5 min, 10.5 min, 60 min
     python benchmarks/bench_long_logs.py --lengths 21,210 --dask   # quick; + Dask throughput
+    python benchmarks/bench_long_logs.py --lengths 21 --lossy 210,630   # + lossy host logs (--resample)
 """
 from __future__ import annotations
 
@@ -73,6 +74,35 @@ def write_log(path: Path, rec, seconds: float) -> int:
     return total
 
 
+#: The lossy log's columns: a host log of the stream (rx90sym.host_log) holds recorded velocities too.
+LOSSY_COLUMNS = "t,q1..q7,qd1..qd7,tau1..tau7"
+
+
+def write_lossy_log(path: Path, rec, seconds: float) -> int:
+    """The log of :func:`write_log` as a host PC logs the stream (rx90sym.host_log, one draw per 21 s copy):
+    5 % stale rows, bursts of 5-40 lost packets every 2-4 s, ±0.15 period of jitter, and 0.2 s lost in
+    the middle of every copy (a new segment every 21 s). Returns the samples of the clean log."""
+    import pyarrow as pa
+    from pyarrow import csv
+
+    from rx90sym.host_log import HostFaults, host_log
+
+    arm = robot()
+    n = rec.n_samples
+    total = int(round(seconds * RATE))
+    names = ["t"] + [f"{p}{j}" for p in ("q", "qd", "tau") for j in range(1, 8)]
+    with open(path, "wb") as fh:
+        fh.write((",".join(names) + "\n").encode())
+        for k, start in enumerate(range(0, total, n)):
+            part = rec.select(slice(0, min(n, total - start)))
+            table, _, _ = host_log(part, HostFaults(long_gaps=(BASE_S / 2,)), seed=k)
+            table[:, 0] += start / RATE
+            table[:, 1:8] = np.asarray(arm.to_controller(table[:, 1:8]), dtype=float)
+            csv.write_csv(pa.table({c: table[:, j] for j, c in enumerate(names)}), fh,
+                          csv.WriteOptions(include_header=False))
+    return total
+
+
 def measured(cmd: list[str], env: dict) -> tuple[float, float, str]:
     """(wall s, peak resident GB, stdout) of one command in its own process."""
     with tempfile.NamedTemporaryFile("r", suffix=".time") as tf:
@@ -90,14 +120,16 @@ def rx90(*args: str) -> list[str]:
     return [str(Path(sys.executable).parent / "rx90"), *args]
 
 
-def run_length(folder: Path, rec, seconds: float, env: dict, reference: bool) -> list[tuple]:
+def run_length(folder: Path, rec, seconds: float, env: dict, reference: bool, lossy: bool = False) -> list[tuple]:
     log, out = folder / f"log_{int(seconds)}.csv", folder / f"rec_{int(seconds)}.csv"
-    samples = write_log(log, rec, seconds)
+    samples = (write_lossy_log if lossy else write_log)(log, rec, seconds)
+    columns = ["--columns", LOSSY_COLUMNS, "--resample", str(RATE)] if lossy else ["--columns", COLUMNS]
     rows = []
     # "default": the command as shipped (a log within one block takes the whole-signal path).
     for path_name, block in (("default", None), ("whole (reference)", WHOLE)) if reference else (("default", None),):
+        path_name = f"lossy, {path_name}" if lossy else path_name
         extra = [] if block is None else ["--block", block]
-        conv = measured(rx90("convert", str(log), *ROBOT, "--columns", COLUMNS, "--out", str(out), *extra), env)
+        conv = measured(rx90("convert", str(log), *ROBOT, *columns, "--out", str(out), *extra), env)
         ident = measured(rx90("identify", str(out), *ROBOT, "--offsets", *extra), env)
         rows.append((seconds, samples, path_name, conv[0], conv[1], ident[0], ident[1], log.stat().st_size / 1e6))
     log.unlink()
@@ -149,6 +181,10 @@ def main() -> None:
     ap.add_argument("--lengths", default="21,210,630,3600", help="log lengths, s")
     ap.add_argument("--reference", type=int, default=2, help="how many of the shortest also on the whole-log path")
     ap.add_argument("--dask", action="store_true", help="also the Dask throughput (1 vs 2 workers)")
+    ap.add_argument("--lossy", default="", help="lengths (s) of lossy host logs too: stale rows, lost packets, "
+                                                "a segment per 21 s; e.g. 210,630")
+    ap.add_argument("--lossy-reference", type=int, default=1,
+                    help="how many of the shortest lossy logs also on the whole-log path")
     ap.add_argument("--folder", help="where the logs go (default: a temporary folder)")
     args = ap.parse_args()
     # One BLAS thread: on a shared 2-core machine OpenBLAS's spinning threads make the small QRs 40x slower.
@@ -162,6 +198,9 @@ def main() -> None:
         for k, seconds in enumerate(lengths):
             rows += run_length(folder, rec, seconds, env, k < args.reference)
             print(f"  done {seconds:g} s", file=sys.stderr, flush=True)
+        for k, seconds in enumerate(float(x) for x in args.lossy.split(",") if x):
+            rows += run_length(folder, rec, seconds, env, k < args.lossy_reference, lossy=True)
+            print(f"  done lossy {seconds:g} s", file=sys.stderr, flush=True)
         print("| log | samples | CSV MB | path | convert s | convert GB | identify s | identify GB |")
         print("|---|---|---|---|---|---|---|---|")
         for seconds, samples, path_name, cs, cg, is_, ig, mb in rows:
@@ -172,6 +211,10 @@ def main() -> None:
             a, b = streamed[630.0], streamed[3600.0]
             print(f"\n60 min / 10.5 min time: convert x{b[3] / a[3]:.2f}, identify x{b[5] / a[5]:.2f} "
                   f"(length x{3600 / 630:.2f}); largest peak memory {max(max(r[4], r[6]) for r in streamed.values()):.2f} GB")
+        lossy = [r for r in rows if r[2] == "lossy, default"]
+        if lossy:
+            print("\nlossy logs, peak memory against length: " + "; ".join(
+                f"{r[0] / 60:g} min {max(r[4], r[6]):.2f} GB" for r in lossy))
         if args.dask:
             dask_throughput(folder, rec, env)
 

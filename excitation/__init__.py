@@ -24,7 +24,7 @@ _EXPORTS = {
     "random_trajectory": "excitation.api",
     "safe_model": "excitation.api",
     "Envelope": "excitation.envelope",
-    "envelope_lines": "excitation.envelope:summary_lines",
+    "envelope_lines": "excitation.envelope_description:summary_lines",
     "Box": "excitation.collision",
     "CollisionModel": "excitation.collision",
     "LimitReport": "excitation.constraints",

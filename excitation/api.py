@@ -121,7 +121,8 @@ def safe_model(robot: rx90sym.Robot, chi_nominal: Any, base: Any, envelope: Enve
     capsules, no boxes). Raises ValueError when no pose lies inside the envelope or a given centre
     pose breaks it."""
     from .constraints import Margins
-    from .envelope import describe_robot, envelope_model
+    from .envelope import envelope_model
+    from .envelope_description import describe_robot
     from .robot_geometry import arm_geometry
 
     geometry = arm_geometry(robot)
@@ -185,7 +186,8 @@ def optimise_payload(robot: rx90sym.Robot, duration: float = 10.0, via_points: i
     model = dataclasses.replace(payload_model(robot, base, chi_nominal, payload, z_min), collision=collision)
     described = None
     if envelope is not None:  # the same envelope as optimise (see safe_model)
-        from .envelope import describe_robot, envelope_model
+        from .envelope import envelope_model
+        from .envelope_description import describe_robot
         from .robot_geometry import arm_geometry
 
         geometry = arm_geometry(robot)

@@ -12,6 +12,11 @@
 - A centre pose inside the envelope, about which random starts are drawn: the centre of the
   ranges if it is inside, else the nearest pose inside (found by IPOPT), or the one given.
 
+Angles: the settings (position_limits, centre) and every message are in controller angles
+(q_controller = q_model + robot.controller_offsets: what the user types and the logs hold);
+the model and the functions' pose arguments are in model angles (Khalil). The JSON block and
+printed lines: envelope_description.py.
+
 Defaults and their reasons: docs/excitation.md ("Safety envelope").
 """
 from __future__ import annotations
@@ -41,7 +46,8 @@ URDF_ACCELERATION_PER_VELOCITY = 2.0  # [1/s] a URDF without accelerations: full
 
 @dataclass(frozen=True)
 class Envelope:
-    """Settings of the safety envelope (see the module docstring); angles are model angles [rad].
+    """Settings of the safety envelope (see the module docstring); angles are CONTROLLER angles
+    [rad] (q_controller = q_model + robot.controller_offsets).
 
     margin [m] above the mounting plane; floor [m above the mounting plane] or None; max_speed [m/s];
     position_limits ((lo, hi) per joint) or None for position_fraction of each range;
@@ -76,10 +82,13 @@ class Envelope:
         above = self.margin if self.floor is None else max(self.margin, float(self.floor))
         return geometry.mounting_z + above
 
-    def joint_limits(self, limits: Any) -> JointLimits:
-        """The experiment's limits from the robot's; ValueError naming the joint when given
-        position limits are empty or outside the robot's ranges."""
+    def joint_limits(self, limits: Any, offsets: Sequence[float]) -> JointLimits:
+        """The experiment's limits (model angles) from the robot's ``limits`` (model angles) and
+        its controller ``offsets`` [rad]. ValueError naming the joint, in controller angles, when
+        the given position limits are empty or leave the robot's ranges, or the given centre
+        pose lies outside the experiment's ranges."""
         lo, hi = np.asarray(limits.q_min, float), np.asarray(limits.q_max, float)
+        offsets = np.asarray(offsets, float)
         n = lo.size
         if self.position_limits is None:
             centre, half = 0.5 * (lo + hi), 0.5 * (hi - lo) * self.position_fraction
@@ -90,20 +99,32 @@ class Envelope:
             given = np.asarray(self.position_limits, float)
             if given.shape != (n, 2):
                 raise ValueError(f"position limits: {given.size // 2} (min, max) pairs for a {n}-joint robot")
-            q_lo, q_hi = given[:, 0], given[:, 1]
-            for j in range(n):
-                if not q_hi[j] > q_lo[j]:
-                    raise ValueError(f"position limits of joint {j + 1}: max {q_hi[j]:.6g} rad is not above "
-                                     f"min {q_lo[j]:.6g} rad (zero or negative width)")
-                if q_lo[j] < lo[j] - 1e-12 or q_hi[j] > hi[j] + 1e-12:
-                    raise ValueError(f"position limits of joint {j + 1}: [{q_lo[j]:.6g}, {q_hi[j]:.6g}] rad "
-                                     f"leave the robot's range [{lo[j]:.6g}, {hi[j]:.6g}] rad")
+            for j, (a, b) in enumerate(given):
+                if not b > a:
+                    raise ValueError(f"position limits of joint {j + 1}: max {b:.6g} rad is not above "
+                                     f"min {a:.6g} rad (zero or negative width)")
+                if a < lo[j] + offsets[j] - 1e-12 or b > hi[j] + offsets[j] + 1e-12:
+                    raise ValueError(f"position limits of joint {j + 1}: [{a:.6g}, {b:.6g}] rad leave the robot's "
+                                     f"range [{lo[j] + offsets[j]:.6g}, {hi[j] + offsets[j]:.6g}] rad "
+                                     f"(controller angles)")
+            q_lo, q_hi = given[:, 0] - offsets, given[:, 1] - offsets
+        if self.centre is not None:
+            bad = range_violations(np.asarray(self.centre, float), q_lo + offsets, q_hi + offsets, "experiment's")
+            if bad:
+                raise ValueError(f"centre pose: {bad[0]}")
         qd = np.asarray(limits.qd_max, float)
         qdd = np.asarray(limits.qdd_max, float)
         if self.urdf_acceleration:
             qdd = np.where(np.isfinite(qd), np.minimum(qdd, URDF_ACCELERATION_PER_VELOCITY * qd), qdd)
         return JointLimits(q_lo, q_hi, qd * self.velocity_scale, qdd * self.acceleration_scale,
                            limits.tau_max)
+
+
+def range_violations(q: np.ndarray, lo: np.ndarray, hi: np.ndarray, whose: str) -> list[str]:
+    """The joints of pose q outside [lo, hi], all [rad, controller angles], quoting q as given
+    (``whose``: "robot's" or "experiment's" range)."""
+    return [f"joint {j + 1} at {q[j]:.6g} rad is outside the {whose} range [{lo[j]:.6g}, {hi[j]:.6g}] rad "
+            f"(controller angles)" for j in range(q.size) if not lo[j] <= q[j] <= hi[j]]
 
 
 def envelope_functions(robot: rx90sym.Robot, geometry: ArmGeometry, capsules: Any
@@ -159,35 +180,46 @@ def envelope_model(model: ExcitationModel, robot: rx90sym.Robot, envelope: Envel
                    margins: Margins = Margins()) -> ExcitationModel:
     """``model`` within the envelope: experiment limits, heights, speeds, collisions, centre."""
     heights, h_names, speeds, s_names = envelope_functions(robot, geometry, collision.capsules)
-    out = dataclasses.replace(model, limits=envelope.joint_limits(robot.limits), heights=heights,
+    limits = envelope.joint_limits(robot.limits, model.controller_offsets)
+    out = dataclasses.replace(model, limits=limits, heights=heights,
                               z_min=envelope.z_min(geometry), speeds=speeds, speed_max=envelope.max_speed,
                               collision=collision, point_names=(h_names, s_names), centre=None)
-    if envelope.centre is not None:
-        centre = np.asarray(envelope.centre, float)
+    if envelope.centre is not None:  # given in controller angles
+        centre = np.asarray(envelope.centre, float) - model.controller_offsets
         bad = pose_violations(out, centre, margins)
         if bad:
-            raise ValueError(f"centre pose: {bad[0]}")
+            typed = ", ".join(f"{v:.6g}" for v in envelope.centre)
+            raise ValueError(f"centre pose {typed} rad (controller angles) is outside the safety envelope: {bad[0]}")
         return dataclasses.replace(out, centre=centre)
     return dataclasses.replace(out, centre=find_centre(out, margins))
 
 
 def pose_violations(model: ExcitationModel, q: Sequence[float], margins: Margins | None = None) -> list[str]:
-    """What the pose q [rad, model angles] breaks: experiment ranges, heights (naming the point),
-    collisions (naming the capsules or box). With margins, the optimiser's margins count too."""
+    """What the pose q [rad, model angles] breaks, said in controller angles: experiment ranges,
+    heights (naming the point), collisions (naming the capsules or box). With margins, the
+    optimiser's margins count too (said apart from the limits the user set)."""
     q = np.asarray(q, dtype=float)
-    lim = model.limits
+    lim, offsets = model.limits, model.controller_offsets
     dz = 0.0 if margins is None else margins.height
     dc = 0.0 if margins is None else margins.clearance
-    out = [f"joint {j + 1} at {q[j]:.6g} rad is outside the experiment's range [{lim.q_min[j]:.6g}, "
-           f"{lim.q_max[j]:.6g}] rad" for j in range(q.size) if not lim.q_min[j] <= q[j] <= lim.q_max[j]]
+    out = range_violations(q + offsets, lim.q_min + offsets, lim.q_max + offsets, "experiment's")
     if model.heights is not None:
         z = np.asarray(model.heights(q)).ravel()
         for k in np.flatnonzero(z < model.z_min + dz):
-            out.append(f"{model.point_names[0][k]} at z = {z[k]:.4f} m, below the lowest allowed "
-                       f"z = {model.z_min + dz:.4f} m")
+            out.append(height_violation(model.point_names[0][k], float(z[k]), model.z_min, dz))
     if model.collision is not None:
         out += collision_violations(model.collision, q, dc)
     return out
+
+
+def height_violation(point: str, z: float, z_min: float, extra: float) -> str:
+    """A point at height z [m] below z_min + extra: z_min is the floor or mounting plane plus
+    the margin the user set, ``extra`` [m] the optimiser's own further margin."""
+    further = f" (the optimiser keeps a further {extra:g} m)" if extra > 0.0 else ""
+    if z < z_min:
+        return f"{point} at z = {z:.4f} m, below the lowest allowed z = {z_min:.4f} m{further}"
+    return (f"{point} at z = {z:.4f} m, less than the optimiser's further {extra:g} m above the lowest "
+            f"allowed z = {z_min:.4f} m")
 
 
 def collision_violations(collision: CollisionModel, q: np.ndarray, clearance: float = 0.0) -> list[str]:
@@ -271,66 +303,6 @@ def path_violations(model: ExcitationModel, q_from: Sequence[float], q_to: Seque
         if bad:
             return [f"{what}, {100 * s:.0f} % of the way: {bad[0]}"]
     return []
-
-
-def describe(envelope: Envelope, geometry: ArmGeometry, model: ExcitationModel, robot_limits: Any) -> dict[str, Any]:
-    """JSON-ready description of the envelope as applied (printed with every trajectory)."""
-    lim = model.limits
-    caps = model.collision.capsules if model.collision is not None else None
-    return {
-        "mounting_plane_z_m": geometry.mounting_z, "mounting_plane_source": geometry.mounting_source,
-        "margin_above_mounting_m": envelope.margin, "floor_above_mounting_m": envelope.floor,
-        "z_min_m": model.z_min,
-        "height_points": list(model.point_names[0]),
-        "max_point_speed_m_s": envelope.max_speed, "speed_points": list(model.point_names[1]),
-        "position_limits_rad": np.c_[lim.q_min, lim.q_max].tolist(),
-        "velocity_limits_rad_s": lim.qd_max.tolist(), "velocity_scale": envelope.velocity_scale,
-        "acceleration_limits_rad_s2": lim.qdd_max.tolist(), "acceleration_scale": envelope.acceleration_scale,
-        "urdf_default_acceleration": envelope.urdf_acceleration,
-        "centre_pose_rad": None if model.centre is None else model.centre.tolist(),
-        "centre_given": envelope.centre is not None,
-        "capsules_source": geometry.source,
-        "capsules": None if caps is None else [{"name": n, "radius_m": r} for n, r in zip(caps.names, caps.radii)],
-        "self_collision": bool(model.collision is not None and model.collision.self_collision),
-        "pairs_checked": 0 if caps is None else len(caps.pairs),
-        "obstacles": [] if model.collision is None else [[*b.lo, *b.hi] for b in model.collision.boxes],
-        "fixed_points_below_z_min": [],
-    }
-
-
-def describe_robot(envelope: Envelope, geometry: ArmGeometry, model: ExcitationModel,
-                   robot: rx90sym.Robot) -> dict[str, Any]:
-    """:func:`describe` plus the points no joint moves that lie below z_min (left out: the floor
-    then cuts the arm's fixed part, which the user should know)."""
-    out = describe(envelope, geometry, model, robot.limits)
-    caps = model.collision.capsules if model.collision is not None else None
-    if caps is not None:
-        out["fixed_points_below_z_min"] = [f"{n} at z = {z:.4f} m" for n, z in fixed_heights(robot, geometry, caps)
-                                           if z < model.z_min]
-    return out
-
-
-def summary_lines(info: dict[str, Any]) -> list[str]:
-    """Human-readable lines of :func:`describe` (printed by ``rx90 excite``)."""
-    deg = np.degrees
-    pos = ", ".join(f"[{deg(lo):.0f}, {deg(hi):.0f}]" for lo, hi in info["position_limits_rad"])
-    return [
-        f"safety envelope: no moving point below z = {info['z_min_m']:.3f} m in frame 0 (mounting plane z = "
-        f"{info['mounting_plane_z_m']:.3f} m: {info['mounting_plane_source']}; margin {info['margin_above_mounting_m']:g} m"
-        + (f"; floor {info['floor_above_mounting_m']:g} m above the mounting plane"
-           if info["floor_above_mounting_m"] is not None else "") + ")",
-        f"  joint ranges [deg]: {pos}",
-        f"  velocities x{info['velocity_scale']:g}: {', '.join(f'{v:.3g}' for v in info['velocity_limits_rad_s'])} rad/s; "
-        f"accelerations x{info['acceleration_scale']:g}: {', '.join(f'{v:.3g}' for v in info['acceleration_limits_rad_s2'])} rad/s^2"
-        + (" (URDF: no acceleration limits given, conservative default)" if info["urdf_default_acceleration"] else ""),
-        f"  Cartesian speed <= {info['max_point_speed_m_s']:g} m/s at the tool point and {len(info['speed_points']) - 1} capsule ends",
-        f"  self-collision: {info['pairs_checked']} capsule pairs ({len(info['capsules'] or [])} capsules from "
-        f"{info['capsules_source']}); {len(info['obstacles'])} obstacle box(es)",
-        f"  centre pose [deg]: {', '.join(f'{v:.1f}' for v in deg(info['centre_pose_rad']))}"
-        + (" (given)" if info["centre_given"] else ""),
-    ] + ([f"  note: {len(info['fixed_points_below_z_min'])} point(s) no joint moves lie below z_min and are "
-          f"left out (the floor cuts the arm's fixed part), e.g. {info['fixed_points_below_z_min'][0]}"]
-         if info.get("fixed_points_below_z_min") else [])
 
 
 def shrink_to_envelope(model: ExcitationModel, form: Any, z: np.ndarray, z_centre: np.ndarray,

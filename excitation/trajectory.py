@@ -58,7 +58,7 @@ class Trajectory:
     info: SolveInfo
     cond_rate: float = 250.0
     parameter_names: tuple[str, ...] | None = field(default=None)
-    envelope: dict[str, Any] | None = field(default=None)  # the safety envelope applied (envelope.describe)
+    envelope: dict[str, Any] | None = field(default=None)  # the safety envelope applied (envelope_description.describe, controller angles)
 
     def __post_init__(self) -> None:
         for name in ("coefficients", "controller_offsets"):

@@ -29,7 +29,8 @@ from identify.estimation.results import IdentificationResult
 from identify.io.blocks import BlockSource, block_source
 from identify.observation.matrix import DEFAULT_MIN_VELOCITY, DEFAULT_REST, column_regressor, presliding_base
 from identify.observation.processing import RestPolicy, drops_rest, predicted_rest
-from identify.observation.stream import DEFAULT_BLOCK, Piece, StreamSettings, piece, plan_windows, scan_all
+from identify.observation.stream import (DEFAULT_BLOCK, Piece, Plan, StreamSettings, piece, plan_windows, scan_all,
+                                         windows_in_order)
 from identify.signal.delay import DelayEstimate, delay_grid, joint_log_rms, refined_delay
 from identify.validation import Validation, _relative, _rms, base_vector
 
@@ -54,7 +55,8 @@ class StreamedFit:
     samples per joint (None without a rest threshold); delay_estimate (None when not estimated);
     delay [s] compensated; bootstrap_std: (c,) (None when not asked); bootstrap_block: samples per
     bootstrap block; settings: the processing; blocks: number of blocks processed; q_range: (2, n)
-    smallest and largest position of each joint over the recordings [rad].
+    smallest and largest position of each joint over the recordings [rad]; recordings: per recording
+    its samples, segments, bridged samples and stale rows (:meth:`identify.observation.stream.Scan.layout`).
     """
 
     result: IdentificationResult
@@ -71,6 +73,7 @@ class StreamedFit:
     settings: StreamSettings
     blocks: int
     q_range: np.ndarray | None = None
+    recordings: tuple[dict, ...] = ()
 
     def summary(self) -> str:
         """What was fitted, in the manner of :meth:`identify.Observation.summary`."""
@@ -94,10 +97,10 @@ def _block_task(robot: rx90sym.Robot, rec: Any, window: Any, plan: Any, cutoff: 
     """One block: its decimated rows and, per joint, the triangular factor of ``[W_i | Y_i | Y_lags]``."""
     p = piece(robot, rec, window, plan, cutoff, settings, base.regressor_batch, names, first, lags)
     m = p.motion
-    drop = settings.min_velocity is not None and drops_rest(settings.rest)
+    keep = m.rows(settings.min_velocity is not None and drops_rest(settings.rest))
     factors = []
     for j in range(m.Phi.shape[1]):
-        rows = stacked_rows(m.Phi, [m.Y, *p.extra_Y], j, m.usable[:, j] if drop else None)
+        rows = stacked_rows(m.Phi, [m.Y, *p.extra_Y], j, keep[:, j])
         factors.append((JointFactors.block_factor(rows), rows.shape[0]))
     return p, factors
 
@@ -117,13 +120,10 @@ def _in_order(tasks: Iterable[tuple], client: Any, in_flight: int) -> Iterable[t
         yield queue.popleft().result()
 
 
-def _tasks(robot: rx90sym.Robot, sources: Sequence[BlockSource], plans: Sequence[Any], cutoff: float,
+def _tasks(robot: rx90sym.Robot, sources: Sequence[BlockSource], plans: Sequence[Sequence[Plan]], cutoff: float,
            settings: StreamSettings, base: Any, names: Sequence[str], lags: Sequence[float]) -> Iterable[tuple]:
-    offset = 0
-    for src, plan in zip(sources, plans):
-        for window, rec in zip(plan.windows, src.windows(plan.spans)):
-            yield (robot, rec, window, plan, cutoff, settings, base, names, offset, tuple(lags))
-        offset += plan.samples
+    for plan, window, rec, first in windows_in_order(sources, plans):
+        yield (robot, rec, window, plan, cutoff, settings, base, names, first, tuple(lags))
 
 
 def _workers(client: Any) -> int:
@@ -152,9 +152,20 @@ def _accumulate(robot: rx90sym.Robot, sources: Sequence[BlockSource], plans: Seq
         for j, (factor, rows) in enumerate(block_factors):
             factors.add_factor(j, factor, rows)
             if boot is not None:
-                keep = m.usable[:, j] if drop else np.ones(m.Y.shape[0], dtype=bool)
+                keep = m.rows(drop)[:, j]
                 boot.add(j, p.first + np.flatnonzero(keep), m.Phi[keep, j, :], m.Y[keep, j])
     return factors, moving, count
+
+
+def _plans(scans: Sequence[Any], cutoff: float, settings: StreamSettings) -> tuple[list[list[Plan]], tuple[str, ...]]:
+    """The windows of every segment of every recording (per recording), and the notes naming the segments
+    left out; recordings of different rates after decimation are refused."""
+    planned = [plan_windows(s, cutoff, settings) for s in scans]
+    rates = [p.rate for src_plans, _ in planned for p in src_plans]
+    if max(rates) > min(rates) * (1 + 1e-3):
+        raise ValueError(f"recordings have different rates after decimation: {', '.join(f'{r:g}' for r in rates)} Hz; "
+                         f"give decimate_to")
+    return [p for p, _ in planned], tuple(note for _, notes in planned for note in notes)
 
 
 def fit_streamed(robot: rx90sym.Robot, recordings: Sequence[Any], method: str = "wls", base: Any = None,
@@ -185,16 +196,13 @@ def fit_streamed(robot: rx90sym.Robot, recordings: Sequence[Any], method: str = 
     settings = StreamSettings(cutoff, decimate_to or None, min_velocity or None, rest,
                               0.0 if delay == "auto" else float(delay), spring, int(block))
     scans, fc = scan_all(sources, settings)
-    plans = [plan_windows(s, fc, replace(settings, delay=0.02 if (estimate or delay == "auto") else settings.delay))
-             for s in scans]
-    rates = [p.rate for p in plans]
-    if max(rates) > min(rates) * (1 + 1e-3):
-        raise ValueError(f"recordings have different rates after decimation: {', '.join(f'{r:g}' for r in rates)} Hz; "
-                         f"give decimate_to")
+    search = estimate or delay == "auto"
+    plans, skipped = _plans(scans, fc, replace(settings, delay=0.02 if search else settings.delay))
+    flat = [p for src_plans in plans for p in src_plans]
     grid, step = delay_grid(max(1.0 / s.rate for s in scans))
-    lags = tuple(grid) if (estimate or delay == "auto") else ()
-    total = sum(p.samples for p in plans)
-    bblock = max(1, int(round(bootstrap.block_s * plans[0].rate))) if bootstrap else 0
+    lags = tuple(grid) if search else ()
+    total = sum(p.samples for p in flat)
+    bblock = max(1, int(round(bootstrap.block_s * flat[0].rate))) if bootstrap else 0
     make_boot = (lambda: SegmentBootstrap(total, bblock, robot.n, len(base.names), bootstrap.draws, bootstrap.seed)
                  if bootstrap else None)
     boot = make_boot()
@@ -209,11 +217,13 @@ def fit_streamed(robot: rx90sym.Robot, recordings: Sequence[Any], method: str = 
     result = solve_joint_systems(factors.systems(0), base.names, weighted=method != "ols")
     if method == "consistent":
         result = consistent_fit(robot, result, base, **consistent_options)
-    return StreamedFit(result, fc, plans[0].rate, tuple(p.note for p in plans), tuple(s.source for s in scans), total,
+    notes = tuple(p.note for p in flat) + skipped
+    return StreamedFit(result, fc, flat[0].rate, notes, tuple(s.source for s in scans), total,
                        moving / total if settings.min_velocity is not None else None, found, settings.delay,
                        boot.std(result.weights) if boot is not None else None, bblock, settings, count,
                        np.vstack([np.min([s.q_range[0] for s in scans], axis=0),
-                                  np.max([s.q_range[1] for s in scans], axis=0)]))
+                                  np.max([s.q_range[1] for s in scans], axis=0)]),
+                       tuple(s.layout() for s in scans))
 
 
 def predict_streamed(robot: rx90sym.Robot, result: IdentificationResult, recording: Any, base: Any = None,
@@ -229,12 +239,13 @@ def predict_streamed(robot: rx90sym.Robot, result: IdentificationResult, recordi
     settings = StreamSettings(cutoff, decimate_to or None, min_velocity or None, predicted_rest(rest), float(delay),
                               spring, int(block))
     scans, fc = scan_all([src], settings)
-    plan = plan_windows(scans[0], fc, settings)
+    plans, _ = plan_windows(scans[0], fc, settings)
     names, regressor = column_regressor(robot, base)
     parts = []
-    for window, rec in zip(plan.windows, src.windows(plan.spans)):
+    for plan, window, rec, _ in windows_in_order([src], [plans]):
         m = piece(robot, rec, window, plan, fc, settings, regressor, names, 0).motion
-        parts.append((m.Y, m.Phi @ beta, m.t, m.moving))
+        rows = m.measured if m.measured is not None else slice(None)  # as identify.predict: measured samples
+        parts.append((m.Y[rows], (m.Phi @ beta)[rows], m.t[rows], m.moving[rows]))
     Y, pred, t, mov = (np.concatenate(a) for a in zip(*parts))
     err = Y - pred
     every = np.ones_like(mov)
@@ -242,7 +253,7 @@ def predict_streamed(robot: rx90sym.Robot, result: IdentificationResult, recordi
         relative_error_pct=_relative(err, Y, every), rms_error=_rms(err, every), measured=Y, predicted=pred, t=t,
         source=src.source, relative_error_pct_moving=_relative(err, Y, mov), rms_error_moving=_rms(err, mov),
         moving_fraction=mov.mean(axis=0), moving_threshold=settings.min_velocity, moving=mov, cutoff=fc,
-        rate=plan.rate)
+        rate=plans[0].rate)
 
 
 def fit_in_blocks(robot: rx90sym.Robot, recordings: Sequence[Any], processing: Any = None, method: str = "wls", *,
@@ -272,4 +283,4 @@ def fit_in_blocks(robot: rx90sym.Robot, recordings: Sequence[Any], processing: A
     boot = Bootstrap(sf.bootstrap_std, sf.bootstrap_block / sf.rate, spec.draws, spec.seed)
     found = sf.delay_estimate
     return Fit(robot, sf.result, p, model, base, None, found, found.delay if found is not None else None, spring,
-               boot, block=block, streamed=sf)
+               boot, block=block, streamed=sf, recordings=sf.recordings)

@@ -172,3 +172,14 @@ def test_bad_envelope_input_exits_2_and_writes_nothing(tmp_path, capsys, extra, 
     assert code == 2, err
     assert message.replace("at most 1.5", "1.5] m/s") in err or message in err, err
     assert list(tmp_path.iterdir()) == []
+
+
+def test_height_refusal_gives_the_users_floor_and_the_optimisers_margin_apart():
+    from excitation.envelope import height_violation
+
+    below = height_violation("tool point", 0.08, 0.1, 0.01)
+    assert "at z = 0.0800 m, below the lowest allowed z = 0.1000 m (the optimiser keeps a further 0.01 m)" in below
+    inside = height_violation("tool point", 0.105, 0.1, 0.01)  # above the floor, within the optimiser's margin
+    assert "below" not in inside
+    assert "less than the optimiser's further 0.01 m above the lowest allowed z = 0.1000 m" in inside
+    assert height_violation("tool point", 0.08, 0.1, 0.0).endswith("below the lowest allowed z = 0.1000 m")

@@ -4,6 +4,8 @@ the model's), one warning about a URDF's acceleration limits, and a report that 
 usage is relative to the experiment's limits. Each refusal comes before any optimisation."""
 from __future__ import annotations
 
+import json
+import re
 from pathlib import Path
 
 import numpy as np
@@ -16,6 +18,8 @@ from identify.app.report.excite_page import excite_page
 UR5 = str(Path(__file__).parent / "data" / "urdf" / "ur5.urdf")
 RX90_FILE = str(Path(rx90sym.__file__).parent / "robots" / "rx90.toml")
 RX90_Q2 = np.radians(137.5)  # rx90.toml [limits]: joint 2 in controller angles, +-137.5 deg
+RX90_ARM = 0.45  # [m] RX90 upper arm and forearm (Staubli's data sheet): shoulder to elbow, elbow to wrist
+RX90_Z_MIN = -0.42 + 0.05  # [m] rx90.toml mounting plane in frame 0 (the shoulder) + the default margin
 
 
 def _excite(tmp_path: Path, capsys: pytest.CaptureFixture, *extra: str) -> tuple[int, str]:
@@ -73,6 +77,9 @@ def test_printed_envelope_is_in_controller_angles(tmp_path, capsys):
 def test_a_urdf_without_accelerations_gets_one_warning_with_the_default_used(tmp_path, capsys):
     code, err = _excite(tmp_path, capsys, "--robot", UR5, "--tip", "tool0", "--floor", "5")
     assert code == 2 and "no pose of the arm lies inside the envelope" in err
+    # the floor the user set: 5 m above the mounting plane (ur5.urdf: shoulder 0.089159 m above the base),
+    # not the optimiser's further 0.01 m
+    assert f"below the lowest allowed z = {5 - 0.089159:.4f} m (the optimiser keeps a further 0.01 m)" in err, err
     assert err.count("acceleration limits") == 1 and "2 x the velocity limit per second" in err, err
     assert "10 rad/s^2" not in err  # the loader's generic default, which the envelope does not use
 
@@ -100,3 +107,39 @@ def test_a_start_pose_below_the_base_is_refused_naming_the_urdf_link(tmp_path, c
     assert code == 2, err
     assert "outside the safety envelope: origin of frame 3 (link forearm_link) at z = -0.4250 m" in err, err
     assert "(z in frame 0, where the mounting plane is z = -0.08916 m)" in err  # ur5.urdf: shoulder 0.089159
+
+
+def test_rx90_envelope_json_and_lines_give_the_typed_position_limits(tmp_path, capsys):
+    # the RX90's joints 2 and 3 are offset by 90 deg between the controller's angles and the model's
+    assert np.any(rx90sym.load_robot("rx90").controller_offsets != 0.0)
+    given = np.array([[-1.5, 1.2], [-1.1, 0.9], [-1.0, 1.3], [-2.0, 2.0], [-1.2, 1.5], [-3.0, 3.0]])
+    code = main(["excite", "--robot", "rx90", "--duration", "6", "--harmonics", "2", "--starts", "1",
+                 "--position-limits", ",".join(f"{a:g}:{b:g}" for a, b in given),
+                 "--out", str(tmp_path / "t.csv"), "--json", str(tmp_path / "t.json")])
+    err = capsys.readouterr().err
+    assert code == 0, err
+    envelope = json.loads((tmp_path / "t.json").read_text())["envelope"]
+    assert envelope["angles"] == "controller" and envelope["position_limits_rad"] == given.tolist()
+    printed = ", ".join(f"[{np.degrees(a):.0f}, {np.degrees(b):.0f}]" for a, b in given)
+    assert f"joint ranges [deg, controller angles]: {printed}" in err, err
+    centre = np.array(envelope["centre_pose_rad"])
+    assert np.all((given[:, 0] <= centre) & (centre <= given[:, 1]))
+    # what the controller runs (the CSV: controller angles, as the logs) keeps inside the typed ranges
+    q = np.loadtxt(tmp_path / "t.csv", delimiter=",", skiprows=1)[:, 1:7]
+    assert np.all(q >= given[:, 0] - 1e-9) and np.all(q <= given[:, 1] + 1e-9)
+
+
+@pytest.mark.parametrize("extra, quoted, q2, q3", [
+    (("--centre-pose", "0,2.1,0,0,0,0"), "--centre-pose 0, 2.1, 0, 0, 0, 0 rad (controller angles) is outside the "
+                                          "safety envelope: origin of frame 4", 2.1, 0.0),
+    (("--controller", "ur", "--start-pose", "0,2.1,0.5,0,0,0"),
+     "--start-pose 0,2.1,0.5,0,0,0 is outside the safety envelope: origin of frame 4", 2.1, 0.5),
+])
+def test_rx90_envelope_refusal_quotes_the_typed_pose_and_its_height(tmp_path, capsys, extra, quoted, q2, q3):
+    code, err = _excite(tmp_path, capsys, "--robot", RX90_FILE, *extra)
+    assert code == 2 and quoted in err, err
+    # the wrist centre (frame 4) by the arm's lengths, controller angles from the vertical: the
+    # height was computed at the typed pose, not at the typed numbers read as model angles
+    wrist = RX90_ARM * np.cos(q2) + RX90_ARM * np.cos(q2 + q3)
+    z, z_min = map(float, re.search(r"at z = (\S+) m, below the lowest allowed z = (\S+) m", err).groups())
+    assert abs(z - wrist) < 1e-4 and abs(z_min - RX90_Z_MIN) < 1e-4, err

@@ -25,10 +25,11 @@ import numpy as np
 import rx90sym
 from rx90sym.recording import Recording, RecordingError
 
-from identify.io.arrays import _resolve_convention, _to_model
+from identify.io.arrays import _check_layout, _resolve_convention, _to_model
 from identify.io.checks import _check_robot_name, _default_labels, _validate, _warn_no_robot
 from identify.io.csv_tables import _column_index, _semicolon_hint, _Table
 from identify.io.gains import DriveGains, apply_gains
+from identify.io.recordings import _count
 
 __all__ = ["BlockSource", "CsvSource", "MemorySource", "block_source", "count_rows", "CSV_BATCH_BYTES",
            "DEFAULT_BLOCK", "DEFAULT_LOG_BLOCK"]
@@ -54,6 +55,7 @@ class BlockSource:
 
     source: str = "<memory>"
     n_samples: int | None = None  # known after a scan
+    stale_rows: int | None = None  # stale rows dropped when the log was read (None: not known)
 
     def __init__(self, robot: rx90sym.Robot, gains: DriveGains | None = None) -> None:
         self.robot, self.gains = robot, gains
@@ -61,7 +63,9 @@ class BlockSource:
     def _rows(self) -> Iterator[np.ndarray]:  # (m, k) raw columns, consecutive
         raise NotImplementedError
 
-    def _record(self, table: np.ndarray) -> Recording:
+    def _record(self, table: np.ndarray, first: bool = False) -> Recording:
+        """The rows ``table`` as a recording; its ``segment`` counted from the rows' first segment, whose
+        number in the whole recording is ``meta["segment0"]`` (``first``: the rows start the recording)."""
         raise NotImplementedError
 
     def _finish(self, rec: Recording) -> Recording:
@@ -97,14 +101,33 @@ class BlockSource:
     def _checked(self, table: np.ndarray, carry: np.ndarray | None, start: int) -> Recording:
         full = table if carry is None else np.concatenate([carry, table])
         offset = start - (0 if carry is None else carry.shape[0])
-        rec = self._record(full)
         labels = _default_labels(self.source, self.robot.n)
         try:
-            _validate(rec.t, rec.q, rec.tau, rec.dq, self.robot, labels, self.source, rec.current, rec.aux)
+            rec = self._record(full, first=carry is None)
+            _validate(rec.t, rec.q, rec.tau, rec.dq, self.robot, labels, self.source, rec.current, rec.aux,
+                      rec.segment)
         except RecordingError as exc:
             raise _shift_rows(exc, offset) from None
         rec.meta["new_from"] = start - offset
         return self._finish(rec)
+
+    def thinned(self, block: int, every: int) -> Recording:
+        """Every ``every``-th sample and the last one, read block by block (checked as by :meth:`scan`): a
+        long recording's extent and motion for figures, in bounded memory (no ``measured``/``segment``)."""
+        parts, at, last = [], 0, None
+        for rec in self.scan(block):
+            new = int(rec.meta.get("new_from", 0))
+            parts.append(rec.select(np.arange(new + (-at) % every, rec.n_samples, every)))
+            at += rec.n_samples - new
+            last = rec.select(slice(rec.n_samples - 1, None))
+        if (at - 1) % every:
+            parts.append(last)
+
+        def cat(name: str) -> np.ndarray | None:
+            return None if getattr(parts[0], name) is None else np.concatenate([getattr(r, name) for r in parts])
+
+        return Recording(t=cat("t"), q=cat("q"), tau=cat("tau"), dq=cat("dq"), source=self.source,
+                         robot=self.robot.name, current=cat("current"))
 
     def windows(self, spans: Iterable[tuple[int, int]]) -> Iterator[Recording]:
         """The samples [r0, r1) of each span, spans in increasing order of r0 and r1."""
@@ -132,12 +155,14 @@ class MemorySource(BlockSource):
     def __init__(self, rec: Recording, robot: rx90sym.Robot, gains: DriveGains | None = None) -> None:
         super().__init__(robot, gains)
         self.rec, self.source, self.n_samples = rec, rec.source, rec.n_samples
+        self.stale_rows = rec.meta.get("log", {}).get("stale_rows")
 
     def scan(self, block: int) -> Iterator[Recording]:
         keep = len(self.robot.parameter_names)
         for start in range(0, self.rec.n_samples, block):
             rec = self.rec.select(slice(max(0, start - keep), start + block))
             rec.meta["new_from"] = start - max(0, start - keep)
+            rec.meta["segment0"] = 0 if self.rec.segment is None else int(self.rec.segment[max(0, start - keep)])
             yield self._finish(rec)
 
     def windows(self, spans: Iterable[tuple[int, int]]) -> Iterator[Recording]:
@@ -158,11 +183,13 @@ class CsvSource(BlockSource):
         self.names = {p: [f"{p}{j + 1}" for j in range(n)] for p in ("q", "tau", "dq", "i")}
         table = _Table(self.source, meta, columns, np.empty((0, len(columns))), self.skip + 1)
         self.index = _column_index(table, ["t", *self.names["q"]],
-                                   [self.names["tau"], self.names["dq"], self.names["i"]], aux=True)
+                                   [self.names["tau"], self.names["dq"], self.names["i"], ["measured"], ["segment"]],
+                                   aux=True)
         if "tau1" not in self.index and "i1" not in self.index:
             raise RecordingError(f"{self.source}: column 'tau1' is missing (joint torques tau1..tau{n}, or "
                                  f"motor currents i1..i{n})")
         _warn_no_robot(meta.get("robot"), robot, self.source)
+        self.stale_rows = _count(meta["stale_rows"], self.source) if "stale_rows" in meta else None
         self.convention = _resolve_convention(convention, meta.get("convention"), self.source)
         self.columns = columns
 
@@ -197,14 +224,21 @@ class CsvSource(BlockSource):
         except pa.ArrowInvalid as exc:
             raise RecordingError(f"{self.source}: {_arrow_message(exc)}") from None
 
-    def _record(self, table: np.ndarray) -> Recording:
+    def _record(self, table: np.ndarray, first: bool = False) -> Recording:
         def take(prefix: str) -> np.ndarray | None:
             return table[:, [self.index[c] for c in self.names[prefix]]] if f"{prefix}1" in self.index else None
 
         aux = {name[2:]: table[:, col] for name, col in self.index.items() if name.startswith("x:")}
         q = _to_model(take("q"), self.robot, self.convention)
-        return Recording(t=table[:, self.index["t"]], q=q, tau=take("tau"), dq=take("dq"), source=self.source,
-                         robot=self.robot.name, current=take("i"), aux=aux)
+        measured = table[:, self.index["measured"]] if "measured" in self.index else None
+        segment = table[:, self.index["segment"]] if "segment" in self.index else None
+        segment0 = 0.0 if segment is None or first or not segment.size else float(segment[0])
+        segment = _check_layout(measured, None if segment is None else segment - segment0, self.source)
+        rec = Recording(t=table[:, self.index["t"]], q=q, tau=take("tau"), dq=take("dq"), source=self.source,
+                        robot=self.robot.name, current=take("i"), aux=aux,
+                        measured=None if measured is None else measured == 1, segment=segment)
+        rec.meta["segment0"] = int(segment0)
+        return rec
 
 
 def _arrow_message(exc: Exception) -> str:

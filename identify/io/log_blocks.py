@@ -3,14 +3,21 @@
 :func:`convert_log` does what :func:`identify.read_log` then :func:`identify.write_recording` do,
 holding one block of lines at a time: lines are read and numbered in Python (comments, header),
 each block's numbers parsed by pyarrow's CSV parser (C++, multithreaded; a block it refuses is
-parsed again by the whole-log parser, whose message names the bad lines), checked with the
-whole-log checks (each block starts with the previous block's last row, so steps and jumps across
-blocks are checked too), resampled when asked (see :class:`_Resampler`), and appended to the output
-through the atomic writer: an error leaves no file behind.
+parsed again by the whole-log parser, whose message names the bad lines), stale rows dropped (each
+block's first row compared with the previous block's last), checked with the whole-log checks
+(each block after the previous block's last kept row, so steps, jumps and gaps across blocks are
+checked too), gaps bridged or split into segments (:mod:`identify.signal.gaps`; a new segment gets
+its own grid), resampled when asked (see :class:`_Resampler`), and appended to the output through
+the atomic writer: an error leaves no file behind. The output always has a ``segment`` column
+(and ``measured`` when resampled): the blocks to come may need them; the stale-row count goes in a
+header field filled in at the end.
 
 Differences from the whole-log reader, by construction: the median time step (irregular-step and
-gap checks, report) is each block's; the recorded-velocity check compares each block's RMS; with
-``t_from``/``t_to`` every row is parsed, so a corrupt row outside the window stops the conversion.
+gap checks, a gap's ``periods``, the report) is each block's, so a step is a lost packet when it is
+longer than 1.5 of its block's median step (the same steps as on the whole log unless the clock
+drifts by a third of a period between blocks); the recorded-velocity check compares each block's
+RMS; with ``t_from``/``t_to`` every row is parsed, so a corrupt row outside the window stops the
+conversion.
 """
 from __future__ import annotations
 
@@ -28,8 +35,10 @@ from rx90sym.recording import Recording, RecordingError
 from identify.io.blocks import DEFAULT_LOG_BLOCK
 from identify.io.columns import ColumnMap
 from identify.io.gains import apply_gains
-from identify.io.logs import (ABSURD, _check_header, _check_positions, _check_increasing, _check_velocities,
-                              _irregular, _Lines, _log_options, _parse, gains_label)
+from identify.io.logs import (_LISTED, ABSURD, _check_header, _check_increasing, _check_positions,
+                              _check_velocities, _irregular, _Lines, _log_options, _parse, _refuse_splits, gains_label)
+from identify.io.recordings import TIME_RTOL
+from identify.signal.gaps import DEFAULT_MAX_GAP, Gap, LogGaps, find_gaps, stale_rows
 from identify.signal.resampling import interpolate
 
 __all__ = ["DEFAULT_LOG_BLOCK", "convert_log"]
@@ -96,7 +105,8 @@ def _parse_fast(lines: _Lines, cmap: ColumnMap) -> np.ndarray:
 
 
 class _Resampler:
-    """The rule of :func:`identify.resample` (grid ``t0 + k/rate``, splines) on a stream of blocks.
+    """The rule of :func:`identify.resample` (grid ``t0 + k/rate``, splines) on a stream of blocks of one
+    segment (a new segment takes a new resampler: its grid starts at its first sample).
 
     Rows are buffered until SPLINE_MARGIN samples lie beyond the grid points emitted, so each
     emitted point sees the samples around it as the whole-log spline does.
@@ -106,8 +116,12 @@ class _Resampler:
         self.rate, self.k, self.t0 = float(rate), 0, None
         self.buffer: Recording | None = None
 
-    def feed(self, rec: Recording, last: bool) -> Recording | None:
-        buf = rec if self.buffer is None else _joined(self.buffer, rec)
+    def feed(self, rec: Recording | None, last: bool) -> Recording | None:
+        """The grid points ``rec`` completes (``last``: the segment ends with it; ``rec`` None: flush)."""
+        buf = rec if self.buffer is None else (self.buffer if rec is None else _joined(self.buffer, rec))
+        if buf is None or (buf.t.size < 2 and not last):  # a segment's first row alone: wait for the next
+            self.buffer = buf
+            return None
         if self.t0 is None:
             self.t0 = float(buf.t[0])
         limit = float(buf.t[-1]) if last else float(buf.t[max(0, buf.t.size - 1 - SPLINE_MARGIN)])
@@ -116,6 +130,7 @@ class _Resampler:
         if last and grid.size:
             grid[-1] = min(grid[-1], limit)  # never beyond the last sample through rounding
         self.k = max(self.k, count)
+        self.buffer = None
         if not last:  # keep what the next points need: SPLINE_MARGIN samples before them
             start = max(0, int(np.searchsorted(buf.t, limit)) - 2 * SPLINE_MARGIN)
             self.buffer = buf.select(slice(start, None))
@@ -131,8 +146,10 @@ def _joined(a: Recording, b: Recording) -> Recording:
                      aux={k: np.concatenate([v, b.aux[k]]) for k, v in a.aux.items()})
 
 
-def _columns(rec: Recording, robot: rx90sym.Robot, convention: str) -> tuple[list[str], np.ndarray]:
-    """Header names and the table of :func:`identify.write_recording` for one block."""
+def _columns(rec: Recording, robot: rx90sym.Robot, convention: str, segment: int,
+             resampled: bool) -> tuple[list[str], np.ndarray]:
+    """Header names and the table of :func:`identify.write_recording` for one part of a block (in the
+    segment ``segment``; ``resampled``: with the ``measured`` column)."""
     n = robot.n
     q = np.asarray(robot.to_controller(rec.q), dtype=float) if convention == "controller" else rec.q
     names, parts = ["t", *[f"q{j + 1}" for j in range(n)]], [rec.t[:, None], q]
@@ -142,6 +159,11 @@ def _columns(rec: Recording, robot: rx90sym.Robot, convention: str) -> tuple[lis
             parts.append(values)
     names += [f"x:{k}" for k in rec.aux]
     parts += [v[:, None] for v in rec.aux.values()]
+    if resampled:  # the layout of identify.write_recording, always written (the blocks to come may need it)
+        names.append("measured")
+        parts.append(rec.measured_mask[:, None].astype(float))
+    names.append("segment")
+    parts.append(np.full((rec.n_samples, 1), float(segment)))
     return names, np.hstack(parts)
 
 
@@ -161,42 +183,135 @@ class _Report:
 
     def __init__(self) -> None:
         self.first_line = self.last_line = None
-        self.rows = self.samples = self.irregular = 0
-        self.t_first = self.t_last = None
+        self.rows = self.samples = self.irregular = self.stale = self.bridged = 0
+        self.stale_lines: list[int] = []
+        self.inside_sum, self.inside_count = 0.0, 0
         self.gap, self.gap_lines, self.medians = -1.0, [0, 0], []
+        self.gaps: list[Gap] = []  # the first _GAPS_KEPT, the rest counted: memory bounded
+        self.gap_count, self.bridged_gaps, self.lost_periods = 0, 0, 0.0
+        self.segments = 1
 
-    def add(self, t: np.ndarray, numbers: list[int], new: int) -> None:
-        """A block's times (its first row the previous block's last when ``new`` < len)."""
+    def add(self, t: np.ndarray, numbers: list[int], found: LogGaps) -> None:
+        """A block's kept rows (after the previous block's last kept row, when there is one) and its gaps."""
         dt = np.diff(t)
         if self.first_line is None:
-            self.first_line, self.t_first = numbers[len(numbers) - new], float(t[len(t) - new])
-        self.last_line, self.t_last, self.rows = numbers[-1], float(t[-1]), self.rows + new
+            self.first_line = numbers[0]
+        self.last_line = numbers[-1]
+        self.gaps += found.gaps[:max(0, _GAPS_KEPT - len(self.gaps))]
+        self.gap_count += len(found.gaps)
+        self.bridged_gaps += len(found.bridged)
+        self.lost_periods += float(sum(g.periods - 1.0 for g in found.bridged))
+        self.segments += int(found.segment[-1])
         if dt.size:
             step = float(np.median(dt))
             self.medians.append(step)
-            self.irregular += int(np.sum(np.abs(dt - step) > 0.01 * step))
+            self.irregular += int(np.sum(np.abs(dt - step) > TIME_RTOL * step))
+            inside = dt[np.diff(found.segment) == 0]
+            self.inside_sum, self.inside_count = self.inside_sum + float(inside.sum()), self.inside_count + inside.size
             k = int(np.argmax(dt))
             if dt[k] > self.gap:
                 self.gap, self.gap_lines = float(dt[k]), [numbers[k], numbers[k + 1]]
+
+    def result(self, max_gap: float) -> dict[str, Any]:
+        gaps = {**LogGaps(tuple(self.gaps), np.array([self.segments - 1]), max_gap).summary(),
+                "bridged_gaps": self.bridged_gaps, "bridged_lost_periods": self.lost_periods,
+                "gaps_total": self.gap_count}
+        return {"lines": [self.first_line, self.last_line], "rows": self.rows, "stale_rows": self.stale,
+                "stale_lines": self.stale_lines,
+                "rate_hz": self.inside_count / self.inside_sum if self.inside_sum else float("nan"),
+                "median_step_s": float(np.median(self.medians)), "largest_gap_s": self.gap,
+                "largest_gap_lines": self.gap_lines, "irregular_steps": self.irregular, "gaps": gaps,
+                "bridged_samples": self.bridged, "samples": self.samples}
+
+
+class _LogStream:
+    """The rules of :func:`identify.io.logs.rows_to_recording` on consecutive blocks of rows: stale rows
+    (each block's first row compared with the previous block's last), checks, gaps and segments (each
+    block after the previous block's last kept row), the grid of each segment. Yields the parts to
+    write, each with its segment number."""
+
+    def __init__(self, cmap: ColumnMap, robot: rx90sym.Robot, conv: str, source: str, resample: float | None,
+                 max_gap: float, segments: bool, report: _Report) -> None:
+        self.cmap, self.robot, self.conv, self.source = cmap, robot, conv, source
+        self.resample, self.max_gap, self.segments, self.report = resample, max_gap, segments, report
+        self.used = [c for c, name in enumerate(cmap.names) if name != "_"]
+        self.last_raw: np.ndarray | None = None
+        self.last_kept: tuple[np.ndarray, list[int]] | None = None
+        self.segment = 0
+        self.resampler = _Resampler(resample) if resample else None
+
+    def block(self, values: np.ndarray, numbers: list[int], last: bool) -> Iterator[tuple[Recording, int]]:
+        report = self.report
+        report.rows += values.shape[0]
+        both = values if self.last_raw is None else np.vstack([self.last_raw, values])
+        stale = stale_rows(both, self.cmap.t, self.used)[both.shape[0] - values.shape[0]:]
+        self.last_raw = values[-1:]
+        report.stale += int(stale.sum())
+        report.stale_lines += [numbers[k] for k in np.flatnonzero(stale)[:max(0, _LISTED - len(report.stale_lines))]]
+        values, numbers = values[~stale], [n for n, s in zip(numbers, stale) if not s]
+        new = values.shape[0]
+        if new:
+            if self.last_kept is not None:
+                values, numbers = np.vstack([self.last_kept[0], values]), self.last_kept[1] + numbers
+            yield from self._kept(values, numbers, new)
+        if last:
+            yield from self._flush()
+
+    def _kept(self, values: np.ndarray, numbers: list[int], new: int) -> Iterator[tuple[Recording, int]]:
+        t = values[:, self.cmap.t]
+        if t.size >= 2:
+            _check_increasing(t, numbers, self.source)
+        found = (find_gaps(t, numbers, self.max_gap) if t.size >= 2
+                 else LogGaps((), np.zeros(t.size, np.int64), self.max_gap))
+        if not self.segments:
+            _refuse_splits(found, self.source)
+        rec = _checked(values, numbers, self.cmap, self.robot, self.conv, self.source)
+        if self.resample is None and t.size >= 2:
+            refusal = _irregular(t, numbers, self.source, found)
+            if refusal:
+                raise RecordingError(refusal)
+        self.report.add(t, numbers, found)
+        self.last_kept = (values[-1:], numbers[-1:])
+        segment = found.segment[t.size - new:] + self.segment  # the carried row is in self.segment
+        rec = rec.select(slice(t.size - new, None))
+        for number in np.unique(segment):
+            part = rec.select(segment == number)
+            if number != self.segment:
+                yield from self._flush()
+                self.segment = int(number)
+                self.resampler = _Resampler(self.resample) if self.resample else None
+            if self.resampler is not None:
+                part = self.resampler.feed(part, False)
+            if part is not None:
+                yield part, self.segment
+
+    def _flush(self) -> Iterator[tuple[Recording, int]]:
+        if self.resampler is not None:
+            part = self.resampler.feed(None, True)
+            if part is not None:
+                yield part, self.segment
 
 
 def convert_log(path: str | os.PathLike[str], robot: rx90sym.Robot, columns: str, out: str | os.PathLike[str],
                 header: bool = False, rows: tuple[int, int] | None = None, t_from: float | None = None,
                 t_to: float | None = None, resample: float | None = None, gains: Any = None,
-                convention: str | None = None, block: int = DEFAULT_LOG_BLOCK) -> dict[str, Any]:
+                convention: str | None = None, block: int = DEFAULT_LOG_BLOCK, max_gap: float = DEFAULT_MAX_GAP,
+                segments: bool = True) -> dict[str, Any]:
     """Convert the log ``path`` (a column map ``columns``, as :func:`identify.read_log`) to the recording
-    file ``out`` (CSV, controller angles), ``block`` lines at a time. Returns the ``meta["log"]`` report.
+    file ``out`` (CSV, controller angles), ``block`` lines at a time. Stale rows, lost packets and
+    segments (``max_gap`` [s], ``segments``) as :func:`identify.read_log`. Returns the ``meta["log"]`` report.
     """
     p = Path(path)
     if Path(out).suffix.lower() != ".csv":
-        raise RecordingError(f"{Path(out).name}: a log converted block by block is written as CSV")
+        raise RecordingError(f"{p.name}: a log converted block by block is written as CSV")
+    if not (np.isfinite(max_gap) and max_gap > 0):
+        raise ValueError(f"max_gap must be a positive time in s, got {max_gap!r}")
     cmap, conv, drive = _log_options(p, robot, columns, rows, t_from, t_to, gains, convention)
     report = _Report()
-    resampler = _Resampler(resample) if resample else None
+    stream = _LogStream(cmap, robot, conv, p.name, resample, max_gap, segments, report)
 
     def write(fh: IO) -> None:
-        carry: tuple[np.ndarray, list[int]] | None = None
-        header_written = False
+        stale_at = None
         blocks = _selected(_line_blocks(p, header, len(cmap.names), block), cmap, rows, t_from, t_to)
         pending = next(blocks, None)
         if pending is None:
@@ -204,36 +319,32 @@ def convert_log(path: str | os.PathLike[str], robot: rx90sym.Robot, columns: str
         while pending is not None:
             values, numbers = pending
             pending = next(blocks, None)
-            new = values.shape[0]
-            if carry is not None:
-                values, numbers = np.vstack([carry[0], values]), carry[1] + numbers
-            rec = _checked(values, numbers, new, cmap, robot, conv, p.name, resample is None)
-            report.add(rec.t, numbers, new)
-            carry = (values[-1:], numbers[-1:])
-            rec = rec.select(slice(rec.t.size - new, None))
-            if resampler is not None:
-                rec = resampler.feed(rec, pending is None)
-                if rec is None:
-                    continue
-            if drive is not None:
-                rec = apply_gains(rec, drive, robot)
-            names, table = _columns(rec, robot, "controller")
-            if not header_written:
-                fh.write(f"# convention: controller\n# robot: {robot.name}\n" + ",".join(names) + "\n")
-                header_written = True
-            report.samples += table.shape[0]
-            _write_rows(fh, table)
+            for rec, segment in stream.block(values, numbers, pending is None):
+                if drive is not None:
+                    rec = apply_gains(rec, drive, robot)
+                names, table = _columns(rec, robot, "controller", segment, resample is not None)
+                if stale_at is None:
+                    fh.write(f"# convention: controller\n# robot: {robot.name}\n# stale_rows: ")
+                    stale_at = fh.tell()  # the count is known at the end: a blank field, filled in then
+                    fh.write(" " * _COUNT_WIDTH + "\n" + ",".join(names) + "\n")
+                report.samples += table.shape[0]
+                report.bridged += int(np.sum(~rec.measured_mask))
+                _write_rows(fh, table)
+        if stale_at is not None:
+            fh.seek(stale_at)
+            fh.write(f"{report.stale:<{_COUNT_WIDTH}d}")
 
     atomic_write(out, write, binary=False)
-    if report.rows < 2:
+    if report.rows - report.stale < 2:
         raise RecordingError(f"{p.name}: line {report.first_line}: a log needs at least 2 rows")
-    return {"lines": [report.first_line, report.last_line], "rows": report.rows,
-            "rate_hz": (report.rows - 1) / (report.t_last - report.t_first),
-            "median_step_s": float(np.median(report.medians)), "largest_gap_s": report.gap,
-            "largest_gap_lines": report.gap_lines, "irregular_steps": report.irregular,
-            "resampled_hz": float(resample) if resample else None, "samples": report.samples,
-            "gains": None if drive is None else gains_label(drive),
-            "convention": conv, "blocks_of_lines": block}
+    return {**report.result(max_gap), "resampled_hz": float(resample) if resample else None,
+            "gains": None if drive is None else gains_label(drive), "convention": conv, "blocks_of_lines": block}
+
+
+#: Gaps listed one by one in the report of a log converted in blocks (the counts cover them all).
+_GAPS_KEPT = 10_000
+#: Characters kept for the stale-row count in the header.
+_COUNT_WIDTH = 20
 
 
 def _selected(blocks: Iterator[_Lines], cmap: ColumnMap, rows: tuple[int, int] | None, t_from: float | None,
@@ -259,26 +370,19 @@ def _selected(blocks: Iterator[_Lines], cmap: ColumnMap, rows: tuple[int, int] |
             yield values, numbers
 
 
-def _checked(values: np.ndarray, numbers: list[int], new: int, cmap: ColumnMap, robot: rx90sym.Robot,
-             conv: str, source: str, regular: bool) -> Recording:
+def _checked(values: np.ndarray, numbers: list[int], cmap: ColumnMap, robot: rx90sym.Robot, conv: str,
+             source: str) -> Recording:
     """One block through the checks of :func:`identify.read_log`, as a recording in model angles."""
     t = values[:, cmap.t]
-    if t.size >= 2:
-        _check_increasing(t, numbers, source)
     q_file = values[:, list(cmap.q)]
     q = np.asarray(robot.to_model(q_file), dtype=float) if conv == "controller" else q_file
     _check_positions(q, t, numbers, cmap, robot, source)
     dq = values[:, list(cmap.qd)] if cmap.qd else None
     if t.size >= 3:
         _check_velocities(dq, q, t, np.ptp(q, axis=0), numbers, cmap, source)
-    if regular and t.size >= 2:
-        refusal = _irregular(t, numbers, source)
-        if refusal:
-            raise RecordingError(refusal)
 
     def take(cols: tuple[int, ...]) -> np.ndarray | None:
         return values[:, list(cols)] if cols else None
 
     return Recording(t=t, q=q, tau=take(cmap.tau), dq=dq, source=source, robot=robot.name, current=take(cmap.i),
                      aux={name: values[:, col] for name, col in cmap.aux})
-

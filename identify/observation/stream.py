@@ -9,6 +9,12 @@ Two passes over each recording (:class:`identify.io.blocks.BlockSource`):
    from the filters' impulse responses), each through :func:`filtered_motion` exactly as a whole
    recording, cut back to its core: a :class:`Piece` of decimated rows.
 
+Segments (a recording cut at gaps too long to bridge, ``Recording.segment`` or a ``segment`` column)
+are scanned, planned and filtered one by one, as :func:`identify.observation.matrix.filtered_motions`
+does on a whole recording: the filters restart at each segment and no window spans two; a sample
+bridged over lost packets (``measured`` 0) runs through the filters but its row is left out
+(:meth:`FilteredMotion.rows`).
+
 Peak memory is that of one block: the full-rate regressor of a block with its margins,
 (block + 2·margin) × n × c doubles, and its parallel-filtered copies (about three such arrays).
 Every quantity downstream (incremental QR, bootstrap, validation) consumes pieces.
@@ -16,7 +22,7 @@ Every quantity downstream (incremental QR, bootstrap, validation) consumes piece
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, replace
+from dataclasses import dataclass
 from typing import Any, Callable, Iterator, Sequence
 
 import numpy as np
@@ -24,12 +30,14 @@ import numpy as np
 import rx90sym
 
 from identify.io.blocks import DEFAULT_BLOCK, BlockSource
-from identify.observation.matrix import DECIMATION_PASSBAND, automatic_cutoff, filtered_motion, shifted_torques
+from identify.observation.matrix import _SPECTRUM_SAMPLES, DECIMATION_PASSBAND, filtered_motion, shifted_torques
 from identify.observation.processing import RestPolicy
 from identify.signal.blocks import WelchAccumulator, decimation_margin, lowpass_margin, motion_windows
+from identify.signal.cutoff import choose_cutoff
 from identify.signal.filtering import EDGE_PERIODS, cutoff_from_spectrum, decimate, decimation_plan
 
-__all__ = ["DEFAULT_BLOCK", "Piece", "Scan", "StreamSettings", "pieces", "plan_windows", "scan", "scan_all"]
+__all__ = ["DEFAULT_BLOCK", "Piece", "Plan", "Scan", "SegmentScan", "StreamSettings", "pieces", "plan_windows", "scan",
+           "scan_all"]
 
 
 
@@ -48,16 +56,35 @@ class StreamSettings:
 
 
 @dataclass(frozen=True)
+class SegmentScan:
+    """One segment of a recording (the samples between two gaps too long to bridge): its first raw
+    sample ``start`` in the recording, ``samples``, ``rate`` [Hz] (1 / its median step, as
+    :func:`filtered_motions` takes it) and its automatic cut-off [Hz] (None when a cut-off is given)."""
+
+    start: int
+    samples: int
+    rate: float
+    cutoff: float | None
+
+
+@dataclass(frozen=True)
 class Scan:
-    """What the first pass learnt of one recording: samples, rate [Hz] (first block's median step),
-    and either the Welch spectrum of its raw accelerations or, for a recording of one block, the recording."""
+    """What the first pass learnt of one recording: samples, rate [Hz] (1 / median step), its segments,
+    the smallest and largest position of each joint ``q_range`` (2, n) [rad], the samples bridged over
+    lost packets and the stale rows dropped when the log was read (None: not known)."""
 
     source: str
     samples: int
     rate: float
-    spectrum: tuple[np.ndarray, np.ndarray] | None
-    whole: Any = None
-    q_range: np.ndarray | None = None  # (2, n) smallest and largest position of each joint [rad]
+    segments: tuple[SegmentScan, ...]
+    q_range: np.ndarray | None = None
+    bridged: int = 0
+    stale_rows: int | None = None
+
+    def layout(self) -> dict[str, Any]:
+        """As :func:`identify.io.recordings.layout_summary` for a recording in memory."""
+        return {"source": self.source, "samples": self.samples, "bridged_samples": self.bridged,
+                "segments": len(self.segments), "stale_rows": self.stale_rows}
 
 
 class StepCounts:
@@ -80,74 +107,153 @@ class StepCounts:
         return float((lo + hi) / 2.0) if lo != hi else float(lo)
 
 
-def scan(src: BlockSource, block: int, need_spectrum: bool) -> Scan:
-    """First pass over one recording (checks every block; see the module docstring)."""
-    welch, rate, first = None, float("nan"), None
+#: Length of a Welch segment of the automatic cut-off [s] (:func:`identify.choose_cutoff`'s default).
+WELCH_SECONDS = 4.0
+
+
+class _SegmentPass:
+    """One segment fed in consecutive pieces: its steps, and the automatic cut-off's spectrum.
+
+    While the segment is at most one block (or one Welch segment) long its samples are held and its
+    cut-off is :func:`identify.choose_cutoff` on them, exactly the whole-recording rule; beyond, the
+    Welch spectrum of its raw accelerations is streamed (:class:`WelchAccumulator`, equal to scipy's).
+    """
+
+    def __init__(self, start: int, hold: int, floor: float | None) -> None:
+        self.start, self.hold, self.floor = start, hold, floor
+        self.samples, self.steps = 0, StepCounts()
+        self.t: list[np.ndarray] = []
+        self.q: list[np.ndarray] = []
+        self.tail_t: np.ndarray | None = None
+        self.tail_q = np.empty((0, 0))
+        self.welch: WelchAccumulator | None = None
+        self.rate = float("nan")
+
+    def feed(self, t: np.ndarray, q: np.ndarray) -> None:
+        if self.tail_t is not None:
+            self.steps.add(np.diff(np.r_[self.tail_t, t]))
+        else:
+            self.steps.add(np.diff(t))
+        self.tail_t = t[-1:]
+        self.samples += t.size
+        if self.floor is None:
+            return
+        if self.welch is None:
+            self.t.append(t)
+            self.q.append(q)
+            t_all = np.concatenate(self.t)
+            rate = 1.0 / float(np.median(np.diff(t_all))) if t_all.size > 1 else np.inf
+            if self.samples > max(self.hold, WELCH_SECONDS * rate):  # long: stream the spectrum from here on
+                q_all = np.concatenate(self.q)
+                self.t, self.q = [], []
+                self.rate = rate
+                self.welch = WelchAccumulator(self.rate, max(16, int(round(WELCH_SECONDS * self.rate))), q.shape[1])
+                self._accelerations(q_all)
+            return
+        self._accelerations(q)
+
+    def _accelerations(self, q: np.ndarray) -> None:
+        x = q if not self.tail_q.size else np.concatenate([self.tail_q, q])
+        self.welch.feed((x[2:] - 2.0 * x[1:-1] + x[:-2]) * self.rate**2)
+        self.tail_q = x[-2:]
+
+    def result(self) -> SegmentScan:
+        rate = 1.0 / self.steps.median() if self.samples > 1 else float("nan")
+        cut = None
+        if self.floor is not None and self.welch is not None:
+            cut = cutoff_from_spectrum(*self.welch.result(), self.rate, min_cutoff=self.floor)
+        elif self.floor is not None and self.samples > 2:
+            t_all, q_all = np.concatenate(self.t), np.concatenate(self.q)
+            cut = choose_cutoff(q_all, 1.0 / float(np.median(np.diff(t_all))), min_cutoff=self.floor)
+        return SegmentScan(self.start, self.samples, rate, cut)
+
+
+def scan(src: BlockSource, block: int, floor: float | None) -> Scan:
+    """First pass over one recording (checks every block; see the module docstring); ``floor``: the
+    lowest automatic cut-off [Hz] (None: the cut-off is given, no spectrum)."""
     lo = hi = None
     steps = StepCounts()  # the rate is the whole log's, 1 / median step
-    for k, rec in enumerate(src.scan(block)):
+    done: list[SegmentScan] = []
+    current: _SegmentPass | None = None
+    bridged, at, last_t = 0, 0, None
+    for rec in src.scan(block):
+        new = int(rec.meta.get("new_from", 0))
         lo = rec.q.min(axis=0) if lo is None else np.minimum(lo, rec.q.min(axis=0))
         hi = rec.q.max(axis=0) if hi is None else np.maximum(hi, rec.q.max(axis=0))
-        steps.add(np.diff(rec.t[max(0, int(rec.meta.get("new_from", 0)) - 1):]))
-        if k == 0:
-            rate = 1.0 / float(np.median(np.diff(rec.t)))  # for the spectrum; the same to rounding
-            first = rec
-            if need_spectrum:
-                welch = WelchAccumulator(rate, max(16, int(round(4.0 * rate))), rec.q.shape[1])
-        elif k == 1:
-            first = None
-        if welch is not None:
-            new = int(rec.meta.get("new_from", 0))
-            q = rec.q[max(0, new - 2):]
-            welch.feed((q[2:] - 2.0 * q[1:-1] + q[:-2]) * rate**2)
-    n = int(src.n_samples)
-    rate = 1.0 / steps.median()
-    q_range = np.vstack([lo, hi])
-    if first is not None:  # one block: the whole-recording rule, exactly
-        return Scan(src.source, n, rate, None, first, q_range)
-    return Scan(src.source, n, rate, welch.result() if welch is not None else None, None, q_range)
+        t, q = rec.t[new:], rec.q[new:]
+        steps.add(np.diff(t if last_t is None else np.r_[last_t, t]))
+        last_t = t[-1:]
+        bridged += int(np.sum(~rec.measured_mask[new:]))
+        seg = int(rec.meta.get("segment0", 0)) + (rec.segment[new:] if rec.segment is not None
+                                                  else np.zeros(t.size, np.int64))
+        for number in np.unique(seg):
+            rows = np.flatnonzero(seg == number)
+            if current is None or number != len(done):
+                if current is not None:
+                    done.append(current.result())
+                current = _SegmentPass(at + int(rows[0]), block, floor)
+            current.feed(t[rows], q[rows])
+        at += t.size
+    done.append(current.result())
+    return Scan(src.source, int(src.n_samples), 1.0 / steps.median(), tuple(done), np.vstack([lo, hi]), bridged,
+                getattr(src, "stale_rows", None))
 
 
 def scan_all(sources: Sequence[BlockSource], settings: StreamSettings) -> tuple[list[Scan], float]:
-    """Scan every recording; the cut-off [Hz] given, or chosen as on the whole recordings."""
+    """Scan every recording; the cut-off [Hz] given, or chosen as on the whole recordings
+    (:func:`identify.observation.matrix.automatic_cutoff`: the largest over the segments long enough
+    for a spectrum)."""
     need = settings.cutoff is None
-    scans = [scan(src, settings.block, need) for src in sources]
+    floor = (max(2.0, DECIMATION_PASSBAND * settings.decimate_to) if settings.decimate_to else 2.0) if need else None
+    scans = [scan(src, settings.block, floor) for src in sources]
     if not need:
         return scans, float(settings.cutoff)
-    floor = max(2.0, DECIMATION_PASSBAND * settings.decimate_to) if settings.decimate_to else 2.0
-    cuts = [automatic_cutoff([s.whole], settings.decimate_to) if s.whole is not None
-            else cutoff_from_spectrum(*s.spectrum, s.rate, min_cutoff=floor) for s in scans]
-    return scans, float(max(cuts))
+    segments = [g for s in scans for g in s.segments]
+    longest = max(g.samples for g in segments)
+    return scans, float(max(g.cutoff for g in segments if g.samples >= min(longest, _SPECTRUM_SAMPLES)))
 
 
 @dataclass(frozen=True)
 class Plan:
-    """How one recording is cut: its scan, the filter's edge and the decimation, the windows."""
+    """How one segment of a recording is cut: its first raw sample ``start`` in the recording, the
+    filter's edge and the decimation, the windows (in the segment's samples)."""
 
-    scan: Scan
+    source: str
+    start: int
     edge: int
     factor: int
     rate: float
     note: str
     windows: tuple
-    samples: int  # decimated samples of the whole motion
+    samples: int  # decimated samples of the segment's motion
 
     @property
     def spans(self) -> list[tuple[int, int]]:
-        return [w.raw for w in self.windows]
+        """The raw samples of each window, counted in the recording."""
+        return [(self.start + w.raw[0], self.start + w.raw[1]) for w in self.windows]
 
 
-def plan_windows(s: Scan, cutoff: float, settings: StreamSettings) -> Plan:
-    """The windows of one recording for :func:`pieces` (margins from the filters' impulse responses)."""
-    edge = max(2, math.ceil(EDGE_PERIODS * s.rate / cutoff))
-    dplan = decimation_plan(s.rate, settings.decimate_to)
-    k = dplan.factor
-    delay_samples = int(math.ceil(abs(settings.delay) * s.rate)) + 1 if settings.delay else 0
-    lp = lowpass_margin(s.rate, cutoff) + delay_samples + DELAY_MARGIN
-    windows = motion_windows(s.samples, edge, k, settings.block, lp, decimation_margin(k))
-    # The plan travels with every block (Dask tasks): without the recording a short log's scan keeps.
-    return Plan(replace(s, whole=None, spectrum=None, q_range=None), edge, k, dplan.rate, dplan.note, tuple(windows),
-                windows[-1].core[1])
+def plan_windows(s: Scan, cutoff: float, settings: StreamSettings) -> tuple[list[Plan], list[str]]:
+    """The windows of every segment of one recording for :func:`pieces` (margins from the filters'
+    impulse responses), and notes naming the segments too short for the filters' edges (left out, as
+    :func:`identify.observation.matrix.filtered_motions` does)."""
+    plans, notes = [], []
+    for k, g in enumerate(s.segments):
+        edge = max(2, math.ceil(EDGE_PERIODS * g.rate / cutoff)) if g.samples > 1 else 2
+        name = f"{s.source}#{k + 1}" if len(s.segments) > 1 else s.source
+        if len(s.segments) > 1 and g.samples < 2 * edge + 5:
+            notes.append(f"{name}: segment of {g.samples} samples left out (shorter than the {2 * edge + 5} the "
+                         f"filter's edges need at {cutoff:.3g} Hz)")
+            continue
+        dplan = decimation_plan(g.rate, settings.decimate_to)
+        factor = dplan.factor
+        delay_samples = int(math.ceil(abs(settings.delay) * g.rate)) + 1 if settings.delay else 0
+        lp = lowpass_margin(g.rate, cutoff) + delay_samples + DELAY_MARGIN
+        windows = motion_windows(g.samples, edge, factor, settings.block, lp, decimation_margin(factor))
+        plans.append(Plan(name, g.start, edge, factor, dplan.rate, dplan.note, tuple(windows), windows[-1].core[1]))
+    if not plans:
+        raise ValueError("no segment is long enough to filter: " + "; ".join(notes))
+    return plans, notes
 
 
 #: Extra raw samples of margin for the torque shifts of the delay search (±20 ms at up to 2.5 kHz).
@@ -180,18 +286,32 @@ def piece(robot: rx90sym.Robot, rec: Any, window: Any, plan: Plan, cutoff: float
         Y = shifted_torques(rec, lag)[m.kept] + m.extra
         extra.append((decimate(Y, m.factor) if m.factor > 1 else Y)[core])
     cut = type(m)(m.t[core], m.q[core], m.dq[core], m.ddq[core], m.Y[core], m.Phi[core], m.cutoff, m.rate,
-                  m.source, m.moving[core], m.usable[core], m.factor, m.kept, 0.0, m.note)
+                  m.source, m.moving[core], m.usable[core], m.factor, m.kept, 0.0, m.note,
+                  None if m.measured is None else m.measured[core])
     return Piece(cut, first + window.core[0], tuple(extra))
 
 
-def pieces(robot: rx90sym.Robot, sources: Sequence[BlockSource], plans: Sequence[Plan], cutoff: float,
+def windows_in_order(sources: Sequence[BlockSource], plans: Sequence[Sequence[Plan]]) -> Iterator[tuple]:
+    """(plan, window, raw samples, first) for every window of every segment of every recording, in
+    order; ``first``: the index of the segment's first decimated sample among all segments."""
+    offset = 0
+    for src, src_plans in zip(sources, plans):
+        pairs = [(plan, window) for plan in src_plans for window in plan.windows]
+        spans = [span for plan in src_plans for span in plan.spans]
+        starts = {}
+        for plan in src_plans:
+            starts[id(plan)] = offset
+            offset += plan.samples
+        for (plan, window), rec in zip(pairs, src.windows(spans)):
+            yield plan, window, rec, starts[id(plan)]
+
+
+def pieces(robot: rx90sym.Robot, sources: Sequence[BlockSource], plans: Sequence[Sequence[Plan]], cutoff: float,
            settings: StreamSettings, regressor: Callable[..., np.ndarray], names: Sequence[str],
            lags: Sequence[float] = (), submit: Callable[..., Any] | None = None) -> Iterator[Any]:
-    """Second pass: the pieces of every recording in order (``submit(fn, *args)`` runs them elsewhere,
-    e.g. ``dask.distributed.Client.submit``; futures are then yielded in order)."""
-    offset = 0
-    for src, plan in zip(sources, plans):
-        for window, rec in zip(plan.windows, src.windows(plan.spans)):
-            args = (robot, rec, window, plan, cutoff, settings, regressor, names, offset, tuple(lags))
-            yield piece(*args) if submit is None else submit(piece, *args)
-        offset += plan.samples
+    """Second pass: the pieces of every segment of every recording in order (``plans``: per recording,
+    from :func:`plan_windows`; ``submit(fn, *args)`` runs them elsewhere, e.g.
+    ``dask.distributed.Client.submit``; futures are then yielded in order)."""
+    for plan, window, rec, first in windows_in_order(sources, plans):
+        args = (robot, rec, window, plan, cutoff, settings, regressor, names, first, tuple(lags))
+        yield piece(*args) if submit is None else submit(piece, *args)

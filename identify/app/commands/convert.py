@@ -137,19 +137,18 @@ def _run_long(args: argparse.Namespace, robot: Any) -> int:
     if not args.out.lower().endswith(".csv"):
         raise UsageError(f"--out {args.out}: a log longer than --block ({args.block} lines) is converted block by "
                          f"block into a CSV recording")
-    unsupported = [f for f, given in (("--max-gap", args.max_gap is not None), ("--no-segments", args.no_segments))
-                   if given]
-    if unsupported or args.columns is None:
+    if args.columns is None:
         raise UsageError(f"a log longer than --block ({args.block} lines) is converted block by block, which "
-                         f"needs --columns and takes no {', '.join(unsupported) or '--max-gap'} (stale rows and "
-                         f"lost packets are handled by the whole-log reader: raise --block)")
+                         f"needs --columns")
     from identify.io.columns import parse_columns
     from identify.io.log_blocks import convert_log
+    from identify.signal.gaps import DEFAULT_MAX_GAP
 
     progress(f"converting the log {args.log} block by block ({args.block} lines per block)")
     log = convert_log(args.log, robot, args.columns, args.out, header=not args.no_header, rows=_rows(args.rows),
                       t_from=args.t_from, t_to=args.t_to, resample=args.resample, gains=args.gains,
-                      convention=args.convention, block=args.block)
+                      convention=args.convention, block=args.block, max_gap=args.max_gap or DEFAULT_MAX_GAP,
+                      segments=not args.no_segments)
     currents = bool(parse_columns(args.columns, robot).i)
     print(_print_log(args.log, log, "no gains: the file keeps currents (give --gains to identify with it)"
                      if currents else "torques as logged"))
@@ -203,13 +202,13 @@ def _print_log(name: str, log: dict, what_else: str) -> str:
         lines.append(f"stale rows dropped (exact repeats of the previous row): {log['stale_rows']} (lines "
                      f"{shown}{', ...' if log['stale_rows'] > len(log['stale_lines']) else ''})")
     if gaps["gaps"]:
-        lines.append(f"lost packets: {len(gaps['gaps'])} gaps; {gaps['bridged_gaps']} up to {gaps['max_gap_s']:g} s "
+        lines.append(f"lost packets: {gaps.get('gaps_total', len(gaps['gaps']))} gaps; {gaps['bridged_gaps']} up to {gaps['max_gap_s']:g} s "
                      f"bridged ({log['bridged_samples']} samples interpolated, never used as measurements), "
                      f"{gaps['segments']} segment(s)")
         lines += [f"  gap of {g['duration_s']:g} s ({g['periods']:.3g} steps) between lines {g['lines'][0]} and "
                   f"{g['lines'][1]}: {'bridged' if g['bridged'] else 'new segment'}" for g in gaps["gaps"][:_GAPS_SHOWN]]
-        if len(gaps["gaps"]) > _GAPS_SHOWN:
-            lines.append(f"  ... and {len(gaps['gaps']) - _GAPS_SHOWN} more gaps")
+        if gaps.get("gaps_total", len(gaps["gaps"])) > _GAPS_SHOWN:
+            lines.append(f"  ... and {gaps.get('gaps_total', len(gaps['gaps'])) - _GAPS_SHOWN} more gaps")
     return "\n".join(lines)
 
 

@@ -14,7 +14,7 @@ import numpy as np
 import rx90sym
 
 from ..common import UsageError, check_output, floats, load_robot, progress, robot_option
-from .excite_poses import check_pose, check_ranges, check_start_pose, envelope_lines, name_frames
+from .excite_poses import check_start_pose, name_frames
 
 
 def register(sub: Any) -> None:
@@ -144,7 +144,7 @@ def run(args: argparse.Namespace) -> int:
     except ValueError as exc:  # a centre pose or a floor the arm cannot hold, naming the point
         raise UsageError(name_frames(robot, str(exc))) from None
     check_start_pose(robot, model, start_pose)
-    for line in envelope_lines(robot, described):
+    for line in excitation.envelope_lines(described):
         progress(line)
     if args.target == "payload":
         return _payload(args, robot, base, chi, noise, collision, start_pose, envelope, (model, described))
@@ -179,7 +179,7 @@ def _report(args: argparse.Namespace, robot: rx90sym.Robot, model: Any, traj: An
     """--report: the envelope as applied, its worst values and figures along time."""
     if args.report is None:
         return
-    from excitation import envelope_report as er
+    from excitation import envelope_lines, envelope_report as er
     from excitation.robot_geometry import arm_geometry
 
     from ..report.excite_page import envelope_table, excite_page
@@ -188,7 +188,7 @@ def _report(args: argparse.Namespace, robot: rx90sym.Robot, model: Any, traj: An
 
     series = er.along_time(robot, model, traj, arm_geometry(robot).tool_point)
     envelope = Section("envelope", "Safety envelope along the trajectory", (
-        Text(tuple(envelope_lines(robot, described))), envelope_table(er.worst(series)),
+        Text(tuple(envelope_lines(described))), envelope_table(er.worst(series)),
         *(figure(i, caption, fig) for i, caption, fig in er.figures(series))))
     write_page(args.report, excite_page({**traj.summary(), "robot": robot.name}, (), (envelope,)))
 
@@ -268,11 +268,10 @@ def _load_robot(args: argparse.Namespace) -> rx90sym.Robot:
 
 
 def _envelope(args: argparse.Namespace, robot: rx90sym.Robot) -> Any:
-    """The safety envelope from the options (angles converted from controller to model; every
-    refusal names the controller angles the user typed)."""
+    """The safety envelope from the options (angles in controller angles, as the envelope takes
+    them; a refusal names the option and the values the user typed)."""
     import excitation
 
-    offsets = robot.controller_offsets
     limits = None
     if args.position_limits is not None:
         pairs = [p.split(":") for p in args.position_limits.split(",")]
@@ -280,8 +279,7 @@ def _envelope(args: argparse.Namespace, robot: rx90sym.Robot) -> Any:
             raise UsageError(f"--position-limits: expected {robot.n} MIN:MAX pairs (rad, controller angles), "
                              f"got {args.position_limits!r}")
         values = floats(",".join(v for p in pairs for v in p), "--position-limits").reshape(-1, 2)
-        check_ranges(robot, values)
-        limits = tuple(map(tuple, values - offsets[:, None]))
+        limits = tuple(map(tuple, values))
     centre = None if args.centre_pose is None else floats(args.centre_pose, "--centre-pose", robot.n)
     urdf_default = robot.urdf is not None and getattr(args, "acceleration", None) is None
     if urdf_default:
@@ -292,14 +290,11 @@ def _envelope(args: argparse.Namespace, robot: rx90sym.Robot) -> Any:
                                ("max_speed", args.max_tool_speed), ("velocity_scale", args.velocity_scale),
                                ("acceleration_scale", args.acceleration_scale)) if v is not None}
     try:
-        envelope = excitation.Envelope(position_limits=limits,
-                                       centre=None if centre is None else tuple(centre - offsets),
+        envelope = excitation.Envelope(position_limits=limits, centre=None if centre is None else tuple(centre),
                                        urdf_acceleration=urdf_default, **given)
-        experiment = envelope.joint_limits(robot.limits)  # refuses empty or too wide ranges now, before any work
+        envelope.joint_limits(robot.limits, robot.controller_offsets)  # refused now, before any work
     except ValueError as exc:
-        raise UsageError(str(exc)) from None
-    if centre is not None:
-        check_pose("--centre-pose", robot, centre, experiment.q_min, experiment.q_max, "experiment's")
+        raise UsageError(name_frames(robot, str(exc))) from None
     return envelope
 
 

@@ -188,9 +188,6 @@ def run(args: argparse.Namespace) -> int:
     flags = given_gain_flags(gains) if gains is not None else []
     prior = None
     if streamed(args.recordings + ([args.validate] if args.validate else []), args.block, args.scheduler):
-        if args.report:
-            raise UsageError(f"--report needs the recordings in memory: not for logs longer than --block "
-                             f"({args.block} samples) or with --scheduler")
         progress("plausibility of the recorded torques (scale, static gravity) not checked: it reads the whole "
                  "recordings, long logs are read block by block")
         if args.method == "consistent":
@@ -221,7 +218,7 @@ def run(args: argparse.Namespace) -> int:
     if args.json:
         result.save(args.json)
     if args.report:
-        _write_report(args.report, result, recs)
+        _write_report(args.report, result, recs) if recs else _write_long_report(args, result)
     if args.urdf_out:  # last: a refused (non-physical) link must not cost the fit's JSON and report
         _write_urdf(args, result)
     return 0
@@ -328,13 +325,44 @@ def _write_report(path: str, f: Fit, recs: list) -> None:
                           _spring_text(f, recs))
 
 
-def data_record(recs: list, obs: Any, validation: Any = None) -> dict:
+#: Points of a long log's figures: its positions and torques are thinned to at most this many.
+REPORT_POINTS = 20_000
+
+
+def _write_long_report(args: argparse.Namespace, f: Fit) -> None:
+    """The HTML report of a fit made block by block: the figures from the recordings read again block by
+    block and thinned to REPORT_POINTS samples (positions) and decimated samples (torques)."""
+    from dataclasses import replace
+
+    from identify.io.blocks import block_source
+
+    from ..report.writers import write_identify_report
+
+    progress(f"report: reading {args.recordings[0]} again block by block for the figures")
+    samples = [lay["samples"] for lay in f.recordings]
+    thin = [block_source(path, f.robot, args.convention, f.gains).thinned(args.block, -(-n // REPORT_POINTS))
+            for path, n in zip(args.recordings, samples)]
+
+    def shown(v: Any) -> Any:  # the torques of the figures: every k-th decimated sample
+        every = slice(None, None, -(-v.t.size // REPORT_POINTS))
+        return replace(v, t=v.t[every], measured=v.measured[every], predicted=v.predicted[every],
+                       moving=v.moving[every])
+
+    record = {**f.to_json(), "data": data_record(thin, f.streamed, f.validation, samples)}
+    held = shown(f.validation) if f.validation is not None else None
+    write_identify_report(args.report, f.robot, record, f.result, thin[0], held, shown(f.predict(args.recordings[0])),
+                          _spring_text(f, []))
+
+
+def data_record(recs: list, obs: Any, validation: Any = None, samples: list[int] | None = None) -> dict:
     """What was fitted: per recording its source, samples, first and last time [s], duration [s] and
     recorded rate [Hz] (1 / mean period); the share of samples where each joint moves (after
-    filtering); the held-out samples' first and last time [s]."""
-    rows = [{"source": src, "samples": int(len(r.t)), "t_first_s": float(r.t[0]), "t_last_s": float(r.t[-1]),
-             "duration_s": float(r.t[-1] - r.t[0]), "rate_hz": float((len(r.t) - 1) / (r.t[-1] - r.t[0]))}
-            for r, src in zip(recs, obs.sources)]
+    filtering); the held-out samples' first and last time [s]. ``samples``: the recordings' sample
+    counts when ``recs`` are thinned (a long log)."""
+    counts = samples if samples is not None else [len(r.t) for r in recs]
+    rows = [{"source": src, "samples": int(k), "t_first_s": float(r.t[0]), "t_last_s": float(r.t[-1]),
+             "duration_s": float(r.t[-1] - r.t[0]), "rate_hz": float((k - 1) / (r.t[-1] - r.t[0]))}
+            for r, src, k in zip(recs, obs.sources, counts)]
     share = None if obs.moving_fraction is None else [float(v) for v in obs.moving_fraction]
     held = None if validation is None else {"source": validation.source, "t_first_s": float(validation.t[0]),
                                             "t_last_s": float(validation.t[-1])}
