@@ -88,3 +88,13 @@ def test_a_per_joint_rest_policy_round_trips_through_the_fit_file(rx90, rx90_bas
     np.testing.assert_allclose(back.predict(rec).predicted, f.predict(rec).predicted, rtol=0, atol=1e-9)
     with pytest.raises(ValueError, match="rest must be one of"):
         Processing(rest=("zero-coulomb", "sometimes"))
+
+
+def test_crossing_keeps_short_or_travelling_passes_and_zeroes_still_rests():
+    from identify.observation.friction import crossing_passes
+
+    mask = np.array([0, 1, 1, 0, 1, 1, 1, 1, 1, 0, 1, 1, 1, 1, 1], dtype=bool)
+    q = np.r_[np.zeros(10), 0.0, 0.001, 0.002, 0.003, 0.004]  # still rest, then a slow motion
+    # the run of 2 is short (< 3 samples); the still run of 5 is a rest; the last run travels
+    expected = np.array([0, 1, 1, 0, 0, 0, 0, 0, 0, 0, 1, 1, 1, 1, 1], dtype=bool)
+    np.testing.assert_array_equal(crossing_passes(mask, q, 3, 5e-4), expected)

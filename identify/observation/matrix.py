@@ -24,11 +24,10 @@ from dataclasses import dataclass, field
 from typing import Any, Callable, Sequence
 
 import numpy as np
-from scipy.ndimage import maximum_filter1d, minimum_filter1d
 
 import rx90sym
 
-from identify.observation.friction import presliding_state
+from identify.observation.friction import crossing_passes, presliding_state
 from identify.observation.friction_model import (PRESLIDING_PREFIX, STRIBECK_PREFIX, CoulombTerm, coulomb_terms, own_terms,
                                                 presliding_base, without_empty_presliding)
 from identify.observation.processing import (CROSSING_SECONDS, CROSSING_TRAVEL, DEFAULT_MIN_VELOCITY, DEFAULT_REST,
@@ -242,7 +241,8 @@ def _rest_rows(robot: rx90sym.Robot, names: Sequence[str] | None, speed: np.ndar
         elif rest == "none":
             still = np.zeros_like(driver_moving)
         elif rest == "crossing":
-            still = ~driver_moving & ~_passes(~driver_moving, q @ np.asarray(term.driver), CROSSING_SECONDS * rate)
+            still = ~driver_moving & ~crossing_passes(~driver_moving, q @ np.asarray(term.driver), CROSSING_SECONDS * rate,
+                                                          CROSSING_TRAVEL)
         else:
             still = ~driver_moving
         # The moving friction (Coulomb, smooth or Stribeck) says nothing at rest.
@@ -259,21 +259,6 @@ def _rest_rows(robot: rx90sym.Robot, names: Sequence[str] | None, speed: np.ndar
             z = presliding_state(q @ np.asarray(term.driver))
             Phi[still, term.row, term.column] = z[still]
     return usable
-
-
-def _passes(mask: np.ndarray, q: np.ndarray, longest: float) -> np.ndarray:
-    """(S,) True where ``mask`` (below the rest threshold) is a motion: inside a run shorter than
-    ``longest`` samples, or where the positions ``q`` [rad] span CROSSING_TRAVEL or more within
-    ``longest`` samples around (a slow motion, or the moments after a stop)."""
-    size = max(1, int(longest))
-    span = maximum_filter1d(q, size, mode="nearest") - minimum_filter1d(q, size, mode="nearest")
-    edges = np.flatnonzero(np.diff(np.concatenate([[0], mask.astype(np.int8), [0]])))
-    starts, ends = edges[::2], edges[1::2]
-    short = (ends - starts) < longest
-    out = np.zeros(mask.size + 1, dtype=np.int32)
-    np.add.at(out, starts[short], 1)
-    np.add.at(out, ends[short], -1)
-    return mask & ((np.cumsum(out[:-1]) > 0) | (span >= CROSSING_TRAVEL))
 
 
 def _named(names: Sequence[str], prefix: str, row: int) -> list[int]:
