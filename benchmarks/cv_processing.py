@@ -3,9 +3,10 @@
 Twin of a 7-joint arm (Panda, 1 kHz, open loop, 2^19-count encoders) at three torque-noise levels;
 fit on the first 2/3 of a 20 s run, predict the last 1/3; every figure is the relative RMS error
 of the predicted torques against the **noise-free** torques (%). Per run: the cross-validated
-choice (identify.observation.cross_validation), the best candidate of its grid, the default
-processing, and the plain least squares of benchmarks/plain_ls.py (the reference measured in the
-same run).
+choice (identify.observation.cross_validation, rest policy chosen per joint), the best candidate
+of its grid, the toolkit's defaults (``identify.fit`` with ``Processing()``: the cross-validation
+runs inside the fit), the former defaults (automatic cut-off, zero-coulomb, no cross-validation),
+and the plain least squares of benchmarks/plain_ls.py (the reference measured in the same run).
 
 Usage: python benchmarks/cv_processing.py [--seeds 5] [--noise 0.015,0.05,0.15] [--duration 20]
 """
@@ -25,6 +26,7 @@ sys.path[:0] = [str(ROOT), str(ROOT / "benchmarks"), str(ROOT / "tests")]
 import rx90sym  # noqa: E402
 from identify import Processing, fit, predict, split  # noqa: E402
 from identify.observation.cross_validation import choose_processing  # noqa: E402
+from identify.observation.processing import rest_label  # noqa: E402
 from motions import multisine, panda_truth  # noqa: E402
 from plain_ls import plain_ls, plain_prediction  # noqa: E402
 from rx90sym.recording import Recording  # noqa: E402
@@ -34,11 +36,11 @@ def relative(pred: np.ndarray, truth: np.ndarray) -> np.ndarray:
     return 100 * np.linalg.norm(pred - truth, axis=0) / np.linalg.norm(truth, axis=0)
 
 
-def held_out_error(robot, base, fit_part, test_clean, cutoff, decimate_to, rest) -> np.ndarray:
-    fit_ = fit(robot, [fit_part], Processing(cutoff=cutoff, decimate_to=decimate_to, rest=rest or "zero-coulomb",
-                                            min_velocity=0.05 if rest else None, estimate_delay=False),
-               base=base)
-    val = predict(robot, fit_.result, test_clean, base=base, cutoff=cutoff, decimate_to=None,
+def held_out_error(robot, base, fit_part, test_clean, cutoff, decimate_to, rest, **options) -> np.ndarray:
+    fit_ = fit(robot, [fit_part], Processing(cutoff=cutoff, decimate_to=decimate_to, rest=rest,
+                                            min_velocity=None if rest is None and cutoff else 0.05,
+                                            estimate_delay=False, **options), base=base)
+    val = predict(robot, fit_.result, test_clean, base=base, cutoff=fit_.cutoff, decimate_to=None,
                   min_velocity=fit_.min_velocity, rest=fit_.rest)
     return relative(val.predicted, val.measured)
 
@@ -56,12 +58,14 @@ def one_run(robot, base, truth, seed: int, noise: float, duration: float) -> dic
                                                                c.decimate_to, c.rest)
             for c in choice.candidates if not np.isnan(c.score)}
     chosen = grid[(choice.chosen.cutoff, choice.chosen.decimate_to, choice.chosen.rest)]
-    default = held_out_error(robot, base, fit_part, test_clean, None, 50.0, "zero-coulomb")
+    default = held_out_error(robot, base, fit_part, test_clean, None, 50.0, None)  # Processing()'s defaults
+    former = held_out_error(robot, base, fit_part, test_clean, None, 50.0, "zero-coulomb", cross_validate=False)
     beta = plain_ls(robot, fit_part, base)
     pred, kept = plain_prediction(robot, beta, test_clean, base)
     plain = relative(pred, np.asarray(test_clean.tau)[kept])
     best = min(grid.values(), key=lambda v: float(np.mean(v)))
-    return {"chosen": chosen, "best": best, "default": default, "plain": plain,
+    return {"chosen": chosen, "best": best, "default": default, "former": former, "plain": plain,
+            "seconds": choice.seconds,
             "cutoff": choice.chosen.cutoff, "knee": choice.knee, "rest": choice.chosen.rest}
 
 
@@ -77,14 +81,15 @@ def main() -> None:
     truth = panda_truth(robot)
     runs = []
     print(f"{'seed':>4} {'noise':>6} {'knee':>6} {'chosen':>7} {'CV err':>7} {'best':>7} {'ratio':>6} {'default':>8} "
-          f"{'plain':>7}   (mean relative error over joints, %, vs noise-free torques)")
+          f"{'former':>7} {'plain':>7} {'CV [s]':>6}   (mean relative error over joints, %, vs noise-free torques)")
     for noise in (float(x) for x in args.noise.split(",")):
         for seed in range(args.seeds):
             r = one_run(robot, base, truth, seed, noise, args.duration)
             runs.append(r)
-            m = {k: float(np.mean(r[k])) for k in ("chosen", "best", "default", "plain")}
+            m = {k: float(np.mean(r[k])) for k in ("chosen", "best", "default", "former", "plain")}
             print(f"{seed:>4} {noise:>6.3f} {r['knee']:>6.3g} {r['cutoff']:>7.3g} {m['chosen']:>7.3f} {m['best']:>7.3f} "
-                  f"{m['chosen'] / m['best']:>6.3f} {m['default']:>8.3f} {m['plain']:>7.3f} {r['rest']}", flush=True)
+                  f"{m['chosen'] / m['best']:>6.3f} {m['default']:>8.3f} {m['former']:>7.3f} {m['plain']:>7.3f} "
+                  f"{r['seconds']:>6.1f} {rest_label(r['rest']) if r['rest'] else 'no threshold'}", flush=True)
     ratio = [float(np.mean(r["chosen"]) / np.mean(r["best"])) for r in runs]
     print(f"median CV / best-of-grid: {np.median(ratio):.4f}")
     chosen = np.median([r["chosen"] for r in runs], axis=0)
@@ -92,6 +97,13 @@ def main() -> None:
     print("per joint, median over runs: CV " + " ".join(f"{v:.3f}" for v in chosen))
     print("                          plain " + " ".join(f"{v:.3f}" for v in plain))
     print("                    CV / plain " + " ".join(f"{a / b:.3f}" for a, b in zip(chosen, plain)))
+    default = np.median([r["default"] for r in runs], axis=0)
+    worst = np.max([r["default"] / r["plain"] for r in runs], axis=0)
+    wins = np.sum([r["default"] < r["plain"] for r in runs], axis=0)
+    print("                       defaults " + " ".join(f"{v:.3f}" for v in default))
+    print("              defaults / plain " + " ".join(f"{a / b:.3f}" for a, b in zip(default, plain)))
+    print("     worst run, defaults / plain " + " ".join(f"{v:.3f}" for v in worst))
+    print(f"  runs where the defaults beat the plain LS, per joint (of {len(runs)}): " + " ".join(map(str, wins)))
 
 
 if __name__ == "__main__":

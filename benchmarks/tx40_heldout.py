@@ -29,6 +29,7 @@ import numpy as np
 
 import rx90sym
 from identify import Processing, fit, read_motor_recording
+from identify.observation.processing import rest_label
 
 FIGAROH_WLS = np.array([1.82, 1.76, 1.13, 0.61, 1.06, 0.74])  # N·m, held-out RMS while moving
 PERIOD = 0.2e-3   # s (5 kHz)
@@ -61,7 +62,9 @@ def cross_validate(data: Path | None, form: str, **options) -> float:
     blocks = [rec.select(slice(a, b)) for a, b in zip(edges[:-1], edges[1:])]
     total = []
     for i, test in enumerate(blocks):
-        f = fit(robot, [b for j, b in enumerate(blocks) if j != i], Processing(estimate_delay=False, **options))
+        # The position-spectrum cut-off (no nested cross-validation inside these 2 s blocks).
+        f = fit(robot, [b for j, b in enumerate(blocks) if j != i],
+                Processing(estimate_delay=False, cross_validate=False, **options))
         val = f.predict(test)
         scale = np.sqrt(np.mean(val.measured ** 2, axis=0))
         total.append(float(np.sum(val.rms_error_moving / scale)))
@@ -92,7 +95,7 @@ def main() -> None:
 
     cache: dict = {}
 
-    def split(form: str, rest: str = "zero-coulomb", delay: float | str = 0.0):
+    def split(form: str, rest: str | None = None, delay: float | str = 0.0):
         """heldout() of the bundled file with this Coulomb form, rest policy and delay (computed once)."""
         if (form, rest, delay) not in cache:
             robot = rx90sym.load_robot("tx40", offsets=True, coulomb_sign=form)
@@ -104,7 +107,7 @@ def main() -> None:
     for tag, label, opts in runs:
         moving, every, f = split(shipped.coupling.coulomb_sign, **opts)
         print(f"\n2{tag}. Held-out (t > {FIT_SECONDS:g} s) RMS error per joint [N·m], bundled robot file, "
-              f"offsets, {label} (delay {1e3 * f.delay:.3g} ms), rest {f.rest} below "
+              f"offsets, {label} (delay {1e3 * f.delay:.3g} ms), rest {rest_label(f.rest)} below "
               f"{f.min_velocity:g} rad/s, cut-off {f.cutoff:.4g} Hz, decimation to {f.decimate_to:g} Hz")
         print(f"{'':<34}" + "".join(f"{'j' + str(j + 1):>8}" for j in range(6)))
         print(row("ours, while moving", moving))

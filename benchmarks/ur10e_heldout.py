@@ -36,6 +36,7 @@ import numpy as np
 import rx90sym
 from identify import Processing, fit
 from identify.io.gains import DriveGains, apply_gains
+from identify.observation.processing import rest_label
 
 
 def _sibling(name: str) -> ModuleType:
@@ -53,10 +54,14 @@ SOURCE_GAINS = np.array(gains_bench.SOURCE_GAINS)
 HELD_OUT = ("ur-20_01_17-p4.csv", (1, 896))  # the whole file: no bad rows
 SECOND_HALF = (2567, 5375)                   # rows of the empty run: motion, then 4.4 s at rest
 THRESHOLDS = (0.005, 0.01, 0.02, 0.05, 0.2)  # rad/s, rest thresholds compared in part 4
-POLICIES = {"none": dict(min_velocity=None), "drop": dict(rest="drop"),
-            "zero-coulomb": dict(rest="zero-coulomb"),
-            "zero-coulomb, delay auto": dict(rest="zero-coulomb", delay="auto"),
-            "presliding": dict(rest="presliding")}
+# The fixed policies with the position-spectrum cut-off (the former defaults: no cross-validation),
+# and the defaults (cut-off, decimation and per-joint rest policy cross-validated in the fitted rows).
+_FIXED = dict(cross_validate=False)
+POLICIES = {"none": dict(min_velocity=None, **_FIXED), "drop": dict(rest="drop", **_FIXED),
+            "zero-coulomb": dict(rest="zero-coulomb", **_FIXED),
+            "zero-coulomb, delay auto": dict(rest="zero-coulomb", delay="auto", **_FIXED),
+            "presliding": dict(rest="presliding", **_FIXED),
+            "defaults (cross-validated)": {}}
 
 
 def torques(path: Path, rows: tuple[int, int], robot: rx90sym.Robot, gains: np.ndarray = SOURCE_GAINS):
@@ -119,7 +124,12 @@ def print_policies(title: str, table: dict) -> None:
     print(f"{'rest policy, offsets':<38}{'':>3}" + "".join(f"{'j' + str(j + 1):>8}" for j in range(6)))
     for (name, offsets), (fit, val) in table.items():
         mask = table["zero-coulomb", offsets][1].moving
+        if mask.shape != val.moving.shape:  # another decimation: its own moving samples
+            mask = val.moving
         label = f"{name}, {'offsets' if offsets else 'no offsets'}"
+        if fit.choice is not None:
+            print(f"  ({name}: cut-off {fit.cutoff:.4g} Hz, decimation to {fit.decimate_to or 0:g} Hz, "
+                  f"rest {rest_label(fit.rest)})")
         print(f"{label:<38}%  " + _cells(val.relative_error_pct, "8.1f"))
         print(f"{'  all samples':<38}Nm " + _cells(val.rms_error, "8.3f"))
         if mask.any():
@@ -150,7 +160,9 @@ def main(argv: list[str] | None = None) -> int:
                         torques(data / HELD_OUT[0], HELD_OUT[1], robot), estimate_delay=True)
     print(f"1. Fit: rows {EMPTY[1][0]}..{EMPTY[1][1]} of {EMPTY[0]}, source gains, rx90 identify defaults")
     print(f"   {fit.observation.summary()}".replace("\n", "\n   "))
-    print(f"   cut-off {fit.cutoff:.4g} Hz, rate {fit.observation.rate:g} Hz, "
+    if fit.choice is not None:
+        print("   " + fit.choice["reason"])
+    print(f"   cut-off {fit.cutoff:.4g} Hz, rate {fit.observation.rate:g} Hz, rest {rest_label(fit.rest)}, "
           f"{fit.delay_estimate.summary()} (not compensated)")
     print("   residual RMS per joint [N·m]: " + " ".join(f"{v:.3g}" for v in fit.result.residual_rms))
     print(f"   held out: the whole {HELD_OUT[0]} (robot at rest on every row)")
@@ -171,7 +183,7 @@ def main(argv: list[str] | None = None) -> int:
     val_rec = torques(data / EMPTY[0], SECOND_HALF, robot)
     mask = half["zero-coulomb", False][1].moving
     for threshold in THRESHOLDS:
-        _, v = held_out(robot, fit_rec, val_rec, min_velocity=threshold)
+        _, v = held_out(robot, fit_rec, val_rec, min_velocity=threshold, cross_validate=False)
         rel, _ = errors_on(v, mask)
         print(f"   {threshold:<6g} all samples " + _cells(v.relative_error_pct, "8.1f")
               + f"\n   {'':6s} moving (0.05)" + _cells(rel, "8.1f"))

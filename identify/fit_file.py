@@ -24,8 +24,12 @@ __all__ = ["SCHEMA_VERSION", "FitModel", "read_fit_file", "robot_file_hash", "to
            "robot_of", "gains_of"]
 
 #: Layout of the fit file. 2: the first with ``schema_version`` and ``processing`` (1: the
-#: identification JSON before them).
-SCHEMA_VERSION = 2
+#: identification JSON before them); 3: the rest policy may be one per joint (a list), and the
+#: processing's ``rest`` and ``cross_validate`` may be null (open, automatic). Version 2 files are
+#: still read (their fields mean the same in 3).
+SCHEMA_VERSION = 3
+#: Older layouts read as they are.
+READABLE_VERSIONS = (2, SCHEMA_VERSION)
 
 
 def robot_file_hash(robot: rx90sym.Robot) -> str | None:
@@ -46,7 +50,8 @@ class FitModel:
 
     robot: name; robot_file: path it was read from; robot_file_sha256; toolkit_version;
     convention: angles of the files ("controller"/"model" or None: from each file); gains: the drive
-    gains' dictionary (None: torque recordings); rest: "drop" | "zero-coulomb"; min_velocity
+    gains' dictionary (None: torque recordings); rest: a policy of
+    identify.observation.processing.REST_POLICIES, or one per joint; min_velocity
     [rad/s] (None: no rest mask); coulomb_sign: the coupling's Coulomb form (None: no coupling);
     offsets: torque offsets OFFj identified; spring: "default" | "none" | "identify" |
     "identify-k" | a table file; cutoff_hz (the one used, also when chosen on the data),
@@ -61,7 +66,7 @@ class FitModel:
     toolkit_version: str
     convention: str | None
     gains: dict | None
-    rest: str
+    rest: str | tuple[str, ...]
     min_velocity: float | None
     coulomb_sign: str | None
     offsets: bool
@@ -93,7 +98,10 @@ class FitModel:
         missing = [k for k in required if k not in d]
         if missing:
             raise ValueError(f"{where}: 'model' lacks {', '.join(missing)} (written by an older version?)")
-        return cls(**{k: d[k] for k in names if k in d})
+        values = {k: d[k] for k in names if k in d}
+        if isinstance(values["rest"], list):  # one policy per joint
+            values["rest"] = tuple(values["rest"])
+        return cls(**values)
 
     from_dict = from_json
 
@@ -123,9 +131,9 @@ def read_fit_file(path: str | Path) -> dict[str, Any]:
     if version is None:
         raise ValueError(f"{path}: a fit file without 'schema_version' (written before version "
                          f"{SCHEMA_VERSION} of the format): identify again to write it in the current format")
-    if version != SCHEMA_VERSION:
+    if version not in READABLE_VERSIONS:
         raise ValueError(f"{path}: fit file schema_version {version!r} is not supported "
-                         f"(this version reads {SCHEMA_VERSION})")
+                         f"(this version reads {', '.join(map(str, READABLE_VERSIONS))})")
     if "model" not in data:
         raise ValueError(f"{path}: no 'model' record")
     return data

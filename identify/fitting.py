@@ -27,7 +27,7 @@ from identify.observation.friction import DEFAULT_FRICTION, PRESLIDING_TRAVEL
 from identify.observation.friction_model import friction_base
 from identify.observation.matrix import Observation, coulomb_terms, observation_matrix
 from identify.io.recordings import layout_summary
-from identify.observation.processing import DEFAULT_MIN_VELOCITY, Processing
+from identify.observation.processing import DEFAULT_MIN_VELOCITY, Processing, has_policy
 from identify.signal.delay import DelayEstimate, estimate_delay
 from identify.validation import Validation, predict
 
@@ -124,7 +124,7 @@ class Fit:
         return self.model.min_velocity
 
     @property
-    def rest(self) -> str:
+    def rest(self) -> str | tuple[str, ...]:
         return self.model.rest
 
     @property
@@ -287,7 +287,7 @@ def fit(robot: rx90sym.Robot, recordings: Sequence[Any], processing: Processing 
     if method not in METHODS:
         raise ValueError(f"fit: method must be one of {METHODS}, got {method!r}")
     p = processing if processing is not None else Processing()
-    if method == "consistent" and (p.friction != DEFAULT_FRICTION or p.rest == "presliding"):
+    if method == "consistent" and (p.friction != DEFAULT_FRICTION or has_policy(p.rest, "presliding")):
         # Its standard parameters are what a URDF/MJCF holds: Coulomb (FS) and viscous (FV) friction.
         raise ValueError(f"fit: the consistent method fits bodies with Coulomb + viscous friction (what a URDF or "
                          f"MJCF holds), not friction form {p.friction!r} with rest policy {p.rest!r}: use "
@@ -296,14 +296,13 @@ def fit(robot: rx90sym.Robot, recordings: Sequence[Any], processing: Processing 
     base = base if base is not None else rx90sym.base_parameters(robot)
     options = p.observation_options()
     choice = None
-    if p.cross_validate and observation is None:
+    if p.cross_validates and observation is None:
         from identify.observation.cross_validation import choose_processing
 
         choice = choose_processing(robot, recordings, base=base, min_velocity=p.min_velocity, rest=p.rest,
                                    spring=p.spring, default_decimate=p.decimate_to)
         c = choice.chosen
-        options.update(cutoff=c.cutoff, decimate_to=c.decimate_to, rest=c.rest or p.rest,
-                       min_velocity=(p.min_velocity or DEFAULT_MIN_VELOCITY) if c.rest else None)
+        options.update(cutoff=c.cutoff, decimate_to=c.decimate_to, rest=c.rest or options["rest"])
     found = None
     if observation is None and (p.estimate_delay or p.delay == "auto"):
         found = estimate_delay(robot, recordings, base=base, **options)
@@ -331,7 +330,7 @@ def _friction_form(robot: rx90sym.Robot, recordings: Sequence[Any], base: Any, f
     ``options``: a smooth form's velocity scale per joint and the presliding travel per joint, both
     by separable least squares (identify.estimation.separable); ``base`` and None for Coulomb
     without presliding."""
-    presliding = options["rest"] == "presliding" and options["min_velocity"] is not None
+    presliding = has_policy(options["rest"], "presliding") and options["min_velocity"] is not None
     if form == DEFAULT_FRICTION and not presliding or observation is not None:
         if observation is not None and form != DEFAULT_FRICTION:
             raise ValueError(f"fit: friction form {form!r} searches its velocity scales on the recordings: "

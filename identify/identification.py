@@ -31,6 +31,6 @@ def identify(robot: rx90sym.Robot, recordings: Sequence[Any], method: str = "wls
     from identify.fitting import fit
 
     processing = Processing(cutoff=cutoff, decimate_to=decimate_to, min_velocity=min_velocity, rest=rest,
-                            delay=delay, estimate_delay=False, spring=spring)
+                            delay=delay, estimate_delay=False, spring=spring, cross_validate=False)
     return fit(robot, recordings, processing, method, base=base, observation=observation,
                **consistent_options).result

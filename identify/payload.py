@@ -239,7 +239,9 @@ def _method_2(robot, base, empty, loaded, options, **_):
     from identify.fitting import fit
 
     kw = {k: options[k] for k in ("cutoff", "decimate_to", "spring", "min_velocity", "delay") if k in options}
-    processing = Processing(**{"min_velocity": None, "rest": "drop", "estimate_delay": False, **kw})
+    # One processing for both runs (their difference is the payload): not chosen on each run.
+    processing = Processing(**{"min_velocity": None, "rest": "drop", "estimate_delay": False, "cross_validate": False,
+                               **kw})
     empty_fit, loaded_fit = fit(robot, empty, processing, base=base), fit(robot, loaded, processing, base=base)
     fit_v, fit_t = empty_fit.result, loaded_fit.result
     delta = fit_t.values - fit_v.values                    # eq. 23

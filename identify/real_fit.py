@@ -7,14 +7,14 @@ from typing import Any, Sequence
 import rx90sym
 
 from identify.fitting import Fit, fit
-from identify.observation.processing import DEFAULT_MIN_VELOCITY, DEFAULT_REST, Processing
+from identify.observation.processing import DEFAULT_MIN_VELOCITY, Processing
 
 __all__ = ["Fit", "fit_recordings"]
 
 
 def fit_recordings(robot: rx90sym.Robot, recordings: Sequence[Any], method: str = "wls", base: Any = None,
                    cutoff: float | None = None, decimate_to: float | None = 50.0,
-                   min_velocity: float | None = DEFAULT_MIN_VELOCITY, rest: str = DEFAULT_REST,
+                   min_velocity: float | None = DEFAULT_MIN_VELOCITY, rest: str | None = None,
                    delay: float | str = 0.0, spring: bool = True, estimate: bool = False,
                    **consistent_options: Any) -> Fit:
     """Deprecated: ``identify.fit(robot, recordings, Processing(...), method, base=base)``."""

@@ -28,6 +28,7 @@ from identify.estimation.least_squares import solve_joint_systems
 from identify.estimation.results import IdentificationResult
 from identify.io.blocks import BlockSource, block_source
 from identify.observation.matrix import DEFAULT_MIN_VELOCITY, DEFAULT_REST, column_regressor, presliding_base
+from identify.observation.processing import RestPolicy, drops_rest, predicted_rest
 from identify.observation.stream import (DEFAULT_BLOCK, Piece, Plan, StreamSettings, piece, plan_windows, scan_all,
                                          windows_in_order)
 from identify.signal.delay import DelayEstimate, delay_grid, joint_log_rms, refined_delay
@@ -96,7 +97,7 @@ def _block_task(robot: rx90sym.Robot, rec: Any, window: Any, plan: Any, cutoff: 
     """One block: its decimated rows and, per joint, the triangular factor of ``[W_i | Y_i | Y_lags]``."""
     p = piece(robot, rec, window, plan, cutoff, settings, base.regressor_batch, names, first, lags)
     m = p.motion
-    keep = m.rows(settings.min_velocity is not None and settings.rest == "drop")
+    keep = m.rows(settings.min_velocity is not None and drops_rest(settings.rest))
     factors = []
     for j in range(m.Phi.shape[1]):
         rows = stacked_rows(m.Phi, [m.Y, *p.extra_Y], j, keep[:, j])
@@ -139,7 +140,7 @@ def _accumulate(robot: rx90sym.Robot, sources: Sequence[BlockSource], plans: Seq
     names = tuple(base.names)
     factors = JointFactors(robot.n, len(names), 1 + len(lags))
     moving = np.zeros(robot.n)
-    drop = settings.min_velocity is not None and settings.rest == "drop"
+    drop = settings.min_velocity is not None and drops_rest(settings.rest)
     count = 0
     # On Dask the robot and its compiled regressor are sent once to each worker, not with every block.
     shared = client.scatter([robot, base], broadcast=True) if client is not None else (robot, base)
@@ -169,7 +170,7 @@ def _plans(scans: Sequence[Any], cutoff: float, settings: StreamSettings) -> tup
 
 def fit_streamed(robot: rx90sym.Robot, recordings: Sequence[Any], method: str = "wls", base: Any = None,
                  cutoff: float | None = None, decimate_to: float | None = 50.0,
-                 min_velocity: float | None = DEFAULT_MIN_VELOCITY, rest: str = DEFAULT_REST,
+                 min_velocity: float | None = DEFAULT_MIN_VELOCITY, rest: RestPolicy = DEFAULT_REST,
                  delay: float | str = 0.0, spring: bool = True, estimate: bool = False,
                  block: int = DEFAULT_BLOCK, client: Any = None, bootstrap: BootstrapSpec | None = None,
                  convention: str | None = None, gains: Any = None, **consistent_options: Any) -> StreamedFit:
@@ -228,15 +229,15 @@ def fit_streamed(robot: rx90sym.Robot, recordings: Sequence[Any], method: str = 
 def predict_streamed(robot: rx90sym.Robot, result: IdentificationResult, recording: Any, base: Any = None,
                      cutoff: float | None = None, decimate_to: float | None = 50.0, spring: bool = True,
                      min_velocity: float | None = None, delay: float = 0.0, block: int = DEFAULT_BLOCK,
-                     convention: str | None = None, gains: Any = None, rest: str = "zero-coulomb") -> Validation:
+                     convention: str | None = None, gains: Any = None, rest: RestPolicy = "zero-coulomb") -> Validation:
     """:func:`identify.predict` on a recording of any length: predicted and measured torques block by block
     (only the decimated torques are held, n columns at the decimated rate)."""
     base = presliding_base(robot, base, rest if min_velocity else None)
     beta = base_vector(result, base, robot)
     src = block_source(recording, robot, convention, gains)
-    # As identify.predict: the fit's presliding state at rest, else the Coulomb term 0 at rest.
-    settings = StreamSettings(cutoff, decimate_to or None, min_velocity or None,
-                              "presliding" if rest == "presliding" else "zero-coulomb", float(delay), spring, int(block))
+    # As identify.predict: every sample predicted (a dropped joint's rest with Coulomb 0).
+    settings = StreamSettings(cutoff, decimate_to or None, min_velocity or None, predicted_rest(rest), float(delay),
+                              spring, int(block))
     scans, fc = scan_all([src], settings)
     plans, _ = plan_windows(scans[0], fc, settings)
     names, regressor = column_regressor(robot, base)
@@ -271,10 +272,11 @@ def fit_in_blocks(robot: rx90sym.Robot, recordings: Sequence[Any], processing: A
     base = base if base is not None else rx90sym.base_parameters(robot)
     recordings = list(recordings) if isinstance(recordings, (list, tuple)) else [recordings]
     spec = BootstrapSpec(BOOTSTRAP_BLOCK_S, BOOTSTRAP_DRAWS, bootstrap_seed)
-    sf = fit_streamed(robot, recordings, method, base, p.cutoff, p.decimate_to, p.min_velocity, p.rest, p.delay,
+    rest = p.observation_options()["rest"]  # an open policy is not chosen block by block: the default
+    sf = fit_streamed(robot, recordings, method, base, p.cutoff, p.decimate_to, p.min_velocity, rest, p.delay,
                       p.spring, p.estimate_delay, block, client, spec, convention, gains, **consistent_options)
     model = FitModel.of(robot, convention=convention, gains=gains.to_dict() if gains is not None else None,
-                        rest=p.rest, min_velocity=p.min_velocity, spring=spring_source or _spring_label(robot, base),
+                        rest=rest, min_velocity=p.min_velocity, spring=spring_source or _spring_label(robot, base),
                         cutoff_hz=sf.cutoff, decimate_to_hz=p.decimate_to, rate_hz=sf.rate, delay_s=sf.delay)
     angles = [SimpleNamespace(q=sf.q_range)]  # what the spring summary reads: the range visited
     spring = spring_summary(robot, base if isinstance(base, BaseWithSpring) else None, sf.result, angles)[0]

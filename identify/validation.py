@@ -15,6 +15,7 @@ import numpy as np
 import rx90sym
 
 from identify.observation.matrix import automatic_cutoff, filtered_motions, presliding_base
+from identify.observation.processing import RestPolicy, has_policy, predicted_rest
 from identify.estimation.results import IdentificationResult, json_number
 
 __all__ = ["Validation", "predict", "validate"]
@@ -108,20 +109,21 @@ def base_vector(result: IdentificationResult, base: Any, robot: rx90sym.Robot) -
 
 def predict(robot: rx90sym.Robot, result: IdentificationResult, recording: Any, base: Any = None,
             cutoff: float | None = None, decimate_to: float | None = 50.0, spring: bool = True,
-            min_velocity: float | None = None, delay: float = 0.0, rest: str = "zero-coulomb") -> Validation:
+            min_velocity: float | None = None, delay: float = 0.0, rest: RestPolicy = "zero-coulomb") -> Validation:
     """Predicted vs measured torques of ``recording`` with the parameters of ``result``.
 
     cutoff [Hz], decimate_to [Hz]: give those of the fit (None: chosen on this recording);
     min_velocity [rad/s]: rest threshold (Coulomb term 0 at rest, errors also while moving);
-    delay [s]: torque lag compensated as in the fit; rest: the fit's rest policy ("presliding":
-    the presliding state times FPj at rest, any other: Coulomb 0 at rest).
+    delay [s]: torque lag compensated as in the fit; rest: the fit's rest policy, one or one per joint
+    (every sample is predicted: "drop" takes Coulomb 0 at rest; "presliding" the presliding state
+    times FPj; the others as in the fit).
     """
-    base = presliding_base(robot, base, rest if rest == "presliding" and min_velocity is not None else None)
+    base = presliding_base(robot, base, rest if has_policy(rest, "presliding") and min_velocity is not None else None)
     beta = base_vector(result, base, robot)
     cutoff = cutoff if cutoff is not None else automatic_cutoff([recording], decimate_to)
     motions, _, _ = filtered_motions(robot, [recording], cutoff, decimate_to, spring, base.regressor_batch,
                                      base.names, min_velocity,
-                                     "presliding" if rest == "presliding" else "zero-coulomb", delay)
+                                     predicted_rest(rest), delay)
     # Samples bridged over lost packets are no measurements: they are not scored.
     rows = [m.measured if m.measured is not None else slice(None) for m in motions]
     Y = np.concatenate([m.Y[r] for m, r in zip(motions, rows)])

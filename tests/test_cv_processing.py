@@ -35,17 +35,17 @@ def test_the_cross_validated_choice_is_near_the_best_of_its_grid(rx90, rx90_base
     _, clean_test = split(clean, 2 / 3)
     choice = choose_processing(rx90, [fit_part], base=rx90_base, min_velocity=0.05, blocks=3)
     scored = [c for c in choice.candidates if np.isfinite(c.score)]
-    assert choice.chosen.score == min(c.score for c in scored)
-    assert {c.rest for c in scored} >= {"zero-coulomb", "presliding", None}
+    assert {c.rest for c in scored} >= {"zero-coulomb", "crossing"}
     assert any(c.label == "(default)" for c in choice.candidates) and "<- chosen" in choice.table()
     truth = {(c.cutoff, c.decimate_to, c.rest): _held_out(rx90, rx90_base, fit_part, clean_test, c) for c in scored}
     best = min(truth.values())
     # The twin's friction is Coulomb with no static part: Coulomb = 0 at rest is a model error that
-    # the cross-validation sees in the torques (measured: the choice within 3 % of the best).
-    assert choice.chosen.rest is None
+    # the cross-validation sees in the torques; the rows below the threshold are reversals, which
+    # "crossing" keeps as motions.
+    assert choice.chosen.rest == "crossing", choice.reason()
     assert truth[(choice.chosen.cutoff, choice.chosen.decimate_to, choice.chosen.rest)] <= 1.10 * best, truth
-    default = truth.get((choice.candidates[-1].cutoff, 50.0, "zero-coulomb"))
-    assert default is None or truth[(choice.chosen.cutoff, choice.chosen.decimate_to, None)] < default
+    zero = [v for (c, d, r), v in truth.items() if r == "zero-coulomb"]
+    assert truth[(choice.chosen.cutoff, choice.chosen.decimate_to, "crossing")] < 0.2 * min(zero)
 
 
 def test_a_given_cutoff_and_cross_validation_are_refused_together():

@@ -16,7 +16,7 @@ import rx90sym
 from motions import multisine
 
 RX90 = str(Path(sys.executable).parent / "rx90")
-TIMING = ()  # keys that may differ between two identical runs (none are written today)
+TIMING = ()  # keys that may differ between two identical runs (besides the choice's seconds)
 
 
 def cli(*args: str, cwd: Path) -> subprocess.CompletedProcess:
@@ -50,7 +50,14 @@ def lib_fit(runs, rx90):
 
 
 def _without(d: dict, keys) -> dict:
-    return {k: v for k, v in d.items() if k not in keys}
+    """``d`` without ``keys`` nor the timing fields of the cross-validated choice (its seconds)."""
+    out = {k: v for k, v in d.items() if k not in keys}
+    if out.get("processing_choice"):
+        choice = {k: v for k, v in out["processing_choice"].items() if k != "seconds"}
+        choice["candidates"] = [{k: v for k, v in c.items() if k != "seconds"} for c in choice["candidates"]]
+        choice["chosen"] = {k: v for k, v in choice["chosen"].items() if k != "seconds"}
+        out["processing_choice"] = choice
+    return out
 
 
 @pytest.mark.slow
@@ -61,7 +68,10 @@ def test_library_defaults_and_command_defaults_give_the_same_file(cli_fit, lib_f
     # The defaults are the command's: rest threshold and policy, decimation, delay 0 compensated
     # while the estimate is reported.
     assert cli["processing"] == identify.Processing().to_json()
-    assert cli["model"]["min_velocity"] == identify.DEFAULT_MIN_VELOCITY and cli["model"]["rest"] == "zero-coulomb"
+    assert cli["model"]["min_velocity"] == identify.DEFAULT_MIN_VELOCITY
+    # No cut-off given: cut-off, decimation and per-joint rest policy chosen by cross-validation.
+    chosen = cli["processing_choice"]["chosen"]
+    assert cli["model"]["cutoff_hz"] == chosen["cutoff_hz"] and cli["model"]["rest"] == chosen["rest"]
     assert cli["delay_estimate_s"] is not None and cli["model"]["delay_s"] == 0.0
     assert cli["schema_version"] == identify.fit_file.SCHEMA_VERSION
 
@@ -124,7 +134,8 @@ def test_deprecated_entry_points_warn_and_agree_with_fit(lib_fit, runs, rx90):
     with pytest.warns(DeprecationWarning, match="identify.fit"):
         old = identify.fit_recordings(rx90, [rec])
     with pytest.warns(DeprecationWarning, match="identify.fit"):
-        res = identify.identify(rx90, [rec], min_velocity=identify.DEFAULT_MIN_VELOCITY, rest="zero-coulomb")
+        res = identify.identify(rx90, [rec], cutoff=lib_fit.cutoff, decimate_to=lib_fit.decimate_to,
+                                min_velocity=identify.DEFAULT_MIN_VELOCITY, rest=lib_fit.rest)
     np.testing.assert_array_equal(old.result.values, lib_fit.result.values)
     np.testing.assert_array_equal(res.values, lib_fit.result.values)
     with warnings.catch_warnings():

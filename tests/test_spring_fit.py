@@ -54,17 +54,17 @@ def test_spring_of_unknown_constants_identified_and_predicting_as_well_as_the_tr
     twin_robot, train, held = unknown_spring_runs
     no_spring = rx90.with_options(spring=None)
     # Reference: the true spring known and added to the measured torques (the usual path).
-    known = identify.fit(twin_robot, train, identify.Processing(min_velocity=0.1, rest="drop", estimate_delay=False), base=rx90_base).result
+    known = identify.fit(twin_robot, train, identify.Processing(min_velocity=0.1, rest="drop", estimate_delay=False, cross_validate=False), base=rx90_base).result
     rms_known = identify.validate(twin_robot, known, held, base=rx90_base).rms_error
     # k for the known geometry: one coefficient, truth 2500 N/m.
     sk = spring_base(no_spring, SpringStiffness(Spring(joint=1, k=1.0, a=0.12, b=0.35, L0=0.08,
                                                        angle_offset=np.pi / 2)), rx90_base)
-    res_k = identify.fit(no_spring, train, identify.Processing(min_velocity=0.1, spring=False, rest="drop", estimate_delay=False), base=sk).result
+    res_k = identify.fit(no_spring, train, identify.Processing(min_velocity=0.1, spring=False, rest="drop", estimate_delay=False, cross_validate=False), base=sk).result
     i = res_k.names.index("KS_2")
     assert abs(res_k.values[i] - UNKNOWN.k) < 3 * res_k.std[i] and res_k.std[i] < 0.02 * UNKNOWN.k
     # A Fourier series in theta2 (shape unknown): held-out torques as good as with the true spring.
     sb = spring_base(no_spring, SpringBasis(1), rx90_base)
-    res = identify.fit(no_spring, train, identify.Processing(min_velocity=0.1, spring=False, rest="drop", estimate_delay=False), base=sb).result
+    res = identify.fit(no_spring, train, identify.Processing(min_velocity=0.1, spring=False, rest="drop", estimate_delay=False, cross_validate=False), base=sb).result
     rms = identify.validate(no_spring, res, held, base=sb, spring=False).rms_error
     # Measured (seeds 0-3, held-out 50): 0.942 vs 0.943 N m on joint 2, equal elsewhere.
     assert np.all(rms <= 1.02 * rms_known + 1e-3), (rms, rms_known)
@@ -97,7 +97,7 @@ def test_spring_in_the_basis_coefficients_within_3_sigma(rx90, rx90_base):
              for s in (10, 11, 12, 13)]
     no_spring = rx90.with_options(spring=None)
     sb = spring_base(no_spring, SpringBasis(1), rx90_base)
-    res = identify.fit(no_spring, train, identify.Processing(min_velocity=0.1, spring=False, rest="drop", estimate_delay=False), base=sb).result
+    res = identify.fit(no_spring, train, identify.Processing(min_velocity=0.1, spring=False, rest="drop", estimate_delay=False, cross_validate=False), base=sb).result
     z = {n: (res.values[res.names.index(n)] - coefficients.get(n, 0.0)) / res.std[res.names.index(n)]
          for n in sb.kept}
     # Measured |z| <= 0.7 on seeds 0-3 (order 4 has truth 0).

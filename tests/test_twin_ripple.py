@@ -28,7 +28,7 @@ def z_scores(robot: rx90sym.Robot, noise: rx90sym.twin.NoiseProfile, seeds: rang
     base = rx90sym.base_parameters(robot)
     recs = [rx90sym.twin.simulate(robot, multisine(robot, s), params=chi, duration=20.0, noise=noise, seed=s)
             for s in seeds]
-    res = identify.fit(robot, recs, identify.Processing(min_velocity=0.1, rest="drop", estimate_delay=False), base=base).result
+    res = identify.fit(robot, recs, identify.Processing(min_velocity=0.1, rest="drop", estimate_delay=False, cross_validate=False), base=base).result
     return (res.values - base.beta(chi)) / res.std
 
 

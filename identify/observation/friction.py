@@ -19,8 +19,9 @@ from functools import lru_cache
 from typing import Any
 
 import numpy as np
+from scipy.ndimage import maximum_filter1d, minimum_filter1d
 
-__all__ = ["DEFAULT_FRICTION", "FRICTION_FORMS", "PRESLIDING_TRAVEL", "friction_columns", "friction_function",
+__all__ = ["DEFAULT_FRICTION", "FRICTION_FORMS", "PRESLIDING_TRAVEL", "crossing_passes", "friction_columns", "friction_function",
            "presliding_state"]
 
 #: Travel (rad) over which the presliding state goes from one sign to the other (docs/real-logs.md).
@@ -81,3 +82,19 @@ def friction_columns(form: str, v: np.ndarray, vs: float) -> tuple[np.ndarray, n
     f = friction_function(form).map(max(v.size, 1))
     cols, dcols = f(v.reshape(1, -1), vs)
     return np.asarray(cols).T, np.asarray(dcols).T
+
+
+def crossing_passes(mask: np.ndarray, q: np.ndarray, longest: float, travel: float) -> np.ndarray:
+    """(S,) True where ``mask`` (below the rest threshold) is a motion, for the "crossing" rest
+    policy: inside a run shorter than ``longest`` samples, or where the positions ``q`` [rad] span
+    ``travel`` [rad] or more within ``longest`` samples around (a slow motion, or the moments
+    after a stop)."""
+    size = max(1, int(longest))
+    span = maximum_filter1d(q, size, mode="nearest") - minimum_filter1d(q, size, mode="nearest")
+    edges = np.flatnonzero(np.diff(np.concatenate([[0], mask.astype(np.int8), [0]])))
+    starts, ends = edges[::2], edges[1::2]
+    short = (ends - starts) < longest
+    out = np.zeros(mask.size + 1, dtype=np.int32)
+    np.add.at(out, starts[short], 1)
+    np.add.at(out, ends[short], -1)
+    return mask & ((np.cumsum(out[:-1]) > 0) | (span >= travel))

@@ -186,11 +186,14 @@ def coulomb_terms(robot: rx90sym.Robot, names: Sequence[str]) -> tuple[CoulombTe
     return tuple(out)
 
 
-def presliding_base(robot: rx90sym.Robot, base: Any = None, rest: str | None = None) -> Any:
-    """The columns a fit with rest policy ``rest`` uses: ``base`` (default: the symbolic base
-    parameters of ``robot``) and, for "presliding", one magnitude FPj per joint with a Coulomb term."""
+def presliding_base(robot: rx90sym.Robot, base: Any = None, rest: Any = None) -> Any:
+    """The columns a fit with rest policy ``rest`` (one, or one per joint) uses: ``base`` (default:
+    the symbolic base parameters of ``robot``) and, where a joint is "presliding", one magnitude FPj
+    per joint with a Coulomb term (the other joints' FPj are 0 and left out of W)."""
+    from identify.observation.processing import has_policy
+
     base = base if base is not None else rx90sym.base_parameters(robot)
-    if rest != "presliding" or getattr(base, "presliding", False):
+    if not has_policy(rest, "presliding") or getattr(base, "presliding", False):
         return base
     return friction_base(base, coulomb_terms(robot, base.names), presliding=True)
 

@@ -8,7 +8,8 @@ Rest phases: a joint whose speed is below ``min_velocity`` (rad/s) is at rest; t
 Coulomb term is then the sign of noise. ``rest="drop"`` leaves those rows out of the fit,
 ``rest="zero-coulomb"`` keeps them with the Coulomb entries set to 0 (see :func:`coulomb_terms`),
 ``rest="presliding"`` with the presliding state of the position history
-(:mod:`identify.observation.friction`).
+(:mod:`identify.observation.friction`), ``rest="none"`` as they are (the sign of the filtered
+speed); a tuple gives one policy per joint (the Coulomb entries of joint j's rows follow its policy).
 The speed is the recorded one when the recording has it (``Recording.dq``), else the filtered
 derivative; it decides the mask only, W keeps the filtered derivatives.
 
@@ -26,10 +27,11 @@ import numpy as np
 
 import rx90sym
 
-from identify.observation.friction import presliding_state
+from identify.observation.friction import crossing_passes, presliding_state
 from identify.observation.friction_model import (PRESLIDING_PREFIX, STRIBECK_PREFIX, CoulombTerm, coulomb_terms, own_terms,
                                                 presliding_base, without_empty_presliding)
-from identify.observation.processing import DEFAULT_MIN_VELOCITY, DEFAULT_REST, REST_POLICIES
+from identify.observation.processing import (CROSSING_SECONDS, CROSSING_TRAVEL, DEFAULT_MIN_VELOCITY, DEFAULT_REST,
+                                             REST_POLICIES, RestPolicy, drops_rest, rest_label, rest_per_joint)
 from identify.signal.filtering import EDGE_PERIODS, choose_cutoff, decimate, decimation_plan, derivatives
 
 __all__ = ["DECIMATION_PASSBAND", "automatic_cutoff", "DEFAULT_MIN_VELOCITY", "DEFAULT_REST", "REST_POLICIES", "CoulombTerm", "FilteredMotion", "Observation",
@@ -62,7 +64,7 @@ class Observation:
     n_samples: int
     notes: tuple[str, ...] = ()
     min_velocity: float | None = None
-    rest: str = "drop"
+    rest: RestPolicy = "drop"
     moving_fraction: np.ndarray | None = None
 
     @property
@@ -77,7 +79,7 @@ class Observation:
                           for s, r, c in zip(self.sources, self.rates, self.cutoffs)]
         if self.min_velocity is not None:
             frac = " ".join(f"{100 * f:.0f}%" for f in self.moving_fraction)
-            lines.append(f"  rest below {self.min_velocity:g} rad/s ({self.rest}); moving per joint: {frac}")
+            lines.append(f"  rest below {self.min_velocity:g} rad/s ({rest_label(self.rest)}); moving per joint: {frac}")
         return "\n".join(lines + [f"  note: {n}" for n in self.notes if n])
 
 
@@ -86,8 +88,8 @@ class FilteredMotion:
     """Samples of one recording after derivation and parallel filtering (time on axis 0).
 
     t: (S,) true time of each kept sample [s]; moving: (S, n) whether each joint moves (all True
-    without a threshold); usable: (S, n) whether joint i's row has every Coulomb driver moving
-    (the rows ``rest="drop"`` keeps); factor: decimation factor; kept: slice of the original
+    without a threshold); usable: (S, n) the rows a "drop" policy keeps (joint i and every Coulomb driver
+    of its row moving; every row of a joint with another policy); factor: decimation factor; kept: slice of the original
     samples before decimation; extra: (K, n) spring torque at the kept samples before decimation
     (what Y adds to the measured torque), for re-building Y from shifted torques.
     """
@@ -153,21 +155,23 @@ def filtered_motion(robot: rx90sym.Robot, rec: Any, cutoff: float | None = None,
                     decimate_to: float | None = None, spring: bool = True,
                     regressor_batch: Callable[..., np.ndarray] | None = None,
                     names: Sequence[str] | None = None, min_velocity: float | None = None,
-                    rest: str = "drop", delay: float = 0.0, kept: slice | None = None) -> FilteredMotion:
+                    rest: RestPolicy = "drop", delay: float = 0.0, kept: slice | None = None) -> FilteredMotion:
     """Derivatives, regressor and torques of one recording, decimated together.
 
     regressor_batch: (Q, QD, QDD) -> (S, n, c) giving the columns wanted (default: all the
     standard columns, robot.regressor_batch); selecting before filtering saves the work of
     filtering columns nobody uses. names: the c column names (default: the robot's standard
     parameters), needed to find the Coulomb columns. min_velocity [rad/s]: rest threshold;
-    rest: "drop" (rows kept as they are, ``usable`` tells which to drop) or "zero-coulomb"
+    rest: "drop" (rows kept as they are, ``usable`` tells which to drop), "zero-coulomb", "presliding",
+    "none" (module docstring), or one of them per joint; "zero-coulomb"
     (Coulomb entries set to 0 where their driver rests, before the parallel filter).
     delay [s]: torques lag positions by this much (compensated by :func:`shifted_torques`).
     kept: the samples kept after differentiation (default: all but the filter's edges; a block of a
     long recording keeps its core, :mod:`identify.observation.stream`).
     """
-    if rest not in REST_POLICIES:
-        raise ValueError(f"rest must be one of {REST_POLICIES}, got {rest!r}")
+    policies = rest_per_joint(rest, robot.n)
+    if any(r not in REST_POLICIES for r in policies):
+        raise ValueError(f"rest must be one of {REST_POLICIES} (or one per joint), got {rest!r}")
     if min_velocity is not None and not (min_velocity >= 0.0 and np.isfinite(min_velocity)):
         raise ValueError(f"min_velocity must be a non-negative speed in rad/s, got {min_velocity!r}")
     if rec.q.shape[1] != robot.n:
@@ -194,7 +198,9 @@ def filtered_motion(robot: rx90sym.Robot, rec: Any, cutoff: float | None = None,
         moving = np.abs(speed) >= min_velocity
         if not (Phi.flags.owndata and Phi.flags.writeable):  # a reused workspace's view: not ours to change
             Phi = np.array(Phi, copy=True)
-        usable = _rest_rows(robot, names, speed, d.q, Phi, min_velocity, rest) & moving
+        usable = _rest_rows(robot, names, speed, d.q, Phi, min_velocity, policies, d.rate)
+        dropped = np.array([r == "drop" for r in policies])
+        usable[:, dropped] &= moving[:, dropped]
     plan = decimation_plan(d.rate, decimate_to)
     k = plan.factor
     q, dq, ddq, t = d.q, d.dq, d.ddq, d.t
@@ -218,18 +224,27 @@ BRIDGED_SHARE = 0.25
 
 
 def _rest_rows(robot: rx90sym.Robot, names: Sequence[str] | None, speed: np.ndarray, q: np.ndarray,
-               Phi: np.ndarray, min_velocity: float, rest: str) -> np.ndarray:
-    """(S, n) rows whose Coulomb drivers all move; sets the Coulomb entries of ``Phi`` (in place)
-    where their driver rests: 0 ("zero-coulomb") or the presliding state of the filtered positions
-    ``q`` ("presliding"; the position history, never the torque)."""
+               Phi: np.ndarray, min_velocity: float, policies: tuple[str, ...], rate: float) -> np.ndarray:
+    """(S, n) rows kept: for a "drop" joint those whose Coulomb drivers all move, every row of the
+    others; sets the Coulomb entries of ``Phi`` (in place) where their driver rests, after the
+    policy of the row's joint: 0 ("zero-coulomb"), the presliding state of the filtered positions
+    ``q`` ("presliding"; the position history, never the torque), 0 over rests longer than
+    CROSSING_SECONDS at ``rate`` [Hz] ("crossing"), unchanged ("none", "drop")."""
     usable = np.ones(speed.shape, dtype=bool)
     names = tuple(names if names is not None else robot.parameter_names)
     for term in coulomb_terms(robot, names):
         driver_moving = np.abs(speed @ np.asarray(term.driver)) >= min_velocity
-        usable[:, term.row] &= driver_moving
+        rest = policies[term.row]
         if rest == "drop":
-            continue
-        still = ~driver_moving
+            usable[:, term.row] &= driver_moving
+            still = np.zeros_like(driver_moving)  # rows dropped; an FPj column (another joint's policy) is 0
+        elif rest == "none":
+            still = np.zeros_like(driver_moving)
+        elif rest == "crossing":
+            still = ~driver_moving & ~crossing_passes(~driver_moving, q @ np.asarray(term.driver), CROSSING_SECONDS * rate,
+                                                          CROSSING_TRAVEL)
+        else:
+            still = ~driver_moving
         # The moving friction (Coulomb, smooth or Stribeck) says nothing at rest.
         for column in [term.column] + _named(names, STRIBECK_PREFIX, term.row):
             Phi[still, term.row, column] = 0.0
@@ -336,7 +351,7 @@ def column_regressor(robot: rx90sym.Robot, base: Any = None, columns: Sequence[s
 def observation_matrix(robot: rx90sym.Robot, recordings: Sequence[Any], cutoff: float | None = None,
                        decimate_to: float | None = 50.0, base: Any = None,
                        columns: Sequence[str] | None = None, spring: bool = True,
-                       min_velocity: float | None = None, rest: str = "drop",
+                       min_velocity: float | None = None, rest: RestPolicy = "drop",
                        delay: float = 0.0) -> Observation:
     """Observation matrix W and torque vector Y (eqs. 6-8) from one or many recordings.
 
@@ -357,7 +372,7 @@ def observation_matrix(robot: rx90sym.Robot, recordings: Sequence[Any], cutoff: 
     cutoff = cutoff if cutoff is not None else automatic_cutoff(recordings, decimate_to)
     motions, skipped, _ = filtered_motions(robot, recordings, cutoff, decimate_to, spring, regressor, names,
                                         min_velocity, rest, delay)  # one filtering for every segment
-    keep = [m.rows(min_velocity is not None and rest == "drop") for m in motions]
+    keep = [m.rows(min_velocity is not None and drops_rest(rest)) for m in motions]
     W, Y, joint, samples = stack_rows([m.Phi for m in motions], [m.Y for m in motions], masks=keep)
     W, names, empty = without_empty_presliding(W, names)
     rates = tuple(m.rate for m in motions)

@@ -12,14 +12,71 @@ from typing import Any
 
 from identify.observation.friction import DEFAULT_FRICTION, FRICTION_FORMS
 
-__all__ = ["Processing", "FRICTION_FORMS", "REST_POLICIES", "DEFAULT_MIN_VELOCITY", "DEFAULT_REST", "DEFAULT_DECIMATE_TO"]
+__all__ = ["Processing", "FRICTION_FORMS", "REST_POLICIES", "CROSSING_SECONDS", "CROSSING_TRAVEL",
+           "DEFAULT_MIN_VELOCITY", "DEFAULT_REST", "DEFAULT_DECIMATE_TO", "RestPolicy", "rest_per_joint",
+           "drops_rest", "has_policy", "predicted_rest", "rest_label"]
 
 #: Rest threshold [rad/s]: a joint slower than this is at rest (its Coulomb sign is unknown).
 DEFAULT_MIN_VELOCITY = 0.05
-#: What rest samples do: their rows are dropped, kept with a Coulomb term of 0, or kept with the
-#: presliding state of the position history (identify.observation.friction).
-REST_POLICIES = ("drop", "zero-coulomb", "presliding")
+#: What rest samples do: their rows are dropped, kept with a Coulomb term of 0, kept with the
+#: presliding state of the position history (identify.observation.friction), kept as they are
+#: ("none": the Coulomb entry keeps the sign of the filtered speed, as without a rest threshold),
+#: or "crossing": as they are through a pass below the threshold shorter than
+#: :data:`CROSSING_SECONDS` or travelling :data:`CROSSING_TRAVEL` or more (a reversal or a slow
+#: motion: the friction follows it), with Coulomb 0 over a longer, still rest (where the sign of
+#: the speed is the sign of noise).
+REST_POLICIES = ("drop", "zero-coulomb", "presliding", "none", "crossing")
+#: Longest pass below the rest threshold [s] that "crossing" treats as a motion (docs/real-logs.md).
+CROSSING_SECONDS = 0.5
+#: Position range [rad] over which a longer pass below the threshold is a slow motion, not a rest.
+CROSSING_TRAVEL = 5e-4
+#: The policy where none is given and none is chosen by cross-validation.
 DEFAULT_REST = "zero-coulomb"
+#: One policy for every joint, or one per joint (joint 1 first).
+RestPolicy = str | tuple[str, ...]
+
+
+def rest_per_joint(rest: RestPolicy | None, n: int) -> tuple[str, ...]:
+    """The policy of each of ``n`` joints (None: :data:`DEFAULT_REST` on every joint)."""
+    rest = DEFAULT_REST if rest is None else rest
+    policies = (rest,) * n if isinstance(rest, str) else tuple(rest)
+    if len(policies) != n:
+        raise ValueError(f"rest: {len(policies)} policies given for {n} joints")
+    return policies
+
+
+def has_policy(rest: RestPolicy | None, name: str) -> bool:
+    """Whether some joint follows policy ``name``."""
+    return rest == name or (not isinstance(rest, str) and rest is not None and name in rest)
+
+
+def drops_rest(rest: RestPolicy | None) -> bool:
+    """Whether some joint's rest rows are dropped (its rows then follow ``FilteredMotion.usable``)."""
+    return has_policy(rest, "drop")
+
+
+def predicted_rest(rest: RestPolicy | None) -> RestPolicy:
+    """The policy a prediction uses: every sample is predicted, so a dropped joint's rest samples
+    take Coulomb = 0; the other policies stay."""
+    swap = {"drop": "zero-coulomb"}
+    rest = DEFAULT_REST if rest is None else rest
+    return swap.get(rest, rest) if isinstance(rest, str) else tuple(swap.get(r, r) for r in rest)
+
+
+def rest_label(rest: RestPolicy | None) -> str:
+    """The policy in words: "zero-coulomb", or "j1 none, j2 presliding, ..." per joint."""
+    rest = DEFAULT_REST if rest is None else rest
+    if isinstance(rest, str) or len(set(rest)) == 1:
+        return rest if isinstance(rest, str) else rest[0]
+    return ", ".join(f"j{j} {r}" for j, r in enumerate(rest, start=1))
+
+
+def _check_rest(rest: Any, where: str) -> RestPolicy | None:
+    if rest is None or (isinstance(rest, str) and rest in REST_POLICIES):
+        return rest
+    if isinstance(rest, (list, tuple)) and rest and all(isinstance(r, str) and r in REST_POLICIES for r in rest):
+        return tuple(rest)
+    raise ValueError(f"{where}: rest must be one of {REST_POLICIES} or one of them per joint, got {rest!r}")
 #: Rate after parallel filtering [Hz].
 DEFAULT_DECIMATE_TO = 50.0
 
@@ -32,7 +89,9 @@ class Processing:
     decimate_to [Hz]: rate after parallel filtering (None or 0: no decimation);
     min_velocity [rad/s]: rest threshold (None or 0: no rest handling);
     rest: "drop" (rest rows removed) | "zero-coulomb" (kept with Coulomb term 0) | "presliding"
-    (kept with the presliding state times its own magnitude FPj);
+    (kept with the presliding state times its own magnitude FPj) | "none" (kept as they are) |
+    "crossing" (see REST_POLICIES), or a tuple of them, one per joint; None: open (chosen per joint
+    by the cross-validation, else :data:`DEFAULT_REST`);
     delay: torque lag behind the positions [s] compensated, or "auto" (estimated);
     estimate_delay: estimate the lag even when it is not compensated, to report it (~40
     least-squares fits);
@@ -40,19 +99,21 @@ class Processing:
     identified with the other parameters);
     friction: the friction form of the moving rows, one of FRICTION_FORMS ("coulomb"; "tanh",
     "stribeck": velocity scale per joint by separable least squares, identify.estimation.separable);
-    cross_validate: choose the cut-off, the decimation and the rest policy on the torques by
-    blocked cross-validation (:mod:`identify.observation.cross_validation`; ``cutoff`` must be
-    None); the fit records the choice and its candidate table.
+    cross_validate: choose the cut-off, the decimation and (where ``rest`` is None) the rest
+    policy per joint on the torques by blocked cross-validation
+    (:mod:`identify.observation.cross_validation`; ``cutoff`` must be None); None (default): on
+    whenever no cut-off is given (:attr:`cross_validates`); the fit records the choice and its
+    candidate table.
     """
 
     cutoff: float | None = None
     decimate_to: float | None = DEFAULT_DECIMATE_TO
     min_velocity: float | None = DEFAULT_MIN_VELOCITY
-    rest: str = DEFAULT_REST
+    rest: RestPolicy | None = None
     delay: float | str = 0.0
     estimate_delay: bool = True
     spring: bool = True
-    cross_validate: bool = False
+    cross_validate: bool | None = None
     friction: str = DEFAULT_FRICTION
 
     def __post_init__(self) -> None:
@@ -67,15 +128,20 @@ class Processing:
             raise ValueError("processing: a cut-off is given and cross_validate asks to choose one: give one of them")
         if self.friction not in FRICTION_FORMS:
             raise ValueError(f"processing: friction must be one of {FRICTION_FORMS}, got {self.friction!r}")
-        if self.rest not in REST_POLICIES:
-            raise ValueError(f"processing: rest must be one of {REST_POLICIES}, got {self.rest!r}")
+        object.__setattr__(self, "rest", _check_rest(self.rest, "processing"))
         if not (self.delay == "auto" or (isinstance(self.delay, (int, float)) and math.isfinite(self.delay))):
             raise ValueError(f"processing: delay must be 'auto' or a number of seconds, got {self.delay!r}")
 
     def observation_options(self) -> dict[str, Any]:
         """Keyword arguments of :func:`identify.observation_matrix` (the delay apart: it may be 'auto')."""
         return {"cutoff": self.cutoff, "decimate_to": self.decimate_to, "min_velocity": self.min_velocity,
-                "rest": self.rest, "spring": self.spring}
+                "rest": DEFAULT_REST if self.rest is None else self.rest, "spring": self.spring}
+
+    @property
+    def cross_validates(self) -> bool:
+        """Whether the fit chooses its processing by cross-validation: as asked, else whenever no
+        cut-off is given."""
+        return self.cutoff is None if self.cross_validate is None else self.cross_validate
 
     def to_json(self) -> dict[str, Any]:
         return asdict(self)

@@ -31,6 +31,7 @@ import rx90sym
 
 from identify.io.blocks import DEFAULT_BLOCK, BlockSource
 from identify.observation.matrix import _SPECTRUM_SAMPLES, DECIMATION_PASSBAND, filtered_motion, shifted_torques
+from identify.observation.processing import RestPolicy
 from identify.signal.blocks import WelchAccumulator, decimation_margin, lowpass_margin, motion_windows
 from identify.signal.cutoff import choose_cutoff
 from identify.signal.filtering import EDGE_PERIODS, cutoff_from_spectrum, decimate, decimation_plan
@@ -48,7 +49,7 @@ class StreamSettings:
     cutoff: float | None = None
     decimate_to: float | None = 50.0
     min_velocity: float | None = None
-    rest: str = "drop"
+    rest: RestPolicy = "drop"
     delay: float = 0.0
     spring: bool = True
     block: int = DEFAULT_BLOCK

@@ -15,7 +15,7 @@ import numpy as np
 
 import rx90sym
 from identify.observation.processing import (DEFAULT_MIN_VELOCITY, DEFAULT_REST, FRICTION_FORMS, REST_POLICIES,
-                                             Processing)
+                                             Processing, rest_label)
 from identify.io.blocks import DEFAULT_BLOCK
 from identify.plausibility import estimate_flags, prior_flags, residual_flags, static_gravity_flags, torque_scale_flags
 
@@ -68,20 +68,24 @@ def register(sub: Any) -> None:
                          "(default: the robot's nominal parameters, its [nominal] table or URDF inertials; "
                          "FILE: a JSON parameter file; none: no prior, the split is arbitrary)")
     sp.add_argument("--essential", action="store_true", help="also compute the essential parameters")
-    sp.add_argument("--cutoff", type=float, help="Butterworth cut-off for q [Hz] (default: chosen from the data)")
-    sp.add_argument("--cross-validate", action="store_true",
-                    help="choose the cut-off, the decimation and the rest policy on the torques by blocked "
-                         "cross-validation (a small grid around the position knee, capped in time; the "
-                         "candidate table is printed and saved)")
+    sp.add_argument("--cutoff", type=float, help="Butterworth cut-off for q [Hz] (default: chosen on the torques "
+                                                 "by cross-validation; a given cut-off turns it off)")
+    sp.add_argument("--cross-validate", action=argparse.BooleanOptionalAction, default=None,
+                    help="choose the cut-off, the decimation and (without --rest) the rest policy per joint on "
+                         "the torques by blocked cross-validation (a small grid around the position knee, capped "
+                         "in time; the candidate table is printed and saved). Default: on without --cutoff; "
+                         "--no-cross-validate: the position-spectrum cut-off and --decimate-to")
     sp.add_argument("--decimate-to", type=float, default=50.0,
                     help="rate after parallel filtering [Hz] (default 50; 0: no decimation)")
     sp.add_argument("--no-decimate", action="store_true", help="no decimation (same as --decimate-to 0)")
     sp.add_argument("--min-velocity", type=float, default=DEFAULT_MIN_VELOCITY,
                     help=f"rest threshold: a joint slower than this is at rest [rad/s] "
                          f"(default {DEFAULT_MIN_VELOCITY:g}; 0: no rest handling)")
-    sp.add_argument("--rest", choices=REST_POLICIES, default=DEFAULT_REST,
-                    help=f"rest samples: drop their rows, keep them with Coulomb = 0, or with the presliding "
-                         f"state of the position history times its own magnitude FPj (default {DEFAULT_REST})")
+    sp.add_argument("--rest", type=_rest_option, default=None,
+                    help=f"rest samples: drop their rows, keep them with Coulomb = 0, with the presliding "
+                         f"state of the position history, or as they are ({', '.join(REST_POLICIES)}); one, "
+                         f"or one per joint separated by commas (default: chosen per joint by the "
+                         f"cross-validation, else {DEFAULT_REST})")
     sp.add_argument("--friction", choices=FRICTION_FORMS, default=FRICTION_FORMS[0],
                     help="friction while moving: Coulomb sign(q̇), smooth tanh(q̇/vs) or Stribeck, the velocity "
                          "scale vs per joint found by separable least squares (default coulomb)")
@@ -139,6 +143,9 @@ def _check(args: argparse.Namespace) -> None:
     if args.no_decimate and args.decimate_to not in (50.0, 0.0):
         raise UsageError("conflicting options: --no-decimate and --decimate-to "
                          f"{args.decimate_to:g}")
+    if args.cross_validate and args.cutoff is not None:
+        raise UsageError(f"conflicting options: --cutoff {args.cutoff:g} and --cross-validate (which chooses "
+                         "the cut-off): give one of them")
     if args.min_velocity < 0:
         raise UsageError(f"--min-velocity must be >= 0 rad/s, got {args.min_velocity:g}")
     if args.urdf_out and args.method != "consistent":
@@ -147,6 +154,15 @@ def _check(args: argparse.Namespace) -> None:
         raise UsageError("--prior is for --method consistent")
     for out in (args.json, args.report, args.urdf_out):
         check_output(out)
+
+
+def _rest_option(text: str) -> str | tuple[str, ...]:
+    """--rest: one policy, or one per joint ("none,none,zero-coulomb,...")."""
+    parts = tuple(p.strip() for p in text.split(","))
+    bad = [p for p in parts if p not in REST_POLICIES]
+    if bad:
+        raise argparse.ArgumentTypeError(f"unknown rest policy {bad[0]!r} (choose from {', '.join(REST_POLICIES)})")
+    return parts[0] if len(parts) == 1 else parts
 
 
 def processing_of(args: argparse.Namespace, spring: bool) -> Processing:
@@ -165,6 +181,8 @@ def run(args: argparse.Namespace) -> int:
 
     _check(args)
     robot, spring_model = _robot(args)
+    if isinstance(args.rest, tuple) and len(args.rest) != robot.n:
+        raise UsageError(f"--rest: {len(args.rest)} policies given for the {robot.n} joints of {robot.name!r}")
     sb = attach_spring(robot, spring_model, args.validate, args.method)
     gains = read_gains(args.gains, robot) if args.gains else None
     flags = given_gain_flags(gains) if gains is not None else []
@@ -252,6 +270,11 @@ def _print_fit(f: Fit, recs: list, auto_delay: bool, prior: Any = None) -> None:
                   f"packets (not fitted), {lay['stale_rows'] or 0} stale rows dropped when read")
     if f.choice is not None:
         print(f.choice["table"])
+    else:
+        p = f.processing
+        why = (f"--cutoff {p.cutoff:g} given" if p.cutoff is not None else "--no-cross-validate"
+               if p.cross_validate is False else "long logs are fitted block by block")
+        print(f"processing not cross-validated ({why}): rest policy {rest_label(f.rest)}")
     if f.model.friction is not None and "velocity_scale" in f.model.friction:
         from identify.estimation.separable import VelocityScales
 

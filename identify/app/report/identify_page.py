@@ -4,6 +4,8 @@ from __future__ import annotations
 from pathlib import Path
 from typing import Any, Mapping, Sequence
 
+from identify.observation.processing import rest_label
+
 from .cells import fixed, fmt, number
 from .page import Column, Figure, Page, Section, Summary, Table, Text
 from .summary import (REST_SHARE_CHECK, as_flag, flag, heldout_flags, heldout_table, next_steps,
@@ -33,7 +35,7 @@ def data_facts(data: Mapping[str, Any] | None, model: Mapping[str, Any]) -> list
     if share and model.get("min_velocity") is not None:
         rest = " / ".join(fixed(100 * (1 - s), 0) for s in share)
         facts.append(("At rest per joint", f"{rest} % (below {fmt(model.get('min_velocity'))} rad/s, "
-                                           f"{model.get('rest', '')})"))
+                                           f"{rest_label(model.get('rest'))})"))
     return facts
 
 
@@ -187,7 +189,7 @@ def processing_table(record: Mapping[str, Any]) -> Any:
              ("Torque offsets", "", bool(m.get("offsets"))),
              ("Spring", "", m.get("spring") or "none"),
              ("Rest threshold", "rad/s", m.get("min_velocity") if m.get("min_velocity") is not None else "off"),
-             ("Rest samples", "", m.get("rest") or "–"),
+             ("Rest samples", "", rest_label(m["rest"]) if m.get("rest") else "–"),
              ("Cut-off", "Hz", m.get("cutoff_hz")),
              ("Decimated to", "Hz", m.get("decimate_to_hz") if m.get("decimate_to_hz") else "no decimation"),
              ("Rate after filtering", "Hz", m.get("rate_hz")),
