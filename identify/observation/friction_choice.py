@@ -89,31 +89,28 @@ class FrictionChoice:
                 "candidates": [dict(c.to_dict(), form=c.label) for c in self.candidates], "table": self.table()}
 
 
-def _columns(obs: Observation, terms: Sequence[Any], form: str, scales: Sequence[float] | None) -> np.ndarray:
-    """W of ``form`` from the probe observation: each Coulomb entry's speed v replaced by the form's
-    column(s) (FST's appended for Stribeck)."""
-    W, extra = obs.W.copy(), []
-    for t in terms:
-        rows = np.flatnonzero(obs.joint == t.row)
-        v = obs.W[rows, t.column]
-        if form == DEFAULT_FRICTION:
-            W[rows, t.column] = np.sign(v)
-            continue
-        cols, _ = friction_columns(form, v, float(scales[t.row]))
-        W[rows, t.column] = cols[:, 0]
-        if cols.shape[1] > 1:
-            extra.append(np.zeros(W.shape[0]))
-            extra[-1][rows] = cols[:, 1]
-    return np.column_stack([W] + extra) if extra else W
+def _exact(robot: rx90sym.Robot, recordings: Sequence[Any], base: Any, options: dict[str, Any], probe: Observation,
+           form: str, scales: Sequence[float] | None) -> np.ndarray:
+    """W of ``form`` at ``scales`` with the fit's exact (parallel-filtered) columns, on the probe's rows."""
+    from identify.observation.friction_model import friction_base
+
+    columns = base if form == DEFAULT_FRICTION else friction_base(base, coulomb_terms(robot, base.names), form, scales)
+    obs = observation_matrix(robot, recordings, base=columns, **options)
+    if obs.W.shape[0] != probe.W.shape[0] or not np.array_equal(obs.joint, probe.joint):
+        raise ValueError(f"friction choice: the observation of form {form!r} has other rows than the probe's")
+    return obs.W
 
 
-def _score_form(obs: Observation, terms: Sequence[Any], form: str, ids: np.ndarray, blocks: int,
-                n: int) -> tuple[Candidate, str | None]:
-    """(the form scored, why it cannot be chosen or None)."""
+def _score_form(robot: rx90sym.Robot, recordings: Sequence[Any], base: Any, options: dict[str, Any],
+                obs: Observation, terms: Sequence[Any], form: str, ids: np.ndarray,
+                blocks: int) -> tuple[Candidate, str | None]:
+    """(the form scored, why it cannot be chosen or None); ``obs`` the probe observation."""
+    n = robot.n
     from identify.estimation.separable import SCALE_BOUNDS, scales_from_observation
 
     err2, ref2 = np.zeros((blocks, n)), np.zeros((blocks, n))
     bound, failed = set(), set()
+    W = None
     for b in range(blocks):
         fit_rows, held = ids != b, ids == b
         scales = None
@@ -127,7 +124,8 @@ def _score_form(obs: Observation, terms: Sequence[Any], form: str, ids: np.ndarr
             bound.update(j + 1 for j, v in enumerate(found.scales) if v >= SCALE_BOUNDS[1] * (1 - 1e-3))
             if not found.converged:
                 failed.add(b + 1)
-        W = _columns(obs, terms, form, scales)
+        if W is None or scales is not None:  # Coulomb's columns do not depend on the fold
+            W = _exact(robot, recordings, base, options, obs, form, scales)
         A = np.column_stack([W, obs.Y])
         factors = {(k, j): (np.linalg.qr(A[m], mode="r"), int(m.sum())) for k in range(blocks) for j in range(n)
                    if (m := (ids == k) & (obs.joint == j)).any()}
@@ -178,7 +176,7 @@ def choose_friction(robot: rx90sym.Robot, recordings: Sequence[Any], base: Any, 
             notes[form] = "not scored: time cap"
             continue
         t0 = time.perf_counter()
-        cand, why = _score_form(obs, terms, form, ids, blocks, robot.n)
+        cand, why = _score_form(robot, recordings, inner, options, obs, terms, form, ids, blocks)
         scored.append(replace(cand, decimate_to=options.get("decimate_to"), seconds=time.perf_counter() - t0))
         if why:
             notes[form] = why
