@@ -63,7 +63,7 @@ class FrictionChoice:
                  f"fitting blocks)\n  form       held-back error [%]" + "".join(f"{'j' + str(j + 1):>7}" for j in range(n))]
         notes = dict(self.notes)
         for c in self.candidates:
-            score = "not scored (time cap)" if math.isnan(c.score) else f"{c.score:.3f}"
+            score = "-" if math.isnan(c.score) else f"{c.score:.3f}"   # the note says why
             joints = "".join(f"{v:7.2f}" for v in c.per_joint)
             mark = " <- chosen" if c.label == self.chosen else ""
             note = f"  ({notes[c.label]})" if c.label in notes else ""
@@ -77,7 +77,7 @@ class FrictionChoice:
             return (f"chosen: {self.chosen}, held-back error {chosen.score:.3f} % below coulomb's "
                     f"{scored[DEFAULT_FRICTION].score:.3f} % by more than the blocks' spread")
         others = [c for k, c in scored.items() if k != DEFAULT_FRICTION and k not in dict(self.notes)]
-        if not others:
+        if not others or chosen is None:
             return "chosen: coulomb (no other form could be chosen)"
         best = min(others, key=lambda c: c.score)
         return (f"chosen: coulomb, the default: {best.label}'s held-back error ({best.score:.3f} %) is not below "
@@ -166,7 +166,11 @@ def choose_friction(robot: rx90sym.Robot, recordings: Sequence[Any], base: Any, 
         return FrictionChoice((), DEFAULT_FRICTION, tuple((f, why) for f in forms if f != DEFAULT_FRICTION),
                               blocks, 0.0)
     probe = FrictionBase(inner, tuple((t.row, t.column, t.driver) for t in terms), "probe")
-    obs = observation_matrix(robot, recordings, base=probe, **options)
+    try:
+        obs = observation_matrix(robot, recordings, base=probe, **options)
+    except ValueError as exc:  # the fit's own observation then says what is wrong, in its words
+        return FrictionChoice((), DEFAULT_FRICTION, tuple((f, f"not scored: {str(exc).splitlines()[0]}")
+                                                          for f in forms if f != DEFAULT_FRICTION), blocks, 0.0)
     ids = np.minimum(blocks * obs.samples // max(obs.n_samples, 1), blocks - 1)
     ordered = [DEFAULT_FRICTION] + [f for f in forms if f != DEFAULT_FRICTION]
     scored, notes = [], {}
@@ -176,12 +180,16 @@ def choose_friction(robot: rx90sym.Robot, recordings: Sequence[Any], base: Any, 
             notes[form] = "not scored: time cap"
             continue
         t0 = time.perf_counter()
-        cand, why = _score_form(robot, recordings, inner, options, obs, terms, form, ids, blocks)
+        try:
+            cand, why = _score_form(robot, recordings, inner, options, obs, terms, form, ids, blocks)
+        except ValueError as exc:  # too few rows in a fold, a form's columns rank deficient on the fitting blocks
+            cand, why = Candidate(obs.cutoffs[0], None, obs.rest, label=form), f"not scored: {str(exc).splitlines()[0]}"
         scored.append(replace(cand, decimate_to=options.get("decimate_to"), seconds=time.perf_counter() - t0))
         if why:
             notes[form] = why
     default = scored[0]
     eligible = [c for c in scored[1:] if not math.isnan(c.score) and c.label not in notes]
     best = min(eligible, key=lambda c: c.score, default=None)
-    chosen = best.label if best is not None and _clearly_better(best, default) else DEFAULT_FRICTION
+    clear = best is not None and not math.isnan(default.score) and _clearly_better(best, default)
+    chosen = best.label if clear else DEFAULT_FRICTION
     return FrictionChoice(tuple(scored), chosen, tuple(notes.items()), blocks, time.perf_counter() - start)
