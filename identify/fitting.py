@@ -307,14 +307,7 @@ def fit(robot: rx90sym.Robot, recordings: Sequence[Any], processing: Processing 
     if observation is None and (p.estimate_delay or p.delay == "auto"):
         found = estimate_delay(robot, recordings, base=base, **options)
     lag = found.delay if p.delay == "auto" else float(p.delay)
-    form = p.friction_form
-    if choice is not None and p.friction is None and method != "consistent":
-        from identify.observation.friction_choice import choose_friction
-
-        forms = choose_friction(robot, recordings, base, dict(options, delay=lag))
-        form, choice = forms.chosen, _with_friction(choice.to_dict(), forms)
-    elif choice is not None:
-        choice = choice.to_dict()
+    form, choice = _chosen_friction(robot, recordings, base, p, method, choice, dict(options, delay=lag))
     base, friction = _friction_form(robot, recordings, base, form, observation, dict(options, delay=lag))
     obs = observation if observation is not None else observation_matrix(robot, recordings, delay=lag,
                                                                          base=base, **options)
@@ -332,9 +325,21 @@ def fit(robot: rx90sym.Robot, recordings: Sequence[Any], processing: Processing 
                choice=choice)
 
 
-def _with_friction(choice: dict[str, Any], forms: Any) -> dict[str, Any]:
-    """The processing choice's record with the friction form's (its table printed after the processing's)."""
-    return dict(choice, friction=forms.to_dict(), table=choice["table"] + "\n" + forms.table())
+def _chosen_friction(robot: rx90sym.Robot, recordings: Sequence[Any], base: Any, p: Processing, method: str,
+                     choice: Any, options: dict[str, Any]) -> tuple[str, dict | None]:
+    """(the friction form, the processing choice's record): the form chosen by the cross-validation
+    (identify.observation.friction_choice) where it is left open and the processing cross-validated
+    (not for the consistent method: a URDF holds Coulomb + viscous), else the one asked for."""
+    if choice is None:
+        return p.friction_form, None
+    if p.friction is not None or method == "consistent":
+        return p.friction_form, choice.to_dict()
+    from identify.observation.friction_choice import choose_friction
+
+    forms = choose_friction(robot, recordings, base, options)
+    record = choice.to_dict()
+    # Its table printed after the processing's.
+    return forms.chosen, dict(record, friction=forms.to_dict(), table=record["table"] + "\n" + forms.table())
 
 
 def _friction_form(robot: rx90sym.Robot, recordings: Sequence[Any], base: Any, form: str,
