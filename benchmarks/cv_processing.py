@@ -6,7 +6,8 @@ of the predicted torques against the **noise-free** torques (%). Per run: the cr
 choice (identify.observation.cross_validation, rest policy chosen per joint), the best candidate
 of its grid, the toolkit's defaults (``identify.fit`` with ``Processing()``: the cross-validation
 runs inside the fit), the former defaults (automatic cut-off, zero-coulomb, no cross-validation),
-and the plain least squares of benchmarks/plain_ls.py (the reference measured in the same run).
+and the plain least squares of benchmarks/plain_ls.py (the reference measured in the same run); the
+friction form the defaults chose (identify.observation.friction_choice; the twin's is Coulomb + viscous).
 
 Usage: python benchmarks/cv_processing.py [--seeds 5] [--noise 0.015,0.05,0.15] [--duration 20]
 """
@@ -36,13 +37,14 @@ def relative(pred: np.ndarray, truth: np.ndarray) -> np.ndarray:
     return 100 * np.linalg.norm(pred - truth, axis=0) / np.linalg.norm(truth, axis=0)
 
 
-def held_out_error(robot, base, fit_part, test_clean, cutoff, decimate_to, rest, **options) -> np.ndarray:
+def held_out_error(robot, base, fit_part, test_clean, cutoff, decimate_to, rest, **options) -> tuple[np.ndarray, str]:
+    """(relative error per joint [%], the fit's friction form)."""
     fit_ = fit(robot, [fit_part], Processing(cutoff=cutoff, decimate_to=decimate_to, rest=rest,
                                             min_velocity=None if rest is None and cutoff else 0.05,
                                             estimate_delay=False, **options), base=base)
     val = predict(robot, fit_.result, test_clean, base=base, cutoff=fit_.cutoff, decimate_to=None,
                   min_velocity=fit_.min_velocity, rest=fit_.rest)
-    return relative(val.predicted, val.measured)
+    return relative(val.predicted, val.measured), (fit_.model.friction or {}).get("form", "coulomb")
 
 
 def one_run(robot, base, truth, seed: int, noise: float, duration: float) -> dict:
@@ -55,17 +57,17 @@ def one_run(robot, base, truth, seed: int, noise: float, duration: float) -> dic
     _, test_clean = split(clean, 2 / 3)
     choice = choose_processing(robot, [fit_part], base=base, min_velocity=0.05)
     grid = {(c.cutoff, c.decimate_to, c.rest): held_out_error(robot, base, fit_part, test_clean, c.cutoff,
-                                                               c.decimate_to, c.rest)
+                                                               c.decimate_to, c.rest)[0]
             for c in choice.candidates if not np.isnan(c.score)}
     chosen = grid[(choice.chosen.cutoff, choice.chosen.decimate_to, choice.chosen.rest)]
-    default = held_out_error(robot, base, fit_part, test_clean, None, 50.0, None)  # Processing()'s defaults
-    former = held_out_error(robot, base, fit_part, test_clean, None, 50.0, "zero-coulomb", cross_validate=False)
+    default, form = held_out_error(robot, base, fit_part, test_clean, None, 50.0, None)  # Processing()'s defaults
+    former = held_out_error(robot, base, fit_part, test_clean, None, 50.0, "zero-coulomb", cross_validate=False)[0]
     beta = plain_ls(robot, fit_part, base)
     pred, kept = plain_prediction(robot, beta, test_clean, base)
     plain = relative(pred, np.asarray(test_clean.tau)[kept])
     best = min(grid.values(), key=lambda v: float(np.mean(v)))
     return {"chosen": chosen, "best": best, "default": default, "former": former, "plain": plain,
-            "seconds": choice.seconds,
+            "seconds": choice.seconds, "friction": form,
             "cutoff": choice.chosen.cutoff, "knee": choice.knee, "rest": choice.chosen.rest}
 
 
@@ -89,7 +91,8 @@ def main() -> None:
             m = {k: float(np.mean(r[k])) for k in ("chosen", "best", "default", "former", "plain")}
             print(f"{seed:>4} {noise:>6.3f} {r['knee']:>6.3g} {r['cutoff']:>7.3g} {m['chosen']:>7.3f} {m['best']:>7.3f} "
                   f"{m['chosen'] / m['best']:>6.3f} {m['default']:>8.3f} {m['former']:>7.3f} {m['plain']:>7.3f} "
-                  f"{r['seconds']:>6.1f} {rest_label(r['rest']) if r['rest'] else 'no threshold'}", flush=True)
+                  f"{r['seconds']:>6.1f} {rest_label(r['rest']) if r['rest'] else 'no threshold'}; default's friction "
+                  f"{r['friction']}", flush=True)
     ratio = [float(np.mean(r["chosen"]) / np.mean(r["best"])) for r in runs]
     print(f"median CV / best-of-grid: {np.median(ratio):.4f}")
     chosen = np.median([r["chosen"] for r in runs], axis=0)

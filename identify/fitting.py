@@ -275,7 +275,7 @@ def fit(robot: rx90sym.Robot, recordings: Sequence[Any], processing: Processing 
     if block is not None or client is not None:
         from identify.stream_fit import fit_in_blocks
 
-        if processing is not None and processing.friction != DEFAULT_FRICTION:
+        if processing is not None and processing.friction_form != DEFAULT_FRICTION:
             raise ValueError(f"fit: friction form {processing.friction!r} searches its velocity scales on whole "
                              f"recordings, not block by block: give friction 'coulomb', or no block")
         if processing is not None and processing.cross_validate:
@@ -287,7 +287,7 @@ def fit(robot: rx90sym.Robot, recordings: Sequence[Any], processing: Processing 
     if method not in METHODS:
         raise ValueError(f"fit: method must be one of {METHODS}, got {method!r}")
     p = processing if processing is not None else Processing()
-    if method == "consistent" and (p.friction != DEFAULT_FRICTION or has_policy(p.rest, "presliding")):
+    if method == "consistent" and (p.friction_form != DEFAULT_FRICTION or has_policy(p.rest, "presliding")):
         # Its standard parameters are what a URDF/MJCF holds: Coulomb (FS) and viscous (FV) friction.
         raise ValueError(f"fit: the consistent method fits bodies with Coulomb + viscous friction (what a URDF or "
                          f"MJCF holds), not friction form {p.friction!r} with rest policy {p.rest!r}: use "
@@ -307,7 +307,8 @@ def fit(robot: rx90sym.Robot, recordings: Sequence[Any], processing: Processing 
     if observation is None and (p.estimate_delay or p.delay == "auto"):
         found = estimate_delay(robot, recordings, base=base, **options)
     lag = found.delay if p.delay == "auto" else float(p.delay)
-    base, friction = _friction_form(robot, recordings, base, p.friction, observation, dict(options, delay=lag))
+    form, choice = _chosen_friction(robot, recordings, base, p, method, choice, dict(options, delay=lag))
+    base, friction = _friction_form(robot, recordings, base, form, observation, dict(options, delay=lag))
     obs = observation if observation is not None else observation_matrix(robot, recordings, delay=lag,
                                                                          base=base, **options)
     result = _solve(robot, obs, base, method, consistent_options)
@@ -321,7 +322,24 @@ def fit(robot: rx90sym.Robot, recordings: Sequence[Any], processing: Processing 
     spring = spring_summary(robot, base if isinstance(base, BaseWithSpring) else None, result, recordings)[0]
     return Fit(robot, result, p, model, base, obs, found, found.delay if found is not None else None, spring,
                recordings=tuple(layout_summary(r) for r in recordings if hasattr(r, "measured_mask")),
-               choice=choice.to_dict() if choice is not None else None)
+               choice=choice)
+
+
+def _chosen_friction(robot: rx90sym.Robot, recordings: Sequence[Any], base: Any, p: Processing, method: str,
+                     choice: Any, options: dict[str, Any]) -> tuple[str, dict | None]:
+    """(the friction form, the processing choice's record): the form chosen by the cross-validation
+    (identify.observation.friction_choice) where it is left open and the processing cross-validated
+    (not for the consistent method: a URDF holds Coulomb + viscous), else the one asked for."""
+    if choice is None:
+        return p.friction_form, None
+    if p.friction is not None or method == "consistent":
+        return p.friction_form, choice.to_dict()
+    from identify.observation.friction_choice import choose_friction
+
+    forms = choose_friction(robot, recordings, base, options)
+    record = choice.to_dict()
+    # Its table printed after the processing's.
+    return forms.chosen, dict(record, friction=forms.to_dict(), table=record["table"] + "\n" + forms.table())
 
 
 def _friction_form(robot: rx90sym.Robot, recordings: Sequence[Any], base: Any, form: str,

@@ -56,6 +56,10 @@ def _without(d: dict, keys) -> dict:
         choice = {k: v for k, v in out["processing_choice"].items() if k != "seconds"}
         choice["candidates"] = [{k: v for k, v in c.items() if k != "seconds"} for c in choice["candidates"]]
         choice["chosen"] = {k: v for k, v in choice["chosen"].items() if k != "seconds"}
+        if "friction" in choice:  # the friction form's choice (identify.observation.friction_choice)
+            forms = {k: v for k, v in choice["friction"].items() if k != "seconds"}
+            forms["candidates"] = [{k: v for k, v in c.items() if k != "seconds"} for c in forms["candidates"]]
+            choice["friction"] = forms
         out["processing_choice"] = choice
     return out
 

@@ -51,13 +51,15 @@ LOW_SPEED_SHARE = 0.02
 class VelocityScales:
     """Velocity scale per joint of a smooth friction form: form; scales, std (n,) [rad/s] (nan for
     a joint without a Coulomb term); at_bound (n,): the search stopped on a bound of
-    :data:`SCALE_BOUNDS` (the data prefer a sign, or a viscous term); cost: the weighted cost F."""
+    :data:`SCALE_BOUNDS` (the data prefer a sign, or a viscous term); cost: the weighted cost F;
+    converged: the search reported success."""
 
     form: str
     scales: tuple[float, ...]
     std: tuple[float, ...]
     at_bound: tuple[bool, ...]
     cost: float
+    converged: bool = True       # the L-BFGS-B search reported success
 
     def to_json(self) -> dict[str, Any]:
         def num(v: float) -> float | None:
@@ -202,7 +204,7 @@ def scales_from_observation(obs: Observation, terms: Sequence[Any], form: str, n
     for k, j in enumerate(prob.joints):
         out_s[j], out_std[j] = s[k], std[k]
         out_b[j] = bool(min(best.x[k] - lo[k], hi[k] - best.x[k]) < 1e-3)
-    return VelocityScales(form, tuple(out_s), tuple(out_std), tuple(out_b), f)
+    return VelocityScales(form, tuple(out_s), tuple(out_std), tuple(out_b), f, bool(best.success))
 
 
 def velocity_scales(robot: rx90sym.Robot, recordings: Sequence[Any], base: Any, form: str,

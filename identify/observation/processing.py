@@ -99,6 +99,8 @@ class Processing:
     identified with the other parameters);
     friction: the friction form of the moving rows, one of FRICTION_FORMS ("coulomb"; "tanh",
     "stribeck": velocity scale per joint by separable least squares, identify.estimation.separable);
+    None: open (chosen by the cross-validation, :mod:`identify.observation.friction_choice`, else
+    :data:`DEFAULT_FRICTION`);
     cross_validate: choose the cut-off, the decimation and (where ``rest`` is None) the rest
     policy per joint on the torques by blocked cross-validation
     (:mod:`identify.observation.cross_validation`; ``cutoff`` must be None); None (default): on
@@ -114,7 +116,7 @@ class Processing:
     estimate_delay: bool = True
     spring: bool = True
     cross_validate: bool | None = None
-    friction: str = DEFAULT_FRICTION
+    friction: str | None = None
 
     def __post_init__(self) -> None:
         # 0 means "none" for the rate and the threshold: one spelling inside (None).
@@ -126,7 +128,7 @@ class Processing:
                 raise ValueError(f"processing: {name} must be a positive number or None, got {value!r}")
         if self.cross_validate and self.cutoff is not None:
             raise ValueError("processing: a cut-off is given and cross_validate asks to choose one: give one of them")
-        if self.friction not in FRICTION_FORMS:
+        if self.friction is not None and self.friction not in FRICTION_FORMS:
             raise ValueError(f"processing: friction must be one of {FRICTION_FORMS}, got {self.friction!r}")
         object.__setattr__(self, "rest", _check_rest(self.rest, "processing"))
         if not (self.delay == "auto" or (isinstance(self.delay, (int, float)) and math.isfinite(self.delay))):
@@ -136,6 +138,11 @@ class Processing:
         """Keyword arguments of :func:`identify.observation_matrix` (the delay apart: it may be 'auto')."""
         return {"cutoff": self.cutoff, "decimate_to": self.decimate_to, "min_velocity": self.min_velocity,
                 "rest": DEFAULT_REST if self.rest is None else self.rest, "spring": self.spring}
+
+    @property
+    def friction_form(self) -> str:
+        """The friction form asked for, :data:`DEFAULT_FRICTION` where it is left open."""
+        return DEFAULT_FRICTION if self.friction is None else self.friction
 
     @property
     def cross_validates(self) -> bool:

@@ -86,9 +86,10 @@ def register(sub: Any) -> None:
                          f"state of the position history, or as they are ({', '.join(REST_POLICIES)}); one, "
                          f"or one per joint separated by commas (default: chosen per joint by the "
                          f"cross-validation, else {DEFAULT_REST})")
-    sp.add_argument("--friction", choices=FRICTION_FORMS, default=FRICTION_FORMS[0],
+    sp.add_argument("--friction", choices=FRICTION_FORMS, default=None,
                     help="friction while moving: Coulomb sign(q̇), smooth tanh(q̇/vs) or Stribeck, the velocity "
-                         "scale vs per joint found by separable least squares (default coulomb)")
+                         "scale vs per joint found by separable least squares (default: coulomb or tanh chosen "
+                         "by the cross-validation, coulomb unless clearly beaten; else coulomb)")
     sp.add_argument("--delay", type=_delay, default=0.0,
                     help="torque lag behind the positions: 'auto' (estimated) or seconds (default 0; "
                          "the estimate is always reported)")
