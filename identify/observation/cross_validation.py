@@ -51,7 +51,7 @@ from identify.observation.processing import DEFAULT_REST, REST_POLICIES, RestPol
 from identify.signal.filtering import choose_cutoff
 
 __all__ = ["Candidate", "ProcessingChoice", "GRID_FACTORS", "DEFAULT_BLOCKS", "DEFAULT_TIME_CAP", "SCORED_REST",
-           "candidate_grid", "choose_processing"]
+           "candidate_grid", "choose_processing", "fold_wls", "clearly_better"]
 
 #: Cut-offs of the grid, as multiples of the position-spectrum knee.
 GRID_FACTORS = (0.5, 0.7, 1.0, 1.4, 2.0)
@@ -207,7 +207,7 @@ def _compressed_blocks(motions: Sequence[Any], ids: Sequence[np.ndarray], blocks
     return out
 
 
-def _fold_wls(factors: dict[tuple[int, int], tuple[np.ndarray, int]], held: int, n: int) -> np.ndarray | None:
+def fold_wls(factors: dict[tuple[int, int], tuple[np.ndarray, int]], held: int, n: int) -> np.ndarray | None:
     """WLS (each joint weighted by 1 / its residual standard deviation, as the fit does) on every
     block but ``held``, from the compressed blocks; None when a joint has too few rows."""
     systems = []
@@ -248,7 +248,7 @@ def _score(robot: rx90sym.Robot, recordings: Sequence[Any], cand: Candidate, bas
     blocks_R = _compressed_blocks(motions, ids, blocks, drop, n)
     err2, ref2 = np.zeros((blocks, n)), np.zeros((blocks, n))
     for b in range(blocks):
-        beta = _fold_wls(blocks_R, b, n)
+        beta = fold_wls(blocks_R, b, n)
         if beta is None:
             continue
         for m, i in zip(motions, ids):
@@ -304,14 +304,14 @@ def choose_processing(robot: rx90sym.Robot, recordings: Sequence[Any], base: Any
     scored = first + second
     chosen = _best(scored)
     default = next((c for c in second if c.label == DEFAULT_LABEL and c.per_block), None)
-    if default is not None and not (_clearly_better(chosen, default)
+    if default is not None and not (clearly_better(chosen, default)
                                     or chosen.score < (1 - CLEAR_MARGIN) * default.score):
         chosen = default
     ordered = tuple(sorted(scored, key=lambda c: c.cutoff))
     return ProcessingChoice(ordered, chosen, knee, reference, blocks, time.perf_counter() - start, rest_scores)
 
 
-def _clearly_better(a: Candidate, b: Candidate, joint: int | None = None) -> bool:
+def clearly_better(a: Candidate, b: Candidate, joint: int | None = None) -> bool:
     """Whether ``a``'s held-back error is below ``b``'s by more than the standard error of their
     paired difference over the blocks (of the mean over joints, or of ``joint``'s): a difference
     the blocks' spread can explain keeps ``b``, the default."""
@@ -327,14 +327,14 @@ def _clearly_better(a: Candidate, b: Candidate, joint: int | None = None) -> boo
 
 def _per_joint_rest(scored: Sequence[Candidate]) -> RestPolicy:
     """Each joint's policy: the one of lowest per-joint score where it is clearly better
-    (:func:`_clearly_better` on that joint) than the default policy, else the default (one name
+    (:func:`clearly_better` on that joint) than the default policy, else the default (one name
     when they all agree)."""
     n = len(scored[0].per_joint)
     default = next((c for c in scored if c.rest == DEFAULT_REST), None)
     policies = []
     for j in range(n):
         best = min(scored, key=lambda c: c.per_joint[j])
-        keep = default is not None and best is not default and not _clearly_better(best, default, j)
+        keep = default is not None and best is not default and not clearly_better(best, default, j)
         policies.append(DEFAULT_REST if keep else str(best.rest))
     return policies[0] if len(set(policies)) == 1 else tuple(policies)
 

@@ -18,7 +18,7 @@ smooth tanh(q̇/vs); Stribeck on request) is scored the same way, on the same co
 
 **Coulomb unless clearly beaten**: a form replaces Coulomb only when its held-back error (mean over
 joints of 100 ||Y_j - W_j beta|| / ||Y_j||) is lower by more than the standard error of the paired
-difference over the blocks (the rest policy's rule, ``_clearly_better``), and never when a fold's
+difference over the blocks (the rest policy's rule, ``clearly_better``), and never when a fold's
 search stopped on the upper bound of the scales (a second viscous term, the scale not identified;
 on the lower bound the form is a sign on that joint, Coulomb's column: allowed) or did not converge. Forms after the first are not started once ``time_cap`` seconds are spent.
 """
@@ -33,7 +33,7 @@ import numpy as np
 
 import rx90sym
 
-from identify.observation.cross_validation import DEFAULT_BLOCKS, Candidate, _clearly_better, _fold_wls
+from identify.observation.cross_validation import DEFAULT_BLOCKS, Candidate, clearly_better, fold_wls
 from identify.observation.friction import DEFAULT_FRICTION, FRICTION_FORMS
 from identify.observation.friction_model import FrictionBase, coulomb_terms, own_terms
 from identify.observation.matrix import Observation, observation_matrix
@@ -131,7 +131,7 @@ def _score_form(robot: rx90sym.Robot, recordings: Sequence[Any], base: Any, opti
         A = np.column_stack([W, obs.Y])
         factors = {(k, j): (np.linalg.qr(A[m], mode="r"), int(m.sum())) for k in range(blocks) for j in range(n)
                    if (m := (ids == k) & (obs.joint == j)).any()}
-        beta = _fold_wls(factors, b, n)  # eq. 11's per-joint weights, as the processing's folds
+        beta = fold_wls(factors, b, n)  # eq. 11's per-joint weights, as the processing's folds
         if beta is None:
             raise ValueError(f"friction choice: too few rows to fit without block {b + 1}")
         res = obs.Y[held] - W[held] @ beta
@@ -192,6 +192,6 @@ def choose_friction(robot: rx90sym.Robot, recordings: Sequence[Any], base: Any, 
     default = scored[0]
     eligible = [c for c in scored[1:] if not math.isnan(c.score) and c.label not in notes]
     best = min(eligible, key=lambda c: c.score, default=None)
-    clear = best is not None and not math.isnan(default.score) and _clearly_better(best, default)
+    clear = best is not None and not math.isnan(default.score) and clearly_better(best, default)
     chosen = best.label if clear else DEFAULT_FRICTION
     return FrictionChoice(tuple(scored), chosen, tuple(notes.items()), blocks, time.perf_counter() - start)
