@@ -18,6 +18,7 @@ import rx90sym
 from rx90sym.files import write_json
 
 from identify.estimation.bootstrap import BLOCK_S, DRAWS, bootstrap_std, segment_bootstrap_std
+from identify.estimation.consistency.errors import SolverError
 from identify.estimation.consistent_fit import ConsistentResult
 from identify.plausibility import Flag
 from identify.estimation.results import IdentificationResult, json_number
@@ -360,6 +361,9 @@ def _friction_form(robot: rx90sym.Robot, recordings: Sequence[Any], base: Any, f
     terms = coulomb_terms(robot, base.names)
     if form != DEFAULT_FRICTION:
         scales = velocity_scales(robot, recordings, base, form, **options)
+        if not scales.converged:  # a failed search is reported, never fitted with
+            raise SolverError(f"fit: the velocity-scale search of friction form {form!r} did not converge "
+                              f"(L-BFGS-B); use friction 'coulomb'", status="not_converged", solver="L-BFGS-B")
         base = friction_base(base, terms, form, scales.scales)
         record.update(scales.to_json())
     if presliding:

@@ -12,7 +12,7 @@ import warnings
 from typing import Sequence
 
 import rx90sym
-from identify.estimation.consistency.errors import ConsistencyError
+from identify.estimation.consistency.errors import SolverError
 
 from .commands import COMMANDS
 from .common import PROG
@@ -57,7 +57,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         with warnings.catch_warnings():
             warnings.showwarning = show_warning  # one plain line, restored on exit
             return int(args.func(args) or 0)
-    except ConsistencyError as exc:
+    except SolverError as exc:
         # A solver that failed is not the user's input: reported, exit 1, nothing written.
         print(f"{PROG} {args.command}: solver failed: {str(exc).splitlines()[0]}", file=sys.stderr)
         return 1

@@ -66,7 +66,8 @@ class VelocityScales:
             return float(v) if np.isfinite(v) else None
 
         return {"form": self.form, "velocity_scale": [num(v) for v in self.scales],
-                "velocity_scale_std": [num(v) for v in self.std], "at_bound": list(self.at_bound)}
+                "velocity_scale_std": [num(v) for v in self.std], "at_bound": list(self.at_bound),
+                "converged": self.converged}
 
     @classmethod
     def from_json(cls, d: dict[str, Any]) -> "VelocityScales":
@@ -75,7 +76,7 @@ class VelocityScales:
 
         return cls(str(d["form"]), tuple(num(v) for v in d["velocity_scale"]),
                    tuple(num(v) for v in d["velocity_scale_std"]), tuple(bool(b) for b in d.get("at_bound", ())),
-                   float("nan"))
+                   float("nan"), bool(d.get("converged", True)))
 
     def summary(self) -> str:
         cells = [f"j{j + 1} {s:.4g} ± {d:.2g}{' (bound)' if b else ''}"

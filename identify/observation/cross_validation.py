@@ -302,7 +302,9 @@ def choose_processing(robot: rx90sym.Robot, recordings: Sequence[Any], base: Any
     todo = [replace(c, rest=rest) for c in grid if (c.cutoff, c.decimate_to, rest) not in done]
     second = _run(robot, recordings, todo, base, reference, blocks, options, start, time_cap, always_first=True)
     scored = first + second
-    chosen = _best(scored)
+    # Only candidates with the rest policy chosen above: a first-stage candidate (one policy for all
+    # joints) must not override the per-joint rule that kept zero-coulomb where it was not beaten.
+    chosen = _best([c for c in scored if c.rest == rest])
     default = next((c for c in second if c.label == DEFAULT_LABEL and c.per_block), None)
     if default is not None and not (clearly_better(chosen, default)
                                     or chosen.score < (1 - CLEAR_MARGIN) * default.score):

@@ -99,7 +99,7 @@ def _exact(robot: rx90sym.Robot, recordings: Sequence[Any], base: Any, options: 
     columns = base if form == DEFAULT_FRICTION else friction_base(base, coulomb_terms(robot, base.names), form, scales)
     obs = observation_matrix(robot, recordings, base=columns, **options)
     if obs.W.shape[0] != probe.W.shape[0] or not np.array_equal(obs.joint, probe.joint):
-        raise ValueError(f"friction choice: the observation of form {form!r} has other rows than the probe's")
+        raise RuntimeError(f"friction choice: the observation of form {form!r} has other rows than the probe's")
     return obs.W
 
 
