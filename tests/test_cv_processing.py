@@ -51,3 +51,28 @@ def test_the_cross_validated_choice_is_near_the_best_of_its_grid(rx90, rx90_base
 def test_a_given_cutoff_and_cross_validation_are_refused_together():
     with pytest.raises(ValueError, match="a cut-off is given and cross_validate asks to choose one"):
         Processing(cutoff=10.0, cross_validate=True)
+
+
+def test_a_uniform_first_stage_policy_does_not_override_the_per_joint_rule(rx90, rx90_base, monkeypatch):
+    """The rest policy is decided per joint (kept zero-coulomb where another is not clearly better);
+    the cut-off is then chosen among candidates with that policy only. Scores are given by hand
+    (the fits are tested above): crossing is lower on average at the knee but within the blocks'
+    spread, so zero-coulomb stays, and the chosen candidate must carry it."""
+    import identify.observation.cross_validation as cv
+
+    blocks = {"zero-coulomb": (5.0, 5.5, 4.5, 5.2, 4.8), "crossing": (4.2, 5.9, 4.0, 5.6, 4.8)}
+    default = (5.2, 5.4, 4.7, 5.3, 4.9)
+
+    def fake_score(robot, recordings, cand, base, reference, n_blocks, options):
+        per = default if cand.label == cv.DEFAULT_LABEL else blocks[cand.rest]
+        per_block = tuple((v,) * robot.n for v in per)
+        return float(np.mean(per)), (float(np.mean(per)),) * robot.n, per_block
+
+    monkeypatch.setattr(cv, "_score", fake_score)
+    rec = rx90sym.twin.simulate(rx90, multisine(rx90, 3), duration=4.0, noise="realistic", seed=3)
+    grid = [Candidate(10.0, 25.0), Candidate(20.0, 50.0, label=cv.DEFAULT_LABEL)]
+    choice = choose_processing(rx90, [rec], base=rx90_base, min_velocity=0.05, rest=None, candidates=grid)
+    assert choice.chosen.rest == "zero-coulomb", choice.table()
+    # Crossing at the knee scored 4.90 (below the default's 5.10 by more than 2 %): before the rule
+    # was kept it won the cut-off stage.
+    assert any(c.rest == "crossing" and c.score < 0.98 * 5.1 for c in choice.candidates)
