@@ -51,7 +51,8 @@ from identify.observation.processing import DEFAULT_REST, REST_POLICIES, RestPol
 from identify.signal.filtering import choose_cutoff
 
 __all__ = ["Candidate", "ProcessingChoice", "GRID_FACTORS", "DEFAULT_BLOCKS", "DEFAULT_TIME_CAP", "SCORED_REST",
-           "candidate_grid", "choose_processing", "fold_wls", "clearly_better"]
+           "candidate_grid", "choose_processing", "fold_wls", "clearly_better", "block_factors",
+           "block_scores"]
 
 #: Cut-offs of the grid, as multiples of the position-spectrum knee.
 GRID_FACTORS = (0.5, 0.7, 1.0, 1.4, 2.0)
@@ -200,11 +201,27 @@ def _compressed_blocks(motions: Sequence[Any], ids: Sequence[np.ndarray], blocks
     for b in range(blocks):
         rows = [m.rows(drop) & (i == b)[:, None] for m, i in zip(motions, ids)]
         W, Y, joint, _ = stack_rows([m.Phi for m in motions], [m.Y for m in motions], masks=rows)
-        for j in range(n):
-            A = np.column_stack([W[joint == j], Y[joint == j]])
-            if A.shape[0]:
-                out[(b, j)] = (np.linalg.qr(A, mode="r"), A.shape[0])
+        out.update(block_factors(W, Y, joint, np.full(joint.size, b), [b], n))
     return out
+
+
+def block_factors(W: np.ndarray, Y: np.ndarray, joint: np.ndarray, ids: np.ndarray, blocks: Sequence[int],
+                  n: int) -> dict[tuple[int, int], tuple[np.ndarray, int]]:
+    """(block, joint) -> (the triangular factor of [W | Y] over the rows of that block (``ids``) and
+    joint, their number), for the ``blocks`` listed: what :func:`fold_wls` solves from."""
+    A = np.column_stack([W, Y])
+    return {(b, j): (np.linalg.qr(A[m], mode="r"), int(m.sum())) for b in blocks for j in range(n)
+            if (m := (ids == b) & (joint == j)).any()}
+
+
+def block_scores(err2: np.ndarray, ref2: np.ndarray) -> tuple[float, tuple[float, ...], tuple[tuple[float, ...], ...]]:
+    """(score, per joint, per held-back block and joint), relative errors 100 sqrt(err2 / ref2) in %,
+    from the squared errors and references (blocks, n) of the held-back blocks."""
+    total = ref2.sum(axis=0)
+    per_joint = 100.0 * np.sqrt(err2.sum(axis=0) / np.where(total > 0, total, np.nan))
+    per_block = 100.0 * np.sqrt(err2 / np.where(ref2 > 0, ref2, np.nan))
+    return (float(np.nanmean(per_joint)), tuple(float(v) for v in per_joint),
+            tuple(tuple(float(v) for v in row) for row in per_block))
 
 
 def fold_wls(factors: dict[tuple[int, int], tuple[np.ndarray, int]], held: int, n: int) -> np.ndarray | None:
@@ -260,10 +277,7 @@ def _score(robot: rx90sym.Robot, recordings: Sequence[Any], cand: Candidate, bas
             ref2[b] += np.sum(meas[ok] ** 2, axis=0)
     if not np.any(ref2 > 0):
         raise ValueError("no fold could be fitted and scored (too few rows left after the filters' edges)")
-    per_joint = 100.0 * np.sqrt(err2.sum(axis=0) / np.where(ref2.sum(axis=0) > 0, ref2.sum(axis=0), np.nan))
-    per_block = 100.0 * np.sqrt(err2 / np.where(ref2 > 0, ref2, np.nan))
-    return (float(np.nanmean(per_joint)), tuple(float(v) for v in per_joint),
-            tuple(tuple(float(v) for v in row) for row in per_block))
+    return block_scores(err2, ref2)
 
 
 def choose_processing(robot: rx90sym.Robot, recordings: Sequence[Any], base: Any = None,

@@ -33,7 +33,8 @@ import numpy as np
 
 import rx90sym
 
-from identify.observation.cross_validation import DEFAULT_BLOCKS, Candidate, clearly_better, fold_wls
+from identify.observation.cross_validation import (DEFAULT_BLOCKS, Candidate, block_factors, block_scores,
+                                                   clearly_better, fold_wls)
 from identify.observation.friction import DEFAULT_FRICTION, FRICTION_FORMS
 from identify.observation.friction_model import FrictionBase, coulomb_terms, own_terms
 from identify.observation.matrix import Observation, observation_matrix
@@ -126,22 +127,16 @@ def _score_form(robot: rx90sym.Robot, recordings: Sequence[Any], base: Any, opti
             bound.update(j + 1 for j, v in enumerate(found.scales) if v >= SCALE_BOUNDS[1] * (1 - 1e-3))
             if not found.converged:
                 failed.add(b + 1)
-        if W is None or scales is not None:  # Coulomb's columns do not depend on the fold
+        if W is None or scales is not None:  # Coulomb's columns (and their factors) do not depend on the fold
             W = _exact(robot, recordings, base, options, obs, form, scales)
-        A = np.column_stack([W, obs.Y])
-        factors = {(k, j): (np.linalg.qr(A[m], mode="r"), int(m.sum())) for k in range(blocks) for j in range(n)
-                   if (m := (ids == k) & (obs.joint == j)).any()}
+            factors = block_factors(W, obs.Y, obs.joint, ids, range(blocks), n)
         beta = fold_wls(factors, b, n)  # eq. 11's per-joint weights, as the processing's folds
         if beta is None:
             raise ValueError(f"friction choice: too few rows to fit without block {b + 1}")
         res = obs.Y[held] - W[held] @ beta
         np.add.at(err2[b], obs.joint[held], res ** 2)
         np.add.at(ref2[b], obs.joint[held], obs.Y[held] ** 2)
-    per_joint = 100.0 * np.sqrt(err2.sum(axis=0) / np.where(ref2.sum(axis=0) > 0, ref2.sum(axis=0), np.nan))
-    per_block = 100.0 * np.sqrt(err2 / np.where(ref2 > 0, ref2, np.nan))
-    cand = Candidate(obs.cutoffs[0], None, obs.rest, float(np.nanmean(per_joint)),
-                     tuple(float(v) for v in per_joint), tuple(tuple(float(v) for v in row) for row in per_block),
-                     label=form)
+    cand = Candidate(obs.cutoffs[0], None, obs.rest, *block_scores(err2, ref2), label=form)
     why = ([f"velocity scale on its upper bound {SCALE_BOUNDS[1]:g} rad/s for joint(s) {', '.join(map(str, sorted(bound)))}"] if bound else []) + \
           ([f"scale search not converged in fold(s) {', '.join(map(str, sorted(failed)))}"] if failed else [])
     return cand, "; ".join(why) or None
