@@ -74,13 +74,19 @@ def friction_function(form: str) -> Any:
     return ca.Function(f"friction_{form}", [v, vs], [cols, ca.jacobian(cols, vs)])
 
 
+@lru_cache(maxsize=32)
+def _mapped(form: str, size: int) -> Any:
+    """:func:`friction_function` mapped over ``size`` speeds, built once per size (the scale search
+    evaluates the same rows at every step)."""
+    return friction_function(form).map(size)
+
+
 def friction_columns(form: str, v: np.ndarray, vs: float) -> tuple[np.ndarray, np.ndarray]:
     """(columns (N, k), derivatives (N, k)) of ``form`` at the speeds v (N,) [rad/s], scale vs [rad/s]."""
     if not (np.isfinite(vs) and vs > 0):
         raise ValueError(f"friction velocity scale must be a positive speed in rad/s, got {vs!r}")
     v = np.asarray(v, dtype=float).reshape(-1)
-    f = friction_function(form).map(max(v.size, 1))
-    cols, dcols = f(v.reshape(1, -1), vs)
+    cols, dcols = _mapped(form, max(v.size, 1))(v.reshape(1, -1), vs)
     return np.asarray(cols).T, np.asarray(dcols).T
 
 
