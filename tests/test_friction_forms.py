@@ -88,3 +88,30 @@ def test_on_the_ur10e_static_log_the_presliding_fit_errs_within_each_coulomb_lev
     fs = np.array([values[f"FS{j}"] for j in range(1, robot.n + 1)])
     print("\np4 RMS error / FS per joint:", np.round(val.rms_error / fs, 2))
     assert np.all(val.rms_error < fs)
+
+
+def test_a_scale_search_that_did_not_converge_is_reported_not_fitted(rx90, rx90_base, monkeypatch, tmp_path,
+                                                                      capsys):
+    """A failed search is a solver failure: the library raises SolverError and the command exits 1
+    with one line, writing nothing (the search's result is replaced by one that says it failed)."""
+    from dataclasses import replace
+
+    import identify.estimation.separable as separable
+    from identify.app.cli import main
+    from identify.estimation.consistency.errors import SolverError
+
+    real = separable.velocity_scales
+    monkeypatch.setattr(separable, "velocity_scales", lambda *a, **k: replace(real(*a, **k), converged=False))
+    rec = friction_twin(rx90, "tanh", 0, 6.0, 100.0)
+    processing = Processing(friction="tanh", min_velocity=None, estimate_delay=False, cutoff=10.0, decimate_to=None)
+    with pytest.raises(SolverError, match="did not converge"):
+        fit(rx90, [rec], processing, base=rx90_base)
+    import identify
+
+    identify.write_recording(tmp_path / "run.csv", rec, rx90)
+    out = tmp_path / "fit.json"
+    code = main(["identify", str(tmp_path / "run.csv"), "--friction", "tanh", "--cutoff", "10", "--rest", "none",
+                 "--json", str(out)])
+    err = capsys.readouterr().err
+    assert code == 1 and not out.exists(), err
+    assert "solver failed" in err and "did not converge" in err, err
