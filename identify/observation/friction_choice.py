@@ -292,7 +292,7 @@ def _check_mix(per_joint: tuple[str, ...], single: Candidate, scored: dict[str, 
         found, why = score(per_joint, "per joint")
         combined = found.candidate
     if why:
-        return single.label, (None if isinstance(mixed, str) else combined), f"the combined forms {why}"
+        return single.label, (None if isinstance(mixed, str) else combined), f"scored together, {why}"
     if math.isnan(combined.score) or math.isnan(single.score) or combined.score > single.score:
         return single.label, (None if isinstance(mixed, str) else combined), (
             f"their joint-combined held-back error ({combined.score:.3f} %) is above {single.label}'s "
