@@ -102,6 +102,11 @@ def test_the_mix_is_fitted_saved_read_back_and_given_on_the_command_line(rx90, r
     out = tmp_path / "cli.json"
     assert main(["identify", str(tmp_path / "run.csv"), "--friction", "tanh,coulomb", "--json", str(out)]) == 2
     assert "--friction: 2 forms given for the 6 joints" in capsys.readouterr().err and not out.exists()
+    assert main(["identify", str(tmp_path / "run.csv"), "--friction", ",".join(MIX), "--cutoff", "10",
+                 "--no-decimate", "--min-velocity", "0.02", "--json", str(out)]) == 0
+    assert "friction per joint: velocity scale [rad/s] j1 tanh" in capsys.readouterr().out
+    given = load_fit(out)
+    assert given.processing.friction == MIX and given.model.friction["form"] == list(MIX)
 
 
 def test_a_mix_whose_combined_score_is_above_the_best_single_form_falls_back_to_it():
