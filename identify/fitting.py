@@ -329,10 +329,9 @@ def fit(robot: rx90sym.Robot, recordings: Sequence[Any], processing: Processing 
 
 def _chosen_friction(robot: rx90sym.Robot, recordings: Sequence[Any], base: Any, p: Processing, method: str,
                      choice: Any, options: dict[str, Any]) -> tuple[FrictionForm, dict | None]:
-    """(the friction form, one or one per joint; the processing choice's record): the form chosen per
-    joint by the cross-validation (identify.observation.friction_choice) where it is left open and
-    the processing cross-validated (not for the consistent method: a URDF holds Coulomb + viscous),
-    else the one asked for."""
+    """(the friction form, one or one per joint; the processing choice's record): chosen per joint by the
+    cross-validation (identify.observation.friction_choice) where it is left open and the processing
+    cross-validated (not for the consistent method: a URDF holds Coulomb + viscous), else as asked."""
     if choice is None:
         return p.friction_form, None
     if p.friction is not None or method == "consistent":
@@ -347,10 +346,9 @@ def _chosen_friction(robot: rx90sym.Robot, recordings: Sequence[Any], base: Any,
 
 def _friction_form(robot: rx90sym.Robot, recordings: Sequence[Any], base: Any, form: FrictionForm,
                    observation: Observation | None, options: dict[str, Any]) -> tuple[Any, dict | None]:
-    """(columns, the fit file's ``model.friction``) of the friction ``form`` (one, or one per joint)
-    and the rest policy in ``options``: a smooth form's velocity scale per joint (the smooth joints
-    only) and the presliding travel per joint, both by separable least squares
-    (identify.estimation.separable); ``base`` and None for Coulomb without presliding."""
+    """(columns, the fit file's ``model.friction``) of the friction ``form`` (one, or one per joint) and the
+    rest policy in ``options``: the smooth joints' velocity scales and the presliding travel per joint by
+    separable least squares (identify.estimation.separable); ``base`` and None for Coulomb, no presliding."""
     presliding = has_policy(options["rest"], "presliding") and options["min_velocity"] is not None
     smooth = has_smooth_friction(form)
     if not smooth and not presliding or observation is not None:

@@ -14,8 +14,8 @@ from identify.observation.friction import DEFAULT_FRICTION, FRICTION_FORMS
 
 __all__ = ["Processing", "FRICTION_FORMS", "REST_POLICIES", "CROSSING_SECONDS", "CROSSING_TRAVEL",
            "DEFAULT_MIN_VELOCITY", "DEFAULT_REST", "DEFAULT_DECIMATE_TO", "RestPolicy", "rest_per_joint",
-           "drops_rest", "has_policy", "predicted_rest", "rest_label", "FrictionForm", "friction_per_joint",
-           "friction_label", "has_smooth_friction", "uniform"]
+           "drops_rest", "has_policy", "predicted_rest", "rest_label", "FrictionForm", "friction_label",
+           "has_smooth_friction", "uniform"]
 
 #: Rest threshold [rad/s]: a joint slower than this is at rest (its Coulomb sign is unknown).
 DEFAULT_MIN_VELOCITY = 0.05
@@ -85,15 +85,6 @@ FrictionForm = str | tuple[str, ...]
 def uniform(values: FrictionForm | None) -> FrictionForm | None:
     """One name where a per-joint tuple holds the same name on every joint (one spelling inside)."""
     return values[0] if isinstance(values, tuple) and values and len(set(values)) == 1 else values
-
-
-def friction_per_joint(friction: FrictionForm | None, n: int) -> tuple[str, ...]:
-    """The friction form of each of ``n`` joints (None: :data:`DEFAULT_FRICTION` on every joint)."""
-    friction = DEFAULT_FRICTION if friction is None else friction
-    forms = (friction,) * n if isinstance(friction, str) else tuple(friction)
-    if len(forms) != n:
-        raise ValueError(f"friction: {len(forms)} forms given for {n} joints")
-    return forms
 
 
 def has_smooth_friction(friction: FrictionForm | None) -> bool:
