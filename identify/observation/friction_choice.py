@@ -98,8 +98,10 @@ class FrictionChoice:
         rule = (f"each joint takes the form of lowest held-back error on that joint where it is below coulomb's by "
                 f"more than the blocks' spread, else coulomb")
         if isinstance(self.chosen, tuple):
+            single = _single_choice(self.candidates, dict(self.notes))
             return (f"chosen per joint: {friction_label(self.chosen)} ({rule}); their joint-combined held-back error "
-                    f"{self.combined.score:.3f} % is not above the best single form's")
+                    f"{self.combined.score:.3f} % is not above the best single form's ({single.label}, "
+                    f"{single.score:.3f} %)")
         if self.fallback:
             return (f"{self._single_reason(scored)}; the per-joint forms ({friction_label(self.per_joint)}) were "
                     f"not kept: {self.fallback}")
