@@ -18,18 +18,16 @@ import rx90sym
 from rx90sym.files import write_json
 
 from identify.estimation.bootstrap import BLOCK_S, DRAWS, bootstrap_std, segment_bootstrap_std
-from identify.estimation.consistency.errors import SolverError
 from identify.estimation.consistent_fit import ConsistentResult
 from identify.plausibility import Flag
 from identify.estimation.results import IdentificationResult, json_number
 from identify.fit_file import SCHEMA_VERSION, FitModel, gains_of, read_fit_file, robot_of
 from identify.io.gains import DriveGains
-from identify.observation.friction import PRESLIDING_TRAVEL
 from identify.observation.friction_model import friction_base
 from identify.observation.matrix import Observation, coulomb_terms, observation_matrix
 from identify.io.recordings import layout_summary
-from identify.observation.processing import (DEFAULT_MIN_VELOCITY, FrictionForm, Processing, friction_label,
-                                             has_policy, has_smooth_friction)
+from identify.observation.processing import Processing, friction_label, has_policy, has_smooth_friction
+from identify.fit_friction import chosen_friction, friction_columns
 from identify.signal.delay import DelayEstimate, estimate_delay
 from identify.validation import Validation, predict
 
@@ -309,8 +307,8 @@ def fit(robot: rx90sym.Robot, recordings: Sequence[Any], processing: Processing 
     if observation is None and (p.estimate_delay or p.delay == "auto"):
         found = estimate_delay(robot, recordings, base=base, **options)
     lag = found.delay if p.delay == "auto" else float(p.delay)
-    form, choice = _chosen_friction(robot, recordings, base, p, method, choice, dict(options, delay=lag))
-    base, friction = _friction_form(robot, recordings, base, form, observation, dict(options, delay=lag))
+    form, choice = chosen_friction(robot, recordings, base, p, method, choice, dict(options, delay=lag))
+    base, friction = friction_columns(robot, recordings, base, form, observation, dict(options, delay=lag))
     obs = observation if observation is not None else observation_matrix(robot, recordings, delay=lag,
                                                                          base=base, **options)
     result = _solve(robot, obs, base, method, consistent_options)
@@ -325,58 +323,6 @@ def fit(robot: rx90sym.Robot, recordings: Sequence[Any], processing: Processing 
     return Fit(robot, result, p, model, base, obs, found, found.delay if found is not None else None, spring,
                recordings=tuple(layout_summary(r) for r in recordings if hasattr(r, "measured_mask")),
                choice=choice)
-
-
-def _chosen_friction(robot: rx90sym.Robot, recordings: Sequence[Any], base: Any, p: Processing, method: str,
-                     choice: Any, options: dict[str, Any]) -> tuple[FrictionForm, dict | None]:
-    """(the friction form, one or one per joint; the processing choice's record): chosen per joint by the
-    cross-validation (identify.observation.friction_choice) where it is left open and the processing
-    cross-validated (not for the consistent method: a URDF holds Coulomb + viscous), else as asked."""
-    if choice is None:
-        return p.friction_form, None
-    if p.friction is not None or method == "consistent":
-        return p.friction_form, choice.to_dict()
-    from identify.observation.friction_choice import choose_friction
-
-    forms = choose_friction(robot, recordings, base, options)
-    record = choice.to_dict()
-    # Its table printed after the processing's.
-    return forms.chosen, dict(record, friction=forms.to_dict(), table=record["table"] + "\n" + forms.table())
-
-
-def _friction_form(robot: rx90sym.Robot, recordings: Sequence[Any], base: Any, form: FrictionForm,
-                   observation: Observation | None, options: dict[str, Any]) -> tuple[Any, dict | None]:
-    """(columns, the fit file's ``model.friction``) of the friction ``form`` (one, or one per joint) and the
-    rest policy in ``options``: the smooth joints' velocity scales and the presliding travel per joint by
-    separable least squares (identify.estimation.separable); ``base`` and None for Coulomb, no presliding."""
-    presliding = has_policy(options["rest"], "presliding") and options["min_velocity"] is not None
-    smooth = has_smooth_friction(form)
-    if not smooth and not presliding or observation is not None:
-        if observation is not None and smooth:
-            raise ValueError(f"fit: friction form {form!r} searches its velocity scales on the recordings: "
-                             f"give recordings, not an observation matrix")
-        return base, None
-    from identify.estimation.separable import presliding_travels, velocity_scales
-
-    record: dict[str, Any] = {"form": form if isinstance(form, str) else list(form)}
-    terms = coulomb_terms(robot, base.names)
-    if smooth:
-        scales = velocity_scales(robot, recordings, base, form, **options)
-        if not scales.converged:  # a failed search is reported, never fitted with
-            raise SolverError(f"fit: the velocity-scale search of friction form {friction_label(form)!r} did not converge "
-                              f"(L-BFGS-B); use friction 'coulomb'", status="not_converged", solver="L-BFGS-B")
-        base = friction_base(base, terms, form, scales.scales)
-        record.update(scales.to_json())
-    if presliding:
-        travels = presliding_travels(robot, recordings, base, **options)
-        base = friction_base(base, terms, presliding=True, travels=_defaulted(travels.travels))
-        record.update(travels.to_json())
-    return base, record
-
-
-def _defaulted(travels: Sequence[float | None]) -> list[float]:
-    """Travels [rad] with the default where none was chosen (the joint never rests: no FPj column)."""
-    return [PRESLIDING_TRAVEL if v is None or not np.isfinite(v) else float(v) for v in travels]
 
 
 def _honest_covariance(obs: Observation, result: IdentificationResult) -> np.ndarray:
