@@ -49,7 +49,8 @@ class Observation:
     spring added; joint: (r,) joint index (0-based) of each row; samples: (r,) index of each row's
     sample in the concatenated, decimated motion; cutoffs: per recording cut-off [Hz]; rates: per
     recording rate after decimation [Hz]; rate: the first of them; notes: decimation notes;
-    min_velocity [rad/s] and rest: the rest policy used (None: no rest mask).
+    min_velocity [rad/s] and rest: the rest policy used (None: no rest mask); t: (n_samples,) time of
+    each sample of the concatenated, decimated motion [s] (what ``samples`` indexes).
     """
 
     W: np.ndarray
@@ -66,6 +67,7 @@ class Observation:
     min_velocity: float | None = None
     rest: RestPolicy = "drop"
     moving_fraction: np.ndarray | None = None
+    t: np.ndarray | None = None
 
     @property
     def rows(self) -> int:
@@ -383,5 +385,6 @@ def observation_matrix(robot: rx90sym.Robot, recordings: Sequence[Any], cutoff: 
     return Observation(W, Y, joint, names, samples, tuple(m.cutoff for m in motions), rates,
                        rates[0], tuple(m.source for m in motions), sum(len(m.Y) for m in motions),
                        tuple(m.note for m in motions) + skipped + empty, min_velocity, rest,
-                       moving.mean(axis=0) if min_velocity is not None else None)
+                       moving.mean(axis=0) if min_velocity is not None else None,
+                       np.concatenate([m.t for m in motions]))
 
