@@ -3,6 +3,8 @@ the processing scored at the fit's delay, segments too short to filter, units ch
 converter."""
 from __future__ import annotations
 
+import re
+
 import numpy as np
 import pytest
 
@@ -72,3 +74,45 @@ def test_the_processing_is_scored_at_the_fits_delay(rx90, rx90_base, monkeypatch
     # Measured, seeds 0-4 (%): in step 4.97-6.36, late at delay 0 8.06-9.95; the fit given 0.01 s within
     # 0.06 of in step, "auto" (9.7-10.4 ms) within 0.23: at most 8 % of the distance to delay 0.
     assert abs(chosen - in_step) < 0.2 * (at_zero - in_step), (chosen, in_step, at_zero)
+
+
+@pytest.fixture(scope="module")
+def rx90_logs(rx90, tmp_path_factory):
+    """Controller logs of a 8 s twin run at 250 Hz (2000 rows): t, q1..q6, qd1..qd6, tau1..tau6 as
+    recorded, in degrees, and with the q and qd groups swapped."""
+    d = tmp_path_factory.mktemp("units")
+    rec = rx90sym.twin.simulate(rx90, multisine(rx90, 4, duration=8.0), duration=8.0, rate=250.0,
+                                noise="quantised", seed=4)
+    qc = np.asarray(rx90.to_controller(rec.q))
+    qd = np.gradient(rec.q, rec.t, axis=0)
+    out = {}
+    for name, cols in (("log.csv", (qc, qd)), ("degrees.csv", (np.rad2deg(qc), np.rad2deg(qd))),
+                       ("swapped.csv", (qd, qc))):
+        np.savetxt(d / name, np.column_stack([rec.t, *cols, rec.tau]), delimiter=",", fmt="%.12g")
+        out[name] = d / name
+    return out
+
+
+@pytest.mark.parametrize("name, words", [("degrees.csv", "positions look like degrees"),
+                                         ("swapped.csv", "position and velocity groups look swapped")])
+def test_the_block_converter_checks_the_units_as_the_reader(rx90, rx90_logs, tmp_path, capsys, name, words):
+    """A log in degrees or with q/qd swapped, longer than --block: the reader's message (degrees: the
+    counts of the block refused), exit 2, nothing written. Before, the block path skipped the check
+    and called the rows corrupt (degrees) or named a velocity mismatch (swapped)."""
+    from identify.app.cli import main
+    from identify.io.logs import read_log
+    from rx90sym.recording import RecordingError
+
+    cols = "t,q1..q6,qd1..qd6,tau1..tau6"
+    with pytest.raises(RecordingError) as whole:
+        read_log(rx90_logs[name], rx90, cols)
+    out = tmp_path / "rec.csv"
+    code = main(["convert", str(rx90_logs[name]), "--robot", "rx90", "--no-header", "--columns", cols,
+                 "--block", "1000", "--out", str(out)])
+    err = capsys.readouterr().err
+    assert code == 2 and words in err and not out.exists(), err
+    # The same message (degrees: the same first line, joint and value; the counts are the block's).
+    counts = re.compile(r"\d+ of \d+ rows")
+    assert counts.sub("", str(whole.value)) in counts.sub("", err.splitlines()[-1])
+    assert main(["convert", str(rx90_logs["log.csv"]), "--robot", "rx90", "--no-header", "--columns", cols,
+                 "--block", "1000", "--out", str(out)]) == 0 and out.exists()

@@ -16,7 +16,9 @@ Differences from the whole-log reader, by construction: the median time step (ir
 gap checks, a gap's ``periods``, the report) is each block's, so a step is a lost packet when it is
 longer than 1.5 of its block's median step (the same steps as on the whole log unless the clock
 drifts by a third of a period between blocks); the recorded-velocity check compares each block's
-RMS; with ``t_from``/``t_to`` every row is parsed, so a corrupt row outside the window stops the
+RMS, and the units check (:func:`identify.io.units.check_units`: degrees, swapped q/qd groups)
+counts the rows of the block where it refuses (the same message, the block's counts); with
+``t_from``/``t_to`` every row is parsed, so a corrupt row outside the window stops the
 conversion.
 """
 from __future__ import annotations
@@ -38,6 +40,7 @@ from identify.io.gains import apply_gains
 from identify.io.logs import (_LISTED, ABSURD, _check_header, _check_increasing, _check_positions,
                               _check_velocities, _irregular, _Lines, _log_options, _parse, _refuse_splits, gains_label)
 from identify.io.recordings import TIME_RTOL
+from identify.io.units import check_units
 from identify.signal.gaps import DEFAULT_MAX_GAP, Gap, LogGaps, find_gaps, stale_rows
 from identify.signal.resampling import interpolate
 
@@ -376,8 +379,10 @@ def _checked(values: np.ndarray, numbers: list[int], cmap: ColumnMap, robot: rx9
     t = values[:, cmap.t]
     q_file = values[:, list(cmap.q)]
     q = np.asarray(robot.to_model(q_file), dtype=float) if conv == "controller" else q_file
-    _check_positions(q, t, numbers, cmap, robot, source)
     dq = values[:, list(cmap.qd)] if cmap.qd else None
+    # Degrees and swapped q/qd groups named as such, before they read as corrupt rows (as read_log).
+    check_units(t, q_file, dq, robot, source, numbers, to_model=conv == "controller", ranges=False)
+    _check_positions(q, t, numbers, cmap, robot, source)
     if t.size >= 3:
         _check_velocities(dq, q, t, np.ptp(q, axis=0), numbers, cmap, source)
 
