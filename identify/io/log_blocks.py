@@ -41,7 +41,8 @@ from identify.io.logs import (_LISTED, ABSURD, _check_header, _check_increasing,
                               _check_velocities, _irregular, _Lines, _log_options, _parse, _refuse_splits, gains_label)
 from identify.io.recordings import TIME_RTOL
 from identify.io.units import check_units
-from identify.signal.gaps import DEFAULT_MAX_GAP, Gap, LogGaps, find_gaps, stale_rows
+from identify.signal.gaps import (DEFAULT_MAX_GAP, MIN_SEGMENT_ROWS, Gap, LogGaps, all_segments_short, find_gaps,
+                                  stale_rows)
 from identify.signal.resampling import interpolate
 
 __all__ = ["DEFAULT_LOG_BLOCK", "convert_log"]
@@ -193,6 +194,7 @@ class _Report:
         self.gaps: list[Gap] = []  # the first _GAPS_KEPT, the rest counted: memory bounded
         self.gap_count, self.bridged_gaps, self.lost_periods = 0, 0, 0.0
         self.segments = 1
+        self.dropped: list[tuple[int, int, int]] = []  # segments too short to filter: lines, rows
 
     def add(self, t: np.ndarray, numbers: list[int], found: LogGaps) -> None:
         """A block's kept rows (after the previous block's last kept row, when there is one) and its gaps."""
@@ -216,7 +218,8 @@ class _Report:
                 self.gap, self.gap_lines = float(dt[k]), [numbers[k], numbers[k + 1]]
 
     def result(self, max_gap: float) -> dict[str, Any]:
-        gaps = {**LogGaps(tuple(self.gaps), np.array([self.segments - 1]), max_gap).summary(),
+        gaps = {**LogGaps(tuple(self.gaps), np.array([self.segments - 1 - len(self.dropped)]), max_gap,
+                          tuple(self.dropped)).summary(),
                 "bridged_gaps": self.bridged_gaps, "bridged_lost_periods": self.lost_periods,
                 "gaps_total": self.gap_count}
         return {"lines": [self.first_line, self.last_line], "rows": self.rows, "stale_rows": self.stale,
@@ -240,8 +243,10 @@ class _LogStream:
         self.used = [c for c, name in enumerate(cmap.names) if name != "_"]
         self.last_raw: np.ndarray | None = None
         self.last_kept: tuple[np.ndarray, list[int]] | None = None
-        self.segment = 0
-        self.resampler = _Resampler(resample) if resample else None
+        self.segment, self.out = 0, -1  # the segment found, and its number in the output
+        self.keeping, self.resampler = False, None  # the segment is long enough to keep; its grid
+        self.held: list[Recording] = []  # its first rows, until it is
+        self.held_rows, self.held_lines = 0, None
 
     def block(self, values: np.ndarray, numbers: list[int], last: bool) -> Iterator[tuple[Recording, int]]:
         report = self.report
@@ -258,7 +263,7 @@ class _LogStream:
                 values, numbers = np.vstack([self.last_kept[0], values]), self.last_kept[1] + numbers
             yield from self._kept(values, numbers, new)
         if last:
-            yield from self._flush()
+            yield from self._end(final=True)
 
     def _kept(self, values: np.ndarray, numbers: list[int], new: int) -> Iterator[tuple[Recording, int]]:
         t = values[:, self.cmap.t]
@@ -277,22 +282,52 @@ class _LogStream:
         self.last_kept = (values[-1:], numbers[-1:])
         segment = found.segment[t.size - new:] + self.segment  # the carried row is in self.segment
         rec = rec.select(slice(t.size - new, None))
+        lines = np.asarray(numbers[t.size - new:])
         for number in np.unique(segment):
-            part = rec.select(segment == number)
             if number != self.segment:
-                yield from self._flush()
+                yield from self._end(final=False)
                 self.segment = int(number)
-                self.resampler = _Resampler(self.resample) if self.resample else None
-            if self.resampler is not None:
-                part = self.resampler.feed(part, False)
-            if part is not None:
-                yield part, self.segment
+            yield from self._add(rec.select(segment == number), lines[segment == number])
 
-    def _flush(self) -> Iterator[tuple[Recording, int]]:
-        if self.resampler is not None:
+    def _add(self, part: Recording, lines: np.ndarray) -> Iterator[tuple[Recording, int]]:
+        """A part of the current segment: held until the segment has MIN_SEGMENT_ROWS rows (a shorter
+        one is dropped, as by the whole-log reader), then resampled and written."""
+        self.held.append(part)
+        self.held_rows += part.n_samples
+        self.held_lines = (self.held_lines[0] if self.held_lines else int(lines[0]), int(lines[-1]))
+        if not self.keeping and self.held_rows >= MIN_SEGMENT_ROWS:
+            self._keep()
+        if self.keeping:
+            yield from self._emit()
+
+    def _keep(self) -> None:
+        self.keeping = True
+        self.out += 1  # the segment's number in the output: a dropped one leaves no hole
+        self.resampler = _Resampler(self.resample) if self.resample else None
+
+    def _emit(self) -> Iterator[tuple[Recording, int]]:
+        parts, self.held = self.held, []
+        for part in parts:
+            part = self.resampler.feed(part, False) if self.resampler is not None else part
+            if part is not None:
+                yield part, self.out
+
+    def _end(self, final: bool) -> Iterator[tuple[Recording, int]]:
+        """The current segment ends: its last grid points, or it is dropped when too short (kept when it
+        is the log's only segment; every segment too short is an error)."""
+        if not self.keeping and self.held:
+            if final and self.out < 0 and not self.report.dropped:  # the only segment: kept whatever its length
+                self._keep()
+                yield from self._emit()
+            else:
+                self.report.dropped.append((*self.held_lines, self.held_rows))
+                if final and self.out < 0:
+                    raise all_segments_short(self.source, self.max_gap, self.report.dropped[0][:2])
+        if self.keeping and self.resampler is not None:
             part = self.resampler.feed(None, True)
             if part is not None:
-                yield part, self.segment
+                yield part, self.out
+        self.keeping, self.resampler, self.held, self.held_rows, self.held_lines = False, None, [], 0, None
 
 
 def convert_log(path: str | os.PathLike[str], robot: rx90sym.Robot, columns: str, out: str | os.PathLike[str],

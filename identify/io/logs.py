@@ -62,7 +62,7 @@ from identify.io.log_rows import (ABSURD, _bad, _check_header, _data_lines, _Lin
                                   _window, header_cells)
 from identify.io.units import check_units
 from identify.io.gains import DriveGains, apply_gains, read_gains
-from identify.signal.gaps import DEFAULT_MAX_GAP, LogGaps, find_gaps, stale_rows
+from identify.signal.gaps import DEFAULT_MAX_GAP, LogGaps, find_gaps, short_segments, stale_rows
 from identify.signal.resampling import resample as resample_recording
 from identify.io.recordings import JUMP_ATOL, JUMP_SAFETY, TIME_RTOL, RecordingWarning, _normalise_convention
 
@@ -315,6 +315,10 @@ def _recording(source: str, values: np.ndarray, numbers: list[int], cmap: Column
         refusal = _irregular(t, numbers, source, found)
         if refusal:
             raise RecordingError(refusal)
+    # A segment too short to filter (one row between two gaps) is dropped and counted, not refused.
+    found, keep = short_segments(found, numbers, source)
+    values, t, q, dq = values[keep], t[keep], q[keep], None if dq is None else dq[keep]
+    report.update(gaps=found.summary(), samples=int(t.size))
 
     def take(cols: tuple[int, ...]) -> np.ndarray | None:
         return values[:, list(cols)] if cols else None

@@ -34,7 +34,7 @@ from identify.observation.processing import (CROSSING_SECONDS, CROSSING_TRAVEL, 
                                              REST_POLICIES, RestPolicy, drops_rest, rest_label, rest_per_joint)
 from identify.signal.filtering import EDGE_PERIODS, choose_cutoff, decimate, decimation_plan, derivatives
 
-__all__ = ["DECIMATION_PASSBAND", "automatic_cutoff", "DEFAULT_MIN_VELOCITY", "DEFAULT_REST", "REST_POLICIES", "CoulombTerm", "FilteredMotion", "Observation",
+__all__ = ["DECIMATION_PASSBAND", "SPECTRUM_SAMPLES", "automatic_cutoff", "DEFAULT_MIN_VELOCITY", "DEFAULT_REST", "REST_POLICIES", "CoulombTerm", "FilteredMotion", "Observation",
            "coulomb_terms", "filtered_motion", "filtered_motions", "observation_matrix", "presliding_base", "stack_rows"]
 
 # Rest threshold and policy (measured on the TX40 and the twin: docs/real-data-identification.md):
@@ -131,7 +131,7 @@ def automatic_cutoff(recordings: Sequence[Any], decimate_to: float | None = None
     pieces = [p for rec in recordings for p in rec.pieces()] if recordings else []
     longest = max((p.n_samples for p in pieces), default=0)
     for rec in pieces:
-        if rec.n_samples < min(longest, _SPECTRUM_SAMPLES):
+        if rec.n_samples < min(longest, SPECTRUM_SAMPLES):
             continue  # too short for a spectrum: the longer segments decide
         rate = 1.0 / float(np.median(np.diff(np.asarray(rec.t, dtype=float))))
         floor = max(2.0, DECIMATION_PASSBAND * decimate_to) if decimate_to else 2.0
@@ -140,7 +140,7 @@ def automatic_cutoff(recordings: Sequence[Any], decimate_to: float | None = None
 
 
 #: A segment shorter than this many samples does not take part in the automatic cut-off.
-_SPECTRUM_SAMPLES = 256
+SPECTRUM_SAMPLES = 256
 
 
 def shifted_torques(rec: Any, delay: float) -> np.ndarray:
