@@ -37,8 +37,9 @@ from rx90sym.recording import Recording, RecordingError
 from identify.io.blocks import DEFAULT_LOG_BLOCK
 from identify.io.columns import ColumnMap
 from identify.io.gains import apply_gains
-from identify.io.logs import (_LISTED, ABSURD, _check_header, _check_increasing, _check_positions,
-                              _check_velocities, _irregular, _Lines, _log_options, _parse, _refuse_splits, gains_label)
+from identify.io.log_rows import ABSURD, LogLines, check_header, parse_rows
+from identify.io.logs import (LISTED_ROWS, check_increasing, check_positions, check_velocities, gains_label,
+                              irregular_refusal, log_options, refuse_splits)
 from identify.io.recordings import TIME_RTOL
 from identify.io.units import check_units
 from identify.signal.gaps import (DEFAULT_MAX_GAP, MIN_SEGMENT_ROWS, Gap, LogGaps, all_segments_short, find_gaps,
@@ -52,7 +53,7 @@ __all__ = ["DEFAULT_LOG_BLOCK", "convert_log"]
 SPLINE_MARGIN = 40
 
 
-def _line_blocks(path: Path, header: bool, n_cols: int, size: int) -> Iterator[_Lines]:
+def _line_blocks(path: Path, header: bool, n_cols: int, size: int) -> Iterator[LogLines]:
     """Data lines (number, text) in blocks of ``size``; comments and trailing blank lines dropped."""
     source = path.name
     numbers: list[int] = []
@@ -66,10 +67,10 @@ def _line_blocks(path: Path, header: bool, n_cols: int, size: int) -> Iterator[_
                 if line.lstrip().startswith("#"):
                     continue
                 if not line.strip():
-                    blanks.append((k, line))  # a row only if data follow (then _parse names it)
+                    blanks.append((k, line))  # a row only if data follow (then parse_rows names it)
                     continue
                 if not header_seen:
-                    _check_header(source, k, line, n_cols)
+                    check_header(source, k, line, n_cols)
                     header_seen = True
                     continue
                 for kb, lb in blanks:
@@ -79,16 +80,16 @@ def _line_blocks(path: Path, header: bool, n_cols: int, size: int) -> Iterator[_
                 numbers.append(k)
                 text.append(line)
                 if len(text) >= size:
-                    yield _Lines(source, numbers, text)
+                    yield LogLines(source, numbers, text)
                     numbers, text = [], []
     except UnicodeDecodeError as exc:
         raise RecordingError(f"{source}: not a UTF-8 text file ({exc})") from None
     if text:
-        yield _Lines(source, numbers, text)
+        yield LogLines(source, numbers, text)
 
 
-def _parse_fast(lines: _Lines, cmap: ColumnMap) -> np.ndarray:
-    """Numbers of a block by pyarrow; anything it refuses goes to :func:`identify.io.logs._parse`."""
+def _parse_fast(lines: LogLines, cmap: ColumnMap) -> np.ndarray:
+    """Numbers of a block by pyarrow; anything it refuses goes to :func:`identify.io.logs.parse_rows`."""
     import pyarrow as pa
     from pyarrow import csv
 
@@ -100,11 +101,11 @@ def _parse_fast(lines: _Lines, cmap: ColumnMap) -> np.ndarray:
                              convert_options=csv.ConvertOptions(column_types={c: pa.float64() for c in names}))
         values = np.column_stack([table.column(c).to_numpy(zero_copy_only=False) for c in names])
     except (pa.ArrowInvalid, ValueError):
-        return _parse(lines, 0, len(lines.text), cmap)
+        return parse_rows(lines, 0, len(lines.text), cmap)
     used = [c for c, name in enumerate(cmap.names) if name != "_" and c != cmap.t]
     if (values.shape[0] != len(lines.text) or not np.all(np.isfinite(values[:, [cmap.t] + used]))
             or np.any(np.abs(values[:, used]) > ABSURD)):
-        return _parse(lines, 0, len(lines.text), cmap)
+        return parse_rows(lines, 0, len(lines.text), cmap)
     return values
 
 
@@ -255,7 +256,7 @@ class _LogStream:
         stale = stale_rows(both, self.cmap.t, self.used)[both.shape[0] - values.shape[0]:]
         self.last_raw = values[-1:]
         report.stale += int(stale.sum())
-        report.stale_lines += [numbers[k] for k in np.flatnonzero(stale)[:max(0, _LISTED - len(report.stale_lines))]]
+        report.stale_lines += [numbers[k] for k in np.flatnonzero(stale)[:max(0, LISTED_ROWS - len(report.stale_lines))]]
         values, numbers = values[~stale], [n for n, s in zip(numbers, stale) if not s]
         new = values.shape[0]
         if new:
@@ -268,14 +269,14 @@ class _LogStream:
     def _kept(self, values: np.ndarray, numbers: list[int], new: int) -> Iterator[tuple[Recording, int]]:
         t = values[:, self.cmap.t]
         if t.size >= 2:
-            _check_increasing(t, numbers, self.source)
+            check_increasing(t, numbers, self.source)
         found = (find_gaps(t, numbers, self.max_gap) if t.size >= 2
                  else LogGaps((), np.zeros(t.size, np.int64), self.max_gap))
         if not self.segments:
-            _refuse_splits(found, self.source)
+            refuse_splits(found, self.source)
         rec = _checked(values, numbers, self.cmap, self.robot, self.conv, self.source)
         if self.resample is None and t.size >= 2:
-            refusal = _irregular(t, numbers, self.source, found)
+            refusal = irregular_refusal(t, numbers, self.source, found)
             if refusal:
                 raise RecordingError(refusal)
         self.report.add(t, numbers, found)
@@ -344,7 +345,7 @@ def convert_log(path: str | os.PathLike[str], robot: rx90sym.Robot, columns: str
         raise RecordingError(f"{p.name}: a log converted block by block is written as CSV")
     if not (np.isfinite(max_gap) and max_gap > 0):
         raise ValueError(f"max_gap must be a positive time in s, got {max_gap!r}")
-    cmap, conv, drive = _log_options(p, robot, columns, rows, t_from, t_to, gains, convention)
+    cmap, conv, drive = log_options(p, robot, columns, rows, t_from, t_to, gains, convention)
     report = _Report()
     stream = _LogStream(cmap, robot, conv, p.name, resample, max_gap, segments, report)
 
@@ -385,7 +386,7 @@ _GAPS_KEPT = 10_000
 _COUNT_WIDTH = 20
 
 
-def _selected(blocks: Iterator[_Lines], cmap: ColumnMap, rows: tuple[int, int] | None, t_from: float | None,
+def _selected(blocks: Iterator[LogLines], cmap: ColumnMap, rows: tuple[int, int] | None, t_from: float | None,
               t_to: float | None) -> Iterator[tuple[np.ndarray, list[int]]]:
     """Parsed blocks restricted to the lines ``rows`` or the times [t_from, t_to] (empty blocks skipped)."""
     for lines in blocks:
@@ -395,7 +396,7 @@ def _selected(blocks: Iterator[_Lines], cmap: ColumnMap, rows: tuple[int, int] |
                 if lines.numbers[0] > rows[1]:
                     return
                 continue
-            lines = _Lines(lines.source, [lines.numbers[k] for k in keep], [lines.text[k] for k in keep])
+            lines = LogLines(lines.source, [lines.numbers[k] for k in keep], [lines.text[k] for k in keep])
         values = _parse_fast(lines, cmap)
         numbers = list(lines.numbers)
         if t_from is not None or t_to is not None:
@@ -417,9 +418,9 @@ def _checked(values: np.ndarray, numbers: list[int], cmap: ColumnMap, robot: rx9
     dq = values[:, list(cmap.qd)] if cmap.qd else None
     # Degrees and swapped q/qd groups named as such, before they read as corrupt rows (as read_log).
     check_units(t, q_file, dq, robot, source, numbers, to_model=conv == "controller", ranges=False)
-    _check_positions(q, t, numbers, cmap, robot, source)
+    check_positions(q, t, numbers, cmap, robot, source)
     if t.size >= 3:
-        _check_velocities(dq, q, t, np.ptp(q, axis=0), numbers, cmap, source)
+        check_velocities(dq, q, t, np.ptp(q, axis=0), numbers, cmap, source)
 
     def take(cols: tuple[int, ...]) -> np.ndarray | None:
         return values[:, list(cols)] if cols else None
