@@ -299,8 +299,12 @@ def fit(robot: rx90sym.Robot, recordings: Sequence[Any], processing: Processing 
     if p.cross_validates and observation is None:
         from identify.observation.cross_validation import choose_processing
 
+        # Scored at the lag the fit compensates; "auto": the lag estimated on the default processing
+        # (W and Y filtered alike, it hardly depends on the cut-off; one delay search).
+        scored_lag = (estimate_delay(robot, recordings, base=base, **options).delay if p.delay == "auto"
+                      else float(p.delay))
         choice = choose_processing(robot, recordings, base=base, min_velocity=p.min_velocity, rest=p.rest,
-                                   spring=p.spring, default_decimate=p.decimate_to)
+                                   spring=p.spring, default_decimate=p.decimate_to, delay=scored_lag)
         c = choice.chosen
         options.update(cutoff=c.cutoff, decimate_to=c.decimate_to, rest=c.rest or options["rest"])
     found = None

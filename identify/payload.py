@@ -40,13 +40,15 @@ METHODS = (1, 2, 3, 4)
 MIN_WRIST_MOTION = 0.05  # rad, range of each of joints 4..6 over all loaded motions together
 
 
-def _as_list(recs: Any) -> list:
+def recording_list(recs: Any) -> list:
+    """``recs`` as a list of recordings (None: none; one recording: a list of it)."""
     if recs is None:
         return []
     return list(recs) if isinstance(recs, (list, tuple)) else [recs]
 
 
-def _check_robot(robot: rx90sym.Robot, recs: Sequence[Any], what: str) -> None:
+def check_joint_count(robot: rx90sym.Robot, recs: Sequence[Any], what: str) -> None:
+    """Refuse a recording (``what``: "empty" or "loaded") with another joint count or of another robot."""
     for rec in recs:
         if rec.q.shape[1] != robot.n:
             raise ValueError(f"{what} recording {rec.source}: {rec.q.shape[1]} joints, robot "
@@ -55,7 +57,8 @@ def _check_robot(robot: rx90sym.Robot, recs: Sequence[Any], what: str) -> None:
             raise ValueError(f"{what} recording {rec.source} is of robot {rec.robot!r}, not {robot.name!r}")
 
 
-def _check_wrist_motion(robot: rx90sym.Robot, loaded: Sequence[Any]) -> None:
+def check_wrist_motion(robot: rx90sym.Robot, loaded: Sequence[Any]) -> None:
+    """Refuse loaded motions whose wrist joints all move by less than MIN_WRIST_MOTION rad (eq. 22)."""
     q = np.concatenate([np.asarray(r.q) for r in loaded])
     wrist = list(range(max(0, robot.n - 3), robot.n))
     span = q[:, wrist].max(axis=0) - q[:, wrist].min(axis=0)
@@ -65,7 +68,7 @@ def _check_wrist_motion(robot: rx90sym.Robot, loaded: Sequence[Any]) -> None:
                          f"is not excited (need > {MIN_WRIST_MOTION} rad on at least one of them)")
 
 
-def _payload_motions(robot: rx90sym.Robot, recs: Sequence[Any], columns: Sequence[int], options: Mapping[str, Any]):
+def payload_motions(robot: rx90sym.Robot, recs: Sequence[Any], columns: Sequence[int], options: Mapping[str, Any]):
     """Filtered motions with the standard regressor's ``columns`` (indices) as Phi."""
     _, regressor = column_regressor(robot, columns=[robot.parameter_names[i] for i in columns])
     return [filtered_motion(robot, r, options.get("cutoff"), options.get("decimate_to", 50.0),
@@ -73,8 +76,8 @@ def _payload_motions(robot: rx90sym.Robot, recs: Sequence[Any], columns: Sequenc
             for r in recs]
 
 
-def _rows(blocks: Sequence[np.ndarray], Y: Sequence[np.ndarray], motions: Sequence[Any],
-          options: Mapping[str, Any]):
+def payload_rows(blocks: Sequence[np.ndarray], Y: Sequence[np.ndarray], motions: Sequence[Any],
+                 options: Mapping[str, Any]):
     """Rows grouped per joint; a joint's rows near rest are dropped when options has min_velocity."""
     return stack_rows(blocks, Y, options.get("min_velocity"), [m.dq for m in motions])
 
@@ -115,14 +118,14 @@ def payload(robot: rx90sym.Robot, method: int, empty: Sequence[Any] = (), loaded
     """
     if method not in METHODS:
         raise ValueError(f"payload: method must be 1, 2, 3 or 4, got {method!r}")
-    empty, loaded = _as_list(empty), _as_list(loaded)
+    empty, loaded = recording_list(empty), recording_list(loaded)
     if not loaded:
         raise ValueError("payload: no loaded recording given")
     if method in (2, 3, 4) and not empty:
         raise ValueError(f"payload method {method} needs at least one empty (unloaded) recording")
-    _check_robot(robot, empty, "empty")
-    _check_robot(robot, loaded, "loaded")
-    _check_wrist_motion(robot, loaded)
+    check_joint_count(robot, empty, "empty")
+    check_joint_count(robot, loaded, "loaded")
+    check_wrist_motion(robot, loaded)
     if isinstance(a_priori, str):
         a_priori = rx90sym.load_payload(a_priori)
     base = base if base is not None else rx90sym.base_parameters(robot)
@@ -140,7 +143,7 @@ def payload(robot: rx90sym.Robot, method: int, empty: Sequence[Any] = (), loaded
         empty, loaded, pairs = _paired(empty, loaded, position_tol)
     solve = {1: _method_1, 2: _method_2, 3: _method_3, 4: _method_4}[method]
     fit, robot_fit, rows = solve(robot, base, empty, loaded, robot_params=robot_params, options=options)
-    values, std, rel = _payload_part(fit)
+    values, std, rel = payload_estimates(fit)
     boot = None
     if callable(rows) and bootstrap_seed is not None:  # method 2: a difference of two fits
         boot = rows(bootstrap_seed)
@@ -151,13 +154,13 @@ def payload(robot: rx90sym.Robot, method: int, empty: Sequence[Any] = (), loaded
         values = _constrained(fit, mass, mass_tol)
         rel = 100 * std / np.abs(values)
     if robot.urdf is not None:
-        values, std, rel = _in_tip_frame(robot, fit, values, std)
+        values, std, rel = estimates_in_tip_frame(robot, fit, values, std)
     return PayloadResult(method, PAYLOAD_NAMES, values, std, rel, fit, robot_fit,
                          dict(a_priori) if a_priori else None, constrained, tuple(pairs), boot)
 
 
-def _in_tip_frame(robot: rx90sym.Robot, fit: IdentificationResult, values: np.ndarray, std: np.ndarray
-                  ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def estimates_in_tip_frame(robot: rx90sym.Robot, fit: IdentificationResult, values: np.ndarray, std: np.ndarray
+                           ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Frame-n estimates in the payload frame of a URDF robot (its tip link)."""
     idx = [fit.names.index(n) for n in PAYLOAD_NAMES]
     cov = fit.covariance[np.ix_(idx, idx)] if fit.covariance is not None else np.diag(std ** 2)
@@ -165,7 +168,8 @@ def _in_tip_frame(robot: rx90sym.Robot, fit: IdentificationResult, values: np.nd
     return values, std, 100 * std / np.abs(values)
 
 
-def _payload_part(fit: IdentificationResult) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def payload_estimates(fit: IdentificationResult) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(values, σ, relative σ in %) of the payload parameters (PAYLOAD_NAMES) of ``fit``."""
     idx = [fit.names.index(n) for n in PAYLOAD_NAMES]
     return fit.values[idx], fit.std[idx], fit.rel_std_pct[idx]
 
@@ -173,11 +177,11 @@ def _payload_part(fit: IdentificationResult) -> tuple[np.ndarray, np.ndarray, np
 def _method_1(robot, base, empty, loaded, robot_params, options, **_):
     beta = _robot_vector(robot, base, robot_params)
     cols = list(base.independent) + list(rx90sym.payload_regressor_columns(robot))
-    motions = _payload_motions(robot, loaded, cols, options)
+    motions = payload_motions(robot, loaded, cols, options)
     nb = base.nb
     # eq. 22: the robot's known part is moved to the left-hand side.
     Y = [m.Y - m.Phi[:, :, :nb] @ beta for m in motions]
-    W, Yr, joint, samples = _rows([m.Phi[:, :, nb:] for m in motions], Y, motions, options)
+    W, Yr, joint, samples = payload_rows([m.Phi[:, :, nb:] for m in motions], Y, motions, options)
     return weighted_least_squares(W, Yr, joint, PAYLOAD_NAMES), None, (W, Yr, joint, samples)
 
 
@@ -195,10 +199,10 @@ def _method_3(robot, base, empty, loaded, options, **_):
     # One cut-off for both runs of a pair, so that the same samples are kept and compared.
     cutoff = options.get("cutoff") or max(choose_cutoff(np.asarray(r.q), r.rate) for r in loaded)
     same = {**options, "cutoff": cutoff}
-    m_l = _payload_motions(robot, loaded, cols, same)
-    m_e = _payload_motions(robot, empty, cols, same)
+    m_l = payload_motions(robot, loaded, cols, same)
+    m_e = payload_motions(robot, empty, cols, same)
     # eq. 28: the empty run's torques replace W chi.
-    W, Y, joint, samples = _rows([m.Phi for m in m_l], [a.Y - b.Y for a, b in zip(m_l, m_e)], m_l, options)
+    W, Y, joint, samples = payload_rows([m.Phi for m in m_l], [a.Y - b.Y for a, b in zip(m_l, m_e)], m_l, options)
     return weighted_least_squares(W, Y, joint, PAYLOAD_NAMES), None, (W, Y, joint, samples)
 
 
@@ -206,21 +210,22 @@ def _global_rows(robot, base, empty, loaded, options):
     """Rows of eq. 29: [W_v 0; W_T W_c] and [Y_v; Y_T], grouped per joint."""
     cols = list(base.independent) + list(rx90sym.payload_regressor_columns(robot))
     nb = base.nb
-    m_e = _payload_motions(robot, empty, cols, options)
-    m_l = _payload_motions(robot, loaded, cols, options)
+    m_e = payload_motions(robot, empty, cols, options)
+    m_l = payload_motions(robot, loaded, cols, options)
     blocks = [np.concatenate([m.Phi[:, :, :nb], np.zeros_like(m.Phi[:, :, nb:])], axis=2) for m in m_e]
     blocks += [m.Phi for m in m_l]
-    return _rows(blocks, [m.Y for m in m_e + m_l], m_e + m_l, options)
+    return payload_rows(blocks, [m.Y for m in m_e + m_l], m_e + m_l, options)
 
 
 def _method_4(robot, base, empty, loaded, options, **_):
     W, Y, joint, samples = _global_rows(robot, base, empty, loaded, options)
     names = tuple(base.names) + PAYLOAD_NAMES
     fit = weighted_least_squares(W, Y, joint, names)
-    return fit, _subset(fit, base.names), (W, Y, joint, samples)
+    return fit, result_subset(fit, base.names), (W, Y, joint, samples)
 
 
-def _subset(fit: IdentificationResult, names: Sequence[str]) -> IdentificationResult:
+def result_subset(fit: IdentificationResult, names: Sequence[str]) -> IdentificationResult:
+    """The part of ``fit`` on the parameters ``names`` (values, σ, covariance)."""
     idx = [fit.names.index(n) for n in names]
     cov = fit.covariance[np.ix_(idx, idx)] if fit.covariance is not None else None
     return IdentificationResult(tuple(names), fit.values[idx], fit.std[idx], fit.rel_std_pct[idx],

@@ -10,8 +10,8 @@ import rx90sym
 from rx90sym.parameters import PAYLOAD_NAMES
 
 from identify.estimation.least_squares import compress, solve_system, stack_systems, weighted_least_squares
-from identify.payload import (PayloadResult, _as_list, _check_robot, _check_wrist_motion, _in_tip_frame,
-                              _payload_motions, _payload_part, _rows, _subset)
+from identify.payload import (PayloadResult, check_joint_count, check_wrist_motion, estimates_in_tip_frame,
+                              payload_estimates, payload_motions, payload_rows, recording_list, result_subset)
 
 __all__ = ["MonitorStep", "PayloadMonitor"]
 
@@ -35,10 +35,10 @@ class PayloadMonitor:
     """
 
     def __init__(self, robot: rx90sym.Robot, empty: Sequence[Any], base: Any = None, **options: Any) -> None:
-        empty = _as_list(empty)
+        empty = recording_list(empty)
         if not empty:
             raise ValueError("PayloadMonitor needs at least one empty recording")
-        _check_robot(robot, empty, "empty")
+        check_joint_count(robot, empty, "empty")
         self.robot = robot
         self.base = base if base is not None else rx90sym.base_parameters(robot)
         self.options = options
@@ -46,9 +46,9 @@ class PayloadMonitor:
         cols = list(self.base.independent) + list(rx90sym.payload_regressor_columns(robot))
         self._cols = cols
         nb = self.base.nb
-        m_e = _payload_motions(robot, empty, cols, options)
+        m_e = payload_motions(robot, empty, cols, options)
         blocks = [np.concatenate([m.Phi[:, :, :nb], np.zeros_like(m.Phi[:, :, nb:])], axis=2) for m in m_e]
-        W, Y, joint, _ = _rows(blocks, [m.Y for m in m_e], m_e, options)
+        W, Y, joint, _ = payload_rows(blocks, [m.Y for m in m_e], m_e, options)
         empty_fit = weighted_least_squares(W[:, :nb], Y, joint, self.base.names)
         self.weights = empty_fit.weights
         self._systems = [compress(W[joint == j], Y[joint == j]) for j in range(robot.n)]
@@ -57,18 +57,18 @@ class PayloadMonitor:
 
     def update(self, loaded: Any) -> PayloadResult:
         """Add one loaded motion and return the new payload estimate."""
-        _check_robot(self.robot, [loaded], "loaded")
-        _check_wrist_motion(self.robot, [loaded])
-        m = _payload_motions(self.robot, [loaded], self._cols, self.options)
-        W, Y, joint, _ = _rows([x.Phi for x in m], [x.Y for x in m], m, self.options)
+        check_joint_count(self.robot, [loaded], "loaded")
+        check_wrist_motion(self.robot, [loaded])
+        m = payload_motions(self.robot, [loaded], self._cols, self.options)
+        W, Y, joint, _ = payload_rows([x.Phi for x in m], [x.Y for x in m], m, self.options)
         new = [compress(W[joint == j], Y[joint == j]) for j in range(self.robot.n)]
         self._systems = [stack_systems([a, b]) for a, b in zip(self._systems, new)]
         system = stack_systems(self._systems, self.weights)
         fit = solve_system(system, self.names, joint_systems=self._systems, weights=self.weights,
                            method="monitor")
-        values, std, rel = _payload_part(fit)
+        values, std, rel = payload_estimates(fit)
         if self.robot.urdf is not None:
-            values, std, rel = _in_tip_frame(self.robot, fit, values, std)
+            values, std, rel = estimates_in_tip_frame(self.robot, fit, values, std)
         nb = self.base.nb
         self.history.append(MonitorStep(loaded.source, values, std, fit.values[:nb]))
-        return PayloadResult(4, PAYLOAD_NAMES, values, std, rel, fit, _subset(fit, self.base.names))
+        return PayloadResult(4, PAYLOAD_NAMES, values, std, rel, fit, result_subset(fit, self.base.names))

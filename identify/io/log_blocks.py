@@ -16,7 +16,9 @@ Differences from the whole-log reader, by construction: the median time step (ir
 gap checks, a gap's ``periods``, the report) is each block's, so a step is a lost packet when it is
 longer than 1.5 of its block's median step (the same steps as on the whole log unless the clock
 drifts by a third of a period between blocks); the recorded-velocity check compares each block's
-RMS; with ``t_from``/``t_to`` every row is parsed, so a corrupt row outside the window stops the
+RMS, and the units check (:func:`identify.io.units.check_units`: degrees, swapped q/qd groups)
+counts the rows of the block where it refuses (the same message, the block's counts); with
+``t_from``/``t_to`` every row is parsed, so a corrupt row outside the window stops the
 conversion.
 """
 from __future__ import annotations
@@ -35,10 +37,13 @@ from rx90sym.recording import Recording, RecordingError
 from identify.io.blocks import DEFAULT_LOG_BLOCK
 from identify.io.columns import ColumnMap
 from identify.io.gains import apply_gains
-from identify.io.logs import (_LISTED, ABSURD, _check_header, _check_increasing, _check_positions,
-                              _check_velocities, _irregular, _Lines, _log_options, _parse, _refuse_splits, gains_label)
+from identify.io.log_rows import ABSURD, LogLines, check_header, parse_rows
+from identify.io.logs import (LISTED_ROWS, check_increasing, check_positions, check_velocities, gains_label,
+                              irregular_refusal, log_options, refuse_splits)
 from identify.io.recordings import TIME_RTOL
-from identify.signal.gaps import DEFAULT_MAX_GAP, Gap, LogGaps, find_gaps, stale_rows
+from identify.io.units import check_units
+from identify.signal.gaps import (DEFAULT_MAX_GAP, MIN_SEGMENT_ROWS, Gap, LogGaps, all_segments_short, find_gaps,
+                                  stale_rows)
 from identify.signal.resampling import interpolate
 
 __all__ = ["DEFAULT_LOG_BLOCK", "convert_log"]
@@ -48,7 +53,7 @@ __all__ = ["DEFAULT_LOG_BLOCK", "convert_log"]
 SPLINE_MARGIN = 40
 
 
-def _line_blocks(path: Path, header: bool, n_cols: int, size: int) -> Iterator[_Lines]:
+def _line_blocks(path: Path, header: bool, n_cols: int, size: int) -> Iterator[LogLines]:
     """Data lines (number, text) in blocks of ``size``; comments and trailing blank lines dropped."""
     source = path.name
     numbers: list[int] = []
@@ -62,10 +67,10 @@ def _line_blocks(path: Path, header: bool, n_cols: int, size: int) -> Iterator[_
                 if line.lstrip().startswith("#"):
                     continue
                 if not line.strip():
-                    blanks.append((k, line))  # a row only if data follow (then _parse names it)
+                    blanks.append((k, line))  # a row only if data follow (then parse_rows names it)
                     continue
                 if not header_seen:
-                    _check_header(source, k, line, n_cols)
+                    check_header(source, k, line, n_cols)
                     header_seen = True
                     continue
                 for kb, lb in blanks:
@@ -75,16 +80,16 @@ def _line_blocks(path: Path, header: bool, n_cols: int, size: int) -> Iterator[_
                 numbers.append(k)
                 text.append(line)
                 if len(text) >= size:
-                    yield _Lines(source, numbers, text)
+                    yield LogLines(source, numbers, text)
                     numbers, text = [], []
     except UnicodeDecodeError as exc:
         raise RecordingError(f"{source}: not a UTF-8 text file ({exc})") from None
     if text:
-        yield _Lines(source, numbers, text)
+        yield LogLines(source, numbers, text)
 
 
-def _parse_fast(lines: _Lines, cmap: ColumnMap) -> np.ndarray:
-    """Numbers of a block by pyarrow; anything it refuses goes to :func:`identify.io.logs._parse`."""
+def _parse_fast(lines: LogLines, cmap: ColumnMap) -> np.ndarray:
+    """Numbers of a block by pyarrow; anything it refuses goes to :func:`identify.io.logs.parse_rows`."""
     import pyarrow as pa
     from pyarrow import csv
 
@@ -96,11 +101,11 @@ def _parse_fast(lines: _Lines, cmap: ColumnMap) -> np.ndarray:
                              convert_options=csv.ConvertOptions(column_types={c: pa.float64() for c in names}))
         values = np.column_stack([table.column(c).to_numpy(zero_copy_only=False) for c in names])
     except (pa.ArrowInvalid, ValueError):
-        return _parse(lines, 0, len(lines.text), cmap)
+        return parse_rows(lines, 0, len(lines.text), cmap)
     used = [c for c, name in enumerate(cmap.names) if name != "_" and c != cmap.t]
     if (values.shape[0] != len(lines.text) or not np.all(np.isfinite(values[:, [cmap.t] + used]))
             or np.any(np.abs(values[:, used]) > ABSURD)):
-        return _parse(lines, 0, len(lines.text), cmap)
+        return parse_rows(lines, 0, len(lines.text), cmap)
     return values
 
 
@@ -190,6 +195,7 @@ class _Report:
         self.gaps: list[Gap] = []  # the first _GAPS_KEPT, the rest counted: memory bounded
         self.gap_count, self.bridged_gaps, self.lost_periods = 0, 0, 0.0
         self.segments = 1
+        self.dropped: list[tuple[int, int, int]] = []  # segments too short to filter: lines, rows
 
     def add(self, t: np.ndarray, numbers: list[int], found: LogGaps) -> None:
         """A block's kept rows (after the previous block's last kept row, when there is one) and its gaps."""
@@ -213,7 +219,8 @@ class _Report:
                 self.gap, self.gap_lines = float(dt[k]), [numbers[k], numbers[k + 1]]
 
     def result(self, max_gap: float) -> dict[str, Any]:
-        gaps = {**LogGaps(tuple(self.gaps), np.array([self.segments - 1]), max_gap).summary(),
+        gaps = {**LogGaps(tuple(self.gaps), np.array([self.segments - 1 - len(self.dropped)]), max_gap,
+                          tuple(self.dropped)).summary(),
                 "bridged_gaps": self.bridged_gaps, "bridged_lost_periods": self.lost_periods,
                 "gaps_total": self.gap_count}
         return {"lines": [self.first_line, self.last_line], "rows": self.rows, "stale_rows": self.stale,
@@ -237,8 +244,10 @@ class _LogStream:
         self.used = [c for c, name in enumerate(cmap.names) if name != "_"]
         self.last_raw: np.ndarray | None = None
         self.last_kept: tuple[np.ndarray, list[int]] | None = None
-        self.segment = 0
-        self.resampler = _Resampler(resample) if resample else None
+        self.segment, self.out = 0, -1  # the segment found, and its number in the output
+        self.keeping, self.resampler = False, None  # the segment is long enough to keep; its grid
+        self.held: list[Recording] = []  # its first rows, until it is
+        self.held_rows, self.held_lines = 0, None
 
     def block(self, values: np.ndarray, numbers: list[int], last: bool) -> Iterator[tuple[Recording, int]]:
         report = self.report
@@ -247,7 +256,7 @@ class _LogStream:
         stale = stale_rows(both, self.cmap.t, self.used)[both.shape[0] - values.shape[0]:]
         self.last_raw = values[-1:]
         report.stale += int(stale.sum())
-        report.stale_lines += [numbers[k] for k in np.flatnonzero(stale)[:max(0, _LISTED - len(report.stale_lines))]]
+        report.stale_lines += [numbers[k] for k in np.flatnonzero(stale)[:max(0, LISTED_ROWS - len(report.stale_lines))]]
         values, numbers = values[~stale], [n for n, s in zip(numbers, stale) if not s]
         new = values.shape[0]
         if new:
@@ -255,41 +264,71 @@ class _LogStream:
                 values, numbers = np.vstack([self.last_kept[0], values]), self.last_kept[1] + numbers
             yield from self._kept(values, numbers, new)
         if last:
-            yield from self._flush()
+            yield from self._end(final=True)
 
     def _kept(self, values: np.ndarray, numbers: list[int], new: int) -> Iterator[tuple[Recording, int]]:
         t = values[:, self.cmap.t]
         if t.size >= 2:
-            _check_increasing(t, numbers, self.source)
+            check_increasing(t, numbers, self.source)
         found = (find_gaps(t, numbers, self.max_gap) if t.size >= 2
                  else LogGaps((), np.zeros(t.size, np.int64), self.max_gap))
         if not self.segments:
-            _refuse_splits(found, self.source)
+            refuse_splits(found, self.source)
         rec = _checked(values, numbers, self.cmap, self.robot, self.conv, self.source)
         if self.resample is None and t.size >= 2:
-            refusal = _irregular(t, numbers, self.source, found)
+            refusal = irregular_refusal(t, numbers, self.source, found)
             if refusal:
                 raise RecordingError(refusal)
         self.report.add(t, numbers, found)
         self.last_kept = (values[-1:], numbers[-1:])
         segment = found.segment[t.size - new:] + self.segment  # the carried row is in self.segment
         rec = rec.select(slice(t.size - new, None))
+        lines = np.asarray(numbers[t.size - new:])
         for number in np.unique(segment):
-            part = rec.select(segment == number)
             if number != self.segment:
-                yield from self._flush()
+                yield from self._end(final=False)
                 self.segment = int(number)
-                self.resampler = _Resampler(self.resample) if self.resample else None
-            if self.resampler is not None:
-                part = self.resampler.feed(part, False)
-            if part is not None:
-                yield part, self.segment
+            yield from self._add(rec.select(segment == number), lines[segment == number])
 
-    def _flush(self) -> Iterator[tuple[Recording, int]]:
-        if self.resampler is not None:
+    def _add(self, part: Recording, lines: np.ndarray) -> Iterator[tuple[Recording, int]]:
+        """A part of the current segment: held until the segment has MIN_SEGMENT_ROWS rows (a shorter
+        one is dropped, as by the whole-log reader), then resampled and written."""
+        self.held.append(part)
+        self.held_rows += part.n_samples
+        self.held_lines = (self.held_lines[0] if self.held_lines else int(lines[0]), int(lines[-1]))
+        if not self.keeping and self.held_rows >= MIN_SEGMENT_ROWS:
+            self._keep()
+        if self.keeping:
+            yield from self._emit()
+
+    def _keep(self) -> None:
+        self.keeping = True
+        self.out += 1  # the segment's number in the output: a dropped one leaves no hole
+        self.resampler = _Resampler(self.resample) if self.resample else None
+
+    def _emit(self) -> Iterator[tuple[Recording, int]]:
+        parts, self.held = self.held, []
+        for part in parts:
+            part = self.resampler.feed(part, False) if self.resampler is not None else part
+            if part is not None:
+                yield part, self.out
+
+    def _end(self, final: bool) -> Iterator[tuple[Recording, int]]:
+        """The current segment ends: its last grid points, or it is dropped when too short (kept when it
+        is the log's only segment; every segment too short is an error)."""
+        if not self.keeping and self.held:
+            if final and self.out < 0 and not self.report.dropped:  # the only segment: kept whatever its length
+                self._keep()
+                yield from self._emit()
+            else:
+                self.report.dropped.append((*self.held_lines, self.held_rows))
+                if final and self.out < 0:
+                    raise all_segments_short(self.source, self.max_gap, self.report.dropped[0][:2])
+        if self.keeping and self.resampler is not None:
             part = self.resampler.feed(None, True)
             if part is not None:
-                yield part, self.segment
+                yield part, self.out
+        self.keeping, self.resampler, self.held, self.held_rows, self.held_lines = False, None, [], 0, None
 
 
 def convert_log(path: str | os.PathLike[str], robot: rx90sym.Robot, columns: str, out: str | os.PathLike[str],
@@ -306,7 +345,7 @@ def convert_log(path: str | os.PathLike[str], robot: rx90sym.Robot, columns: str
         raise RecordingError(f"{p.name}: a log converted block by block is written as CSV")
     if not (np.isfinite(max_gap) and max_gap > 0):
         raise ValueError(f"max_gap must be a positive time in s, got {max_gap!r}")
-    cmap, conv, drive = _log_options(p, robot, columns, rows, t_from, t_to, gains, convention)
+    cmap, conv, drive = log_options(p, robot, columns, rows, t_from, t_to, gains, convention)
     report = _Report()
     stream = _LogStream(cmap, robot, conv, p.name, resample, max_gap, segments, report)
 
@@ -347,7 +386,7 @@ _GAPS_KEPT = 10_000
 _COUNT_WIDTH = 20
 
 
-def _selected(blocks: Iterator[_Lines], cmap: ColumnMap, rows: tuple[int, int] | None, t_from: float | None,
+def _selected(blocks: Iterator[LogLines], cmap: ColumnMap, rows: tuple[int, int] | None, t_from: float | None,
               t_to: float | None) -> Iterator[tuple[np.ndarray, list[int]]]:
     """Parsed blocks restricted to the lines ``rows`` or the times [t_from, t_to] (empty blocks skipped)."""
     for lines in blocks:
@@ -357,7 +396,7 @@ def _selected(blocks: Iterator[_Lines], cmap: ColumnMap, rows: tuple[int, int] |
                 if lines.numbers[0] > rows[1]:
                     return
                 continue
-            lines = _Lines(lines.source, [lines.numbers[k] for k in keep], [lines.text[k] for k in keep])
+            lines = LogLines(lines.source, [lines.numbers[k] for k in keep], [lines.text[k] for k in keep])
         values = _parse_fast(lines, cmap)
         numbers = list(lines.numbers)
         if t_from is not None or t_to is not None:
@@ -376,10 +415,12 @@ def _checked(values: np.ndarray, numbers: list[int], cmap: ColumnMap, robot: rx9
     t = values[:, cmap.t]
     q_file = values[:, list(cmap.q)]
     q = np.asarray(robot.to_model(q_file), dtype=float) if conv == "controller" else q_file
-    _check_positions(q, t, numbers, cmap, robot, source)
     dq = values[:, list(cmap.qd)] if cmap.qd else None
+    # Degrees and swapped q/qd groups named as such, before they read as corrupt rows (as read_log).
+    check_units(t, q_file, dq, robot, source, numbers, to_model=conv == "controller", ranges=False)
+    check_positions(q, t, numbers, cmap, robot, source)
     if t.size >= 3:
-        _check_velocities(dq, q, t, np.ptp(q, axis=0), numbers, cmap, source)
+        check_velocities(dq, q, t, np.ptp(q, axis=0), numbers, cmap, source)
 
     def take(cols: tuple[int, ...]) -> np.ndarray | None:
         return values[:, list(cols)] if cols else None

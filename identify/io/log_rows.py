@@ -15,6 +15,8 @@ from rx90sym.recording import RecordingError
 
 from identify.io.columns import ColumnMap
 
+__all__ = ["ABSURD", "LogLines", "header_cells", "data_lines", "check_header", "row_window", "bad_rows", "parse_rows"]
+
 #: A value larger than this in magnitude (any column but time) marks its row as corrupt.
 ABSURD = 1e6
 #: How many bad rows a message names before "and K more".
@@ -22,7 +24,7 @@ _SHOWN = 3
 
 
 @dataclass(frozen=True)
-class _Lines:
+class LogLines:
     """The data lines of a log: their 1-based line numbers and text."""
 
     source: str
@@ -47,7 +49,7 @@ def header_cells(path: Path) -> tuple[list[str], bool]:
     return [], False
 
 
-def _data_lines(path: Path, header: bool, n_cols: int, blanks: bool = False) -> _Lines:
+def data_lines(path: Path, header: bool, n_cols: int, blanks: bool = False) -> LogLines:
     """The data lines (``blanks``: cells separated by blanks, as UR's RTDE recorder writes them)."""
     source = path.name
     lines = _file_lines(path)
@@ -62,16 +64,16 @@ def _data_lines(path: Path, header: bool, n_cols: int, blanks: bool = False) -> 
             continue
         if header and header_line is None:
             header_line = k
-            _check_header(source, k, line, n_cols)
+            check_header(source, k, line, n_cols)
             continue
         numbers.append(k)
         text.append(line)
     if not numbers:
         raise RecordingError(f"{source}: no data rows")
-    return _Lines(source, numbers, text)
+    return LogLines(source, numbers, text)
 
 
-def _check_header(source: str, k: int, line: str, n_cols: int) -> None:
+def check_header(source: str, k: int, line: str, n_cols: int) -> None:
     """The header line ``k`` has the column map's cell count and is not a row of numbers."""
     cells = line.split(",")
     if len(cells) != n_cols:
@@ -96,8 +98,8 @@ def _separator_hint(line: str, n_cols: int) -> str:
     return ""
 
 
-def _window(lines: _Lines, rows: tuple[int, int] | None, t_from: float | None, t_to: float | None,
-            t_col: int) -> tuple[int, int]:
+def row_window(lines: LogLines, rows: tuple[int, int] | None, t_from: float | None, t_to: float | None,
+               t_col: int) -> tuple[int, int]:
     """Indices [a, b) into ``lines`` of the selected window."""
     source, numbers = lines.source, lines.numbers
     if rows is not None:
@@ -134,7 +136,7 @@ def _window(lines: _Lines, rows: tuple[int, int] | None, t_from: float | None, t
     return int(after[0]), int(before[-1]) + 1
 
 
-def _bad(source: str, problems: list[tuple[int, str]]) -> RecordingError:
+def bad_rows(source: str, problems: list[tuple[int, str]]) -> RecordingError:
     """One message naming the first bad rows by line number and what is wrong with them."""
     problems = sorted(problems)
     shown = "; ".join(f"line {line}: {what}" for line, what in problems[:_SHOWN])
@@ -144,7 +146,7 @@ def _bad(source: str, problems: list[tuple[int, str]]) -> RecordingError:
                           f"or --from/--to (rows=, t_from=, t_to= in Python)")
 
 
-def _parse(lines: _Lines, a: int, b: int, cmap: ColumnMap) -> np.ndarray:
+def parse_rows(lines: LogLines, a: int, b: int, cmap: ColumnMap) -> np.ndarray:
     """Numbers of the window's rows (N, ncols); corrupt rows raise naming their lines."""
     n_cols = len(cmap.names)
     cells = [line.split(",") for line in lines.text[a:b]]
@@ -188,5 +190,5 @@ def _parse(lines: _Lines, a: int, b: int, cmap: ColumnMap) -> np.ndarray:
                 continue
             break
     if problems:
-        raise _bad(lines.source, [(lines.numbers[a + k], what) for k, what in problems.items()])
+        raise bad_rows(lines.source, [(lines.numbers[a + k], what) for k, what in problems.items()])
     return values

@@ -58,16 +58,17 @@ import rx90sym
 from rx90sym.recording import Recording, RecordingError
 
 from identify.io.columns import ColumnMap, parse_columns, rtde_columns
-from identify.io.log_rows import (ABSURD, _bad, _check_header, _data_lines, _Lines, _parse,  # noqa: F401 (block reader)
-                                  _window, header_cells)
+from identify.io.log_rows import ABSURD, bad_rows, data_lines, header_cells, parse_rows, row_window
 from identify.io.units import check_units
 from identify.io.gains import DriveGains, apply_gains, read_gains
-from identify.signal.gaps import DEFAULT_MAX_GAP, LogGaps, find_gaps, stale_rows
+from identify.signal.gaps import DEFAULT_MAX_GAP, LogGaps, find_gaps, short_segments, stale_rows
 from identify.signal.resampling import resample as resample_recording
 from identify.io.recordings import JUMP_ATOL, JUMP_SAFETY, TIME_RTOL, RecordingWarning, _normalise_convention
 
 __all__ = ["ColumnMap", "parse_columns", "read_log", "ABSURD", "POSITION_MARGIN", "DEFAULT_MAX_GAP",
-           "STILL", "MOVING_SPAN", "VELOCITY_MISMATCH"]
+           "STILL", "MOVING_SPAN", "VELOCITY_MISMATCH", "LISTED_ROWS", "rows_to_recording", "gains_label",
+           "log_options", "check_increasing", "refuse_splits", "check_positions", "check_velocities",
+           "irregular_refusal"]
 
 #: A position further than this beyond the robot's joint limits (rad) marks its row as corrupt.
 POSITION_MARGIN = 1.0
@@ -81,7 +82,7 @@ MOVING_SPAN = 0.05
 #: fraction of the derivative's RMS (measured on the UR10e logs: see docs/real-logs.md).
 VELOCITY_MISMATCH = 0.5
 
-def _check_increasing(t: np.ndarray, numbers: Sequence[int], source: str) -> None:
+def check_increasing(t: np.ndarray, numbers: Sequence[int], source: str) -> None:
     """Time increases (a gap is not an error: :func:`identify.signal.gaps.find_gaps`). A log's
     rule; a recording's regular clock is checked by :func:`identify.io.checks._check_time`."""
     if t.size < 2:
@@ -90,20 +91,20 @@ def _check_increasing(t: np.ndarray, numbers: Sequence[int], source: str) -> Non
     problems = [(numbers[k + 1], f"time {t[k + 1]:g} s does not increase (line {numbers[k]}: {t[k]:g} s)")
                 for k in np.flatnonzero(dt <= 0.0)]
     if problems:
-        raise _bad(source, problems)
+        raise bad_rows(source, problems)
 
 
-def _refuse_splits(found: LogGaps, source: str) -> None:
+def refuse_splits(found: LogGaps, source: str) -> None:
     """With segments refused: every gap longer than the limit, named by its lines."""
     problems = [(g.lines[0], f"gap of {g.duration:g} s to line {g.lines[1]} ({g.periods:.3g} median steps), "
                              f"longer than the {found.max_gap:g} s that can be bridged")
                 for g in found.splits]
     if problems:
-        err = _bad(source, problems)
+        err = bad_rows(source, problems)
         raise RecordingError(f"{err} (or allow segments, or a longer max_gap)")
 
 
-def _check_positions(q: np.ndarray, t: np.ndarray, numbers: Sequence[int], cmap: ColumnMap,
+def check_positions(q: np.ndarray, t: np.ndarray, numbers: Sequence[int], cmap: ColumnMap,
                      robot: rx90sym.Robot, source: str) -> None:
     """Positions (model angles) within the limits + POSITION_MARGIN, and no faster jump than
     JUMP_SAFETY x the velocity limit between two rows (a corrupt value inside the limits)."""
@@ -116,7 +117,7 @@ def _check_positions(q: np.ndarray, t: np.ndarray, numbers: Sequence[int], cmap:
                                      f"beyond joint {j + 1}'s limits [{lo[j] + POSITION_MARGIN:g}, "
                                      f"{hi[j] - POSITION_MARGIN:g}] rad by more than {POSITION_MARGIN:g} rad"))
     if problems:
-        raise _bad(source, problems)
+        raise bad_rows(source, problems)
     qd_max = np.asarray(robot.limits.qd_max, dtype=float)
     allowed = JUMP_SAFETY * qd_max[None, :] * np.diff(t)[:, None] + JUMP_ATOL
     jumps = np.abs(np.diff(q, axis=0)) > allowed  # inf limits never flag
@@ -126,10 +127,10 @@ def _check_positions(q: np.ndarray, t: np.ndarray, numbers: Sequence[int], cmap:
                                          f"{numbers[k]} in {t[k + 1] - t[k]:g} s (more than {JUMP_SAFETY:g} x "
                                          f"its velocity limit {qd_max[j]:g} rad/s)"))
     if problems:
-        raise _bad(source, problems)
+        raise bad_rows(source, problems)
 
 
-def _check_velocities(dq: np.ndarray | None, q: np.ndarray, t: np.ndarray, span: np.ndarray,
+def check_velocities(dq: np.ndarray | None, q: np.ndarray, t: np.ndarray, span: np.ndarray,
                       numbers: Sequence[int], cmap: ColumnMap, source: str) -> None:
     """A velocity column that is 0 on every row while its joint moves is not a velocity (the
     Hermite interpolation would flatten the motion between samples); one that does not match
@@ -170,7 +171,7 @@ def _check_velocities(dq: np.ndarray | None, q: np.ndarray, t: np.ndarray, span:
 # --------------------------------------------------------------------------------------------
 
 
-def _irregular(t: np.ndarray, numbers: Sequence[int], source: str, found: LogGaps | None = None) -> str | None:
+def irregular_refusal(t: np.ndarray, numbers: Sequence[int], source: str, found: LogGaps | None = None) -> str | None:
     """None when every step inside a segment is within TIME_RTOL of the median step, else the
     refusal text (lost packets are irregular steps too: resampling bridges them)."""
     dt = np.diff(t)
@@ -251,9 +252,9 @@ def read_log(
                              f"header this reader knows (UR RTDE: timestamp, actual_q_0..actual_q_{robot.n - 1})")
     cmap = parse_columns(columns, robot)
     conv = _normalise_convention(convention, p.name) or "controller"
-    lines = _data_lines(p, header, len(cmap.names), blanks)
-    a, b = _window(lines, rows, t_from, t_to, cmap.t)
-    values = _parse(lines, a, b, cmap)
+    lines = data_lines(p, header, len(cmap.names), blanks)
+    a, b = row_window(lines, rows, t_from, t_to, cmap.t)
+    values = parse_rows(lines, a, b, cmap)
     rec = rows_to_recording(p.name, values, lines.numbers[a:b], cmap, robot, conv, gains=gains,
                             max_gap=max_gap, segments=segments, resample=resample)
     rec.meta["log"]["columns"] = ",".join(cmap.names)
@@ -270,7 +271,7 @@ def rows_to_recording(source: str, values: np.ndarray, numbers: Sequence[int], c
     drive = _drive(cmap, gains, robot)
     stale = stale_rows(values, cmap.t, [c for c, name in enumerate(cmap.names) if name != "_"])
     report = {"lines": [numbers[0], numbers[-1]], "rows": int(len(numbers)), "stale_rows": int(stale.sum()),
-              "stale_lines": [int(numbers[k]) for k in np.flatnonzero(stale)[:_LISTED]]}
+              "stale_lines": [int(numbers[k]) for k in np.flatnonzero(stale)[:LISTED_ROWS]]}
     values, numbers = values[~stale], [n for n, s in zip(numbers, stale) if not s]
     rec = _recording(source, values, numbers, cmap, robot, convention, report, max_gap, segments, resample)
     if drive is not None:
@@ -280,25 +281,25 @@ def rows_to_recording(source: str, values: np.ndarray, numbers: Sequence[int], c
 
 
 #: How many stale rows the report lists by line.
-_LISTED = 10
+LISTED_ROWS = 10
 
 
 def _recording(source: str, values: np.ndarray, numbers: list[int], cmap: ColumnMap, robot: rx90sym.Robot,
                conv: str, report: dict, max_gap: float, segments: bool, resample: float | None) -> Recording:
     """The checked rows as a recording: time, gaps, positions, velocities, then the grid."""
     t = values[:, cmap.t]
-    _check_increasing(t, numbers, source)
+    check_increasing(t, numbers, source)
     found = find_gaps(t, numbers, max_gap)
     if not segments:
-        _refuse_splits(found, source)
+        refuse_splits(found, source)
     q_file = values[:, list(cmap.q)]
     q = np.asarray(robot.to_model(q_file), dtype=float) if conv == "controller" else q_file
     dq = values[:, list(cmap.qd)] if cmap.qd else None
     # Degrees and swapped q/qd groups named as such, before they read as corrupt rows.
     check_units(t, q_file, dq, robot, source, numbers, to_model=conv == "controller", ranges=False)
-    _check_positions(q, t, numbers, cmap, robot, source)
+    check_positions(q, t, numbers, cmap, robot, source)
     span = np.ptp(q, axis=0)
-    _check_velocities(dq, q, t, span, numbers, cmap, source)
+    check_velocities(dq, q, t, span, numbers, cmap, source)
     if np.all(span < STILL):
         warnings.warn(f"{source}: no joint moves in lines {numbers[0]}..{numbers[-1]} (largest position span "
                       f"{span.max():g} rad): a recording at rest identifies gravity and offsets at most",
@@ -312,9 +313,13 @@ def _recording(source: str, values: np.ndarray, numbers: list[int], cmap: Column
                    "gaps": found.summary(), "bridged_samples": 0, "resampled_hz": None,
                    "samples": int(t.size), "gains": None, "convention": conv, "position_span_rad": span.tolist()})
     if resample is None:
-        refusal = _irregular(t, numbers, source, found)
+        refusal = irregular_refusal(t, numbers, source, found)
         if refusal:
             raise RecordingError(refusal)
+    # A segment too short to filter (one row between two gaps) is dropped and counted, not refused.
+    found, keep = short_segments(found, numbers, source)
+    values, t, q, dq = values[keep], t[keep], q[keep], None if dq is None else dq[keep]
+    report.update(gaps=found.summary(), samples=int(t.size))
 
     def take(cols: tuple[int, ...]) -> np.ndarray | None:
         return values[:, list(cols)] if cols else None
@@ -334,7 +339,7 @@ def gains_label(drive: DriveGains) -> str:
     return drive.source if drive.source not in ("--gains", "<memory>") else ",".join(f"{k:g}" for k in drive.gains) + " N·m/A"
 
 
-def _log_options(p: Path, robot: rx90sym.Robot, columns: str | Sequence[str], rows: tuple[int, int] | None,
+def log_options(p: Path, robot: rx90sym.Robot, columns: str | Sequence[str], rows: tuple[int, int] | None,
                  t_from: float | None, t_to: float | None, gains: DriveGains | str | None,
                  convention: str | None) -> tuple[ColumnMap, str, DriveGains | None]:
     """The column map, the convention and the drive gains of a log, checked together."""

@@ -52,7 +52,7 @@ from identify.signal.filtering import choose_cutoff
 
 __all__ = ["Candidate", "ProcessingChoice", "GRID_FACTORS", "DEFAULT_BLOCKS", "DEFAULT_TIME_CAP", "SCORED_REST",
            "candidate_grid", "choose_processing", "fold_wls", "clearly_better", "block_factors",
-           "block_scores"]
+           "block_scores", "time_blocks"]
 
 #: Cut-offs of the grid, as multiples of the position-spectrum knee.
 GRID_FACTORS = (0.5, 0.7, 1.0, 1.4, 2.0)
@@ -189,8 +189,15 @@ def _scoring_rate(grid: Sequence[Candidate]) -> float | None:
     return None if any(c.decimate_to is None for c in grid) else max(c.decimate_to for c in grid)
 
 
-def _blocks_of(t: np.ndarray, start: float, span: float, blocks: int) -> np.ndarray:
-    return np.minimum((blocks * (t - start) / span).astype(int), blocks - 1)
+def time_blocks(times: Sequence[np.ndarray], blocks: int) -> list[np.ndarray]:
+    """The fold of every sample: per array of sample times [s] (one per motion or segment), the
+    block 0..blocks-1 it falls in when the common span (earliest to latest time of all) is cut into
+    ``blocks`` contiguous blocks of equal duration. The one fold assignment of the processing and
+    the friction choices (by time, not by sample index: recordings and segments of other lengths
+    or rates fall in the same blocks for both)."""
+    start = min(float(np.min(t)) for t in times)
+    span = max(float(np.max(t)) for t in times) - start + 1e-9
+    return [np.minimum((blocks * (np.asarray(t) - start) / span).astype(int), blocks - 1) for t in times]
 
 
 def _compressed_blocks(motions: Sequence[Any], ids: Sequence[np.ndarray], blocks: int, drop: bool,
@@ -255,10 +262,8 @@ def _score(robot: rx90sym.Robot, recordings: Sequence[Any], cand: Candidate, bas
     # A presliding joint gets its magnitude FPj (travel PRESLIDING_TRAVEL), as in the fit.
     names, regressor = column_regressor(robot, base, rest=rest if min_velocity is not None else None)
     motions, _, _ = filtered_motions(robot, recordings, cand.cutoff, reference, options["spring"],
-                                     regressor, names, min_velocity, rest, 0.0)
-    start = min(float(m.t[0]) for m in motions)
-    span = max(float(m.t[-1]) for m in motions) - start + 1e-9
-    ids = [_blocks_of(m.t, start, span, blocks) for m in motions]
+                                     regressor, names, min_velocity, rest, options.get("delay", 0.0))
+    ids = time_blocks([m.t for m in motions], blocks)
     drop = min_velocity is not None and drops_rest(rest)
     n = robot.n
     # One compression per (block, joint): [R | z] of the QR of [W | Y] (eq. 10 on few rows).
@@ -284,14 +289,15 @@ def choose_processing(robot: rx90sym.Robot, recordings: Sequence[Any], base: Any
                       min_velocity: float | None = DEFAULT_MIN_VELOCITY, rest: RestPolicy | None = None,
                       spring: bool = True, blocks: int = DEFAULT_BLOCKS, time_cap: float = DEFAULT_TIME_CAP,
                       default_decimate: float | None = 50.0, candidates: Sequence[Candidate] | None = None,
-                      policies: Sequence[str] = SCORED_REST) -> ProcessingChoice:
+                      policies: Sequence[str] = SCORED_REST, delay: float = 0.0) -> ProcessingChoice:
     """Score the candidate processings (module docstring) and choose the lowest held-back error.
 
     min_velocity [rad/s], spring: the fit's rest threshold (None: no rest handling) and spring (the
     rows of W); rest: the fit's rest policy, one or one per joint, or None (open: chosen per joint
     among ``policies``, default :data:`SCORED_REST`); blocks: contiguous blocks (>= 2); time_cap [s]: no cut-off is
     started after it (the first is always scored); candidates: another grid (default
-    :func:`candidate_grid`).
+    :func:`candidate_grid`); delay [s]: the torque lag the fit compensates (every candidate is scored
+    with it, as the fit will use it).
     """
     if blocks < 2:
         raise ValueError(f"cross-validation needs at least 2 blocks, got {blocks}")
@@ -299,7 +305,7 @@ def choose_processing(robot: rx90sym.Robot, recordings: Sequence[Any], base: Any
     knee, grid = candidate_grid(recordings, default_decimate)
     grid = list(candidates) if candidates is not None else grid
     reference = _scoring_rate(grid)
-    options = {"min_velocity": min_velocity, "spring": spring}
+    options = {"min_velocity": min_velocity, "spring": spring, "delay": delay}
     start = time.perf_counter()
     first: list[Candidate] = []
     rest_scores: tuple[tuple[str, tuple[float, ...]], ...] = ()

@@ -2,7 +2,9 @@
 
 After :func:`identify.observation.cross_validation.choose_processing` has fixed the cut-off, the
 decimation and the rest policy, each friction form of :data:`DEFAULT_FORMS` (Coulomb sign(q̇), the
-smooth tanh(q̇/vs); Stribeck on request) is scored the same way, on the same contiguous blocks:
+smooth tanh(q̇/vs); Stribeck on request) is scored the same way, on the same contiguous blocks
+(:func:`~identify.observation.cross_validation.time_blocks`: cut by time over the recordings'
+common span):
 
 1. one observation matrix of the fit's processing whose Coulomb columns hold the filtered,
    decimated driver speed v (:class:`~identify.observation.friction_model.FrictionBase` form
@@ -44,7 +46,7 @@ import numpy as np
 import rx90sym
 
 from identify.observation.cross_validation import (DEFAULT_BLOCKS, Candidate, block_factors, block_scores,
-                                                   clearly_better, fold_wls)
+                                                   clearly_better, fold_wls, time_blocks)
 from identify.observation.friction import DEFAULT_FRICTION, FRICTION_FORMS
 from identify.observation.friction_model import FrictionBase, coulomb_terms, own_terms
 from identify.observation.matrix import Observation, observation_matrix
@@ -242,7 +244,7 @@ def choose_friction(robot: rx90sym.Robot, recordings: Sequence[Any], base: Any, 
     except ValueError as exc:  # the fit's own observation then says what is wrong, in its words
         return FrictionChoice((), DEFAULT_FRICTION, tuple((f, f"not scored: {str(exc).splitlines()[0]}")
                                                           for f in forms if f != DEFAULT_FRICTION), blocks, 0.0)
-    ids = np.minimum(blocks * obs.samples // max(obs.n_samples, 1), blocks - 1)
+    ids = time_blocks([obs.t], blocks)[0][obs.samples]  # the processing choice's folds, by time
 
     def score(form: FrictionForm, label: str) -> tuple[_Scored, str | None]:
         """The form scored (or not: time cap, too few rows) and why it cannot be chosen (None: it can)."""

@@ -34,7 +34,7 @@ from identify.observation.processing import (CROSSING_SECONDS, CROSSING_TRAVEL, 
                                              REST_POLICIES, RestPolicy, drops_rest, rest_label, rest_per_joint)
 from identify.signal.filtering import EDGE_PERIODS, choose_cutoff, decimate, decimation_plan, derivatives
 
-__all__ = ["DECIMATION_PASSBAND", "automatic_cutoff", "DEFAULT_MIN_VELOCITY", "DEFAULT_REST", "REST_POLICIES", "CoulombTerm", "FilteredMotion", "Observation",
+__all__ = ["DECIMATION_PASSBAND", "SPECTRUM_SAMPLES", "automatic_cutoff", "DEFAULT_MIN_VELOCITY", "DEFAULT_REST", "REST_POLICIES", "CoulombTerm", "FilteredMotion", "Observation",
            "coulomb_terms", "filtered_motion", "filtered_motions", "observation_matrix", "presliding_base", "stack_rows"]
 
 # Rest threshold and policy (measured on the TX40 and the twin: docs/real-data-identification.md):
@@ -49,7 +49,8 @@ class Observation:
     spring added; joint: (r,) joint index (0-based) of each row; samples: (r,) index of each row's
     sample in the concatenated, decimated motion; cutoffs: per recording cut-off [Hz]; rates: per
     recording rate after decimation [Hz]; rate: the first of them; notes: decimation notes;
-    min_velocity [rad/s] and rest: the rest policy used (None: no rest mask).
+    min_velocity [rad/s] and rest: the rest policy used (None: no rest mask); t: (n_samples,) time of
+    each sample of the concatenated, decimated motion [s] (what ``samples`` indexes).
     """
 
     W: np.ndarray
@@ -66,6 +67,7 @@ class Observation:
     min_velocity: float | None = None
     rest: RestPolicy = "drop"
     moving_fraction: np.ndarray | None = None
+    t: np.ndarray | None = None
 
     @property
     def rows(self) -> int:
@@ -129,7 +131,7 @@ def automatic_cutoff(recordings: Sequence[Any], decimate_to: float | None = None
     pieces = [p for rec in recordings for p in rec.pieces()] if recordings else []
     longest = max((p.n_samples for p in pieces), default=0)
     for rec in pieces:
-        if rec.n_samples < min(longest, _SPECTRUM_SAMPLES):
+        if rec.n_samples < min(longest, SPECTRUM_SAMPLES):
             continue  # too short for a spectrum: the longer segments decide
         rate = 1.0 / float(np.median(np.diff(np.asarray(rec.t, dtype=float))))
         floor = max(2.0, DECIMATION_PASSBAND * decimate_to) if decimate_to else 2.0
@@ -138,7 +140,7 @@ def automatic_cutoff(recordings: Sequence[Any], decimate_to: float | None = None
 
 
 #: A segment shorter than this many samples does not take part in the automatic cut-off.
-_SPECTRUM_SAMPLES = 256
+SPECTRUM_SAMPLES = 256
 
 
 def shifted_torques(rec: Any, delay: float) -> np.ndarray:
@@ -383,5 +385,6 @@ def observation_matrix(robot: rx90sym.Robot, recordings: Sequence[Any], cutoff: 
     return Observation(W, Y, joint, names, samples, tuple(m.cutoff for m in motions), rates,
                        rates[0], tuple(m.source for m in motions), sum(len(m.Y) for m in motions),
                        tuple(m.note for m in motions) + skipped + empty, min_velocity, rest,
-                       moving.mean(axis=0) if min_velocity is not None else None)
+                       moving.mean(axis=0) if min_velocity is not None else None,
+                       np.concatenate([m.t for m in motions]))
 

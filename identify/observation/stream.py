@@ -30,7 +30,7 @@ import numpy as np
 import rx90sym
 
 from identify.io.blocks import DEFAULT_BLOCK, BlockSource
-from identify.observation.matrix import _SPECTRUM_SAMPLES, DECIMATION_PASSBAND, filtered_motion, shifted_torques
+from identify.observation.matrix import DECIMATION_PASSBAND, SPECTRUM_SAMPLES, filtered_motion, shifted_torques
 from identify.observation.processing import RestPolicy
 from identify.signal.blocks import WelchAccumulator, decimation_margin, lowpass_margin, motion_windows
 from identify.signal.cutoff import choose_cutoff
@@ -210,7 +210,7 @@ def scan_all(sources: Sequence[BlockSource], settings: StreamSettings) -> tuple[
         return scans, float(settings.cutoff)
     segments = [g for s in scans for g in s.segments]
     longest = max(g.samples for g in segments)
-    return scans, float(max(g.cutoff for g in segments if g.samples >= min(longest, _SPECTRUM_SAMPLES)))
+    return scans, float(max(g.cutoff for g in segments if g.samples >= min(longest, SPECTRUM_SAMPLES)))
 
 
 @dataclass(frozen=True)

@@ -20,18 +20,28 @@ and a 1 rad sine at 2 Hz, 4e-4 rad on samples that are not used as measurements 
 """
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import Sequence
 
 import numpy as np
 
-__all__ = ["DEFAULT_MAX_GAP", "LOST_STEPS", "Gap", "LogGaps", "stale_rows", "find_gaps"]
+from rx90sym.recording import RecordingError
+
+from identify.signal.filtering import EDGE_PERIODS
+
+__all__ = ["DEFAULT_MAX_GAP", "LOST_STEPS", "MIN_SEGMENT_ROWS", "Gap", "LogGaps", "stale_rows", "find_gaps",
+           "short_segments", "all_segments_short"]
 
 #: Longest gap (s) bridged by interpolation; a longer one starts a new segment.
 DEFAULT_MAX_GAP = 0.05
 #: A time step longer than this many median steps has lost at least one packet (host-clock jitter
 #: of a fraction of a period stays below it; one lost packet makes a step of 2 periods).
 LOST_STEPS = 1.5
+#: Fewest rows of a segment kept when a log has several: the fewest samples the fit's filters can
+#: use at any cut-off below Nyquist (two edges of more than 2·EDGE_PERIODS samples each, plus 5;
+#: identify.observation.matrix.filtered_motions). A shorter segment (e.g. one row between two
+#: gaps) holds no row of W at any cut-off, and cannot even be resampled with one row.
+MIN_SEGMENT_ROWS = 2 * (2 * int(EDGE_PERIODS) + 1) + 5
 
 
 @dataclass(frozen=True)
@@ -51,11 +61,13 @@ class Gap:
 
 @dataclass(frozen=True)
 class LogGaps:
-    """Every gap of a log (time order), and the segment of each row (0, 1, ...)."""
+    """Every gap of a log (time order), the segment of each row (0, 1, ...) and the segments
+    dropped as too short to filter (``dropped``: first and last line of each, rows)."""
 
     gaps: tuple[Gap, ...]
     segment: np.ndarray
     max_gap: float
+    dropped: tuple[tuple[int, int, int], ...] = ()
 
     @property
     def bridged(self) -> tuple[Gap, ...]:
@@ -70,7 +82,9 @@ class LogGaps:
         return {"max_gap_s": self.max_gap, "bridged_gaps": len(self.bridged),
                 "bridged_lost_periods": float(sum(g.periods - 1.0 for g in self.bridged)),
                 "segments": int(self.segment[-1]) + 1 if self.segment.size else 0,
-                "gaps": [g.to_dict() for g in self.gaps]}
+                "gaps": [g.to_dict() for g in self.gaps], "dropped_segments": len(self.dropped),
+                "dropped_rows": int(sum(rows for _, _, rows in self.dropped)),
+                "dropped_lines": [[a, b] for a, b, _ in self.dropped[:_LISTED]]}
 
 
 def stale_rows(values: np.ndarray, t_col: int, used: Sequence[int]) -> np.ndarray:
@@ -103,3 +117,35 @@ def find_gaps(t: np.ndarray, numbers: Sequence[int], max_gap: float = DEFAULT_MA
     split = dt > max(max_gap, LOST_STEPS * step)
     segment = np.r_[0, np.cumsum(split)].astype(np.int64)
     return LogGaps(tuple(found), segment, float(max_gap))
+
+
+#: How many dropped segments the summary lists by lines.
+_LISTED = 10
+
+
+def short_segments(found: LogGaps, numbers: Sequence[int], source: str) -> tuple[LogGaps, np.ndarray]:
+    """(the gaps with the segments of fewer than :data:`MIN_SEGMENT_ROWS` rows dropped and the others
+    renumbered, the (N,) mask of the rows kept). A log of one segment is kept whatever its length.
+
+    Raises:
+        RecordingError: every segment of a log of several is that short (nothing to filter).
+    """
+    counts = np.bincount(found.segment)
+    keep = counts[found.segment] >= MIN_SEGMENT_ROWS
+    if counts.size < 2 or keep.all():
+        return found, np.ones(found.segment.size, dtype=bool)
+    starts = np.r_[0, np.cumsum(counts)]
+    dropped = tuple((int(numbers[a]), int(numbers[b - 1]), int(b - a)) for a, b in zip(starts[:-1], starts[1:])
+                    if b - a < MIN_SEGMENT_ROWS)
+    if not keep.any():
+        raise all_segments_short(source, found.max_gap, dropped[0][:2])
+    kept = found.segment[keep]
+    return replace(found, segment=np.r_[0, np.cumsum(np.diff(kept) != 0)].astype(np.int64),
+                   dropped=found.dropped + dropped), keep
+
+
+def all_segments_short(source: str, max_gap: float, first: tuple[int, int]) -> RecordingError:
+    """The error of a log whose segments are all too short to filter (``first``: the first one's lines)."""
+    return RecordingError(f"{source}: every segment between gaps longer than {max_gap:g} s has fewer than "
+                          f"{MIN_SEGMENT_ROWS} rows (lines {first[0]}..{first[1]} the first): none is long "
+                          f"enough to filter")

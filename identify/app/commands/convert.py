@@ -209,6 +209,13 @@ def _print_log(name: str, log: dict, what_else: str) -> str:
                   f"{g['lines'][1]}: {'bridged' if g['bridged'] else 'new segment'}" for g in gaps["gaps"][:_GAPS_SHOWN]]
         if gaps.get("gaps_total", len(gaps["gaps"])) > _GAPS_SHOWN:
             lines.append(f"  ... and {gaps.get('gaps_total', len(gaps['gaps'])) - _GAPS_SHOWN} more gaps")
+    if gaps.get("dropped_segments"):
+        from identify.signal.gaps import MIN_SEGMENT_ROWS
+
+        shown = ", ".join(f"{a}..{b}" for a, b in gaps["dropped_lines"])
+        lines.append(f"segments too short to filter dropped: {gaps['dropped_segments']} ({gaps['dropped_rows']} rows, "
+                     f"fewer than {MIN_SEGMENT_ROWS} each; lines {shown}"
+                     f"{', ...' if gaps['dropped_segments'] > len(gaps['dropped_lines']) else ''})")
     return "\n".join(lines)
 
 

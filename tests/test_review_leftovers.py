@@ -1,0 +1,178 @@
+"""Review leftovers of issue 21: one fold assignment for the processing and the friction choices,
+the processing scored at the fit's delay, segments too short to filter, units checked on the block
+converter."""
+from __future__ import annotations
+
+import re
+
+import numpy as np
+import pytest
+
+import rx90sym
+from identify import Processing, fit
+from identify.observation.cross_validation import Candidate, choose_processing
+from identify.observation.friction_choice import choose_friction
+from motions import multisine
+from rx90sym.recording import Recording
+from test_friction_choice import OPTIONS, coulomb_twin
+
+
+def _processing_blocks(robot, recordings, base):
+    """Per-block scores of the one candidate of OPTIONS' processing (no decimation: scored at the full rate)."""
+    choice = choose_processing(robot, recordings, base=base, min_velocity=OPTIONS["min_velocity"],
+                               rest=OPTIONS["rest"], candidates=[Candidate(OPTIONS["cutoff"], None)])
+    return np.asarray(choice.chosen.per_block)
+
+
+def test_the_friction_choice_scores_coulomb_on_the_processing_choices_folds(rx90, rx90_base):
+    """Two recordings of 4 and 10 s: Coulomb's per-block errors in the friction choice are those of the
+    same processing in the processing choice (the same rows, weights and folds). Cut by sample index,
+    the friction choice's first block held most of the first recording and a block's error differed by up to 140 %."""
+    recordings = [coulomb_twin(rx90, 0, duration=4.0), coulomb_twin(rx90, 1, duration=10.0)]
+    friction = choose_friction(rx90, recordings, rx90_base, OPTIONS, forms=("coulomb",))
+    coulomb = np.asarray(friction.candidates[0].per_block)
+    np.testing.assert_allclose(coulomb, _processing_blocks(rx90, recordings, rx90_base), rtol=1e-9)
+
+
+def _lagged_twin(robot, seed: int, lag: float, duration: float = 8.0, rate: float = 100.0):
+    """(the Coulomb twin, the same run with its torques logged ``lag`` s late: τ(t − lag), exact)."""
+    chi = robot.parameter_vector(rx90sym.twin.default_parameters(robot))
+    t = np.arange(0, duration, 1 / rate)
+    motion = multisine(robot, seed, duration=duration)
+    noise = np.random.default_rng(100 + seed).normal(size=(t.size, robot.n))
+
+    def torques(times):
+        q, qd, qdd = motion(times)
+        tau = robot.regressor_batch(q, qd, qdd) @ chi - robot.spring_torque_batch(q)[:, :, 0]
+        return tau
+
+    tau = torques(t)
+    scale = 0.01 * np.sqrt(np.mean(tau**2, axis=0))
+    q, qd, _ = motion(t)
+    return (Recording(t=t, q=q, tau=tau + scale * noise, dq=qd, robot=robot.name),
+            Recording(t=t, q=q, tau=torques(t - lag) + scale * noise, dq=qd, robot=robot.name))
+
+
+@pytest.mark.parametrize("delay", [0.01, "auto"])
+def test_the_processing_is_scored_at_the_fits_delay(rx90, rx90_base, monkeypatch, delay):
+    """Torques logged 10 ms late (one period), the fit given that delay or "auto" (estimated on the
+    default processing): its candidate scores as on the run logged in step, not as at delay 0 (the
+    former scoring). One candidate in the grid (the scoring is the library's; the test is the lag)."""
+    import identify.observation.cross_validation as cv
+
+    truth, late = _lagged_twin(rx90, 2, 0.01)
+    cand = Candidate(10.0, None)
+    monkeypatch.setattr(cv, "candidate_grid", lambda recordings, default: (10.0, [cand]))
+    p = Processing(delay=delay, estimate_delay=False, min_velocity=0.02, rest="zero-coulomb", friction="coulomb")
+    chosen = fit(rx90, [late], p, base=rx90_base).choice["chosen"]["score_pct"]
+
+    def score(rec):
+        return choose_processing(rx90, [rec], base=rx90_base, min_velocity=0.02, rest="zero-coulomb",
+                                 candidates=[cand]).chosen.score
+
+    in_step, at_zero = score(truth), score(late)
+    # Measured, seeds 0-4 (%): in step 4.97-6.36, late at delay 0 8.06-9.95; the fit given 0.01 s within
+    # 0.06 of in step, "auto" (9.7-10.4 ms) within 0.23: at most 8 % of the distance to delay 0.
+    assert abs(chosen - in_step) < 0.2 * (at_zero - in_step), (chosen, in_step, at_zero)
+
+
+@pytest.fixture(scope="module")
+def rx90_logs(rx90, tmp_path_factory):
+    """Controller logs of a 8 s twin run at 250 Hz (2000 rows): t, q1..q6, qd1..qd6, tau1..tau6 as
+    recorded, in degrees, and with the q and qd groups swapped."""
+    d = tmp_path_factory.mktemp("units")
+    rec = rx90sym.twin.simulate(rx90, multisine(rx90, 4, duration=8.0), duration=8.0, rate=250.0,
+                                noise="quantised", seed=4)
+    qc = np.asarray(rx90.to_controller(rec.q))
+    qd = np.gradient(rec.q, rec.t, axis=0)
+    out = {}
+    for name, cols in (("log.csv", (qc, qd)), ("degrees.csv", (np.rad2deg(qc), np.rad2deg(qd))),
+                       ("swapped.csv", (qd, qc))):
+        np.savetxt(d / name, np.column_stack([rec.t, *cols, rec.tau]), delimiter=",", fmt="%.12g")
+        out[name] = d / name
+    return out
+
+
+@pytest.mark.parametrize("name, words", [("degrees.csv", "positions look like degrees"),
+                                         ("swapped.csv", "position and velocity groups look swapped")])
+def test_the_block_converter_checks_the_units_as_the_reader(rx90, rx90_logs, tmp_path, capsys, name, words):
+    """A log in degrees or with q/qd swapped, longer than --block: the reader's message (degrees: the
+    counts of the block refused), exit 2, nothing written. Before, the block path skipped the check
+    and called the rows corrupt (degrees) or named a velocity mismatch (swapped)."""
+    from identify.app.cli import main
+    from identify.io.logs import read_log
+    from rx90sym.recording import RecordingError
+
+    cols = "t,q1..q6,qd1..qd6,tau1..tau6"
+    with pytest.raises(RecordingError) as whole:
+        read_log(rx90_logs[name], rx90, cols)
+    out = tmp_path / "rec.csv"
+    code = main(["convert", str(rx90_logs[name]), "--robot", "rx90", "--no-header", "--columns", cols,
+                 "--block", "1000", "--out", str(out)])
+    err = capsys.readouterr().err
+    assert code == 2 and words in err and not out.exists(), err
+    # The same message (degrees: the same first line, joint and value; the counts are the block's).
+    counts = re.compile(r"\d+ of \d+ rows")
+    assert counts.sub("", str(whole.value)) in counts.sub("", err.splitlines()[-1])
+    assert main(["convert", str(rx90_logs["log.csv"]), "--robot", "rx90", "--no-header", "--columns", cols,
+                 "--block", "1000", "--out", str(out)]) == 0 and out.exists()
+
+
+def _write_rows(path, table, keep):
+    np.savetxt(path, table[keep], delimiter=",", fmt="%.12g")
+    return path
+
+
+def test_a_segment_too_short_to_filter_is_dropped_and_counted(rx90, rx90_logs, tmp_path, capsys):
+    """Gaps of 21 periods (84 ms, beyond the 50 ms bridged) around one row, then 18 rows, then 19: the
+    one row and the 18 are dropped and counted (report, printed), the 19 kept as a segment; the block
+    converter writes the same recording for blocks ending anywhere near them. Before, resampling
+    failed inside scipy ("`x` must contain at least 2 elements")."""
+    from identify.app.cli import main
+    from identify.io.log_blocks import convert_log
+    from identify.io.logs import read_log
+    from identify.io.recordings import read_recording
+
+    table = np.loadtxt(rx90_logs["log.csv"], delimiter=",")
+    rows = np.arange(table.shape[0])
+    keep = (rows < 700) | (rows == 720) | ((rows >= 741) & (rows < 759)) | ((rows >= 780) & (rows < 799)) | (rows >= 820)
+    path = _write_rows(tmp_path / "short.csv", table, keep)
+    cols = "t,q1..q6,qd1..qd6,tau1..tau6"
+    line = {int(r): k + 1 for k, r in enumerate(rows[keep])}  # file line of each row kept
+    whole = read_log(path, rx90, cols, resample=250.0)
+    gaps = whole.meta["log"]["gaps"]
+    from identify.signal.gaps import MIN_SEGMENT_ROWS
+    assert MIN_SEGMENT_ROWS == 19 and whole.n_segments == gaps["segments"] == 3
+    assert gaps["dropped_segments"] == 2 and gaps["dropped_rows"] == 19
+    assert gaps["dropped_lines"] == [[line[720], line[720]], [line[741], line[758]]]
+    t = np.asarray(whole.t)
+    assert not np.any((t > table[700, 0]) & (t < table[780, 0]))  # nothing of the dropped rows
+    for block in (line[720], line[720] + 1, line[741] + 5, line[758], 1000):
+        out = tmp_path / f"b{block}.csv"
+        report = convert_log(path, rx90, cols, out, resample=250.0, block=block)
+        got = read_recording(out, rx90)
+        assert report["gaps"]["dropped_lines"] == gaps["dropped_lines"] and report["gaps"]["segments"] == 3
+        np.testing.assert_array_equal(got.segment, whole.segment)
+        np.testing.assert_allclose(got.t, whole.t, rtol=0, atol=1e-12)
+        np.testing.assert_allclose(got.q, whole.q, rtol=0, atol=1e-9)
+    out = tmp_path / "rec.csv"
+    assert main(["convert", str(path), "--robot", "rx90", "--no-header", "--columns", cols, "--resample", "250",
+                 "--out", str(out)]) == 0
+    assert f"segments too short to filter dropped: 2 (19 rows" in capsys.readouterr().out
+
+
+def test_a_log_of_short_segments_only_is_refused_on_both_paths(rx90, rx90_logs, tmp_path):
+    from identify.io.log_blocks import convert_log
+    from identify.io.logs import read_log
+    from rx90sym.recording import RecordingError
+
+    table = np.loadtxt(rx90_logs["log.csv"], delimiter=",")
+    rows = np.arange(400)
+    path = _write_rows(tmp_path / "bits.csv", table[:400], rows % 40 < 10)  # 10 rows, then 30 lost (120 ms)
+    cols = "t,q1..q6,qd1..qd6,tau1..tau6"
+    with pytest.raises(RecordingError, match="fewer than 19 rows .lines 1..10 the first.: none is long enough"):
+        read_log(path, rx90, cols, resample=250.0)
+    out = tmp_path / "rec.csv"
+    with pytest.raises(RecordingError, match="none is long enough to filter"):
+        convert_log(path, rx90, cols, out, resample=250.0, block=25)
+    assert not out.exists()
