@@ -13,7 +13,6 @@ serial one (the same operations in the same order).
 """
 from __future__ import annotations
 
-from collections import deque
 from dataclasses import dataclass, replace
 from types import SimpleNamespace
 from typing import Any, Iterable, Sequence
@@ -29,8 +28,8 @@ from identify.estimation.results import IdentificationResult
 from identify.io.blocks import BlockSource, block_source
 from identify.observation.matrix import DEFAULT_MIN_VELOCITY, DEFAULT_REST, column_regressor, presliding_base
 from identify.observation.processing import RestPolicy, drops_rest, predicted_rest
-from identify.observation.stream import (DEFAULT_BLOCK, Piece, Plan, StreamSettings, piece, plan_windows, scan_all,
-                                         windows_in_order)
+from identify.observation.stream import (DEFAULT_BLOCK, Piece, Plan, StreamSettings, in_order, piece, plan_windows,
+                                         scan_all, windows_in_order)
 from identify.signal.delay import DelayEstimate, delay_grid, joint_log_rms, refined_delay
 from identify.validation import Validation, _relative, _rms, base_vector
 
@@ -105,21 +104,6 @@ def _block_task(robot: rx90sym.Robot, rec: Any, window: Any, plan: Any, cutoff: 
     return p, factors
 
 
-def _in_order(tasks: Iterable[tuple], client: Any, in_flight: int) -> Iterable[tuple[Piece, list]]:
-    """Run the block tasks serially, or on Dask with at most ``in_flight`` blocks submitted; results in order."""
-    if client is None:
-        for args in tasks:
-            yield _block_task(*args)
-        return
-    queue: deque = deque()
-    for args in tasks:
-        queue.append(client.submit(_block_task, *args, pure=False))
-        if len(queue) >= in_flight:
-            yield queue.popleft().result()
-    while queue:
-        yield queue.popleft().result()
-
-
 def _tasks(robot: rx90sym.Robot, sources: Sequence[BlockSource], plans: Sequence[Sequence[Plan]], cutoff: float,
            settings: StreamSettings, base: Any, names: Sequence[str], lags: Sequence[float]) -> Iterable[tuple]:
     for plan, window, rec, first in windows_in_order(sources, plans):
@@ -145,7 +129,7 @@ def _accumulate(robot: rx90sym.Robot, sources: Sequence[BlockSource], plans: Seq
     # On Dask the robot and its compiled regressor are sent once to each worker, not with every block.
     shared = client.scatter([robot, base], broadcast=True) if client is not None else (robot, base)
     tasks = _tasks(shared[0], sources, plans, cutoff, settings, shared[1], names, lags)
-    for p, block_factors in _in_order(tasks, client, 2 * _workers(client) if client is not None else 1):
+    for p, block_factors in in_order(_block_task, tasks, client, 2 * _workers(client) if client is not None else 1):
         count += 1
         m = p.motion
         moving += m.moving.sum(axis=0)
