@@ -273,8 +273,7 @@ def _print_fit(f: Fit, recs: list, auto_delay: bool, prior: Any = None) -> None:
         print(f.choice["table"])
     else:
         p = f.processing
-        why = (f"--cutoff {p.cutoff:g} given" if p.cutoff is not None else "--no-cross-validate"
-               if p.cross_validate is False else "long logs are fitted block by block")
+        why = f"--cutoff {p.cutoff:g} given" if p.cutoff is not None else "--no-cross-validate"
         print(f"processing not cross-validated ({why}): rest policy {rest_label(f.rest)}")
     if f.model.friction is not None and "velocity_scale" in f.model.friction:
         from identify.estimation.separable import VelocityScales
