@@ -131,7 +131,7 @@ def _accumulate(robot: rx90sym.Robot, sources: Sequence[BlockSource], plans: Seq
     drop = settings.min_velocity is not None and drops_rest(settings.rest)
     count = 0
     # On Dask the robot and its compiled regressor are sent once to each worker, not with every block.
-    shared = client.scatter([robot, base], broadcast=True) if client is not None else (robot, base)
+    shared = client.scatter([robot, base], broadcast=True, hash=False) if client is not None else (robot, base)
     tasks = _tasks(shared[0], sources, plans, cutoff, settings, shared[1], names, lags)
     for p, block_factors in in_order(_block_task, tasks, client, 2 * _workers(client) if client is not None else 1):
         count += 1
@@ -154,6 +154,16 @@ def _plans(scans: Sequence[Any], cutoff: float, settings: StreamSettings) -> tup
         raise ValueError(f"recordings have different rates after decimation: {', '.join(f'{r:g}' for r in rates)} Hz; "
                          f"give decimate_to")
     return [p for p, _ in planned], tuple(note for _, notes in planned for note in notes)
+
+
+def _choose(robot: rx90sym.Robot, sources: Sequence[BlockSource], base: Any, cutoff: float | None,
+            decimate_to: float | None, min_velocity: float | None, rest: RestPolicy | None, spring: bool, block: int,
+            client: Any) -> Any:
+    """The processing chosen by blocked cross-validation block by block (a ProcessingChoice)."""
+    if cutoff is not None:
+        raise ValueError("a cut-off is given and cross_validate asks to choose one: give one of them")
+    return choose_processing_streamed(robot, sources, base, min_velocity or None, rest, spring,
+                                      default_decimate=decimate_to or None, block=block, client=client)
 
 
 def fit_streamed(robot: rx90sym.Robot, recordings: Sequence[Any], method: str = "wls", base: Any = None,
@@ -188,10 +198,7 @@ def fit_streamed(robot: rx90sym.Robot, recordings: Sequence[Any], method: str = 
     sources = [block_source(r, robot, convention, gains) for r in recordings]
     choice = None
     if (cutoff is None) if cross_validate is None else cross_validate:
-        if cutoff is not None:
-            raise ValueError("a cut-off is given and cross_validate asks to choose one: give one of them")
-        choice = choose_processing_streamed(robot, sources, base, min_velocity or None, rest, spring,
-                                            default_decimate=decimate_to or None, block=int(block), client=client)
+        choice = _choose(robot, sources, base, cutoff, decimate_to, min_velocity, rest, spring, int(block), client)
         cutoff, decimate_to, rest = choice.chosen.cutoff, choice.chosen.decimate_to, choice.chosen.rest or rest
     rest = DEFAULT_REST if rest is None else rest
     base = presliding_base(robot, base, rest if min_velocity else None)  # FPj columns with "presliding"

@@ -134,7 +134,7 @@ def _score(cand: Candidate, robot: rx90sym.Robot, sources: Sequence[BlockSource]
     fitted = [JointFactors(n, c) for _ in range(blocks)]
     held = [JointFactors(n, c) for _ in range(blocks)] if drop else fitted
     if client is not None:  # the robot and its compiled columns sent once to each worker
-        robot, columns = client.scatter([robot, columns], broadcast=True)
+        robot, columns = client.scatter([robot, columns], broadcast=True, hash=False)
     tasks = ((robot, rec, window, plan, settings, columns, span, drop)
              for plan, window, rec, _ in windows_in_order(sources, plans))
     for parts in in_order(_fold_task, tasks, client, 4 if client is not None else 1):

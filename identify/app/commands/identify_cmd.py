@@ -89,7 +89,8 @@ def register(sub: Any) -> None:
     sp.add_argument("--friction", choices=FRICTION_FORMS, default=None,
                     help="friction while moving: Coulomb sign(q̇), smooth tanh(q̇/vs) or Stribeck, the velocity "
                          "scale vs per joint found by separable least squares (default: coulomb or tanh chosen "
-                         "by the cross-validation, coulomb unless clearly beaten; else coulomb)")
+                         "by the cross-validation, coulomb unless clearly beaten; else coulomb, and for long logs "
+                         "fitted block by block)")
     sp.add_argument("--delay", type=_delay, default=0.0,
                     help="torque lag behind the positions: 'auto' (estimated) or seconds (default 0; "
                          "the estimate is always reported)")
