@@ -6,6 +6,8 @@ bootstrap, without ever holding a full-rate array of a whole log: recordings are
 (:mod:`identify.io.blocks`), filtered in overlapping blocks (:mod:`identify.signal.blocks`), turned
 into decimated rows block by block (:mod:`identify.observation.stream`) and folded into the
 per-joint triangular factors (:mod:`identify.estimation.incremental_qr`) from which eqs. 9-15 follow.
+Without a cut-off the processing is first chosen by blocked cross-validation, block by block too
+(:mod:`identify.observation.stream_cv`).
 
 With a Dask ``client`` every block is a task (filtering, regressor, parallel decimation and the
 block's QR run on the workers); the client folds the factors in block order, so the result is the
