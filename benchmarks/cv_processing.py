@@ -27,7 +27,7 @@ sys.path[:0] = [str(ROOT), str(ROOT / "benchmarks"), str(ROOT / "tests")]
 import rx90sym  # noqa: E402
 from identify import Processing, fit, predict, split  # noqa: E402
 from identify.observation.cross_validation import choose_processing  # noqa: E402
-from identify.observation.processing import rest_label  # noqa: E402
+from identify.observation.processing import friction_label, rest_label  # noqa: E402
 from motions import multisine, panda_truth  # noqa: E402
 from plain_ls import plain_ls, plain_prediction  # noqa: E402
 from rx90sym.recording import Recording  # noqa: E402
@@ -44,7 +44,8 @@ def held_out_error(robot, base, fit_part, test_clean, cutoff, decimate_to, rest,
                                             estimate_delay=False, **options), base=base)
     val = predict(robot, fit_.result, test_clean, base=base, cutoff=fit_.cutoff, decimate_to=None,
                   min_velocity=fit_.min_velocity, rest=fit_.rest)
-    return relative(val.predicted, val.measured), (fit_.model.friction or {}).get("form", "coulomb")
+    form = (fit_.model.friction or {}).get("form", "coulomb")
+    return relative(val.predicted, val.measured), friction_label(tuple(form) if isinstance(form, list) else form)
 
 
 def one_run(robot, base, truth, seed: int, noise: float, duration: float) -> dict:

@@ -116,6 +116,8 @@ def main() -> None:
         print(row("ours, all samples", every))
         above = [f"j{j + 1} {100 * (r - 1):+.1f} %" for j, r in enumerate(moving / FIGAROH_WLS) if r > 1.05]
         print(f"   within 5 % of FIGAROH or below on every joint: {'yes' if not above else 'NO: ' + ', '.join(above)}")
+        if f.choice is not None and f.choice.get("friction"):  # the friction form chosen per joint
+            print("   " + f.choice["friction"]["table"].replace("\n", "\n   "))
     options = {}  # parts 3-4: rx90 identify's defaults unless stated
 
     if args.quick:

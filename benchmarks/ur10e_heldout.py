@@ -36,7 +36,7 @@ import numpy as np
 import rx90sym
 from identify import Processing, fit
 from identify.io.gains import DriveGains, apply_gains
-from identify.observation.processing import rest_label
+from identify.observation.processing import friction_label, rest_label
 
 
 def _sibling(name: str) -> ModuleType:
@@ -128,8 +128,9 @@ def print_policies(title: str, table: dict) -> None:
             mask = val.moving
         label = f"{name}, {'offsets' if offsets else 'no offsets'}"
         if fit.choice is not None:
+            form = (fit.model.friction or {}).get("form", "coulomb")
             print(f"  ({name}: cut-off {fit.cutoff:.4g} Hz, decimation to {fit.decimate_to or 0:g} Hz, "
-                  f"rest {rest_label(fit.rest)})")
+                  f"rest {rest_label(fit.rest)}, friction {friction_label(form)})")
         print(f"{label:<38}%  " + _cells(val.relative_error_pct, "8.1f"))
         print(f"{'  all samples':<38}Nm " + _cells(val.rms_error, "8.3f"))
         if mask.any():

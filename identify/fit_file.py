@@ -25,8 +25,10 @@ __all__ = ["SCHEMA_VERSION", "FitModel", "read_fit_file", "robot_file_hash", "to
 
 #: Layout of the fit file. 2: the first with ``schema_version`` and ``processing`` (1: the
 #: identification JSON before them); 3: the rest policy may be one per joint (a list), and the
-#: processing's ``rest`` and ``cross_validate`` may be null (open, automatic). Version 2 files are
-#: still read (their fields mean the same in 3).
+#: processing's ``rest`` and ``cross_validate`` may be null (open, automatic); the friction form
+#: (``processing.friction``, ``model.friction.form``) may be one per joint (a list; a file whose
+#: form is the same on every joint keeps the one name, so earlier version-3 files read the same).
+#: Version 2 files are still read (their fields mean the same in 3).
 SCHEMA_VERSION = 3
 #: Older layouts read as they are.
 READABLE_VERSIONS = (2, SCHEMA_VERSION)
@@ -56,8 +58,9 @@ class FitModel:
     offsets: torque offsets OFFj identified; spring: "default" | "none" | "identify" |
     "identify-k" | a table file; cutoff_hz (the one used, also when chosen on the data),
     decimate_to_hz (None: no decimation), rate_hz (achieved), delay_s: torque lag compensated;
-    tip: the tip link of a URDF robot (None otherwise); friction: the smooth friction form and its
-    velocity scales (identify.estimation.separable.VelocityScales.to_json; None: Coulomb).
+    tip: the tip link of a URDF robot (None otherwise); friction: the smooth friction form (one, or
+    a list of one per joint) and its velocity scales (null on a Coulomb joint;
+    identify.estimation.separable.VelocityScales.to_json), the presliding travels; None: Coulomb.
     """
 
     robot: str

@@ -24,11 +24,12 @@ from identify.plausibility import Flag
 from identify.estimation.results import IdentificationResult, json_number
 from identify.fit_file import SCHEMA_VERSION, FitModel, gains_of, read_fit_file, robot_of
 from identify.io.gains import DriveGains
-from identify.observation.friction import DEFAULT_FRICTION, PRESLIDING_TRAVEL
+from identify.observation.friction import PRESLIDING_TRAVEL
 from identify.observation.friction_model import friction_base
 from identify.observation.matrix import Observation, coulomb_terms, observation_matrix
 from identify.io.recordings import layout_summary
-from identify.observation.processing import DEFAULT_MIN_VELOCITY, Processing, has_policy
+from identify.observation.processing import (DEFAULT_MIN_VELOCITY, FrictionForm, Processing, friction_label,
+                                             has_policy, has_smooth_friction)
 from identify.signal.delay import DelayEstimate, estimate_delay
 from identify.validation import Validation, predict
 
@@ -277,7 +278,7 @@ def fit(robot: rx90sym.Robot, recordings: Sequence[Any], processing: Processing 
     if block is not None or client is not None:
         from identify.stream_fit import fit_in_blocks
 
-        if processing is not None and processing.friction_form != DEFAULT_FRICTION:
+        if processing is not None and has_smooth_friction(processing.friction):
             raise ValueError(f"fit: friction form {processing.friction!r} searches its velocity scales on whole "
                              f"recordings, not block by block: give friction 'coulomb', or no block")
         return fit_in_blocks(robot, recordings, processing, method, base=base, gains=gains, convention=convention,
@@ -286,10 +287,10 @@ def fit(robot: rx90sym.Robot, recordings: Sequence[Any], processing: Processing 
     if method not in METHODS:
         raise ValueError(f"fit: method must be one of {METHODS}, got {method!r}")
     p = processing if processing is not None else Processing()
-    if method == "consistent" and (p.friction_form != DEFAULT_FRICTION or has_policy(p.rest, "presliding")):
+    if method == "consistent" and (has_smooth_friction(p.friction) or has_policy(p.rest, "presliding")):
         # Its standard parameters are what a URDF/MJCF holds: Coulomb (FS) and viscous (FV) friction.
         raise ValueError(f"fit: the consistent method fits bodies with Coulomb + viscous friction (what a URDF or "
-                         f"MJCF holds), not friction form {p.friction!r} with rest policy {p.rest!r}: use "
+                         f"MJCF holds), not friction form {friction_label(p.friction)!r} with rest policy {p.rest!r}: use "
                          f"friction 'coulomb' and rest 'zero-coulomb' or 'drop', or method 'wls'")
     recordings = list(recordings) if isinstance(recordings, (list, tuple)) else [recordings]
     base = base if base is not None else rx90sym.base_parameters(robot)
@@ -325,10 +326,10 @@ def fit(robot: rx90sym.Robot, recordings: Sequence[Any], processing: Processing 
 
 
 def _chosen_friction(robot: rx90sym.Robot, recordings: Sequence[Any], base: Any, p: Processing, method: str,
-                     choice: Any, options: dict[str, Any]) -> tuple[str, dict | None]:
-    """(the friction form, the processing choice's record): the form chosen by the cross-validation
-    (identify.observation.friction_choice) where it is left open and the processing cross-validated
-    (not for the consistent method: a URDF holds Coulomb + viscous), else the one asked for."""
+                     choice: Any, options: dict[str, Any]) -> tuple[FrictionForm, dict | None]:
+    """(the friction form, one or one per joint; the processing choice's record): chosen per joint by the
+    cross-validation (identify.observation.friction_choice) where it is left open and the processing
+    cross-validated (not for the consistent method: a URDF holds Coulomb + viscous), else as asked."""
     if choice is None:
         return p.friction_form, None
     if p.friction is not None or method == "consistent":
@@ -341,26 +342,26 @@ def _chosen_friction(robot: rx90sym.Robot, recordings: Sequence[Any], base: Any,
     return forms.chosen, dict(record, friction=forms.to_dict(), table=record["table"] + "\n" + forms.table())
 
 
-def _friction_form(robot: rx90sym.Robot, recordings: Sequence[Any], base: Any, form: str,
+def _friction_form(robot: rx90sym.Robot, recordings: Sequence[Any], base: Any, form: FrictionForm,
                    observation: Observation | None, options: dict[str, Any]) -> tuple[Any, dict | None]:
-    """(columns, the fit file's ``model.friction``) of the friction ``form`` and the rest policy in
-    ``options``: a smooth form's velocity scale per joint and the presliding travel per joint, both
-    by separable least squares (identify.estimation.separable); ``base`` and None for Coulomb
-    without presliding."""
+    """(columns, the fit file's ``model.friction``) of the friction ``form`` (one, or one per joint) and the
+    rest policy in ``options``: the smooth joints' velocity scales and the presliding travel per joint by
+    separable least squares (identify.estimation.separable); ``base`` and None for Coulomb, no presliding."""
     presliding = has_policy(options["rest"], "presliding") and options["min_velocity"] is not None
-    if form == DEFAULT_FRICTION and not presliding or observation is not None:
-        if observation is not None and form != DEFAULT_FRICTION:
+    smooth = has_smooth_friction(form)
+    if not smooth and not presliding or observation is not None:
+        if observation is not None and smooth:
             raise ValueError(f"fit: friction form {form!r} searches its velocity scales on the recordings: "
                              f"give recordings, not an observation matrix")
         return base, None
     from identify.estimation.separable import presliding_travels, velocity_scales
 
-    record: dict[str, Any] = {"form": form}
+    record: dict[str, Any] = {"form": form if isinstance(form, str) else list(form)}
     terms = coulomb_terms(robot, base.names)
-    if form != DEFAULT_FRICTION:
+    if smooth:
         scales = velocity_scales(robot, recordings, base, form, **options)
         if not scales.converged:  # a failed search is reported, never fitted with
-            raise SolverError(f"fit: the velocity-scale search of friction form {form!r} did not converge "
+            raise SolverError(f"fit: the velocity-scale search of friction form {friction_label(form)!r} did not converge "
                               f"(L-BFGS-B); use friction 'coulomb'", status="not_converged", solver="L-BFGS-B")
         base = friction_base(base, terms, form, scales.scales)
         record.update(scales.to_json())

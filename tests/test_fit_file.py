@@ -59,6 +59,8 @@ def _without(d: dict, keys) -> dict:
         if "friction" in choice:  # the friction form's choice (identify.observation.friction_choice)
             forms = {k: v for k, v in choice["friction"].items() if k != "seconds"}
             forms["candidates"] = [{k: v for k, v in c.items() if k != "seconds"} for c in forms["candidates"]]
+            if forms.get("combined"):  # the per-joint forms scored together
+                forms["combined"] = {k: v for k, v in forms["combined"].items() if k != "seconds"}
             choice["friction"] = forms
         out["processing_choice"] = choice
     return out

@@ -49,12 +49,12 @@ LOW_SPEED_SHARE = 0.02
 
 @dataclass(frozen=True)
 class VelocityScales:
-    """Velocity scale per joint of a smooth friction form: form; scales, std (n,) [rad/s] (nan for
-    a joint without a Coulomb term); at_bound (n,): the search stopped on a bound of
+    """Velocity scale per joint of a smooth friction form: form (one, or one per joint); scales,
+    std (n,) [rad/s] (nan for a joint without a Coulomb term or of the Coulomb form); at_bound (n,): the search stopped on a bound of
     :data:`SCALE_BOUNDS` (the data prefer a sign, or a viscous term); cost: the weighted cost F;
     converged: the search reported success."""
 
-    form: str
+    form: str | tuple[str, ...]
     scales: tuple[float, ...]
     std: tuple[float, ...]
     at_bound: tuple[bool, ...]
@@ -65,7 +65,7 @@ class VelocityScales:
         def num(v: float) -> float | None:
             return float(v) if np.isfinite(v) else None
 
-        return {"form": self.form, "velocity_scale": [num(v) for v in self.scales],
+        return {"form": self.form if isinstance(self.form, str) else list(self.form), "velocity_scale": [num(v) for v in self.scales],
                 "velocity_scale_std": [num(v) for v in self.std], "at_bound": list(self.at_bound),
                 "converged": self.converged}
 
@@ -74,14 +74,19 @@ class VelocityScales:
         def num(v: float | None) -> float:
             return float("nan") if v is None else float(v)
 
-        return cls(str(d["form"]), tuple(num(v) for v in d["velocity_scale"]),
+        form = d["form"] if isinstance(d["form"], str) else tuple(str(f) for f in d["form"])
+        return cls(form, tuple(num(v) for v in d["velocity_scale"]),
                    tuple(num(v) for v in d["velocity_scale_std"]), tuple(bool(b) for b in d.get("at_bound", ())),
                    float("nan"), bool(d.get("converged", True)))
 
     def summary(self) -> str:
-        cells = [f"j{j + 1} {s:.4g} ± {d:.2g}{' (bound)' if b else ''}"
+        per_joint = not isinstance(self.form, str)
+        cells = [f"j{j + 1} {self.form[j] + ' ' if per_joint else ''}{s:.4g} ± {d:.2g}{' (bound)' if b else ''}"
                  for j, (s, d, b) in enumerate(zip(self.scales, self.std, self.at_bound)) if np.isfinite(s)]
-        return f"friction {self.form}: velocity scale [rad/s] " + ", ".join(cells)
+        coulomb = [f"j{j + 1}" for j, f in enumerate(self.form) if f == "coulomb"] if per_joint else []
+        head = "friction per joint" if per_joint else f"friction {self.form}"
+        return (f"{head}: velocity scale [rad/s] " + ", ".join(cells)
+                + (f"; coulomb (no scale): {', '.join(coulomb)}" if coulomb else ""))
 
 
 @dataclass(frozen=True, eq=False)
@@ -90,15 +95,17 @@ class _Problem:
     (``fixed``) are projected out once (thin QR: Q of D·W_fixed), so each cost evaluation solves
     only for the friction columns (``varying``: the Coulomb columns, then FST's for Stribeck).
 
-    W, Y: the probe system; d (r,): row weights; joints: joints with a Coulomb entry; entries:
-    per joint (rows, column index in ``varying`` order, speeds v) of its Coulomb entries."""
+    W, Y: the probe system (a Coulomb-form joint's column holding sign(v): fixed); d (r,): row
+    weights; joints: joints of a smooth form (their scales searched); entries: per joint (rows,
+    column index in ``varying`` order, speeds v) of its Coulomb entries; forms: per joint of
+    ``joints`` its form."""
 
     W: np.ndarray
     Y: np.ndarray
     d: np.ndarray
     joints: tuple[int, ...]
     entries: dict[int, list[tuple[np.ndarray, int, np.ndarray]]]
-    form: str
+    forms: dict[int, str]
     fixed: np.ndarray
     varying: np.ndarray
 
@@ -113,33 +120,45 @@ class _Problem:
         return b - self.Q @ (self.Q.T @ b)
 
     @classmethod
-    def build(cls, obs: Observation, terms: Sequence[Any], form: str, weights: np.ndarray) -> "_Problem":
-        coulomb = sorted({t.column for t in terms})
+    def build(cls, obs: Observation, terms: Sequence[Any], form: str | Sequence[str],
+              weights: np.ndarray) -> "_Problem":
+        """``form``: one smooth form, or one form per joint (a Coulomb joint's column is sign(v), no scale)."""
+        form_of = (lambda j: form) if isinstance(form, str) else (lambda j: form[j])
+        W = obs.W
+        signs = [t for t in terms if form_of(t.row) not in ("tanh", "stribeck")]
+        if signs:   # the Coulomb joints' columns do not depend on the scales: sign(v), with the fixed ones
+            W = obs.W.copy()
+            for t in signs:
+                rows = np.flatnonzero(obs.joint == t.row)
+                W[rows, t.column] = np.sign(obs.W[rows, t.column])
+        smooth = [t for t in terms if t not in signs]
+        coulomb = sorted({t.column for t in smooth})
         entries: dict[int, list] = {}
-        for term in terms:
+        for term in smooth:
             rows = np.flatnonzero(obs.joint == term.row)
             entries.setdefault(term.row, []).append((rows, coulomb.index(term.column),
                                                      obs.W[rows, term.column].copy()))
         fixed = np.array([c for c in range(obs.W.shape[1]) if c not in coulomb], dtype=int)
-        return cls(obs.W, obs.Y, np.asarray(weights, dtype=float)[obs.joint], tuple(sorted(entries)), entries, form,
-                   fixed, np.array(coulomb, dtype=int))
+        return cls(W, obs.Y, np.asarray(weights, dtype=float)[obs.joint], tuple(sorted(entries)), entries,
+                   {j: form_of(j) for j in entries}, fixed, np.array(coulomb, dtype=int))
 
     def columns(self, s: np.ndarray) -> tuple[np.ndarray, list[list[tuple[np.ndarray, int, np.ndarray]]]]:
         """Weighted friction columns (r, m: Coulomb's, then FST's for Stribeck) at the scales s and
         per joint the pieces of their derivative: (rows, column, D·∂column/∂s_j)."""
         m = len(self.varying)
-        stribeck = self.form == "stribeck"
-        A = np.zeros((self.W.shape[0], m + (len(self.joints) if stribeck else 0)))
+        stribeck = [j for j in self.joints if self.forms[j] == "stribeck"]   # FST's columns, after Coulomb's
+        A = np.zeros((self.W.shape[0], m + len(stribeck)))
         parts = []
         for k, j in enumerate(self.joints):
             part = []
             for rows, col, v in self.entries[j]:
-                cols, dcols = friction_columns(self.form, v, float(s[k]))
+                cols, dcols = friction_columns(self.forms[j], v, float(s[k]))
                 A[rows, col] = cols[:, 0]
                 part.append((rows, col, dcols[:, 0] * self.d[rows]))
-                if stribeck:
-                    A[rows, m + k] = cols[:, 1]
-                    part.append((rows, m + k, dcols[:, 1] * self.d[rows]))
+                if j in stribeck:
+                    extra = m + stribeck.index(j)
+                    A[rows, extra] = cols[:, 1]
+                    part.append((rows, extra, dcols[:, 1] * self.d[rows]))
             parts.append(part)
         return A * self.d[:, None], parts
 
@@ -171,13 +190,19 @@ def _log_bounds(prob: _Problem) -> tuple[np.ndarray, np.ndarray]:
     return np.log(lo), np.full(len(lo), np.log(SCALE_BOUNDS[1]))
 
 
-def scales_from_observation(obs: Observation, terms: Sequence[Any], form: str, n: int) -> VelocityScales:
-    """The velocity scales of ``form`` from a probe observation (Coulomb columns = driver speed)."""
+def scales_from_observation(obs: Observation, terms: Sequence[Any], form: str | Sequence[str],
+                            n: int) -> VelocityScales:
+    """The velocity scales of ``form`` (one smooth form, or one form per joint: only the smooth
+    joints' scales are searched, a Coulomb joint keeps sign(v)) from a probe observation (Coulomb
+    columns = driver speed)."""
+    form = form if isinstance(form, str) else tuple(form)
+    if not any((form if isinstance(form, str) else form[t.row]) in ("tanh", "stribeck") for t in terms):
+        raise ValueError(f"friction form {form!r}: no joint with a Coulomb term has a velocity scale to search")
     # Eq. 11's weights from a first fit at a middle scale (the probe's own columns are speeds,
     # collinear with the viscous ones).
     plain = _Problem.build(obs, terms, form, np.ones(n))
     A, _ = plain.columns(np.full(len(plain.joints), _GRID[len(_GRID) // 2]))
-    W = np.hstack([obs.W[:, plain.fixed], A])
+    W = np.hstack([plain.W[:, plain.fixed], A])
     first = weighted_least_squares(W, obs.Y, obs.joint, [f"c{k}" for k in range(W.shape[1])])
     prob = _Problem.build(obs, terms, form, first.weights)
     lo, hi = _log_bounds(prob)
@@ -197,7 +222,7 @@ def scales_from_observation(obs: Observation, terms: Sequence[Any], form: str, n
     best = minimize(cost, u0, jac=True, method="L-BFGS-B", bounds=list(zip(lo, hi)))
     s = np.exp(best.x)
     f, r, A, ds = prob.solve(s)
-    J = np.hstack([obs.W[:, prob.fixed] * prob.d[:, None], A, ds])   # ∂(D·model)/∂(β, s): Gauss-Newton
+    J = np.hstack([prob.W[:, prob.fixed] * prob.d[:, None], A, ds])   # ∂(D·model)/∂(β, s): Gauss-Newton
     dof = max(1, J.shape[0] - J.shape[1])
     cov = (r @ r) / dof * np.linalg.pinv(J.T @ J)
     std = np.sqrt(np.maximum(np.diag(cov)[-len(s):], 0.0))
@@ -208,9 +233,10 @@ def scales_from_observation(obs: Observation, terms: Sequence[Any], form: str, n
     return VelocityScales(form, tuple(out_s), tuple(out_std), tuple(out_b), f, bool(best.success))
 
 
-def velocity_scales(robot: rx90sym.Robot, recordings: Sequence[Any], base: Any, form: str,
+def velocity_scales(robot: rx90sym.Robot, recordings: Sequence[Any], base: Any, form: str | Sequence[str],
                     **options: Any) -> VelocityScales:
-    """The velocity scale per joint of the smooth friction ``form`` ("tanh" | "stribeck") on
+    """The velocity scale per joint of the smooth friction ``form`` ("tanh" | "stribeck", or one
+    form per joint, "coulomb" on the joints without a scale) on
     ``recordings`` with the base columns ``base`` and the observation ``options`` of the fit
     (cutoff, decimate_to, min_velocity, rest, spring, delay: :func:`identify.observation_matrix`)."""
     base = base if base is not None else rx90sym.base_parameters(robot)

@@ -1,4 +1,4 @@
-"""Friction form chosen by the blocked cross-validation, where the fit leaves it open (issue 21, item 4).
+"""Friction form chosen per joint by the blocked cross-validation, where the fit leaves it open (issue 21, item 4).
 
 After :func:`identify.observation.cross_validation.choose_processing` has fixed the cut-off, the
 decimation and the rest policy, each friction form of :data:`DEFAULT_FORMS` (Coulomb sign(q̇), the
@@ -16,11 +16,21 @@ smooth tanh(q̇/vs); Stribeck on request) is scored the same way, on the same co
    probe's decimated speed (sign(Dv), tanh(Dv/vs)) handicapped Coulomb against the fit's smooth
    D·sign(v) (TX40: 10.655 % instead of 8.427 %) and chose tanh where the held-out errors got worse.
 
-**Coulomb unless clearly beaten**: a form replaces Coulomb only when its held-back error (mean over
-joints of 100 ||Y_j - W_j beta|| / ||Y_j||) is lower by more than the standard error of the paired
-difference over the blocks (the rest policy's rule, ``clearly_better``), and never when a fold's
-search stopped on the upper bound of the scales (a second viscous term, the scale not identified;
-on the lower bound the form is a sign on that joint, Coulomb's column: allowed) or did not converge. Forms after the first are not started once ``time_cap`` seconds are spent.
+**Per joint, Coulomb unless clearly beaten on that joint**: a real arm has different drives per
+joint, so each joint takes the form of lowest held-back error on that joint (100 ||Y_j - W_j beta||
+/ ||Y_j||) where it is lower than Coulomb's by more than the standard error of the paired
+difference over the blocks on that joint (``clearly_better(a, b, joint)``, the rest policy's rule;
+the Coulomb column of joint j enters joint j's rows only, so the choice is nearly separable), else
+Coulomb. A form is not taken on a joint whose scale stopped on the upper bound in a fold (a second
+viscous term, the scale not identified; on the lower bound the form is a sign on that joint,
+Coulomb's column: allowed), nor anywhere when a fold's search did not converge.
+
+**One joint-combined check**: the joints share the other parameters, so when the per-joint forms
+mix, they are scored together (the scales of their smooth joints only searched on the fitting
+blocks, the Coulomb joints keep sign(q̇)); the mix is kept when that score is not above the best
+single form's (Coulomb unless a form clearly beats it on the mean over joints), else that single
+form is chosen and the record says why (``FrictionChoice.fallback``). Forms after the first, and
+the combined check, are not started once ``time_cap`` seconds are spent.
 """
 from __future__ import annotations
 
@@ -38,6 +48,7 @@ from identify.observation.cross_validation import (DEFAULT_BLOCKS, Candidate, bl
 from identify.observation.friction import DEFAULT_FRICTION, FRICTION_FORMS
 from identify.observation.friction_model import FrictionBase, coulomb_terms, own_terms
 from identify.observation.matrix import Observation, observation_matrix
+from identify.observation.processing import FrictionForm, friction_label, has_smooth_friction, uniform
 
 __all__ = ["DEFAULT_FORMS", "FRICTION_TIME_CAP", "FrictionChoice", "choose_friction"]
 
@@ -51,30 +62,55 @@ FRICTION_TIME_CAP = 60.0
 @dataclass(frozen=True)
 class FrictionChoice:
     """The forms scored (``Candidate.label`` the form; its score, per joint and per block in %),
-    the form chosen, why any form could not be chosen (``notes``: form -> reason), the number of
-    blocks and the seconds spent."""
+    the form chosen (one, or one per joint), why any form could not be chosen (``notes``: form ->
+    reason), the number of blocks and the seconds spent; the per-joint rule's forms
+    (``per_joint``: each joint's form of lowest score where clearly below Coulomb's on that joint),
+    their joint-combined score (``combined``, scored when they mix forms; None otherwise) and,
+    when the mix was not kept, why (``fallback``: the best single form is chosen instead)."""
 
     candidates: tuple[Candidate, ...]
-    chosen: str
+    chosen: str | tuple[str, ...]
     notes: tuple[tuple[str, str], ...]
     blocks: int
     seconds: float
+    per_joint: tuple[str, ...] = ()
+    combined: Candidate | None = None
+    fallback: str = ""
 
     def table(self) -> str:
         n = max((len(c.per_joint) for c in self.candidates), default=0)
-        lines = [f"friction form chosen by {self.blocks}-block cross-validation (velocity scales searched on the "
-                 f"fitting blocks)\n  form       held-back error [%]" + "".join(f"{'j' + str(j + 1):>7}" for j in range(n))]
+        lines = [f"friction form chosen per joint by {self.blocks}-block cross-validation (velocity scales searched "
+                 f"on the fitting blocks)\n  form       held-back error [%]" + "".join(f"{'j' + str(j + 1):>7}" for j in range(n))]
         notes = dict(self.notes)
-        for c in self.candidates:
+        rows = self.candidates + ((self.combined,) if self.combined is not None else ())
+        for c in rows:
             score = "-" if math.isnan(c.score) else f"{c.score:.3f}"   # the note says why
             joints = "".join(f"{v:7.2f}" for v in c.per_joint)
-            mark = " <- chosen" if c.label == self.chosen else ""
+            mark = " <- chosen" if c.label == self.chosen or (c is self.combined and not self.fallback) else ""
             note = f"  ({notes[c.label]})" if c.label in notes else ""
             lines.append(f"  {c.label:<9}  {score:>19}{joints}{note}{mark}")
+        if self.per_joint:
+            lines.append(f"  per joint: {friction_label(self.per_joint)}")
         return "\n".join(lines + ["  " + self.reason()])
 
     def reason(self) -> str:
         scored = {c.label: c for c in self.candidates if not math.isnan(c.score)}
+        rule = (f"each joint takes the form of lowest held-back error on that joint where it is below coulomb's by "
+                f"more than the blocks' spread, else coulomb")
+        if isinstance(self.chosen, tuple):
+            single = _single_choice(self.candidates, dict(self.notes))
+            return (f"chosen per joint: {friction_label(self.chosen)} ({rule}); their joint-combined held-back error "
+                    f"{self.combined.score:.3f} % is not above the best single form's ({single.label}, "
+                    f"{single.score:.3f} %)")
+        if self.fallback:
+            return (f"{self._single_reason(scored)}; the per-joint forms ({friction_label(self.per_joint)}) were "
+                    f"not kept: {self.fallback}")
+        if self.per_joint and self.chosen != DEFAULT_FRICTION:
+            return (f"chosen: {self.chosen} on every joint ({rule}), held-back error {scored[self.chosen].score:.3f} % "
+                    f"against coulomb's {scored[DEFAULT_FRICTION].score:.3f} %")
+        return f"{self._single_reason(scored)} ({rule})" if self.per_joint else self._single_reason(scored)
+
+    def _single_reason(self, scored: dict[str, Candidate]) -> str:
         chosen = scored.get(self.chosen)
         if self.chosen != DEFAULT_FRICTION:
             return (f"chosen: {self.chosen}, held-back error {chosen.score:.3f} % below coulomb's "
@@ -87,37 +123,61 @@ class FrictionChoice:
                 f"coulomb's ({chosen.score:.3f} %) by more than the blocks' spread")
 
     def to_dict(self) -> dict[str, Any]:
+        chosen = self.chosen if isinstance(self.chosen, str) else list(self.chosen)
+        combined = None if self.combined is None else dict(self.combined.to_dict(), form=list(self.per_joint))
         return {"method": "blocked cross-validation", "blocks": self.blocks, "seconds": self.seconds,
-                "chosen": self.chosen, "reason": self.reason(), "not_chosen": dict(self.notes),
+                "chosen": chosen, "reason": self.reason(), "not_chosen": dict(self.notes),
+                "per_joint": list(self.per_joint), "combined": combined, "fallback": self.fallback or None,
                 "candidates": [dict(c.to_dict(), form=c.label) for c in self.candidates], "table": self.table()}
 
 
 def _exact(robot: rx90sym.Robot, recordings: Sequence[Any], base: Any, options: dict[str, Any], probe: Observation,
-           form: str, scales: Sequence[float] | None) -> np.ndarray:
-    """W of ``form`` at ``scales`` with the fit's exact (parallel-filtered) columns, on the probe's rows."""
+           form: FrictionForm, scales: Sequence[float] | None) -> np.ndarray:
+    """W of ``form`` (one, or one per joint) at ``scales`` with the fit's exact (parallel-filtered)
+    columns, on the probe's rows."""
     from identify.observation.friction_model import friction_base
 
-    columns = base if form == DEFAULT_FRICTION else friction_base(base, coulomb_terms(robot, base.names), form, scales)
+    columns = friction_base(base, coulomb_terms(robot, base.names), form, scales) if has_smooth_friction(form) else base
     obs = observation_matrix(robot, recordings, base=columns, **options)
     if obs.W.shape[0] != probe.W.shape[0] or not np.array_equal(obs.joint, probe.joint):
         raise RuntimeError(f"friction choice: the observation of form {form!r} has other rows than the probe's")
     return obs.W
 
 
+@dataclass(frozen=True)
+class _Scored:
+    """One form scored: the candidate, the joints (1-based) whose scale reached the upper bound in
+    some fold, the folds (1-based) whose search did not converge."""
+
+    candidate: Candidate
+    bound: frozenset[int] = frozenset()
+    failed: frozenset[int] = frozenset()
+
+    def why(self) -> str | None:
+        """Why the form cannot be chosen for the whole robot (None: it can)."""
+        from identify.estimation.separable import SCALE_BOUNDS
+
+        why = ([f"velocity scale on its upper bound {SCALE_BOUNDS[1]:g} rad/s for joint(s) "
+                f"{', '.join(map(str, sorted(self.bound)))}"] if self.bound else []) + \
+              ([f"scale search not converged in fold(s) {', '.join(map(str, sorted(self.failed)))}"] if self.failed else [])
+        return "; ".join(why) or None
+
+
 def _score_form(robot: rx90sym.Robot, recordings: Sequence[Any], base: Any, options: dict[str, Any],
-                obs: Observation, terms: Sequence[Any], form: str, ids: np.ndarray,
-                blocks: int) -> tuple[Candidate, str | None]:
-    """(the form scored, why it cannot be chosen or None); ``obs`` the probe observation."""
+                obs: Observation, terms: Sequence[Any], form: FrictionForm, ids: np.ndarray,
+                blocks: int, label: str) -> _Scored:
+    """``form`` (one, or one per joint) scored on the folds; ``obs`` the probe observation."""
     n = robot.n
     from identify.estimation.separable import SCALE_BOUNDS, scales_from_observation
 
     err2, ref2 = np.zeros((blocks, n)), np.zeros((blocks, n))
     bound, failed = set(), set()
+    smooth = has_smooth_friction(form)
     W = None
     for b in range(blocks):
         fit_rows, held = ids != b, ids == b
         scales = None
-        if form != DEFAULT_FRICTION:  # searched on the fitting blocks only: the held-back block is unseen
+        if smooth:  # searched on the fitting blocks only: the held-back block is unseen
             sub = replace(obs, W=obs.W[fit_rows], Y=obs.Y[fit_rows], joint=obs.joint[fit_rows],
                           samples=obs.samples[fit_rows])
             found = scales_from_observation(sub, terms, form, n)
@@ -136,10 +196,24 @@ def _score_form(robot: rx90sym.Robot, recordings: Sequence[Any], base: Any, opti
         res = obs.Y[held] - W[held] @ beta
         np.add.at(err2[b], obs.joint[held], res ** 2)
         np.add.at(ref2[b], obs.joint[held], obs.Y[held] ** 2)
-    cand = Candidate(obs.cutoffs[0], None, obs.rest, *block_scores(err2, ref2), label=form)
-    why = ([f"velocity scale on its upper bound {SCALE_BOUNDS[1]:g} rad/s for joint(s) {', '.join(map(str, sorted(bound)))}"] if bound else []) + \
-          ([f"scale search not converged in fold(s) {', '.join(map(str, sorted(failed)))}"] if failed else [])
-    return cand, "; ".join(why) or None
+    cand = Candidate(obs.cutoffs[0], None, obs.rest, *block_scores(err2, ref2), label=label)
+    return _Scored(cand, frozenset(bound), frozenset(failed))
+
+
+def _per_joint_forms(scored: dict[str, _Scored], rows: Sequence[int], n: int) -> tuple[str, ...]:
+    """Each joint's form: the one of lowest held-back error on that joint where it is clearly below
+    Coulomb's on that joint (:func:`clearly_better`, paired blocks), else Coulomb. A form is not
+    taken on a joint whose scale reached the upper bound, nor anywhere when a fold's search failed;
+    a joint without a Coulomb term (``rows``: those with one, 0-based) keeps Coulomb."""
+    default = scored[DEFAULT_FRICTION].candidate
+    forms = []
+    for j in range(n):
+        eligible = [x.candidate for x in scored.values() if x.candidate.per_joint and not x.failed
+                    and j + 1 not in x.bound and np.isfinite(x.candidate.per_joint[j])]
+        best = min(eligible, key=lambda c: c.per_joint[j], default=default)
+        take = j in rows and best.label != DEFAULT_FRICTION and clearly_better(best, default, j)
+        forms.append(best.label if take else DEFAULT_FRICTION)
+    return tuple(forms)
 
 
 def choose_friction(robot: rx90sym.Robot, recordings: Sequence[Any], base: Any, options: dict[str, Any],
@@ -147,7 +221,7 @@ def choose_friction(robot: rx90sym.Robot, recordings: Sequence[Any], base: Any, 
                     time_cap: float = FRICTION_TIME_CAP) -> FrictionChoice:
     """Score the friction ``forms`` (Coulomb first, the default) by blocked cross-validation with the
     fit's observation ``options`` (cutoff, decimate_to, min_velocity, rest, spring, delay) and choose
-    (module docstring). time_cap [s]: no form is started after it."""
+    per joint (module docstring). time_cap [s]: no form is started after it."""
     unknown = [f for f in forms if f not in FRICTION_FORMS]
     if unknown or DEFAULT_FRICTION not in forms:
         raise ValueError(f"friction choice: forms must include {DEFAULT_FRICTION!r} and be among "
@@ -169,24 +243,60 @@ def choose_friction(robot: rx90sym.Robot, recordings: Sequence[Any], base: Any, 
         return FrictionChoice((), DEFAULT_FRICTION, tuple((f, f"not scored: {str(exc).splitlines()[0]}")
                                                           for f in forms if f != DEFAULT_FRICTION), blocks, 0.0)
     ids = np.minimum(blocks * obs.samples // max(obs.n_samples, 1), blocks - 1)
-    ordered = [DEFAULT_FRICTION] + [f for f in forms if f != DEFAULT_FRICTION]
-    scored, notes = [], {}
-    for form in ordered:
-        if scored and time.perf_counter() - start > time_cap:
-            scored.append(Candidate(obs.cutoffs[0], None, obs.rest, label=form))
-            notes[form] = "not scored: time cap"
-            continue
+
+    def score(form: FrictionForm, label: str) -> tuple[_Scored, str | None]:
+        """The form scored (or not: time cap, too few rows) and why it cannot be chosen (None: it can)."""
+        if label != DEFAULT_FRICTION and time.perf_counter() - start > time_cap:
+            return _Scored(Candidate(obs.cutoffs[0], None, obs.rest, label=label)), "not scored: time cap"
         t0 = time.perf_counter()
         try:
-            cand, why = _score_form(robot, recordings, inner, options, obs, terms, form, ids, blocks)
+            done = _score_form(robot, recordings, inner, options, obs, terms, form, ids, blocks, label)
         except ValueError as exc:  # too few rows in a fold, a form's columns rank deficient on the fitting blocks
-            cand, why = Candidate(obs.cutoffs[0], None, obs.rest, label=form), f"not scored: {str(exc).splitlines()[0]}"
-        scored.append(replace(cand, decimate_to=options.get("decimate_to"), seconds=time.perf_counter() - t0))
+            return _Scored(Candidate(obs.cutoffs[0], None, obs.rest, label=label)), \
+                f"not scored: {str(exc).splitlines()[0]}"
+        cand = replace(done.candidate, decimate_to=options.get("decimate_to"), seconds=time.perf_counter() - t0)
+        return replace(done, candidate=cand), done.why()
+
+    ordered = [DEFAULT_FRICTION] + [f for f in forms if f != DEFAULT_FRICTION]
+    scored, notes = {}, {}
+    for form in ordered:
+        scored[form], why = score(form, form)
         if why:
             notes[form] = why
-    default = scored[0]
-    eligible = [c for c in scored[1:] if not math.isnan(c.score) and c.label not in notes]
+    single = _single_choice([x.candidate for x in scored.values()], notes)
+    per_joint = _per_joint_forms(scored, sorted({t.row for t in terms}), robot.n)
+    chosen, combined, fallback = _check_mix(per_joint, single, scored, score)
+    return FrictionChoice(tuple(x.candidate for x in scored.values()), chosen, tuple(notes.items()), blocks,
+                          time.perf_counter() - start, per_joint, combined, fallback)
+
+
+def _single_choice(candidates: Sequence[Candidate], notes: dict[str, str]) -> Candidate:
+    """The best single form for the whole robot: Coulomb (the first) unless clearly beaten
+    (:func:`clearly_better` on the mean over joints) by the best form that can be chosen."""
+    default = candidates[0]
+    eligible = [c for c in candidates[1:] if not math.isnan(c.score) and c.label not in notes]
     best = min(eligible, key=lambda c: c.score, default=None)
     clear = best is not None and not math.isnan(default.score) and clearly_better(best, default)
-    chosen = best.label if clear else DEFAULT_FRICTION
-    return FrictionChoice(tuple(scored), chosen, tuple(notes.items()), blocks, time.perf_counter() - start)
+    return best if clear else default
+
+
+def _check_mix(per_joint: tuple[str, ...], single: Candidate, scored: dict[str, _Scored],
+               score: Any) -> tuple[FrictionForm, Candidate | None, str]:
+    """(the form chosen, the joint-combined candidate, why the per-joint forms were not kept): the
+    per-joint forms when their joint-combined held-back error is not above the best single form's
+    (scored here when they mix forms: the joints share the other parameters), else that single form."""
+    mixed = uniform(per_joint)
+    if isinstance(mixed, str):   # one form on every joint: its own score is the combined one
+        combined, why = scored[mixed].candidate, scored[mixed].why()
+        if mixed == single.label:
+            return mixed, None, ""
+    else:
+        found, why = score(per_joint, "per joint")
+        combined = found.candidate
+    if why:
+        return single.label, (None if isinstance(mixed, str) else combined), f"scored together, {why}"
+    if math.isnan(combined.score) or math.isnan(single.score) or combined.score > single.score:
+        return single.label, (None if isinstance(mixed, str) else combined), (
+            f"their joint-combined held-back error ({combined.score:.3f} %) is above {single.label}'s "
+            f"({single.score:.3f} %)")
+    return mixed, (None if isinstance(mixed, str) else combined), ""

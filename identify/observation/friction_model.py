@@ -26,6 +26,7 @@ import rx90sym
 
 from identify.observation.friction import (DEFAULT_FRICTION, FRICTION_FORMS, PRESLIDING_TRAVEL, friction_columns,
                                           presliding_state)
+from identify.observation.processing import uniform
 
 __all__ = ["CoulombTerm", "FrictionBase", "PRESLIDING_PREFIX", "STRIBECK_PREFIX", "coulomb_terms", "friction_base",
            "own_terms", "presliding_base", "without_empty_presliding"]
@@ -41,8 +42,10 @@ class FrictionBase:
 
     base: the wrapped columns; terms: (row, column, driver) of each Coulomb entry of ``base``
     driven by its own joint (:func:`coulomb_terms`, :func:`own_terms`); form: "coulomb" | "tanh" |
-    "stribeck" | "probe";
-    scales: velocity scale vs [rad/s] per joint (0-based index) for the smooth forms;
+    "stribeck" | "probe", or one of the first three per joint (a tuple indexed by joint, 0-based:
+    a Coulomb joint keeps its sign column, no scale);
+    scales: velocity scale vs [rad/s] per joint (0-based index) for the smooth forms (nan or
+    anything on a Coulomb joint);
     presliding: add the FPj columns; travels: presliding travel δ [rad] per joint (None:
     PRESLIDING_TRAVEL); candidates: travels [rad] tried for every joint, one column FPj_k each
     (the search; None: one column FPj at ``travels``).
@@ -50,20 +53,28 @@ class FrictionBase:
 
     base: Any
     terms: tuple[tuple[int, int, tuple[float, ...]], ...]
-    form: str = DEFAULT_FRICTION
+    form: str | tuple[str, ...] = DEFAULT_FRICTION
     scales: tuple[float, ...] | None = None
     presliding: bool = False
     travels: tuple[float, ...] | None = None
     candidates: tuple[float, ...] | None = None
 
     def __post_init__(self) -> None:
-        if self.form not in FRICTION_FORMS + ("probe",):
-            raise ValueError(f"friction form must be one of {FRICTION_FORMS}, got {self.form!r}")
-        if self.form in ("tanh", "stribeck"):
-            rows = sorted({row for row, _, _ in self.terms})
-            if self.scales is None or any(not (row < len(self.scales) and self.scales[row] > 0) for row in rows):
-                raise ValueError(f"friction form {self.form!r} needs a positive velocity scale [rad/s] for "
-                                 f"joints {', '.join(str(r + 1) for r in rows)}, got {self.scales!r}")
+        per_joint = isinstance(self.form, tuple)
+        if (self.form not in FRICTION_FORMS + ("probe",) if not per_joint
+                else not all(f in FRICTION_FORMS for f in self.form)):
+            raise ValueError(f"friction form must be one of {FRICTION_FORMS} or one of them per joint, got {self.form!r}")
+        if per_joint and any(row >= len(self.form) for row, _, _ in self.terms):
+            raise ValueError(f"friction form: {len(self.form)} forms given, the Coulomb terms reach joint "
+                             f"{max(row for row, _, _ in self.terms) + 1}")
+        rows = sorted({row for row, _, _ in self.terms if self.form_of(row) in ("tanh", "stribeck")})
+        if rows and (self.scales is None or any(not (row < len(self.scales) and self.scales[row] > 0) for row in rows)):
+            raise ValueError(f"friction form {self.form!r} needs a positive velocity scale [rad/s] for "
+                             f"joints {', '.join(str(r + 1) for r in rows)}, got {self.scales!r}")
+
+    def form_of(self, row: int) -> str:
+        """The friction form of joint ``row`` (0-based)."""
+        return self.form[row] if isinstance(self.form, tuple) else self.form
 
     @cached_property
     def rows(self) -> tuple[int, ...]:
@@ -72,7 +83,7 @@ class FrictionBase:
 
     @cached_property
     def names(self) -> tuple[str, ...]:
-        extra = [f"{STRIBECK_PREFIX}{r + 1}" for r in self.rows] if self.form == "stribeck" else []
+        extra = [f"{STRIBECK_PREFIX}{r + 1}" for r in self.rows if self.form_of(r) == "stribeck"]
         if self.presliding:
             extra += [name for r in self.rows for name, _ in self.presliding_columns(r)]
         return tuple(self.base.names) + tuple(extra)
@@ -100,12 +111,13 @@ class FrictionBase:
         QD = np.asarray(QD, dtype=float)
         for row, column, driver in self.terms:
             v = QD @ np.asarray(driver)
-            if self.form == "probe":
+            form = self.form_of(row)
+            if form == "probe":
                 full[:, row, column] = v
-            elif self.form in ("tanh", "stribeck"):
-                cols, _ = friction_columns(self.form, v, self.scales[row])
+            elif form in ("tanh", "stribeck"):
+                cols, _ = friction_columns(form, v, self.scales[row])
                 full[:, row, column] = cols[:, 0]
-                if self.form == "stribeck":
+                if form == "stribeck":
                     full[:, row, self.names.index(f"{STRIBECK_PREFIX}{row + 1}")] = cols[:, 1]
             if self.presliding:
                 # z on every sample of the position history; the rest mask keeps it at rest only.
@@ -128,12 +140,14 @@ def own_terms(terms: Sequence[Any]) -> tuple[Any, ...]:
                  if driver(t)[1][driver(t)[0]] == 1 and sum(abs(x) for x in driver(t)[1]) == 1)
 
 
-def friction_base(base: Any, terms: Sequence[Any], form: str | None = None, scales: Sequence[float] | None = None,
-                  presliding: bool = False, travels: Sequence[float] | None = None) -> Any:
-    """``base`` with the friction columns of ``form`` (None: keep the form of a FrictionBase, else
-    Coulomb) and, with ``presliding``, the FPj columns (travels [rad] per joint; None: those of a
-    FrictionBase, else PRESLIDING_TRAVEL); ``base`` itself when nothing is added.
-    terms: the Coulomb entries of ``base`` (CoulombTerm, or (row, column, driver))."""
+def friction_base(base: Any, terms: Sequence[Any], form: str | Sequence[str] | None = None,
+                  scales: Sequence[float] | None = None, presliding: bool = False,
+                  travels: Sequence[float] | None = None) -> Any:
+    """``base`` with the friction columns of ``form`` (one, or one per joint; None: keep the form of
+    a FrictionBase, else Coulomb) and, with ``presliding``, the FPj columns (travels [rad] per
+    joint; None: those of a FrictionBase, else PRESLIDING_TRAVEL); ``base`` itself when nothing is
+    added. terms: the Coulomb entries of ``base`` (CoulombTerm, or (row, column, driver))."""
+    form = uniform(form if form is None or isinstance(form, str) else tuple(form))   # one spelling inside
     if isinstance(base, FrictionBase):
         form = base.form if form is None else form
         scales = base.scales if scales is None and form == base.form else scales

@@ -14,7 +14,8 @@ from identify.observation.friction import DEFAULT_FRICTION, FRICTION_FORMS
 
 __all__ = ["Processing", "FRICTION_FORMS", "REST_POLICIES", "CROSSING_SECONDS", "CROSSING_TRAVEL",
            "DEFAULT_MIN_VELOCITY", "DEFAULT_REST", "DEFAULT_DECIMATE_TO", "RestPolicy", "rest_per_joint",
-           "drops_rest", "has_policy", "predicted_rest", "rest_label"]
+           "drops_rest", "has_policy", "predicted_rest", "rest_label", "FrictionForm", "friction_label",
+           "has_smooth_friction", "uniform"]
 
 #: Rest threshold [rad/s]: a joint slower than this is at rest (its Coulomb sign is unknown).
 DEFAULT_MIN_VELOCITY = 0.05
@@ -77,6 +78,36 @@ def _check_rest(rest: Any, where: str) -> RestPolicy | None:
     if isinstance(rest, (list, tuple)) and rest and all(isinstance(r, str) and r in REST_POLICIES for r in rest):
         return tuple(rest)
     raise ValueError(f"{where}: rest must be one of {REST_POLICIES} or one of them per joint, got {rest!r}")
+#: One friction form for every joint, or one per joint (joint 1 first), like :data:`RestPolicy`.
+FrictionForm = str | tuple[str, ...]
+
+
+def uniform(values: FrictionForm | None) -> FrictionForm | None:
+    """One name where a per-joint tuple holds the same name on every joint (one spelling inside)."""
+    return values[0] if isinstance(values, tuple) and values and len(set(values)) == 1 else values
+
+
+def has_smooth_friction(friction: FrictionForm | None) -> bool:
+    """Whether some joint's friction form has a velocity scale (anything but Coulomb)."""
+    forms = (friction,) if isinstance(friction, str) or friction is None else friction
+    return any(f not in (None, DEFAULT_FRICTION) for f in forms)
+
+
+def friction_label(friction: FrictionForm | None) -> str:
+    """The form in words: "tanh", or "j1 tanh, j2 coulomb, ..." per joint."""
+    friction = uniform(DEFAULT_FRICTION if friction is None else friction)
+    return friction if isinstance(friction, str) else ", ".join(f"j{j} {f}" for j, f in enumerate(friction, start=1))
+
+
+def _check_friction(friction: Any, where: str) -> FrictionForm | None:
+    if friction is None or (isinstance(friction, str) and friction in FRICTION_FORMS):
+        return friction
+    if (isinstance(friction, (list, tuple)) and friction
+            and all(isinstance(f, str) and f in FRICTION_FORMS for f in friction)):
+        return uniform(tuple(friction))
+    raise ValueError(f"{where}: friction must be one of {FRICTION_FORMS} or one of them per joint, got {friction!r}")
+
+
 #: Rate after parallel filtering [Hz].
 DEFAULT_DECIMATE_TO = 50.0
 
@@ -98,8 +129,9 @@ class Processing:
     spring: add the robot's spring torque to the measured torque (False when the spring is
     identified with the other parameters);
     friction: the friction form of the moving rows, one of FRICTION_FORMS ("coulomb"; "tanh",
-    "stribeck": velocity scale per joint by separable least squares, identify.estimation.separable);
-    None: open (chosen by the cross-validation, :mod:`identify.observation.friction_choice`, else
+    "stribeck": velocity scale per joint by separable least squares, identify.estimation.separable),
+    or a tuple of them, one per joint (the same on every joint is kept as one name); None: open
+    (chosen per joint by the cross-validation, :mod:`identify.observation.friction_choice`, else
     :data:`DEFAULT_FRICTION`);
     cross_validate: choose the cut-off, the decimation and (where ``rest`` is None) the rest
     policy per joint on the torques by blocked cross-validation
@@ -116,7 +148,7 @@ class Processing:
     estimate_delay: bool = True
     spring: bool = True
     cross_validate: bool | None = None
-    friction: str | None = None
+    friction: FrictionForm | None = None
 
     def __post_init__(self) -> None:
         # 0 means "none" for the rate and the threshold: one spelling inside (None).
@@ -128,8 +160,7 @@ class Processing:
                 raise ValueError(f"processing: {name} must be a positive number or None, got {value!r}")
         if self.cross_validate and self.cutoff is not None:
             raise ValueError("processing: a cut-off is given and cross_validate asks to choose one: give one of them")
-        if self.friction is not None and self.friction not in FRICTION_FORMS:
-            raise ValueError(f"processing: friction must be one of {FRICTION_FORMS}, got {self.friction!r}")
+        object.__setattr__(self, "friction", _check_friction(self.friction, "processing"))
         object.__setattr__(self, "rest", _check_rest(self.rest, "processing"))
         if not (self.delay == "auto" or (isinstance(self.delay, (int, float)) and math.isfinite(self.delay))):
             raise ValueError(f"processing: delay must be 'auto' or a number of seconds, got {self.delay!r}")
@@ -140,8 +171,8 @@ class Processing:
                 "rest": DEFAULT_REST if self.rest is None else self.rest, "spring": self.spring}
 
     @property
-    def friction_form(self) -> str:
-        """The friction form asked for, :data:`DEFAULT_FRICTION` where it is left open."""
+    def friction_form(self) -> FrictionForm:
+        """The friction form asked for (one, or one per joint), :data:`DEFAULT_FRICTION` where it is left open."""
         return DEFAULT_FRICTION if self.friction is None else self.friction
 
     @property

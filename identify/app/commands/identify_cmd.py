@@ -86,11 +86,12 @@ def register(sub: Any) -> None:
                          f"state of the position history, or as they are ({', '.join(REST_POLICIES)}); one, "
                          f"or one per joint separated by commas (default: chosen per joint by the "
                          f"cross-validation, else {DEFAULT_REST})")
-    sp.add_argument("--friction", choices=FRICTION_FORMS, default=None,
-                    help="friction while moving: Coulomb sign(q̇), smooth tanh(q̇/vs) or Stribeck, the velocity "
-                         "scale vs per joint found by separable least squares (default: coulomb or tanh chosen "
-                         "by the cross-validation, coulomb unless clearly beaten; else coulomb, and for long logs "
-                         "fitted block by block)")
+    sp.add_argument("--friction", type=_friction_option, default=None,
+                    help=f"friction while moving: Coulomb sign(q̇), smooth tanh(q̇/vs) or Stribeck "
+                         f"({', '.join(FRICTION_FORMS)}), the velocity scale vs per joint found by separable least "
+                         f"squares; one, or one per joint separated by commas (default: coulomb or tanh chosen per "
+                         f"joint by the cross-validation, coulomb unless clearly beaten on that joint; else coulomb, "
+                         f"and for long logs fitted block by block)")
     sp.add_argument("--delay", type=_delay, default=0.0,
                     help="torque lag behind the positions: 'auto' (estimated) or seconds (default 0; "
                          "the estimate is always reported)")
@@ -158,13 +159,21 @@ def _check(args: argparse.Namespace) -> None:
         check_output(out)
 
 
-def _rest_option(text: str) -> str | tuple[str, ...]:
-    """--rest: one policy, or one per joint ("none,none,zero-coulomb,...")."""
-    parts = tuple(p.strip() for p in text.split(","))
-    bad = [p for p in parts if p not in REST_POLICIES]
-    if bad:
-        raise argparse.ArgumentTypeError(f"unknown rest policy {bad[0]!r} (choose from {', '.join(REST_POLICIES)})")
-    return parts[0] if len(parts) == 1 else parts
+def _per_joint_option(what: str, choices: tuple[str, ...]) -> Any:
+    """The parser of an option taking one name of ``choices``, or one per joint separated by commas
+    (--rest "none,none,zero-coulomb,...", --friction "tanh,coulomb,...")."""
+    def parse(text: str) -> str | tuple[str, ...]:
+        parts = tuple(p.strip() for p in text.split(","))
+        bad = [p for p in parts if p not in choices]
+        if bad:
+            raise argparse.ArgumentTypeError(f"unknown {what} {bad[0]!r} (choose from {', '.join(choices)})")
+        return parts[0] if len(parts) == 1 else parts
+
+    return parse
+
+
+_rest_option = _per_joint_option("rest policy", REST_POLICIES)
+_friction_option = _per_joint_option("friction form", FRICTION_FORMS)
 
 
 def processing_of(args: argparse.Namespace, spring: bool) -> Processing:
@@ -185,6 +194,8 @@ def run(args: argparse.Namespace) -> int:
     robot, spring_model = _robot(args)
     if isinstance(args.rest, tuple) and len(args.rest) != robot.n:
         raise UsageError(f"--rest: {len(args.rest)} policies given for the {robot.n} joints of {robot.name!r}")
+    if isinstance(args.friction, tuple) and len(args.friction) != robot.n:
+        raise UsageError(f"--friction: {len(args.friction)} forms given for the {robot.n} joints of {robot.name!r}")
     sb = attach_spring(robot, spring_model, args.validate, args.method)
     gains = read_gains(args.gains, robot) if args.gains else None
     flags = given_gain_flags(gains) if gains is not None else []
