@@ -30,7 +30,7 @@ from identify.estimation.results import IdentificationResult
 from identify.io.blocks import BlockSource, block_source
 from identify.observation.matrix import DEFAULT_MIN_VELOCITY, DEFAULT_REST, column_regressor, presliding_base
 from identify.observation.processing import RestPolicy, drops_rest, predicted_rest
-from identify.observation.stream_cv import choose_processing_streamed
+from identify.observation.stream_cv import choose_processing_streamed, scans_for_choice
 from identify.observation.stream import (DEFAULT_BLOCK, Piece, Plan, StreamSettings, in_order, piece, plan_windows,
                                          scan_all, windows_in_order)
 from identify.signal.delay import DelayEstimate, delay_grid, joint_log_rms, refined_delay
@@ -160,12 +160,15 @@ def _plans(scans: Sequence[Any], cutoff: float, settings: StreamSettings) -> tup
 
 def _choose(robot: rx90sym.Robot, sources: Sequence[BlockSource], base: Any, cutoff: float | None,
             decimate_to: float | None, min_velocity: float | None, rest: RestPolicy | None, spring: bool, block: int,
-            client: Any) -> Any:
-    """The processing chosen by blocked cross-validation block by block (a ProcessingChoice)."""
+            client: Any) -> tuple[Any, list]:
+    """(the processing chosen by blocked cross-validation block by block, the scans it made: the fit
+    that follows reuses that pass)."""
     if cutoff is not None:
         raise ValueError("a cut-off is given and cross_validate asks to choose one: give one of them")
+    scans = scans_for_choice(sources, block)
     return choose_processing_streamed(robot, sources, base, min_velocity or None, rest, spring,
-                                      default_decimate=decimate_to or None, block=block, client=client)
+                                      default_decimate=decimate_to or None, block=block, client=client,
+                                      scans=scans), scans
 
 
 def fit_streamed(robot: rx90sym.Robot, recordings: Sequence[Any], method: str = "wls", base: Any = None,
@@ -198,15 +201,16 @@ def fit_streamed(robot: rx90sym.Robot, recordings: Sequence[Any], method: str = 
     if int(block) != block or block < 1000:
         raise ValueError(f"block must be a whole number of samples >= 1000, got {block!r}")
     sources = [block_source(r, robot, convention, gains) for r in recordings]
-    choice = None
+    choice = scans = None
     if (cutoff is None) if cross_validate is None else cross_validate:
-        choice = _choose(robot, sources, base, cutoff, decimate_to, min_velocity, rest, spring, int(block), client)
+        choice, scans = _choose(robot, sources, base, cutoff, decimate_to, min_velocity, rest, spring, int(block),
+                                client)
         cutoff, decimate_to, rest = choice.chosen.cutoff, choice.chosen.decimate_to, choice.chosen.rest or rest
     rest = DEFAULT_REST if rest is None else rest
     base = presliding_base(robot, base, rest if min_velocity else None)  # FPj columns with "presliding"
     settings = StreamSettings(cutoff, decimate_to or None, min_velocity or None, rest,
                               0.0 if delay == "auto" else float(delay), spring, int(block))
-    scans, fc = scan_all(sources, settings)
+    scans, fc = (scans, float(cutoff)) if scans is not None else scan_all(sources, settings)
     search = estimate or delay == "auto"
     plans, skipped = _plans(scans, fc, replace(settings, delay=0.02 if search else settings.delay))
     flat = [p for src_plans in plans for p in src_plans]

@@ -43,7 +43,7 @@ from identify.observation.stream import (DEFAULT_BLOCK, Plan, Scan, StreamSettin
                                          scan, scanned_cutoff, windows_in_order)
 from identify.signal.filtering import EDGE_PERIODS
 
-__all__ = ["choose_processing_streamed", "grid_of_scans"]
+__all__ = ["choose_processing_streamed", "grid_of_scans", "scans_for_choice"]
 
 #: Lowest cut-off of the grid [Hz] (candidate_grid's floor): the scan keeps each segment's first and
 #: last 2 x EDGE_PERIODS / LOWEST_CUTOFF seconds of times, beyond the filters' longest edge.
@@ -67,20 +67,28 @@ def choose_processing_streamed(robot: rx90sym.Robot, sources: Sequence[BlockSour
                                spring: bool = True, blocks: int = DEFAULT_BLOCKS,
                                time_cap: float = DEFAULT_TIME_CAP, default_decimate: float | None = 50.0,
                                block: int = DEFAULT_BLOCK, client: Any = None,
-                               policies: Sequence[str] = SCORED_REST) -> ProcessingChoice:
+                               policies: Sequence[str] = SCORED_REST,
+                               scans: Sequence[Scan] | None = None) -> ProcessingChoice:
     """:func:`identify.observation.cross_validation.choose_processing` on recordings read block by block
     (module docstring). sources: the recordings (:func:`identify.io.blocks.block_source`); block: raw
-    samples per block core; client: a ``dask.distributed.Client`` running the blocks (None: here). The
-    other arguments are those of ``choose_processing``."""
+    samples per block core; client: a ``dask.distributed.Client`` running the blocks (None: here);
+    scans: the sources' :func:`scans_for_choice` when already made (the fit that follows reuses them).
+    The other arguments are those of ``choose_processing``."""
     if blocks < 2:
         raise ValueError(f"cross-validation needs at least 2 blocks, got {blocks}")
     base = base if base is not None else rx90sym.base_parameters(robot)
-    scans = [scan(src, block, LOWEST_CUTOFF, KEEP_SECONDS) for src in sources]
+    scans = scans if scans is not None else scans_for_choice(sources, block)
     knee, grid = grid_of_scans(scans, default_decimate)
     reference = scoring_rate(grid)
     context = (robot, sources, scans, base, reference, blocks, min_velocity, spring, block, client)
     return select_processing(lambda cand: _score(cand, *context), knee, grid, reference, blocks, min_velocity,
                              rest, time_cap, policies)
+
+
+def scans_for_choice(sources: Sequence[BlockSource], block: int) -> list[Scan]:
+    """The first pass the choice needs (:func:`identify.observation.stream.scan` with the 2 Hz floor and
+    each segment's first and last :data:`KEEP_SECONDS` of times); a fit with a given cut-off reuses it."""
+    return [scan(src, block, LOWEST_CUTOFF, KEEP_SECONDS) for src in sources]
 
 
 def _time_span(scans: Sequence[Scan], plans: Sequence[Sequence[Plan]]) -> tuple[float, float]:
