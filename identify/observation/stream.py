@@ -22,8 +22,8 @@ Every quantity downstream (incremental QR, bootstrap, validation) consumes piece
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
 from collections import deque
+from dataclasses import dataclass, field
 from typing import Any, Callable, Iterable, Iterator, Sequence
 
 import numpy as np
