@@ -28,11 +28,12 @@ from identify.estimation.incremental_qr import JointFactors, stacked_rows
 from identify.estimation.least_squares import solve_joint_systems
 from identify.estimation.results import IdentificationResult
 from identify.io.blocks import BlockSource, block_source
+from identify.observation.cross_validation import ProcessingChoice
 from identify.observation.matrix import DEFAULT_MIN_VELOCITY, DEFAULT_REST, column_regressor, presliding_base
 from identify.observation.processing import RestPolicy, drops_rest, predicted_rest
+from identify.observation.stream import (DEFAULT_BLOCK, Piece, Plan, Scan, StreamSettings, in_order, piece,
+                                         plan_windows, scan_all, windows_in_order)
 from identify.observation.stream_cv import choose_processing_streamed, scans_for_choice
-from identify.observation.stream import (DEFAULT_BLOCK, Piece, Plan, StreamSettings, in_order, piece, plan_windows,
-                                         scan_all, windows_in_order)
 from identify.signal.delay import DelayEstimate, delay_grid, joint_log_rms, refined_delay
 from identify.validation import Validation, _relative, _rms, base_vector
 
@@ -78,7 +79,7 @@ class StreamedFit:
     blocks: int
     q_range: np.ndarray | None = None
     recordings: tuple[dict, ...] = ()
-    choice: Any = None
+    choice: ProcessingChoice | None = None
 
     def summary(self) -> str:
         """What was fitted, in the manner of :meth:`identify.Observation.summary`."""
@@ -160,7 +161,7 @@ def _plans(scans: Sequence[Any], cutoff: float, settings: StreamSettings) -> tup
 
 def _choose(robot: rx90sym.Robot, sources: Sequence[BlockSource], base: Any, cutoff: float | None,
             decimate_to: float | None, min_velocity: float | None, rest: RestPolicy | None, spring: bool, block: int,
-            client: Any) -> tuple[Any, list]:
+            client: Any) -> tuple[ProcessingChoice, list[Scan]]:
     """(the processing chosen by blocked cross-validation block by block, the scans it made: the fit
     that follows reuses that pass)."""
     if cutoff is not None:
@@ -308,7 +309,7 @@ FRICTION_NOTE = ("friction form: coulomb (not chosen block by block: the smooth 
                  "needs the whole recordings)")
 
 
-def _choice_record(choice: Any, p: Any) -> dict | None:
+def _choice_record(choice: ProcessingChoice | None, p: Any) -> dict | None:
     """The fit file's ``processing_choice`` of a block-by-block fit: the in-memory fit's record, with a
     line saying the friction form was left at coulomb where it was open."""
     if choice is None:
