@@ -11,6 +11,11 @@ measured on the two shortest logs as the reference.
     python benchmarks/bench_long_logs.py                 # 21 s, 3.5 min, 10.5 min, 60 min
     python benchmarks/bench_long_logs.py --lengths 21,210 --dask   # quick; + Dask throughput
     python benchmarks/bench_long_logs.py --lengths 21 --lossy 210,630   # + lossy host logs (--resample)
+    python benchmarks/bench_long_logs.py --lengths 210,630 --reference 0 --choice-reference 2   # the choice's cost
+
+``rx90 identify`` chooses its processing by blocked cross-validation (the default, block by block on
+long logs): the last column gives the seconds of that choice and the candidates scored within its
+time cap (from the fit file's ``processing_choice``).
 """
 from __future__ import annotations
 
@@ -120,18 +125,34 @@ def rx90(*args: str) -> list[str]:
     return [str(Path(sys.executable).parent / "rx90"), *args]
 
 
-def run_length(folder: Path, rec, seconds: float, env: dict, reference: bool, lossy: bool = False) -> list[tuple]:
+def choice_of(path: Path) -> str:
+    """'seconds of the choice (candidates scored / in the grid)' from a fit file, '-' without a choice."""
+    import json
+
+    choice = json.loads(path.read_text()).get("processing_choice")
+    if not choice:
+        return "-"
+    scored = sum(c["score_pct"] is not None for c in choice["candidates"])
+    return f"{choice['seconds']:.1f} ({scored}/{len(choice['candidates'])})"
+
+
+def run_length(folder: Path, rec, seconds: float, env: dict, reference: bool, lossy: bool = False,
+               choice: bool = True, without_choice: bool = False) -> list[tuple]:
     log, out = folder / f"log_{int(seconds)}.csv", folder / f"rec_{int(seconds)}.csv"
     samples = (write_lossy_log if lossy else write_log)(log, rec, seconds)
     columns = ["--columns", LOSSY_COLUMNS, "--resample", str(RATE)] if lossy else ["--columns", COLUMNS]
     rows = []
     # "default": the command as shipped (a log within one block takes the whole-signal path).
-    for path_name, block in (("default", None), ("whole (reference)", WHOLE)) if reference else (("default", None),):
+    modes = [("default", None, choice)] + ([("default, --no-cross-validate", None, False)] if without_choice else [])
+    for path_name, block, choice in modes + ([("whole (reference)", WHOLE, choice)] if reference else []):
         path_name = f"lossy, {path_name}" if lossy else path_name
         extra = [] if block is None else ["--block", block]
         conv = measured(rx90("convert", str(log), *ROBOT, *columns, "--out", str(out), *extra), env)
-        ident = measured(rx90("identify", str(out), *ROBOT, "--offsets", *extra), env)
-        rows.append((seconds, samples, path_name, conv[0], conv[1], ident[0], ident[1], log.stat().st_size / 1e6))
+        fit = folder / "fit.json"
+        ident = measured(rx90("identify", str(out), *ROBOT, "--offsets", "--json", str(fit), *extra,
+                              *([] if choice else ["--no-cross-validate"])), env)
+        rows.append((seconds, samples, path_name, conv[0], conv[1], ident[0], ident[1], log.stat().st_size / 1e6,
+                     choice_of(fit)))
     log.unlink()
     out.unlink()
     return rows
@@ -186,6 +207,10 @@ def main() -> None:
     ap.add_argument("--lossy-reference", type=int, default=1,
                     help="how many of the shortest lossy logs also on the whole-log path")
     ap.add_argument("--folder", help="where the logs go (default: a temporary folder)")
+    ap.add_argument("--no-choice", action="store_true",
+                    help="identify with --no-cross-validate (the position-spectrum cut-off, no processing choice)")
+    ap.add_argument("--choice-reference", type=int, default=0,
+                    help="how many of the shortest logs also with --no-cross-validate (the cost of the choice)")
     args = ap.parse_args()
     # One BLAS thread: on a shared 2-core machine OpenBLAS's spinning threads make the small QRs 40x slower.
     env = dict(os.environ, PYTHONPATH=str(ROOT) + os.pathsep + os.environ.get("PYTHONPATH", ""),
@@ -196,16 +221,24 @@ def main() -> None:
         folder = Path(tmp)
         rows = []
         for k, seconds in enumerate(lengths):
-            rows += run_length(folder, rec, seconds, env, k < args.reference)
+            rows += run_length(folder, rec, seconds, env, k < args.reference, choice=not args.no_choice,
+                               without_choice=k < args.choice_reference)
             print(f"  done {seconds:g} s", file=sys.stderr, flush=True)
         for k, seconds in enumerate(float(x) for x in args.lossy.split(",") if x):
-            rows += run_length(folder, rec, seconds, env, k < args.lossy_reference, lossy=True)
+            rows += run_length(folder, rec, seconds, env, k < args.lossy_reference, lossy=True,
+                               choice=not args.no_choice)
             print(f"  done lossy {seconds:g} s", file=sys.stderr, flush=True)
-        print("| log | samples | CSV MB | path | convert s | convert GB | identify s | identify GB |")
-        print("|---|---|---|---|---|---|---|---|")
-        for seconds, samples, path_name, cs, cg, is_, ig, mb in rows:
+        print("| log | samples | CSV MB | path | convert s | convert GB | identify s | identify GB | choice s (scored) |")
+        print("|---|---|---|---|---|---|---|---|---|")
+        for seconds, samples, path_name, cs, cg, is_, ig, mb, ch in rows:
             label = f"{seconds / 60:g} min" if seconds >= 60 else f"{seconds:g} s"
-            print(f"| {label} | {samples:,} | {mb:.0f} | {path_name} | {cs:.1f} | {cg:.2f} | {is_:.1f} | {ig:.2f} |")
+            print(f"| {label} | {samples:,} | {mb:.0f} | {path_name} | {cs:.1f} | {cg:.2f} | {is_:.1f} | {ig:.2f} "
+                  f"| {ch} |")
+        off = {r[0]: r for r in rows if r[2] == "default, --no-cross-validate"}
+        for r in rows:
+            if r[2] == "default" and r[0] in off:
+                print(f"\n{r[0] / 60:g} min: identify with the choice / without: time x{r[5] / off[r[0]][5]:.2f}, "
+                      f"peak memory x{r[6] / off[r[0]][6]:.2f}")
         streamed = {r[0]: r for r in rows if r[2] == "default"}
         if 630.0 in streamed and 3600.0 in streamed:
             a, b = streamed[630.0], streamed[3600.0]

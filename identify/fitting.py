@@ -270,7 +270,8 @@ def fit(robot: rx90sym.Robot, recordings: Sequence[Any], processing: Processing 
     block: read, filter and fit the recordings (CSV paths, recordings) in blocks of this many
     samples: memory bounded by the block whatever the logs' length (docs/long-logs.md), the
     segment bootstrap computed on the way with ``bootstrap_seed``; client: a
-    ``dask.distributed.Client`` running the blocks (block by default 60,000 samples).
+    ``dask.distributed.Client`` running the blocks (block by default 60,000 samples); the processing
+    is cross-validated block by block as on whole recordings (the friction form stays coulomb).
     """
     if block is not None or client is not None:
         from identify.stream_fit import fit_in_blocks
@@ -278,9 +279,6 @@ def fit(robot: rx90sym.Robot, recordings: Sequence[Any], processing: Processing 
         if processing is not None and has_smooth_friction(processing.friction):
             raise ValueError(f"fit: friction form {processing.friction!r} searches its velocity scales on whole "
                              f"recordings, not block by block: give friction 'coulomb', or no block")
-        if processing is not None and processing.cross_validate:
-            raise ValueError("fit: the cross-validated processing is chosen on whole recordings, not block by "
-                             "block: give a cut-off and a rest policy, or no block")
         return fit_in_blocks(robot, recordings, processing, method, base=base, gains=gains, convention=convention,
                              spring_source=spring_source, block=block, client=client, bootstrap_seed=bootstrap_seed,
                              **consistent_options)

@@ -6,6 +6,8 @@ bootstrap, without ever holding a full-rate array of a whole log: recordings are
 (:mod:`identify.io.blocks`), filtered in overlapping blocks (:mod:`identify.signal.blocks`), turned
 into decimated rows block by block (:mod:`identify.observation.stream`) and folded into the
 per-joint triangular factors (:mod:`identify.estimation.incremental_qr`) from which eqs. 9-15 follow.
+Without a cut-off the processing is first chosen by blocked cross-validation, block by block too
+(:mod:`identify.observation.stream_cv`).
 
 With a Dask ``client`` every block is a task (filtering, regressor, parallel decimation and the
 block's QR run on the workers); the client folds the factors in block order, so the result is the
@@ -13,7 +15,6 @@ serial one (the same operations in the same order).
 """
 from __future__ import annotations
 
-from collections import deque
 from dataclasses import dataclass, replace
 from types import SimpleNamespace
 from typing import Any, Iterable, Sequence
@@ -27,10 +28,12 @@ from identify.estimation.incremental_qr import JointFactors, stacked_rows
 from identify.estimation.least_squares import solve_joint_systems
 from identify.estimation.results import IdentificationResult
 from identify.io.blocks import BlockSource, block_source
+from identify.observation.cross_validation import ProcessingChoice
 from identify.observation.matrix import DEFAULT_MIN_VELOCITY, DEFAULT_REST, column_regressor, presliding_base
 from identify.observation.processing import RestPolicy, drops_rest, predicted_rest
-from identify.observation.stream import (DEFAULT_BLOCK, Piece, Plan, StreamSettings, piece, plan_windows, scan_all,
-                                         windows_in_order)
+from identify.observation.stream import (DEFAULT_BLOCK, Piece, Plan, Scan, StreamSettings, in_order, piece,
+                                         plan_windows, scan_all, windows_in_order)
+from identify.observation.stream_cv import choose_processing_streamed, scans_for_choice
 from identify.signal.delay import DelayEstimate, delay_grid, joint_log_rms, refined_delay
 from identify.validation import Validation, _relative, _rms, base_vector
 
@@ -56,7 +59,9 @@ class StreamedFit:
     delay [s] compensated; bootstrap_std: (c,) (None when not asked); bootstrap_block: samples per
     bootstrap block; settings: the processing; blocks: number of blocks processed; q_range: (2, n)
     smallest and largest position of each joint over the recordings [rad]; recordings: per recording
-    its samples, segments, bridged samples and stale rows (:meth:`identify.observation.stream.Scan.layout`).
+    its samples, segments, bridged samples and stale rows (:meth:`identify.observation.stream.Scan.layout`);
+    choice: the cross-validated processing (a :class:`~identify.observation.cross_validation.ProcessingChoice`;
+    None when the processing was given).
     """
 
     result: IdentificationResult
@@ -74,6 +79,7 @@ class StreamedFit:
     blocks: int
     q_range: np.ndarray | None = None
     recordings: tuple[dict, ...] = ()
+    choice: ProcessingChoice | None = None
 
     def summary(self) -> str:
         """What was fitted, in the manner of :meth:`identify.Observation.summary`."""
@@ -105,21 +111,6 @@ def _block_task(robot: rx90sym.Robot, rec: Any, window: Any, plan: Any, cutoff: 
     return p, factors
 
 
-def _in_order(tasks: Iterable[tuple], client: Any, in_flight: int) -> Iterable[tuple[Piece, list]]:
-    """Run the block tasks serially, or on Dask with at most ``in_flight`` blocks submitted; results in order."""
-    if client is None:
-        for args in tasks:
-            yield _block_task(*args)
-        return
-    queue: deque = deque()
-    for args in tasks:
-        queue.append(client.submit(_block_task, *args, pure=False))
-        if len(queue) >= in_flight:
-            yield queue.popleft().result()
-    while queue:
-        yield queue.popleft().result()
-
-
 def _tasks(robot: rx90sym.Robot, sources: Sequence[BlockSource], plans: Sequence[Sequence[Plan]], cutoff: float,
            settings: StreamSettings, base: Any, names: Sequence[str], lags: Sequence[float]) -> Iterable[tuple]:
     for plan, window, rec, first in windows_in_order(sources, plans):
@@ -143,9 +134,9 @@ def _accumulate(robot: rx90sym.Robot, sources: Sequence[BlockSource], plans: Seq
     drop = settings.min_velocity is not None and drops_rest(settings.rest)
     count = 0
     # On Dask the robot and its compiled regressor are sent once to each worker, not with every block.
-    shared = client.scatter([robot, base], broadcast=True) if client is not None else (robot, base)
+    shared = client.scatter([robot, base], broadcast=True, hash=False) if client is not None else (robot, base)
     tasks = _tasks(shared[0], sources, plans, cutoff, settings, shared[1], names, lags)
-    for p, block_factors in _in_order(tasks, client, 2 * _workers(client) if client is not None else 1):
+    for p, block_factors in in_order(_block_task, tasks, client, 2 * _workers(client) if client is not None else 1):
         count += 1
         m = p.motion
         moving += m.moving.sum(axis=0)
@@ -168,19 +159,38 @@ def _plans(scans: Sequence[Any], cutoff: float, settings: StreamSettings) -> tup
     return [p for p, _ in planned], tuple(note for _, notes in planned for note in notes)
 
 
+def _choose(robot: rx90sym.Robot, sources: Sequence[BlockSource], base: Any, cutoff: float | None,
+            decimate_to: float | None, min_velocity: float | None, rest: RestPolicy | None, spring: bool, block: int,
+            client: Any) -> tuple[ProcessingChoice, list[Scan]]:
+    """(the processing chosen by blocked cross-validation block by block, the scans it made: the fit
+    that follows reuses that pass)."""
+    if cutoff is not None:
+        raise ValueError("a cut-off is given and cross_validate asks to choose one: give one of them")
+    scans = scans_for_choice(sources, block)
+    return choose_processing_streamed(robot, sources, base, min_velocity or None, rest, spring,
+                                      default_decimate=decimate_to or None, block=block, client=client,
+                                      scans=scans), scans
+
+
 def fit_streamed(robot: rx90sym.Robot, recordings: Sequence[Any], method: str = "wls", base: Any = None,
                  cutoff: float | None = None, decimate_to: float | None = 50.0,
-                 min_velocity: float | None = DEFAULT_MIN_VELOCITY, rest: RestPolicy = DEFAULT_REST,
+                 min_velocity: float | None = DEFAULT_MIN_VELOCITY, rest: RestPolicy | None = None,
                  delay: float | str = 0.0, spring: bool = True, estimate: bool = False,
                  block: int = DEFAULT_BLOCK, client: Any = None, bootstrap: BootstrapSpec | None = None,
-                 convention: str | None = None, gains: Any = None, **consistent_options: Any) -> StreamedFit:
+                 convention: str | None = None, gains: Any = None, cross_validate: bool | None = None,
+                 **consistent_options: Any) -> StreamedFit:
     """:func:`identify.fit_recordings` on recordings of any length, block by block.
 
     recordings: CSV paths (streamed), :class:`~identify.Recording` objects or
     :class:`~identify.io.blocks.BlockSource`; block: raw samples per block core (peak memory grows
     with it, not with the logs: docs/long-logs.md); client: a ``dask.distributed.Client`` to run the
     blocks on (None: here); bootstrap: also the segment-bootstrap σ; convention, gains: how CSV files
-    are read. The other arguments are those of :func:`identify.fit_recordings`.
+    are read; cross_validate: choose the cut-off, decimation and (``rest`` None) the rest policy per
+    joint by blocked cross-validation, block by block
+    (:func:`identify.observation.stream_cv.choose_processing_streamed`); None: whenever ``cutoff`` is
+    None, as :class:`identify.Processing`; ``decimate_to`` is then the default candidate's. rest: None
+    is open (chosen by the cross-validation, else zero-coulomb). The other arguments are those of
+    :func:`identify.fit_recordings`.
     """
     from identify.estimation.consistent_fit import consistent_fit
     from identify.fitting import METHODS
@@ -191,11 +201,17 @@ def fit_streamed(robot: rx90sym.Robot, recordings: Sequence[Any], method: str = 
         raise ValueError(f"delay must be 'auto' or a number of seconds, got {delay!r}")
     if int(block) != block or block < 1000:
         raise ValueError(f"block must be a whole number of samples >= 1000, got {block!r}")
-    base = presliding_base(robot, base, rest if min_velocity else None)  # FPj columns with "presliding"
     sources = [block_source(r, robot, convention, gains) for r in recordings]
+    choice = scans = None
+    if (cutoff is None) if cross_validate is None else cross_validate:
+        choice, scans = _choose(robot, sources, base, cutoff, decimate_to, min_velocity, rest, spring, int(block),
+                                client)
+        cutoff, decimate_to, rest = choice.chosen.cutoff, choice.chosen.decimate_to, choice.chosen.rest or rest
+    rest = DEFAULT_REST if rest is None else rest
+    base = presliding_base(robot, base, rest if min_velocity else None)  # FPj columns with "presliding"
     settings = StreamSettings(cutoff, decimate_to or None, min_velocity or None, rest,
                               0.0 if delay == "auto" else float(delay), spring, int(block))
-    scans, fc = scan_all(sources, settings)
+    scans, fc = (scans, float(cutoff)) if scans is not None else scan_all(sources, settings)
     search = estimate or delay == "auto"
     plans, skipped = _plans(scans, fc, replace(settings, delay=0.02 if search else settings.delay))
     flat = [p for src_plans in plans for p in src_plans]
@@ -223,7 +239,7 @@ def fit_streamed(robot: rx90sym.Robot, recordings: Sequence[Any], method: str = 
                        boot.std(result.weights) if boot is not None else None, bblock, settings, count,
                        np.vstack([np.min([s.q_range[0] for s in scans], axis=0),
                                   np.max([s.q_range[1] for s in scans], axis=0)]),
-                       tuple(s.layout() for s in scans))
+                       tuple(s.layout() for s in scans), choice)
 
 
 def predict_streamed(robot: rx90sym.Robot, result: IdentificationResult, recording: Any, base: Any = None,
@@ -272,15 +288,34 @@ def fit_in_blocks(robot: rx90sym.Robot, recordings: Sequence[Any], processing: A
     base = base if base is not None else rx90sym.base_parameters(robot)
     recordings = list(recordings) if isinstance(recordings, (list, tuple)) else [recordings]
     spec = BootstrapSpec(BOOTSTRAP_BLOCK_S, BOOTSTRAP_DRAWS, bootstrap_seed)
-    rest = p.observation_options()["rest"]  # an open policy is not chosen block by block: the default
-    sf = fit_streamed(robot, recordings, method, base, p.cutoff, p.decimate_to, p.min_velocity, rest, p.delay,
-                      p.spring, p.estimate_delay, block, client, spec, convention, gains, **consistent_options)
+    sf = fit_streamed(robot, recordings, method, base, p.cutoff, p.decimate_to, p.min_velocity, p.rest, p.delay,
+                      p.spring, p.estimate_delay, block, client, spec, convention, gains, p.cross_validates,
+                      **consistent_options)
+    rest = sf.settings.rest  # the policy given, or chosen by the cross-validation
     model = FitModel.of(robot, convention=convention, gains=gains.to_dict() if gains is not None else None,
                         rest=rest, min_velocity=p.min_velocity, spring=spring_source or _spring_label(robot, base),
-                        cutoff_hz=sf.cutoff, decimate_to_hz=p.decimate_to, rate_hz=sf.rate, delay_s=sf.delay)
+                        cutoff_hz=sf.cutoff, decimate_to_hz=sf.settings.decimate_to, rate_hz=sf.rate,
+                        delay_s=sf.delay)
     angles = [SimpleNamespace(q=sf.q_range)]  # what the spring summary reads: the range visited
     spring = spring_summary(robot, base if isinstance(base, BaseWithSpring) else None, sf.result, angles)[0]
     boot = Bootstrap(sf.bootstrap_std, sf.bootstrap_block / sf.rate, spec.draws, spec.seed)
     found = sf.delay_estimate
     return Fit(robot, sf.result, p, model, base, None, found, found.delay if found is not None else None, spring,
-               boot, block=block, streamed=sf, recordings=sf.recordings)
+               boot, block=block, streamed=sf, recordings=sf.recordings, choice=_choice_record(sf.choice, p))
+
+
+#: Why the friction form is not chosen on the block path (its velocity-scale search reads whole recordings).
+FRICTION_NOTE = ("friction form: coulomb (not chosen block by block: the smooth forms' velocity-scale search "
+                 "needs the whole recordings)")
+
+
+def _choice_record(choice: ProcessingChoice | None, p: Any) -> dict | None:
+    """The fit file's ``processing_choice`` of a block-by-block fit: the in-memory fit's record, with a
+    line saying the friction form was left at coulomb where it was open."""
+    if choice is None:
+        return None
+    record = choice.to_dict()
+    if p.friction is None:
+        record.update(friction={"form": "coulomb", "chosen": False, "reason": FRICTION_NOTE},
+                      table=record["table"] + "\n  " + FRICTION_NOTE)
+    return record

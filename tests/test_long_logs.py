@@ -88,7 +88,7 @@ def test_incremental_qr_and_bootstrap_equal_the_whole_matrix():
 
 @pytest.fixture(scope="module")
 def whole_fit(rx90, rx90_base, twin_empty):
-    # Long logs are fitted block by block with the position-spectrum cut-off (no cross-validation).
+    # The position-spectrum cut-off (no cross-validation): the block-wise fits compared with it fix it too.
     return identify.fit(rx90, twin_empty[:1], WHOLE, base=rx90_base)
 
 
@@ -107,7 +107,7 @@ def test_streamed_fit_equals_the_whole_fit(rx90, rx90_base, twin_empty, whole_fi
     obs = whole_fit.observation
     boot = segment_bootstrap_std(obs.W, obs.Y, obs.joint, obs.samples, whole_fit.result.weights, 25, 50, 0)
     fit = fit_streamed(rx90, twin_empty[:1], base=rx90_base, estimate=True, block=1000,
-                       bootstrap=BootstrapSpec(0.5, 50, 0))
+                       bootstrap=BootstrapSpec(0.5, 50, 0), cross_validate=False)
     assert fit.blocks >= 4 and fit.cutoff == whole_fit.cutoff and fit.result.rows == whole_fit.result.rows
     _close(fit.result.values, whole_fit.result.values, 1e-8)
     _close(fit.result.std, whole_fit.result.std, 1e-8)
@@ -124,8 +124,9 @@ def test_streamed_fit_equals_the_whole_fit(rx90, rx90_base, twin_empty, whole_fi
 @pytest.mark.slow
 def test_streamed_fit_of_several_recordings_with_rest_dropped(rx90, rx90_base, twin_empty):
     """80 s in four recordings, rest rows dropped and the cut-off chosen: equal to the whole path."""
-    whole = identify.fit(rx90, twin_empty, Processing(rest="drop", delay="auto"), base=rx90_base)
-    fit = fit_streamed(rx90, twin_empty, base=rx90_base, rest="drop", delay="auto", block=2000)
+    # The processing fixed on both paths (the choice block by block: tests/test_stream_cv.py).
+    whole = identify.fit(rx90, twin_empty, Processing(rest="drop", delay="auto", cross_validate=False), base=rx90_base)
+    fit = fit_streamed(rx90, twin_empty, base=rx90_base, rest="drop", delay="auto", block=2000, cross_validate=False)
     assert fit.cutoff == whole.cutoff and fit.result.rows == whole.result.rows
     assert fit.delay == pytest.approx(whole.delay, abs=1e-9)
     _close(fit.result.values, whole.result.values, 1e-8)
@@ -136,10 +137,10 @@ def test_dask_blocks_equal_serial(rx90, rx90_base, twin_empty, whole_fit, tmp_pa
     operations, same order), which equals the whole fit; the fit file saves and loads."""
     from dask.distributed import Client, LocalCluster
 
-    serial = identify.fit(rx90, twin_empty[:1], base=rx90_base, block=1000)
+    serial = identify.fit(rx90, twin_empty[:1], WHOLE, base=rx90_base, block=1000)
     with LocalCluster(n_workers=2, threads_per_worker=1, processes=False, dashboard_address=None) as cluster, \
             Client(cluster) as client:
-        spread = identify.fit(rx90, twin_empty[:1], base=rx90_base, block=1000, client=client)
+        spread = identify.fit(rx90, twin_empty[:1], WHOLE, base=rx90_base, block=1000, client=client)
     np.testing.assert_allclose(spread.result.values, serial.result.values, rtol=1e-10)
     np.testing.assert_allclose(spread.bootstrap.std, serial.bootstrap.std, rtol=1e-10)
     assert spread.streamed.blocks == serial.streamed.blocks >= 4 and serial.observation is None
@@ -198,7 +199,8 @@ def test_convert_log_in_blocks_equals_the_whole_reader(rx90, twin_empty, tmp_pat
 def test_cli_identify_streams_a_log_longer_than_the_block(rx90, twin_empty, whole_fit, tmp_path):
     path = tmp_path / "rec.csv"
     identify.write_recording(path, twin_empty[0], rx90)
-    done = subprocess.run([RX90, "identify", str(path), "--block", "1000", "--json", str(tmp_path / "id.json")],
+    done = subprocess.run([RX90, "identify", str(path), "--block", "1000", "--no-cross-validate", "--json",
+                           str(tmp_path / "id.json")],
                           capture_output=True, text=True, timeout=600)
     assert done.returncode == 0, done.stderr
     assert "block by block" in done.stderr
@@ -214,7 +216,7 @@ def test_fleet_fits_every_robot_on_its_own_logs(rx90, rx90_base, twin_empty, who
     robot's whole-signal fit, and one table line each."""
     from identify.fleet import fit_fleet
 
-    fleet = fit_fleet({"cell-1": (rx90, twin_empty[:1]), "cell-2": (rx90, twin_empty[1:2])}, base=rx90_base,
+    fleet = fit_fleet({"cell-1": (rx90, twin_empty[:1]), "cell-2": (rx90, twin_empty[1:2])}, WHOLE, base=rx90_base,
                       block=2000)
     assert list(fleet.fits) == ["cell-1", "cell-2"]
     _close(fleet.fits["cell-1"].result.values, whole_fit.result.values, 1e-8)

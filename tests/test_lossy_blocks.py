@@ -77,7 +77,7 @@ def test_block_fit_of_a_lossy_log_equals_the_in_memory_fit(panda, lossy, tmp_pat
     base = rx90sym.base_parameters(panda)
     out = tmp_path / "rec.csv"
     convert_log(path, panda, cols, out, resample=1000.0, convention="model", block=LINES)
-    # The delay search in blocks: tests/test_long_logs.py; blocks keep the position-spectrum cut-off.
+    # The delay search in blocks: tests/test_long_logs.py; the choice block by block: tests/test_stream_cv.py.
     p = identify.Processing(estimate_delay=False, cross_validate=False)
     ref = identify.fit(panda, [whole], p, base=base).bootstrapped(0)
     blocks = identify.fit(panda, [str(out)], p, base=base, block=SAMPLES)
@@ -129,7 +129,8 @@ def test_report_of_a_long_lossy_log(panda, lossy, tmp_path):
     convert_log(path, panda, cols, out, resample=1000.0, convention="model", block=LINES)
     rec = identify.read_recording(out, panda)
     html = tmp_path / "id.html"
-    assert main(["identify", str(out), "--robot", "panda", "--block", str(SAMPLES), "--report", str(html)]) == 0
+    assert main(["identify", str(out), "--robot", "panda", "--block", str(SAMPLES), "--no-cross-validate",
+                 "--report", str(html)]) == 0
     text = html.read_text()
     assert f"{fmt(rec.t[-1] - rec.t[0], 4)} s, {rec.n_samples} samples" in text
     for fig in ("fig-parameters", "fig-torques", "fig-residuals", "fig-trajectory"):

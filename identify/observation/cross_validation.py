@@ -30,16 +30,18 @@ replaces the default processing, only when its held-back error is lower by more 
 error of the paired difference over the blocks (or, for the processing, by more than
 :data:`CLEAR_MARGIN` of the default's score); a smaller difference keeps the default (on the
 TX40, 26.6 and 20 Hz score 9.562 and 9.575 % while the held-out error of joint 1 is 2.196 and
-1.806 N·m: the scores cannot tell them apart). Cut-offs are scored from the knee outwards and no further one is started once ``time_cap`` seconds are spent (those left are
-listed as not scored); the rest policies are always scored. Bridged samples and rest rows follow
-the fit's rules (the same rows as W).
+1.806 N·m: the scores cannot tell them apart). Cut-offs are scored from the knee outwards and no
+further one is started once ``time_cap`` seconds are spent (those left are listed as not scored);
+the rest policies are always scored. Bridged samples and rest rows follow the fit's rules (the
+same rows as W). :func:`select_processing` is this selection whatever scores the candidates (in
+memory here; block by block in :mod:`identify.observation.stream_cv`).
 """
 from __future__ import annotations
 
 import math
 import time
 from dataclasses import dataclass, replace
-from typing import Any, Sequence
+from typing import Any, Callable, Sequence
 
 import numpy as np
 
@@ -51,8 +53,8 @@ from identify.observation.processing import DEFAULT_REST, REST_POLICIES, RestPol
 from identify.signal.filtering import choose_cutoff
 
 __all__ = ["Candidate", "ProcessingChoice", "GRID_FACTORS", "DEFAULT_BLOCKS", "DEFAULT_TIME_CAP", "SCORED_REST",
-           "candidate_grid", "choose_processing", "fold_wls", "clearly_better", "block_factors",
-           "block_scores", "time_blocks"]
+           "candidate_grid", "grid_around", "choose_processing", "select_processing", "scoring_rate", "time_folds",
+           "time_blocks", "fold_wls", "clearly_better", "block_factors", "block_scores"]
 
 #: Cut-offs of the grid, as multiples of the position-spectrum knee.
 GRID_FACTORS = (0.5, 0.7, 1.0, 1.4, 2.0)
@@ -160,16 +162,19 @@ def _rest_text(rest: RestPolicy | None) -> str:
     return "no threshold" if rest is None else rest_label(rest)
 
 
-def _rate(recordings: Sequence[Any]) -> float:
-    return min(1.0 / float(np.median(np.diff(np.asarray(p.t)))) for r in recordings for p in r.pieces())
-
-
 def candidate_grid(recordings: Sequence[Any], default_decimate: float | None = 50.0) -> tuple[float, list[Candidate]]:
     """(knee [Hz], candidates in scoring order: the knee first, the default (labelled, the
     automatic cut-off with ``default_decimate``), then outwards from the knee)."""
-    rate = _rate(recordings)
+    rate = min(1.0 / float(np.median(np.diff(np.asarray(p.t)))) for r in recordings for p in r.pieces())
     knee = max(choose_cutoff(np.asarray(p.q), rate) for r in recordings for p in r.pieces()
                if p.n_samples >= 64)
+    return knee, grid_around(knee, rate, automatic_cutoff(recordings, default_decimate), default_decimate)
+
+
+def grid_around(knee: float, rate: float, default_cutoff: float, default_decimate: float | None) -> list[Candidate]:
+    """The candidates around the position-spectrum ``knee`` [Hz] at the recordings' ``rate`` [Hz]
+    (the knee first, the default processing (``default_cutoff`` [Hz], ``default_decimate`` [Hz]),
+    then outwards): what :func:`candidate_grid` returns, from numbers a streamed scan also gives."""
     top = 0.4 * rate / 2.0
     cuts = sorted({min(max(2.0, f * knee), top) for f in GRID_FACTORS}, key=lambda c: abs(math.log(c / knee)))
     out = []
@@ -177,33 +182,36 @@ def candidate_grid(recordings: Sequence[Any], default_decimate: float | None = 5
         target = max(fc / DECIMATION_PASSBAND, MIN_DECIMATED_RATE)  # pass band >= fc
         factor = max(1, int(math.floor(rate / target)))
         out.append(Candidate(fc, rate / factor if factor > 1 else None))
-    default = Candidate(automatic_cutoff(recordings, default_decimate), default_decimate, label=DEFAULT_LABEL)
-    out = [c for c in out if abs(c.cutoff - default.cutoff) > 1e-9 * default.cutoff
-           or c.decimate_to != default.decimate_to]
-    return knee, out[:1] + [default] + out[1:]
+    default = Candidate(default_cutoff, default_decimate, label=DEFAULT_LABEL)
+    out = [c for c in out if abs(c.cutoff - default_cutoff) > 1e-9 * default_cutoff or c.decimate_to != default_decimate]
+    return out[:1] + [default] + out[1:]
 
 
-def _scoring_rate(grid: Sequence[Candidate]) -> float | None:
+def scoring_rate(grid: Sequence[Candidate]) -> float | None:
     """The common rate every candidate is scored at [Hz]: the highest decimated rate of the grid
     (None: one candidate is not decimated), so that every held-back torque is the same signal."""
     return None if any(c.decimate_to is None for c in grid) else max(c.decimate_to for c in grid)
 
 
+def time_folds(t: np.ndarray, start: float, span: float, blocks: int) -> np.ndarray:
+    """The contiguous block (0 .. blocks-1) of each time ``t`` [s] in ``[start, start + span)``."""
+    return np.minimum((blocks * (t - start) / span).astype(int), blocks - 1)
+
+
 def time_blocks(times: Sequence[np.ndarray], blocks: int) -> list[np.ndarray]:
     """The fold of every sample: per array of sample times [s] (one per motion or segment), the
     block 0..blocks-1 it falls in when the common span (earliest to latest time of all) is cut into
-    ``blocks`` contiguous blocks of equal duration. The one fold assignment of the processing and
-    the friction choices (by time, not by sample index: recordings and segments of other lengths
-    or rates fall in the same blocks for both)."""
+    ``blocks`` contiguous blocks of equal duration (:func:`time_folds`). The one fold assignment of the
+    processing and the friction choices (by time, not by sample index: recordings and segments of other
+    lengths or rates fall in the same blocks for both)."""
     start = min(float(np.min(t)) for t in times)
     span = max(float(np.max(t)) for t in times) - start + 1e-9
-    return [np.minimum((blocks * (np.asarray(t) - start) / span).astype(int), blocks - 1) for t in times]
+    return [time_folds(np.asarray(t), start, span, blocks) for t in times]
 
 
 def _compressed_blocks(motions: Sequence[Any], ids: Sequence[np.ndarray], blocks: int, drop: bool,
                        n: int) -> dict[tuple[int, int], tuple[np.ndarray, int]]:
-    """(block, joint) -> (the triangular factor of [W | Y] over the block's rows of that joint,
-    their number)."""
+    """(block, joint) -> (the triangular factor of [W | Y] over the block's rows of that joint, their number)."""
     out = {}
     for b in range(blocks):
         rows = [m.rows(drop) & (i == b)[:, None] for m, i in zip(motions, ids)]
@@ -304,8 +312,23 @@ def choose_processing(robot: rx90sym.Robot, recordings: Sequence[Any], base: Any
     base = base if base is not None else rx90sym.base_parameters(robot)
     knee, grid = candidate_grid(recordings, default_decimate)
     grid = list(candidates) if candidates is not None else grid
-    reference = _scoring_rate(grid)
+    reference = scoring_rate(grid)
     options = {"min_velocity": min_velocity, "spring": spring, "delay": delay}
+    return select_processing(lambda cand: _score(robot, recordings, cand, base, reference, blocks, options),
+                             knee, grid, reference, blocks, min_velocity, rest, time_cap, policies)
+
+
+Scorer = Callable[[Candidate], tuple[float, tuple[float, ...], tuple[tuple[float, ...], ...]]]  # as _score's
+
+
+def select_processing(score: Scorer, knee: float, grid: Sequence[Candidate], reference: float | None, blocks: int,
+                      min_velocity: float | None, rest: RestPolicy | None, time_cap: float,
+                      policies: Sequence[str] = SCORED_REST) -> ProcessingChoice:
+    """The selection of :func:`choose_processing` (and of the block-by-block choice,
+    :mod:`identify.observation.stream_cv`) whatever computes the scores: the rest policy per joint at
+    the knee where it is open, the cut-offs from the knee outwards within ``time_cap`` [s], the
+    default unless clearly beaten. ``grid``: the knee's candidate first, the default among them;
+    ``reference``: the common scoring rate [Hz] (None: not decimated)."""
     start = time.perf_counter()
     first: list[Candidate] = []
     rest_scores: tuple[tuple[str, tuple[float, ...]], ...] = ()
@@ -313,14 +336,13 @@ def choose_processing(robot: rx90sym.Robot, recordings: Sequence[Any], base: Any
         rest = None
     elif rest is None:
         # First stage, at the knee: every policy that keeps the rest rows; each joint takes its best.
-        first = _run(robot, recordings, [replace(grid[0], rest=r) for r in policies], base, reference, blocks,
-                     options, start, math.inf)
+        first = _run(score, [replace(grid[0], rest=r) for r in policies], start, math.inf)
         valid = [c for c in first if c.per_joint]
         rest_scores = tuple((str(c.rest), c.per_joint) for c in valid)
         rest = _per_joint_rest(valid) if valid else DEFAULT_REST
     done = {(f.cutoff, f.decimate_to, f.rest) for f in first}
     todo = [replace(c, rest=rest) for c in grid if (c.cutoff, c.decimate_to, rest) not in done]
-    second = _run(robot, recordings, todo, base, reference, blocks, options, start, time_cap, always_first=True)
+    second = _run(score, todo, start, time_cap, always_first=True)
     scored = first + second
     # Only candidates with the rest policy chosen above: a first-stage candidate (one policy for all
     # joints) must not override the per-joint rule that kept zero-coulomb where it was not beaten.
@@ -368,8 +390,8 @@ def _best(scored: Sequence[Candidate]) -> Candidate:
     return min(valid, key=lambda c: c.score)
 
 
-def _run(robot: rx90sym.Robot, recordings: Sequence[Any], grid: Sequence[Candidate], base: Any, reference: float,
-         blocks: int, options: dict, start: float, time_cap: float, always_first: bool = False) -> list[Candidate]:
+def _run(score: Scorer, grid: Sequence[Candidate], start: float, time_cap: float,
+         always_first: bool = False) -> list[Candidate]:
     """Score ``grid`` in order; none is started after ``time_cap`` s since ``start`` (but the first
     with ``always_first``)."""
     scored: list[Candidate] = []
@@ -379,10 +401,10 @@ def _run(robot: rx90sym.Robot, recordings: Sequence[Any], grid: Sequence[Candida
             continue
         t0 = time.perf_counter()
         try:
-            score, per_joint, per_block = _score(robot, recordings, cand, base, reference, blocks, options)
+            value, per_joint, per_block = score(cand)
         except ValueError as exc:  # too few rows left to fit (a low rate on a short recording)
             scored.append(replace(cand, label=f"{cand.label} not scored: {str(exc).splitlines()[0]}".strip()))
             continue
-        scored.append(replace(cand, score=score, per_joint=per_joint, per_block=per_block,
+        scored.append(replace(cand, score=value, per_joint=per_joint, per_block=per_block,
                               seconds=time.perf_counter() - t0))
     return scored

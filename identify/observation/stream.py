@@ -22,8 +22,9 @@ Every quantity downstream (incremental QR, bootstrap, validation) consumes piece
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
-from typing import Any, Callable, Iterator, Sequence
+from collections import deque
+from dataclasses import dataclass, field
+from typing import Any, Callable, Iterable, Iterator, Sequence
 
 import numpy as np
 
@@ -36,8 +37,8 @@ from identify.signal.blocks import WelchAccumulator, decimation_margin, lowpass_
 from identify.signal.cutoff import choose_cutoff
 from identify.signal.filtering import EDGE_PERIODS, cutoff_from_spectrum, decimate, decimation_plan
 
-__all__ = ["DEFAULT_BLOCK", "Piece", "Plan", "Scan", "SegmentScan", "StreamSettings", "pieces", "plan_windows", "scan",
-           "scan_all"]
+__all__ = ["DEFAULT_BLOCK", "Piece", "Plan", "Scan", "SegmentScan", "StreamSettings", "in_order", "pieces",
+           "plan_windows", "scan", "scan_all", "scanned_cutoff"]
 
 
 
@@ -59,12 +60,26 @@ class StreamSettings:
 class SegmentScan:
     """One segment of a recording (the samples between two gaps too long to bridge): its first raw
     sample ``start`` in the recording, ``samples``, ``rate`` [Hz] (1 / its median step, as
-    :func:`filtered_motions` takes it) and its automatic cut-off [Hz] (None when a cut-off is given)."""
+    :func:`filtered_motions` takes it), its automatic cut-off [Hz] (None when a cut-off is given) and,
+    when the scan was asked to keep them, the times [s] of its first and last samples (``head``,
+    ``tail``: where the filters' edges end, for the time blocks of a cross-validation)."""
 
     start: int
     samples: int
     rate: float
     cutoff: float | None
+    head: np.ndarray = field(default_factory=lambda: np.empty(0), compare=False, repr=False)
+    tail: np.ndarray = field(default_factory=lambda: np.empty(0), compare=False, repr=False)
+
+    def time_at(self, index: int) -> float:
+        """The time [s] of the segment's sample ``index`` (0 .. samples-1), from its head or tail kept."""
+        if 0 <= index < self.head.size:
+            return float(self.head[index])
+        back = self.samples - index
+        if 0 < back <= self.tail.size:
+            return float(self.tail[-back])
+        raise ValueError(f"sample {index} of a segment of {self.samples} is not among the times the scan kept "
+                         f"({self.head.size} first, {self.tail.size} last)")
 
 
 @dataclass(frozen=True)
@@ -119,8 +134,9 @@ class _SegmentPass:
     Welch spectrum of its raw accelerations is streamed (:class:`WelchAccumulator`, equal to scipy's).
     """
 
-    def __init__(self, start: int, hold: int, floor: float | None) -> None:
-        self.start, self.hold, self.floor = start, hold, floor
+    def __init__(self, start: int, hold: int, floor: float | None, keep_s: float = 0.0) -> None:
+        self.start, self.hold, self.floor, self.keep_s = start, hold, floor, keep_s
+        self.head, self.tail = np.empty(0), np.empty(0)
         self.samples, self.steps = 0, StepCounts()
         self.t: list[np.ndarray] = []
         self.q: list[np.ndarray] = []
@@ -130,6 +146,12 @@ class _SegmentPass:
         self.rate = float("nan")
 
     def feed(self, t: np.ndarray, q: np.ndarray) -> None:
+        if self.keep_s > 0:  # the times within keep_s of either end
+            first = self.head[0] if self.head.size else t[0]
+            if self.head.size == self.samples:
+                self.head = np.concatenate([self.head, t[t <= first + self.keep_s]])
+            tail = np.concatenate([self.tail, t])
+            self.tail = tail[tail >= t[-1] - self.keep_s]
         if self.tail_t is not None:
             self.steps.add(np.diff(np.r_[self.tail_t, t]))
         else:
@@ -165,12 +187,13 @@ class _SegmentPass:
         elif self.floor is not None and self.samples > 2:
             t_all, q_all = np.concatenate(self.t), np.concatenate(self.q)
             cut = choose_cutoff(q_all, 1.0 / float(np.median(np.diff(t_all))), min_cutoff=self.floor)
-        return SegmentScan(self.start, self.samples, rate, cut)
+        return SegmentScan(self.start, self.samples, rate, cut, self.head, self.tail)
 
 
-def scan(src: BlockSource, block: int, floor: float | None) -> Scan:
+def scan(src: BlockSource, block: int, floor: float | None, keep_s: float = 0.0) -> Scan:
     """First pass over one recording (checks every block; see the module docstring); ``floor``: the
-    lowest automatic cut-off [Hz] (None: the cut-off is given, no spectrum)."""
+    lowest automatic cut-off [Hz] (None: the cut-off is given, no spectrum); ``keep_s`` [s]: keep the
+    times of each segment's first and last ``keep_s`` seconds (:meth:`SegmentScan.time_at`)."""
     lo = hi = None
     steps = StepCounts()  # the rate is the whole log's, 1 / median step
     done: list[SegmentScan] = []
@@ -191,7 +214,7 @@ def scan(src: BlockSource, block: int, floor: float | None) -> Scan:
             if current is None or number != len(done):
                 if current is not None:
                     done.append(current.result())
-                current = _SegmentPass(at + int(rows[0]), block, floor)
+                current = _SegmentPass(at + int(rows[0]), block, floor, keep_s)
             current.feed(t[rows], q[rows])
         at += t.size
     done.append(current.result())
@@ -206,11 +229,17 @@ def scan_all(sources: Sequence[BlockSource], settings: StreamSettings) -> tuple[
     need = settings.cutoff is None
     floor = (max(2.0, DECIMATION_PASSBAND * settings.decimate_to) if settings.decimate_to else 2.0) if need else None
     scans = [scan(src, settings.block, floor) for src in sources]
-    if not need:
-        return scans, float(settings.cutoff)
+    return scans, scanned_cutoff(scans, floor) if need else float(settings.cutoff)
+
+
+def scanned_cutoff(scans: Sequence[Scan], floor: float) -> float:
+    """:func:`identify.observation.matrix.automatic_cutoff` [Hz] from the segments' cut-offs of a scan made
+    with a floor at most ``floor`` [Hz]: the largest over the segments long enough for a spectrum, each
+    raised to ``floor`` and bounded by 40 % of its Nyquist frequency as :func:`choose_cutoff` bounds it."""
     segments = [g for s in scans for g in s.segments]
     longest = max(g.samples for g in segments)
-    return scans, float(max(g.cutoff for g in segments if g.samples >= min(longest, SPECTRUM_SAMPLES)))
+    return float(max(g.cutoff if g.cutoff >= floor else min(floor, 0.2 * g.rate) for g in segments
+                     if g.samples >= min(longest, SPECTRUM_SAMPLES)))
 
 
 @dataclass(frozen=True)
@@ -315,3 +344,20 @@ def pieces(robot: rx90sym.Robot, sources: Sequence[BlockSource], plans: Sequence
     for plan, window, rec, first in windows_in_order(sources, plans):
         args = (robot, rec, window, plan, cutoff, settings, regressor, names, first, tuple(lags))
         yield piece(*args) if submit is None else submit(piece, *args)
+
+
+def in_order(task: Callable[..., Any], arguments: Iterable[tuple], client: Any = None,
+             in_flight: int = 2) -> Iterator[Any]:
+    """``task(*args)`` for every tuple of ``arguments``, here, or on a ``dask.distributed.Client`` with at
+    most ``in_flight`` tasks submitted; the results in order (the fold that follows is the serial one)."""
+    if client is None:
+        for args in arguments:
+            yield task(*args)
+        return
+    queue: deque = deque()
+    for args in arguments:
+        queue.append(client.submit(task, *args, pure=False))
+        if len(queue) >= in_flight:
+            yield queue.popleft().result()
+    while queue:
+        yield queue.popleft().result()

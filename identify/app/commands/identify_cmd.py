@@ -90,7 +90,8 @@ def register(sub: Any) -> None:
                     help=f"friction while moving: Coulomb sign(q̇), smooth tanh(q̇/vs) or Stribeck "
                          f"({', '.join(FRICTION_FORMS)}), the velocity scale vs per joint found by separable least "
                          f"squares; one, or one per joint separated by commas (default: coulomb or tanh chosen per "
-                         f"joint by the cross-validation, coulomb unless clearly beaten on that joint; else coulomb)")
+                         f"joint by the cross-validation, coulomb unless clearly beaten on that joint; else coulomb, "
+                         f"and for long logs fitted block by block)")
     sp.add_argument("--delay", type=_delay, default=0.0,
                     help="torque lag behind the positions: 'auto' (estimated) or seconds (default 0; "
                          "the estimate is always reported)")
@@ -284,8 +285,7 @@ def _print_fit(f: Fit, recs: list, auto_delay: bool, prior: Any = None) -> None:
         print(f.choice["table"])
     else:
         p = f.processing
-        why = (f"--cutoff {p.cutoff:g} given" if p.cutoff is not None else "--no-cross-validate"
-               if p.cross_validate is False else "long logs are fitted block by block")
+        why = f"--cutoff {p.cutoff:g} given" if p.cutoff is not None else "--no-cross-validate"
         print(f"processing not cross-validated ({why}): rest policy {rest_label(f.rest)}")
     if f.model.friction is not None and "velocity_scale" in f.model.friction:
         from identify.estimation.separable import VelocityScales

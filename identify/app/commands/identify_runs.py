@@ -32,7 +32,9 @@ def fit_long(args: argparse.Namespace, robot: rx90sym.Robot, processing: Process
     from identify.fitting import fit
 
     progress(f"identifying ({args.method}) block by block ({args.block} samples per block"
-             + (f", Dask scheduler {args.scheduler}" if args.scheduler else "") + ")")
+             + (f", Dask scheduler {args.scheduler}" if args.scheduler else "") + ")"
+             + ("; the processing chosen first by cross-validation, one pass over the logs per candidate"
+                if processing.cross_validates else ""))
     options = dict(base=base, gains=gains, convention=args.convention, spring_source=args.spring,
                    block=args.block, bootstrap_seed=args.bootstrap_seed)
     if args.scheduler is None:

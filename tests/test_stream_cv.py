@@ -1,0 +1,118 @@
+"""The processing chosen by blocked cross-validation on a log read block by block
+(identify.observation.stream_cv) against the in-memory choice on the same recording
+(identify.observation.cross_validation.choose_processing), and through ``rx90 identify``."""
+from __future__ import annotations
+
+import json
+import math
+
+import numpy as np
+import pytest
+
+import identify
+import rx90sym
+from identify.app.cli import main
+from identify.io.blocks import block_source
+from identify.io.logs import read_log
+from identify.observation.cross_validation import choose_processing
+from identify.observation.stream import StreamSettings, plan_windows, scan
+from identify.observation.stream_cv import choose_processing_streamed
+from motions import multisine
+from rx90sym.host_log import HostFaults, host_log, write_host_log
+
+#: Raw samples per block of the choice: every segment of the log below (about 5 s at 250 Hz) spans two
+#: blocks or more; the command line's smallest --block (1,000) for its run.
+BLOCK, CLI_BLOCK = 500, 1000
+#: Scores [%] of the two paths agree to this relative tolerance. The filters agree to ~1e-13 at the
+#: blocks' overlaps (their margins) and the knees to 1e-13 (each segment's rate from its own steps);
+#: the fold fits amplify that by the conditioning of the base parameters: measured 4e-10 relative on
+#: the candidates' scores, 1.2e-9 on the per-block ones.
+RTOL = 1e-6
+
+
+@pytest.fixture(scope="module")
+def lossy_rx90(rx90, tmp_path_factory):
+    """(recording CSV, the recording in memory): 15 s of the RX90 twin logged by a host at 250 Hz
+    (5 % stale rows, bursts of 3-8 lost packets every 1-2 s bridged, two gaps of 0.2 s: three
+    segments), read with --resample."""
+    run = rx90sym.twin.simulate(rx90, multisine(rx90, 3), duration=15.0, noise="realistic", seed=3)
+    table, _, _ = host_log(run, HostFaults(gap_every_s=(1.0, 2.0), gap_periods=(3, 8), long_gaps=(5.0, 10.0)), 3)
+    folder = tmp_path_factory.mktemp("streamcv")
+    cols = write_host_log(folder / "host.csv", table)
+    rec = read_log(folder / "host.csv", rx90, cols, resample=250.0, convention="model")
+    assert rec.n_segments == 3 and np.sum(~rec.measured_mask) > 100 and rec.meta["log"]["stale_rows"] > 100
+    path = folder / "rec.csv"
+    identify.write_recording(path, rec, rx90)
+    return path, rec
+
+
+@pytest.fixture(scope="module")
+def in_memory(rx90, rx90_base, lossy_rx90):
+    return choose_processing(rx90, [lossy_rx90[1]], base=rx90_base)
+
+
+def _same_scores(a, b) -> None:
+    assert a == pytest.approx(b, rel=RTOL, nan_ok=True)
+
+
+def test_the_streamed_choice_equals_the_in_memory_one(rx90, rx90_base, lossy_rx90, in_memory):
+    """Same knee, candidates, per-joint rest policy, chosen candidate and scores (per joint and per
+    held-back block) from the CSV read in blocks of 500 samples as from the recording in memory."""
+    path, _ = lossy_rx90
+    src = block_source(str(path), rx90)
+    segments = scan(src, BLOCK, None).segments
+    plans, _ = plan_windows(scan(src, BLOCK, None), 4.0, StreamSettings(4.0, 50.0, block=BLOCK))
+    assert len(segments) == 3 and all(len(p.windows) >= 2 for p in plans)  # blocks inside every segment
+    got = choose_processing_streamed(rx90, [src], base=rx90_base, block=BLOCK)
+    assert got.knee == pytest.approx(in_memory.knee, rel=1e-9)
+    assert [(c.decimate_to, c.rest, c.label) for c in got.candidates] == \
+        [(c.decimate_to, c.rest, c.label) for c in in_memory.candidates]
+    for a, b in zip(got.candidates, in_memory.candidates):
+        assert a.cutoff == pytest.approx(b.cutoff, rel=1e-9)
+        _same_scores(a.score, b.score)
+        _same_scores(a.per_joint, b.per_joint)
+        _same_scores([v for row in a.per_block for v in row], [v for row in b.per_block for v in row])
+    assert got.chosen.rest == in_memory.chosen.rest and got.chosen.label == in_memory.chosen.label
+    assert got.chosen.cutoff == pytest.approx(in_memory.chosen.cutoff, rel=1e-9)
+    assert [name for name, _ in got.rest_scores] == [name for name, _ in in_memory.rest_scores]
+    # The choice is not a formality on this log: the candidates' scores differ by far more than the
+    # tolerance, and the default (20 Hz) is beaten.
+    scores = [c.score for c in got.candidates if not math.isnan(c.score)]
+    assert max(scores) > 2 * min(scores) and got.chosen.label != "(default)"
+
+
+def test_the_cli_cross_validates_a_long_log(rx90, lossy_rx90, in_memory, tmp_path, capsys):
+    """``rx90 identify`` on a log longer than --block: the candidate table printed, the fit made with
+    the chosen processing, ``processing_choice`` in the fit file as for a log in memory."""
+    path, _ = lossy_rx90
+    out = tmp_path / "fit.json"
+    assert main(["identify", str(path), "--robot", "rx90", "--block", str(CLI_BLOCK), "--json", str(out)]) == 0
+    printed = capsys.readouterr().out
+    assert "processing chosen by 5-block cross-validation" in printed and "<- chosen" in printed
+    assert "friction form: coulomb (not chosen block by block" in printed
+    assert "not cross-validated" not in printed
+    record = json.loads(out.read_text())
+    choice, chosen = record["processing_choice"], in_memory.chosen
+    assert choice["chosen"]["cutoff_hz"] == pytest.approx(chosen.cutoff, rel=1e-9)
+    assert choice["chosen"]["rest"] == chosen.rest and choice["chosen"]["decimate_to_hz"] == chosen.decimate_to
+    _same_scores(choice["chosen"]["score_pct"], chosen.score)
+    assert record["model"]["cutoff_hz"] == pytest.approx(chosen.cutoff, rel=1e-9)
+    assert record["model"]["rest"] == chosen.rest and record["model"]["decimate_to_hz"] == chosen.decimate_to
+    loaded = identify.load_fit(out)
+    assert loaded.cutoff == pytest.approx(chosen.cutoff, rel=1e-9) and loaded.choice["reason"] == choice["reason"]
+
+
+def test_the_streamed_choice_on_dask_equals_the_serial_one(rx90, rx90_base):
+    """Every block of every candidate a task on two local workers, the factors folded in block order
+    on the client: the serial choice (same scores to the last digit, measured)."""
+    from dask.distributed import Client, LocalCluster
+
+    run = rx90sym.twin.simulate(rx90, multisine(rx90, 4), duration=6.0, noise="realistic", seed=4)
+    src = block_source(run, rx90)  # 6 s at 250 Hz: three blocks of 500 samples
+    serial = choose_processing_streamed(rx90, [src], base=rx90_base, block=BLOCK)
+    with LocalCluster(n_workers=2, threads_per_worker=1, processes=False, dashboard_address=None) as cluster, \
+            Client(cluster) as client:
+        spread = choose_processing_streamed(rx90, [src], base=rx90_base, block=BLOCK, client=client)
+    assert [(c.cutoff, c.rest, c.score, c.per_block) for c in spread.candidates] == \
+        [(c.cutoff, c.rest, c.score, c.per_block) for c in serial.candidates]
+    assert spread.chosen.cutoff == serial.chosen.cutoff and len(serial.candidates) >= 4
