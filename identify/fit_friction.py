@@ -14,7 +14,7 @@ from identify.observation.friction_model import friction_base
 from identify.observation.matrix import Observation, coulomb_terms
 from identify.observation.processing import FrictionForm, Processing, friction_label, has_policy, has_smooth_friction
 
-__all__ = ["chosen_friction", "friction_columns"]
+__all__ = ["chosen_friction", "defaulted_travels", "friction_columns"]
 
 
 def chosen_friction(robot: rx90sym.Robot, recordings: Sequence[Any], base: Any, p: Processing, method: str,
@@ -59,11 +59,11 @@ def friction_columns(robot: rx90sym.Robot, recordings: Sequence[Any], base: Any,
         record.update(scales.to_json())
     if presliding:
         travels = presliding_travels(robot, recordings, base, **options)
-        base = friction_base(base, terms, presliding=True, travels=_defaulted(travels.travels))
+        base = friction_base(base, terms, presliding=True, travels=defaulted_travels(travels.travels))
         record.update(travels.to_json())
     return base, record
 
 
-def _defaulted(travels: Sequence[float | None]) -> list[float]:
+def defaulted_travels(travels: Sequence[float | None]) -> list[float]:
     """Travels [rad] with the default where none was chosen (the joint never rests: no FPj column)."""
     return [PRESLIDING_TRAVEL if v is None or not np.isfinite(v) else float(v) for v in travels]

@@ -27,7 +27,7 @@ from identify.observation.friction_model import friction_base
 from identify.observation.matrix import Observation, coulomb_terms, observation_matrix
 from identify.io.recordings import layout_summary
 from identify.observation.processing import Processing, friction_label, has_policy, has_smooth_friction
-from identify.fit_friction import chosen_friction, friction_columns
+from identify.fit_friction import chosen_friction, defaulted_travels, friction_columns
 from identify.signal.delay import DelayEstimate, estimate_delay
 from identify.validation import Validation, predict
 
@@ -225,7 +225,7 @@ class Fit:
         if model.friction is not None:  # the friction columns found: smooth form's scales, presliding travels
             fr = model.friction
             scales = [np.nan if v is None else v for v in fr["velocity_scale"]] if "velocity_scale" in fr else None
-            travels = _defaulted(fr["presliding_travel"]) if "presliding_travel" in fr else None
+            travels = defaulted_travels(fr["presliding_travel"]) if "presliding_travel" in fr else None
             base = friction_base(base, coulomb_terms(rob, base.names), fr["form"], scales,
                                  presliding=travels is not None, travels=travels)
         return cls(rob, result, processing, model, base,
