@@ -40,9 +40,9 @@ from identify.io.gains import apply_gains
 from identify.io.log_rows import ABSURD, LogLines, check_header, parse_rows
 from identify.io.logs import (LISTED_ROWS, check_increasing, check_positions, check_velocities, gains_label,
                               irregular_refusal, log_options, refuse_splits)
-from identify.io.recordings import TIME_RTOL
+from identify.io.log_block_report import BlockReport
 from identify.io.units import check_units
-from identify.signal.gaps import (DEFAULT_MAX_GAP, MIN_SEGMENT_ROWS, Gap, LogGaps, all_segments_short, find_gaps,
+from identify.signal.gaps import (DEFAULT_MAX_GAP, MIN_SEGMENT_ROWS, LogGaps, all_segments_short, find_gaps,
                                   stale_rows)
 from identify.signal.resampling import interpolate
 
@@ -183,54 +183,6 @@ def _write_rows(fh: IO, table: np.ndarray) -> None:
     fh.write(out.getvalue().decode())
 
 
-class _Report:
-    """What :func:`identify.read_log` reports in ``meta["log"]``, gathered block by block."""
-
-    def __init__(self) -> None:
-        self.first_line = self.last_line = None
-        self.rows = self.samples = self.irregular = self.stale = self.bridged = 0
-        self.stale_lines: list[int] = []
-        self.inside_sum, self.inside_count = 0.0, 0
-        self.gap, self.gap_lines, self.medians = -1.0, [0, 0], []
-        self.gaps: list[Gap] = []  # the first _GAPS_KEPT, the rest counted: memory bounded
-        self.gap_count, self.bridged_gaps, self.lost_periods = 0, 0, 0.0
-        self.segments = 1
-        self.dropped: list[tuple[int, int, int]] = []  # segments too short to filter: lines, rows
-
-    def add(self, t: np.ndarray, numbers: list[int], found: LogGaps) -> None:
-        """A block's kept rows (after the previous block's last kept row, when there is one) and its gaps."""
-        dt = np.diff(t)
-        if self.first_line is None:
-            self.first_line = numbers[0]
-        self.last_line = numbers[-1]
-        self.gaps += found.gaps[:max(0, _GAPS_KEPT - len(self.gaps))]
-        self.gap_count += len(found.gaps)
-        self.bridged_gaps += len(found.bridged)
-        self.lost_periods += float(sum(g.periods - 1.0 for g in found.bridged))
-        self.segments += int(found.segment[-1])
-        if dt.size:
-            step = float(np.median(dt))
-            self.medians.append(step)
-            self.irregular += int(np.sum(np.abs(dt - step) > TIME_RTOL * step))
-            inside = dt[np.diff(found.segment) == 0]
-            self.inside_sum, self.inside_count = self.inside_sum + float(inside.sum()), self.inside_count + inside.size
-            k = int(np.argmax(dt))
-            if dt[k] > self.gap:
-                self.gap, self.gap_lines = float(dt[k]), [numbers[k], numbers[k + 1]]
-
-    def result(self, max_gap: float) -> dict[str, Any]:
-        gaps = {**LogGaps(tuple(self.gaps), np.array([self.segments - 1 - len(self.dropped)]), max_gap,
-                          tuple(self.dropped)).summary(),
-                "bridged_gaps": self.bridged_gaps, "bridged_lost_periods": self.lost_periods,
-                "gaps_total": self.gap_count}
-        return {"lines": [self.first_line, self.last_line], "rows": self.rows, "stale_rows": self.stale,
-                "stale_lines": self.stale_lines,
-                "rate_hz": self.inside_count / self.inside_sum if self.inside_sum else float("nan"),
-                "median_step_s": float(np.median(self.medians)), "largest_gap_s": self.gap,
-                "largest_gap_lines": self.gap_lines, "irregular_steps": self.irregular, "gaps": gaps,
-                "bridged_samples": self.bridged, "samples": self.samples}
-
-
 class _LogStream:
     """The rules of :func:`identify.io.logs.rows_to_recording` on consecutive blocks of rows: stale rows
     (each block's first row compared with the previous block's last), checks, gaps and segments (each
@@ -238,7 +190,7 @@ class _LogStream:
     write, each with its segment number."""
 
     def __init__(self, cmap: ColumnMap, robot: rx90sym.Robot, conv: str, source: str, resample: float | None,
-                 max_gap: float, segments: bool, report: _Report) -> None:
+                 max_gap: float, segments: bool, report: BlockReport) -> None:
         self.cmap, self.robot, self.conv, self.source = cmap, robot, conv, source
         self.resample, self.max_gap, self.segments, self.report = resample, max_gap, segments, report
         self.used = [c for c, name in enumerate(cmap.names) if name != "_"]
@@ -346,7 +298,7 @@ def convert_log(path: str | os.PathLike[str], robot: rx90sym.Robot, columns: str
     if not (np.isfinite(max_gap) and max_gap > 0):
         raise ValueError(f"max_gap must be a positive time in s, got {max_gap!r}")
     cmap, conv, drive = log_options(p, robot, columns, rows, t_from, t_to, gains, convention)
-    report = _Report()
+    report = BlockReport()
     stream = _LogStream(cmap, robot, conv, p.name, resample, max_gap, segments, report)
 
     def write(fh: IO) -> None:
@@ -380,8 +332,6 @@ def convert_log(path: str | os.PathLike[str], robot: rx90sym.Robot, columns: str
             "gains": None if drive is None else gains_label(drive), "convention": conv, "blocks_of_lines": block}
 
 
-#: Gaps listed one by one in the report of a log converted in blocks (the counts cover them all).
-_GAPS_KEPT = 10_000
 #: Characters kept for the stale-row count in the header.
 _COUNT_WIDTH = 20
 

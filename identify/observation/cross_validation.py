@@ -40,7 +40,7 @@ from __future__ import annotations
 
 import math
 import time
-from dataclasses import dataclass, replace
+from dataclasses import replace
 from typing import Any, Callable, Sequence
 
 import numpy as np
@@ -49,8 +49,9 @@ import rx90sym
 
 from identify.observation.matrix import (DECIMATION_PASSBAND, DEFAULT_MIN_VELOCITY, automatic_cutoff, column_regressor,
                                          filtered_motions, stack_rows)
-from identify.observation.processing import DEFAULT_REST, REST_POLICIES, RestPolicy, drops_rest, rest_label
+from identify.observation.processing import DEFAULT_REST, REST_POLICIES, RestPolicy, drops_rest
 from identify.signal.filtering import choose_cutoff
+from identify.observation.candidates import CLEAR_MARGIN, DEFAULT_LABEL, Candidate, ProcessingChoice
 
 __all__ = ["Candidate", "ProcessingChoice", "GRID_FACTORS", "DEFAULT_BLOCKS", "DEFAULT_TIME_CAP", "SCORED_REST",
            "candidate_grid", "grid_around", "choose_processing", "select_processing", "scoring_rate", "time_folds",
@@ -62,10 +63,6 @@ GRID_FACTORS = (0.5, 0.7, 1.0, 1.4, 2.0)
 DEFAULT_BLOCKS = 5
 #: Lowest rate a candidate decimates to, Hz (enough rows per block for the fits and the scores).
 MIN_DECIMATED_RATE = 25.0
-#: A cut-off also replaces the default's when its score is lower by this share of the default's.
-CLEAR_MARGIN = 0.02
-#: Label of the default processing's candidate (the automatic cut-off and decimation).
-DEFAULT_LABEL = "(default)"
 #: Seconds after which no further cut-off is scored.
 DEFAULT_TIME_CAP = 60.0
 #: The rest policies scored where the fit leaves it open: every one that keeps the rest rows (a
@@ -76,90 +73,6 @@ DEFAULT_TIME_CAP = 60.0
 #: and joint 5's while moving up 5 %; choose_processing(policies=...) scores it on request).
 SCORED_REST = tuple(r for r in REST_POLICIES if r not in ("drop", "none", "presliding"))
 
-
-@dataclass(frozen=True)
-class Candidate:
-    """One processing: cut-off [Hz], decimation target [Hz] (None: none), rest policy, one or one per
-    joint (None: no rest threshold, every row a moving one), its cross-validated
-    score (mean over joints of the relative held-back error, %; nan: not scored), per joint (%),
-    and the seconds it took."""
-
-    cutoff: float
-    decimate_to: float | None
-    rest: RestPolicy | None = None
-    score: float = math.nan
-    per_joint: tuple[float, ...] = ()
-    per_block: tuple[tuple[float, ...], ...] = ()
-    seconds: float = 0.0
-    label: str = ""
-
-    def to_dict(self) -> dict[str, Any]:
-        rest = list(self.rest) if isinstance(self.rest, tuple) else self.rest
-        return {"cutoff_hz": self.cutoff, "decimate_to_hz": self.decimate_to, "rest": rest,
-                "score_pct": None if math.isnan(self.score) else self.score,
-                "per_joint_pct": list(self.per_joint), "seconds": self.seconds, "label": self.label}
-
-
-@dataclass(frozen=True)
-class ProcessingChoice:
-    """The candidates scored, the chosen one (lowest score), the knee [Hz], the reference
-    bandwidth [Hz], the number of blocks, the time spent [s] and, where the rest policy was open,
-    the per-joint scores [%] of each policy at the knee (``rest_scores``)."""
-
-    candidates: tuple[Candidate, ...]
-    chosen: Candidate
-    knee: float
-    reference_hz: float | None
-    blocks: int
-    seconds: float
-    rest_scores: tuple[tuple[str, tuple[float, ...]], ...] = ()
-
-    def table(self) -> str:
-        n = max((len(c.per_joint) for c in self.candidates), default=0)
-        head = (f"processing chosen by {self.blocks}-block cross-validation (scored at "
-                f"{'the full rate' if self.reference_hz is None else f'{self.reference_hz:.4g} Hz'}; "
-                f"knee {self.knee:.3g} Hz)\n  cut-off [Hz]  decimate to [Hz]  "
-                f"held-back error [%]" + "".join(f"{'j' + str(j + 1):>7}" for j in range(n)) + "  rest policy")
-        lines = [head]
-        for c in self.candidates:
-            mark = " <- chosen" if c is self.chosen else ""
-            score = (("-" if c.label.strip().startswith("not") else "not scored (time cap)")
-                     if math.isnan(c.score) else f"{c.score:.3f}")
-            dec = "none" if c.decimate_to is None else f"{c.decimate_to:.4g}"
-            joints = "".join(f"{v:7.2f}" for v in c.per_joint) if c.per_joint else " " * 7 * n
-            lines.append(f"  {c.cutoff:12.4g}  {dec:>16}  {score:>19}{joints}  {_rest_text(c.rest)}"
-                         f"{' ' + c.label if c.label else ''}{mark}")
-        return "\n".join(lines + ["  " + self.reason()])
-
-    def reason(self) -> str:
-        """Why the chosen processing: its score against the others, and each joint's rest policy."""
-        c = self.chosen
-        scored = [x for x in self.candidates if not math.isnan(x.score)]
-        dec = "no decimation" if c.decimate_to is None else f"decimation to {c.decimate_to:.4g} Hz"
-        best = min(scored, key=lambda x: x.score)
-        why = (f"the lowest held-back error ({c.score:.3f} %) of {len(scored)} candidates scored, clearly below "
-               f"the default's" if c is best and c.label != DEFAULT_LABEL else
-               f"the default: the lowest held-back error ({best.score:.3f} %, cut-off {best.cutoff:.4g} Hz) is not "
-               f"below it ({c.score:.3f} %) by more than the blocks' spread nor by {100 * CLEAR_MARGIN:g} %"
-               if c is not best else
-               f"the default, the lowest held-back error ({c.score:.3f} %) of {len(scored)} candidates scored")
-        out = f"chosen: cut-off {c.cutoff:.4g} Hz, {dec}, rest {_rest_text(c.rest)}: {why}"
-        if self.rest_scores:
-            out += (f"; rest per joint: the policy of lowest per-joint score at the knee where clearly below "
-                    f"{DEFAULT_REST}'s, else {DEFAULT_REST} ("
-                    + "; ".join(f"j{j + 1} " + ", ".join(f"{name} {v[j]:.2f}" for name, v in self.rest_scores)
-                                for j in range(len(self.rest_scores[0][1]))) + " %)")
-        return out
-
-    def to_dict(self) -> dict[str, Any]:
-        return {"method": "blocked cross-validation", "blocks": self.blocks, "scoring_rate_hz": self.reference_hz,
-                "knee_hz": self.knee, "seconds": self.seconds, "chosen": self.chosen.to_dict(),
-                "reason": self.reason(), "rest_scores_pct": {name: list(v) for name, v in self.rest_scores},
-                "candidates": [c.to_dict() for c in self.candidates], "table": self.table()}
-
-
-def _rest_text(rest: RestPolicy | None) -> str:
-    return "no threshold" if rest is None else rest_label(rest)
 
 
 def candidate_grid(recordings: Sequence[Any], default_decimate: float | None = 50.0) -> tuple[float, list[Candidate]]:

@@ -1,0 +1,63 @@
+"""What :func:`identify.read_log` reports in ``meta["log"]``, gathered block by block by the block
+converter (:mod:`identify.io.log_blocks`)."""
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+
+from identify.io.recordings import TIME_RTOL
+from identify.signal.gaps import Gap, LogGaps
+
+__all__ = ["BlockReport", "GAPS_KEPT"]
+
+#: Gaps listed one by one in the report of a log converted in blocks (the counts cover them all).
+GAPS_KEPT = 10_000
+
+
+class BlockReport:
+    """What :func:`identify.read_log` reports in ``meta["log"]``, gathered block by block."""
+
+    def __init__(self) -> None:
+        self.first_line = self.last_line = None
+        self.rows = self.samples = self.irregular = self.stale = self.bridged = 0
+        self.stale_lines: list[int] = []
+        self.inside_sum, self.inside_count = 0.0, 0
+        self.gap, self.gap_lines, self.medians = -1.0, [0, 0], []
+        self.gaps: list[Gap] = []  # the first GAPS_KEPT, the rest counted: memory bounded
+        self.gap_count, self.bridged_gaps, self.lost_periods = 0, 0, 0.0
+        self.segments = 1
+        self.dropped: list[tuple[int, int, int]] = []  # segments too short to filter: lines, rows
+
+    def add(self, t: np.ndarray, numbers: list[int], found: LogGaps) -> None:
+        """A block's kept rows (after the previous block's last kept row, when there is one) and its gaps."""
+        dt = np.diff(t)
+        if self.first_line is None:
+            self.first_line = numbers[0]
+        self.last_line = numbers[-1]
+        self.gaps += found.gaps[:max(0, GAPS_KEPT - len(self.gaps))]
+        self.gap_count += len(found.gaps)
+        self.bridged_gaps += len(found.bridged)
+        self.lost_periods += float(sum(g.periods - 1.0 for g in found.bridged))
+        self.segments += int(found.segment[-1])
+        if dt.size:
+            step = float(np.median(dt))
+            self.medians.append(step)
+            self.irregular += int(np.sum(np.abs(dt - step) > TIME_RTOL * step))
+            inside = dt[np.diff(found.segment) == 0]
+            self.inside_sum, self.inside_count = self.inside_sum + float(inside.sum()), self.inside_count + inside.size
+            k = int(np.argmax(dt))
+            if dt[k] > self.gap:
+                self.gap, self.gap_lines = float(dt[k]), [numbers[k], numbers[k + 1]]
+
+    def result(self, max_gap: float) -> dict[str, Any]:
+        gaps = {**LogGaps(tuple(self.gaps), np.array([self.segments - 1 - len(self.dropped)]), max_gap,
+                          tuple(self.dropped)).summary(),
+                "bridged_gaps": self.bridged_gaps, "bridged_lost_periods": self.lost_periods,
+                "gaps_total": self.gap_count}
+        return {"lines": [self.first_line, self.last_line], "rows": self.rows, "stale_rows": self.stale,
+                "stale_lines": self.stale_lines,
+                "rate_hz": self.inside_count / self.inside_sum if self.inside_sum else float("nan"),
+                "median_step_s": float(np.median(self.medians)), "largest_gap_s": self.gap,
+                "largest_gap_lines": self.gap_lines, "irregular_steps": self.irregular, "gaps": gaps,
+                "bridged_samples": self.bridged, "samples": self.samples}
