@@ -293,8 +293,8 @@ def static_gravity_flags(recordings: Sequence, robot: rx90sym.Robot, nominal: di
         return []
     Z = np.zeros_like(Q)
     g = robot.regressor_batch(Q, Z, Z) @ chi
-    if robot.spring is not None:
-        g = g + robot.spring_torque_batch(Q)[:, :, 0]
+    if robot.spring is not None:  # the motor holds gravity minus the spring (Y = tau + spring, eq. 7)
+        g = g - robot.spring_torque_batch(Q)[:, :, 0]
     tau = np.concatenate(Ts)
     judged = np.sqrt(np.mean(g ** 2, axis=0)) >= GRAVITY_SHARE * np.asarray(robot.limits.tau_max, dtype=float)
     flags = []

@@ -266,10 +266,13 @@ def test_static_torques_are_checked_against_the_nominal_gravity(rx90):
     """At rest, the twin's torques are the gravity of its true parameters: within the nominal
     table's factor; joint 2's torque negated is refused, a robot without nominal table not judged."""
     t = np.arange(250) / 250.0
-    q = np.tile(np.array([0.3, -1.0, 2.0, 0.2, 0.8, 0.1]), (t.size, 1))
-    rest = rx90sym.twin.simulate(rx90, (t, q, 0 * q, 0 * q), noise="quantised", seed=0)
     nominal = rx90sym.nominal_parameters(rx90)
-    assert static_gravity_flags([rest], rx90, nominal) == []
+    # Poses where the joint-2 spring is a large share of the held torque (q2 = 0, 0.3, 1: the spring's
+    # sign matters; the spring added instead of subtracted gave 0.24-0.31 x, refused) and one where not.
+    for q2 in (0.0, 0.3, 1.0, -1.0):
+        q = np.tile(np.array([0.3, q2, 2.0, 0.2, 0.8, 0.1]), (t.size, 1))
+        rest = rx90sym.twin.simulate(rx90, (t, q, 0 * q, 0 * q), noise="quantised", seed=0)
+        assert static_gravity_flags([rest], rx90, nominal) == [], q2
     tau = rest.tau.copy()
     tau[:, 1] *= -1
     flags = static_gravity_flags([dataclasses.replace(rest, tau=tau)], rx90, nominal)
