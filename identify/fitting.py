@@ -287,9 +287,11 @@ def fit(robot: rx90sym.Robot, recordings: Sequence[Any], processing: Processing 
     p = processing if processing is not None else Processing()
     if method == "consistent" and (has_smooth_friction(p.friction) or has_policy(p.rest, "presliding")):
         # Its standard parameters are what a URDF/MJCF holds: Coulomb (FS) and viscous (FV) friction.
+        what = " and ".join(([f"friction form {friction_label(p.friction)!r}"] if has_smooth_friction(p.friction) else [])
+                            + (["rest policy 'presliding'"] if has_policy(p.rest, "presliding") else []))
         raise ValueError(f"fit: the consistent method fits bodies with Coulomb + viscous friction (what a URDF or "
-                         f"MJCF holds), not friction form {friction_label(p.friction)!r} with rest policy {p.rest!r}: use "
-                         f"friction 'coulomb' and rest 'zero-coulomb' or 'drop', or method 'wls'")
+                         f"MJCF holds), not {what}: use friction 'coulomb' and a rest policy other than "
+                         f"'presliding', or method 'wls'")
     recordings = list(recordings) if isinstance(recordings, (list, tuple)) else [recordings]
     base = base if base is not None else rx90sym.base_parameters(robot)
     options = p.observation_options()
