@@ -333,3 +333,28 @@ def test_a_constrained_payload_page_prints_no_sigma_of_the_unconstrained_fit():
     table = page.sections[0].blocks[0]
     assert all(row[3] is None for row in table.rows)                                # σ eq. 13
     assert all(row[4].value is None for row in table.rows if row[2])                # σr eq. 15
+
+
+def test_the_report_shows_the_cross_validated_choices_and_the_friction_per_joint():
+    """The fit file's processing_choice (candidates, chosen, reason; friction forms) and model.friction
+    reach the identification report's processing section, the chosen candidate marked."""
+    from identify.app.report.identify_page import choice_blocks, processing_table
+
+    def cand(cutoff, score, rest="crossing", form=None):
+        return {"cutoff_hz": cutoff, "decimate_to_hz": 25.0, "rest": rest, "score_pct": score,
+                "per_joint_pct": [score - 0.1, score + 0.1], "label": "", **({"form": form} if form else {})}
+
+    chosen = cand(4.0, 1.2)
+    record = {"processing_choice": {"blocks": 5, "candidates": [cand(2.0, 1.5), chosen, cand(8.0, 1.4)],
+                                    "chosen": chosen, "reason": "chosen: cut-off 4 Hz, the lowest",
+                                    "friction": {"chosen": "tanh", "reason": "tanh clearly below",
+                                                 "candidates": [cand(4.0, 1.2, form="coulomb"),
+                                                                cand(4.0, 1.0, form="tanh")]}},
+              "model": {"friction": {"form": ["tanh", "coulomb"], "velocity_scale": [0.05, None]}}}
+    processing, reason, friction, why = choice_blocks(record)
+    assert [row[-1] for row in processing.rows] == ["", "chosen", ""] and reason.paragraphs == ("chosen: cut-off 4 Hz, the lowest",)
+    assert [row[0] for row in friction.rows] == ["coulomb", "tanh"] and friction.rows[1][-1] == "chosen"
+    assert processing.rows[1][4:6] == pytest.approx((1.1, 1.3)) and why.paragraphs == ("tanh clearly below",)
+    settings = dict((row[0], row[-1]) for row in processing_table(record).rows)
+    assert settings["Friction form per joint"] == "tanh, coulomb; velocity scales 0.05, – rad/s"
+    assert choice_blocks({}) == ()

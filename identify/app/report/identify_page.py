@@ -153,7 +153,7 @@ def identify_page(record: Mapping[str, Any], figures: Mapping[str, Sequence[Figu
         sections.append(Section("gains", "Drive gains used", (gains_table(model["gains"], "gains-used"),)))
     if figures.get("fit"):
         sections.append(Section("fit", "Fit: measured and predicted torques", tuple(figures["fit"])))
-    sections.append(Section("processing", "Processing record", (processing_table(record),)))
+    sections.append(Section("processing", "Processing record", (processing_table(record), *choice_blocks(record))))
     if spring_text or figures.get("trajectory"):
         sections.append(Section("motion", "Motion and spring", (*_spring_blocks(record.get("spring"), spring_text),
                                                                 *figures.get("trajectory", ()))))
@@ -179,6 +179,38 @@ def _subtitle(record: Mapping[str, Any]) -> str:
                else ""))
 
 
+def choice_blocks(record: Mapping[str, Any]) -> tuple:
+    """The cross-validated choices of the fit file's ``processing_choice``: the candidate processings
+    and, where chosen, the friction forms, each with its held-back errors per joint and the reason."""
+    choice = record.get("processing_choice") or {}
+    blocks: list = []
+    for key, title, first in ((None, "Processing candidates", "cut-off [Hz]"), ("friction", "Friction forms", "form")):
+        part = choice.get(key) if key else choice
+        candidates = (part or {}).get("candidates") or []
+        if not candidates:
+            continue
+        n = max(len(c.get("per_joint_pct") or []) for c in candidates)
+        chosen = part.get("chosen")
+        rows = tuple((c.get("form") or fmt(c.get("cutoff_hz"), 4),
+                      "none" if c.get("decimate_to_hz") is None else fmt(c.get("decimate_to_hz"), 4),
+                      rest_label(c["rest"]) if c.get("rest") else "no threshold",
+                      c.get("score_pct"), *(list(c.get("per_joint_pct") or []) + [None] * n)[:n],
+                      "chosen" if _is_chosen(c, chosen) else (c.get("label") or ""))
+                     for c in candidates)
+        columns = (Column(first, text=True), Column("decimated to", "Hz", text=True), Column("rest", text=True),
+                   Column("held-back error", "%", digits=3), *(Column(f"j{j + 1}", "%", digits=3) for j in range(n)),
+                   Column("", text=True))
+        blocks += [Table(f"choice-{key or 'processing'}", f"{title}: {choice.get('blocks', part.get('blocks', ''))}-block "
+                         f"cross-validation inside the fitted data", columns, rows), Text((str(part.get("reason", "")),))]
+    return tuple(blocks)
+
+
+def _is_chosen(candidate: Mapping[str, Any], chosen: Any) -> bool:
+    if isinstance(chosen, Mapping):  # the processing: the chosen candidate's record
+        return all(candidate.get(k) == chosen.get(k) for k in ("cutoff_hz", "decimate_to_hz", "rest"))
+    return candidate.get("form") == chosen  # the friction: the chosen form's name (or list)
+
+
 def processing_table(record: Mapping[str, Any]) -> Any:
     """The processing record (model) as settings with units; absent values named, not 'None'."""
     m = record.get("model") or {}
@@ -186,6 +218,7 @@ def processing_table(record: Mapping[str, Any]) -> Any:
     items = [("Robot file", "", m.get("robot_file") or "bundled"),
              ("Angle convention of the files", "", m.get("convention") or "the file's own (default: controller)"),
              ("Friction: coupled Coulomb form", "", m.get("coulomb_sign") or "not coupled"),
+             ("Friction form per joint", "", _friction_text(m.get("friction"))),
              ("Torque offsets", "", bool(m.get("offsets"))),
              ("Spring", "", m.get("spring") or "none"),
              ("Rest threshold", "rad/s", m.get("min_velocity") if m.get("min_velocity") is not None else "off"),
@@ -201,3 +234,16 @@ def processing_table(record: Mapping[str, Any]) -> Any:
                                f"seed {boot.get('seed', '–')}" if boot else "not run"),
              ("Equations", "", record.get("rows"))]
     return key_values("processing", "How the data were processed (stored in the JSON's model record)", items)
+
+
+def _friction_text(friction: Mapping[str, Any] | None) -> str:
+    """The fit file's ``model.friction``: the form (one or per joint) and the velocity scales [rad/s]."""
+    if not friction:
+        return "coulomb (sign of the speed)"
+    form = friction.get("form")
+    text = ", ".join(form) if isinstance(form, list) else str(form)
+    scales = friction.get("velocity_scale")
+    if scales:
+        text += "; velocity scales " + ", ".join("–" if v is None else fmt(v, 3) for v in scales) + " rad/s"
+    return text
+
