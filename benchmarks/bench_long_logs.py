@@ -15,7 +15,7 @@ measured on the two shortest logs as the reference.
 
 ``rx90 identify`` chooses its processing by blocked cross-validation (the default, block by block on
 long logs): the last column gives the seconds of that choice and the candidates scored within its
-time cap (from the fit file's ``processing_choice``).
+row cap (from the fit file's ``processing_choice``).
 """
 from __future__ import annotations
 

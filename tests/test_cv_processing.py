@@ -76,3 +76,52 @@ def test_a_uniform_first_stage_policy_does_not_override_the_per_joint_rule(rx90,
     # Crossing at the knee scored 4.90 (below the default's 5.10 by more than 2 %): before the rule
     # was kept it won the cut-off stage.
     assert any(c.rest == "crossing" and c.score < 0.98 * 5.1 for c in choice.candidates)
+
+
+def _fake_scores(cv):
+    """A scorer by hand (the fits are tested above): every candidate scores by its cut-off."""
+    def fake_score(robot, recordings, cand, base, reference, n_blocks, options):
+        per = tuple(4.0 + 0.01 * cand.cutoff + 0.1 * b for b in range(n_blocks))
+        return float(np.mean(per)), (float(np.mean(per)),) * robot.n, tuple((v,) * robot.n for v in per)
+    return fake_score
+
+
+def test_the_choice_does_not_depend_on_the_wall_clock(rx90, rx90_base, monkeypatch):
+    """A slow or loaded machine scores the same candidates and makes the same choice: the default cap
+    counts observation rows, not seconds (the former 60 s wall-clock cap scored 5 of 5 cut-offs of one
+    10.5 min log in one run and 4 of 5 in another). Here the clock jumps 1000 s at every reading."""
+    import identify.observation.cross_validation as cv
+
+    monkeypatch.setattr(cv, "_score", _fake_scores(cv))
+    rec = rx90sym.twin.simulate(rx90, multisine(rx90, 3), duration=4.0, noise="realistic", seed=3)
+    calm = choose_processing(rx90, [rec], base=rx90_base, min_velocity=0.05)
+    clock = iter(range(0, 10 ** 9, 1000))
+    monkeypatch.setattr(cv.time, "perf_counter", lambda: float(next(clock)))
+    slow = choose_processing(rx90, [rec], base=rx90_base, min_velocity=0.05)
+    assert [c.score for c in slow.candidates] == [c.score for c in calm.candidates]
+    assert all(np.isfinite(c.score) for c in calm.candidates), calm.table()
+    assert (slow.chosen.cutoff, slow.chosen.decimate_to, slow.chosen.rest) == \
+        (calm.chosen.cutoff, calm.chosen.decimate_to, calm.chosen.rest)
+    # The wall-clock cap stays available on request, and then says so.
+    capped = choose_processing(rx90, [rec], base=rx90_base, min_velocity=0.05, time_cap=60.0)
+    assert any("not scored (time cap: 60 s)" in c.label for c in capped.candidates), capped.table()
+
+
+def test_the_row_cap_stops_the_cut_offs_after_the_rest_policies_and_the_first(rx90, rx90_base, monkeypatch):
+    """With a cap below two passes, the rest policies (always scored) and the first cut-off are scored,
+    the others listed as not scored with the count that stopped them; without a cap, all are."""
+    import identify.observation.cross_validation as cv
+
+    monkeypatch.setattr(cv, "_score", _fake_scores(cv))
+    rec = rx90sym.twin.simulate(rx90, multisine(rx90, 3), duration=4.0, noise="realistic", seed=3)
+    rows = cv.observation_rows(rx90, [rec])
+    assert rows == rx90.n * rec.n_samples
+    capped = choose_processing(rx90, [rec], base=rx90_base, min_velocity=0.05, row_cap=rows)
+    policies = len(cv.SCORED_REST)
+    scored = [c for c in capped.candidates if np.isfinite(c.score)]
+    left = [c for c in capped.candidates if not np.isfinite(c.score)]
+    assert len(scored) == policies + 1 and left, capped.table()
+    assert all(f"not scored (row cap: {(policies + 1) * rows:,} rows processed > {rows:,})" in c.label
+               for c in left), capped.table()
+    free = choose_processing(rx90, [rec], base=rx90_base, min_velocity=0.05, row_cap=None)
+    assert all(np.isfinite(c.score) for c in free.candidates)

@@ -53,6 +53,23 @@ def test_the_fit_records_the_friction_choice_and_a_given_form_is_not_chosen(rx90
         choose_friction(rx90, [rec], rx90_base, OPTIONS, forms=("tanh",))
 
 
+
+def test_the_forms_scored_do_not_depend_on_the_wall_clock_and_the_row_cap_is_said(rx90, rx90_base, monkeypatch):
+    """A slow machine scores the same forms (the cap counts observation rows, not seconds: here the
+    clock jumps 1000 s at every reading, which stopped the former 60 s cap after coulomb); a row cap
+    below one pass leaves tanh unscored and the note names the count."""
+    import identify.observation.cross_validation as cv
+
+    rec = friction_twin(rx90, "tanh", 0, 10.0, 100.0)
+    clock = iter(range(0, 10 ** 9, 1000))
+    monkeypatch.setattr(cv.time, "perf_counter", lambda: float(next(clock)))
+    slow = choose_friction(rx90, [rec], rx90_base, OPTIONS)
+    assert slow.chosen == "tanh" and all(np.isfinite(c.score) for c in slow.candidates), slow.table()
+    capped = choose_friction(rx90, [rec], rx90_base, OPTIONS, row_cap=100)
+    rows = cv.observation_rows(rx90, [rec])
+    assert capped.chosen == "coulomb"
+    assert dict(capped.notes)["tanh"] == f"not scored: row cap: {rows:,} rows processed > 100", capped.table()
+
 MIX = ("tanh",) * 3 + ("coulomb",) * 3   # smooth drives on joints 1-3, Coulomb on the wrist
 
 

@@ -62,8 +62,7 @@ class ProcessingChoice:
         lines = [head]
         for c in self.candidates:
             mark = " <- chosen" if c is self.chosen else ""
-            score = (("-" if c.label.strip().startswith("not") else "not scored (time cap)")
-                     if math.isnan(c.score) else f"{c.score:.3f}")
+            score = (("-" if "not scored" in c.label else "not scored") if math.isnan(c.score) else f"{c.score:.3f}")
             dec = "none" if c.decimate_to is None else f"{c.decimate_to:.4g}"
             joints = "".join(f"{v:7.2f}" for v in c.per_joint) if c.per_joint else " " * 7 * n
             lines.append(f"  {c.cutoff:12.4g}  {dec:>16}  {score:>19}{joints}  {_rest_text(c.rest)}"

@@ -31,8 +31,12 @@ error of the paired difference over the blocks (or, for the processing, by more 
 :data:`CLEAR_MARGIN` of the default's score); a smaller difference keeps the default (on the
 TX40, 26.6 and 20 Hz score 9.562 and 9.575 % while the held-out error of joint 1 is 2.196 and
 1.806 N·m: the scores cannot tell them apart). Cut-offs are scored from the knee outwards and no
-further one is started once ``time_cap`` seconds are spent (those left are listed as not scored);
-the rest policies are always scored. Bridged samples and rest rows follow the fit's rules (the
+further one is started once the candidates scored have processed ``row_cap`` observation rows
+(recorded samples x joints, one pass of a candidate over the recordings; those left are listed as
+not scored): a cap on the work, not on the clock, so that the same log gets the same choice on any
+machine under any load (a 60 s wall-clock cap scored 5 of 5 cut-offs of one 10.5 min log in one run
+and 4 of 5 in another). ``time_cap`` adds a wall-clock cap on request. The rest policies and the
+first cut-off are always scored. Bridged samples and rest rows follow the fit's rules (the
 same rows as W). :func:`select_processing` is this selection whatever scores the candidates (in
 memory here; block by block in :mod:`identify.observation.stream_cv`).
 """
@@ -40,7 +44,7 @@ from __future__ import annotations
 
 import math
 import time
-from dataclasses import replace
+from dataclasses import dataclass, replace
 from typing import Any, Callable, Sequence
 
 import numpy as np
@@ -53,9 +57,10 @@ from identify.observation.processing import DEFAULT_REST, REST_POLICIES, RestPol
 from identify.signal.filtering import choose_cutoff
 from identify.observation.candidates import CLEAR_MARGIN, DEFAULT_LABEL, Candidate, ProcessingChoice
 
-__all__ = ["Candidate", "ProcessingChoice", "GRID_FACTORS", "DEFAULT_BLOCKS", "DEFAULT_TIME_CAP", "SCORED_REST",
+__all__ = ["Candidate", "ProcessingChoice", "GRID_FACTORS", "DEFAULT_BLOCKS", "SCORED_REST",
            "candidate_grid", "grid_around", "choose_processing", "select_processing", "scoring_rate", "time_folds",
-           "time_blocks", "fold_wls", "clearly_better", "block_factors", "block_scores"]
+           "time_blocks", "fold_wls", "clearly_better", "block_factors", "block_scores", "DEFAULT_ROW_CAP", "Budget",
+           "observation_rows"]
 
 #: Cut-offs of the grid, as multiples of the position-spectrum knee.
 GRID_FACTORS = (0.5, 0.7, 1.0, 1.4, 2.0)
@@ -63,8 +68,11 @@ GRID_FACTORS = (0.5, 0.7, 1.0, 1.4, 2.0)
 DEFAULT_BLOCKS = 5
 #: Lowest rate a candidate decimates to, Hz (enough rows per block for the fits and the scores).
 MIN_DECIMATED_RATE = 25.0
-#: Seconds after which no further cut-off is scored.
-DEFAULT_TIME_CAP = 60.0
+#: Observation rows (recorded samples x joints: one candidate's pass over the recordings) after which
+#: no further cut-off is started. A count, not seconds: the choice is the same on any machine. 3e7 is
+#: about 60 s of passes block by block on the 2-core reference machine (a 3.5 min 7-joint log at 1 kHz,
+#: 1.5e6 rows, takes 3 s a pass), where logs held in memory (under 1e7 rows) never reach it.
+DEFAULT_ROW_CAP = 30_000_000
 #: The rest policies scored where the fit leaves it open: every one that keeps the rest rows (a
 #: dropped row is not predicted the way it is scored), predicts a long rest from more than the
 #: sign of noise ("none" does not: a joint held still in new data would flip by ±FS) and carries
@@ -208,15 +216,18 @@ def _score(robot: rx90sym.Robot, recordings: Sequence[Any], cand: Candidate, bas
 
 def choose_processing(robot: rx90sym.Robot, recordings: Sequence[Any], base: Any = None,
                       min_velocity: float | None = DEFAULT_MIN_VELOCITY, rest: RestPolicy | None = None,
-                      spring: bool = True, blocks: int = DEFAULT_BLOCKS, time_cap: float = DEFAULT_TIME_CAP,
-                      default_decimate: float | None = 50.0, candidates: Sequence[Candidate] | None = None,
-                      policies: Sequence[str] = SCORED_REST, delay: float = 0.0) -> ProcessingChoice:
+                      spring: bool = True, blocks: int = DEFAULT_BLOCKS, row_cap: int | None = DEFAULT_ROW_CAP,
+                      time_cap: float | None = None, default_decimate: float | None = 50.0,
+                      candidates: Sequence[Candidate] | None = None, policies: Sequence[str] = SCORED_REST,
+                      delay: float = 0.0) -> ProcessingChoice:
     """Score the candidate processings (module docstring) and choose the lowest held-back error.
 
     min_velocity [rad/s], spring: the fit's rest threshold (None: no rest handling) and spring (the
     rows of W); rest: the fit's rest policy, one or one per joint, or None (open: chosen per joint
-    among ``policies``, default :data:`SCORED_REST`); blocks: contiguous blocks (>= 2); time_cap [s]: no cut-off is
-    started after it (the first is always scored); candidates: another grid (default
+    among ``policies``, default :data:`SCORED_REST`); blocks: contiguous blocks (>= 2); row_cap: no cut-off is
+    started once the candidates scored have processed that many observation rows (None: no cap; the
+    first is always scored); time_cap [s]: the same on the wall clock, on request (None: off, the
+    default: the choice then never depends on the machine's speed); candidates: another grid (default
     :func:`candidate_grid`); delay [s]: the torque lag the fit compensates (every candidate is scored
     with it, as the fit will use it).
     """
@@ -227,19 +238,46 @@ def choose_processing(robot: rx90sym.Robot, recordings: Sequence[Any], base: Any
     grid = list(candidates) if candidates is not None else grid
     reference = scoring_rate(grid)
     options = {"min_velocity": min_velocity, "spring": spring, "delay": delay}
+    budget = Budget(observation_rows(robot, recordings), row_cap, time_cap)
     return select_processing(lambda cand: _score(robot, recordings, cand, base, reference, blocks, options),
-                             knee, grid, reference, blocks, min_velocity, rest, time_cap, policies)
+                             knee, grid, reference, blocks, min_velocity, rest, budget, policies)
+
+
+def observation_rows(robot: rx90sym.Robot, recordings: Sequence[Any]) -> int:
+    """Observation rows of one pass over ``recordings``: recorded samples x joints (every piece)."""
+    return robot.n * sum(p.n_samples for r in recordings for p in r.pieces())
+
+
+@dataclass(frozen=True)
+class Budget:
+    """What the cross-validated choices may spend: ``rows`` observation rows a candidate's pass costs
+    (:func:`observation_rows`), no candidate started beyond ``row_cap`` rows processed (None: no
+    cap), nor after ``time_cap`` seconds of wall clock (None, the default: off, so that nothing
+    depends on the machine's speed or load)."""
+
+    rows: int
+    row_cap: int | None = DEFAULT_ROW_CAP
+    time_cap: float | None = None
+
+    def spent(self, scored: int, start: float) -> str | None:
+        """Why no further candidate is started after ``scored`` passes begun at ``start``
+        (time.perf_counter()), or None."""
+        if self.row_cap is not None and scored * self.rows > self.row_cap:
+            return f"row cap: {scored * self.rows:,} rows processed > {self.row_cap:,}"
+        if self.time_cap is not None and time.perf_counter() - start > self.time_cap:
+            return f"time cap: {self.time_cap:g} s"
+        return None
 
 
 Scorer = Callable[[Candidate], tuple[float, tuple[float, ...], tuple[tuple[float, ...], ...]]]  # as _score's
 
 
 def select_processing(score: Scorer, knee: float, grid: Sequence[Candidate], reference: float | None, blocks: int,
-                      min_velocity: float | None, rest: RestPolicy | None, time_cap: float,
+                      min_velocity: float | None, rest: RestPolicy | None, budget: Budget,
                       policies: Sequence[str] = SCORED_REST) -> ProcessingChoice:
     """The selection of :func:`choose_processing` (and of the block-by-block choice,
     :mod:`identify.observation.stream_cv`) whatever computes the scores: the rest policy per joint at
-    the knee where it is open, the cut-offs from the knee outwards within ``time_cap`` [s], the
+    the knee where it is open, the cut-offs from the knee outwards within the ``budget``, the
     default unless clearly beaten. ``grid``: the knee's candidate first, the default among them;
     ``reference``: the common scoring rate [Hz] (None: not decimated)."""
     start = time.perf_counter()
@@ -249,13 +287,13 @@ def select_processing(score: Scorer, knee: float, grid: Sequence[Candidate], ref
         rest = None
     elif rest is None:
         # First stage, at the knee: every policy that keeps the rest rows; each joint takes its best.
-        first = _run(score, [replace(grid[0], rest=r) for r in policies], start, math.inf)
+        first = _run(score, [replace(grid[0], rest=r) for r in policies], start, Budget(budget.rows, None, None))
         valid = [c for c in first if c.per_joint]
         rest_scores = tuple((str(c.rest), c.per_joint) for c in valid)
         rest = _per_joint_rest(valid) if valid else DEFAULT_REST
     done = {(f.cutoff, f.decimate_to, f.rest) for f in first}
     todo = [replace(c, rest=rest) for c in grid if (c.cutoff, c.decimate_to, rest) not in done]
-    second = _run(score, todo, start, time_cap, always_first=True)
+    second = _run(score, todo, start, budget, always_first=True, scored_before=len(first))
     scored = first + second
     # Only candidates with the rest policy chosen above: a first-stage candidate (one policy for all
     # joints) must not override the per-joint rule that kept zero-coulomb where it was not beaten.
@@ -303,16 +341,19 @@ def _best(scored: Sequence[Candidate]) -> Candidate:
     return min(valid, key=lambda c: c.score)
 
 
-def _run(score: Scorer, grid: Sequence[Candidate], start: float, time_cap: float,
-         always_first: bool = False) -> list[Candidate]:
-    """Score ``grid`` in order; none is started after ``time_cap`` s since ``start`` (but the first
-    with ``always_first``)."""
+def _run(score: Scorer, grid: Sequence[Candidate], start: float, budget: Budget, always_first: bool = False,
+         scored_before: int = 0) -> list[Candidate]:
+    """Score ``grid`` in order; none is started once the ``budget`` is spent (counting the passes
+    ``scored_before``), but the first with ``always_first``; ``start``: time.perf_counter() of the choice."""
     scored: list[Candidate] = []
+    passes = scored_before
     for cand in grid:
-        if time.perf_counter() - start > time_cap and (scored or not always_first):
-            scored.append(cand)
+        spent = budget.spent(passes, start)
+        if spent and (scored or not always_first):
+            scored.append(replace(cand, label=f"{cand.label} not scored ({spent})".strip()))
             continue
         t0 = time.perf_counter()
+        passes += 1
         try:
             value, per_joint, per_block = score(cand)
         except ValueError as exc:  # too few rows left to fit (a low rate on a short recording)

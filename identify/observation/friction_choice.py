@@ -32,7 +32,9 @@ mix, they are scored together (the scales of their smooth joints only searched o
 blocks, the Coulomb joints keep sign(q̇)); the mix is kept when that score is not above the best
 single form's (Coulomb unless a form clearly beats it on the mean over joints), else that single
 form is chosen and the record says why (``FrictionChoice.fallback``). Forms after the first, and
-the combined check, are not started once ``time_cap`` seconds are spent.
+the combined check, are not started once the passes scored exceed the processing choice's row cap
+(:class:`~identify.observation.cross_validation.Budget`: a count of observation rows, never the
+wall clock unless asked).
 """
 from __future__ import annotations
 
@@ -45,20 +47,19 @@ import numpy as np
 
 import rx90sym
 
-from identify.observation.cross_validation import (DEFAULT_BLOCKS, Candidate, block_factors, block_scores,
-                                                   clearly_better, fold_wls, time_blocks)
+from identify.observation.cross_validation import (DEFAULT_BLOCKS, DEFAULT_ROW_CAP, Budget, Candidate, block_factors,
+                                                   block_scores, clearly_better, fold_wls, observation_rows,
+                                                   time_blocks)
 from identify.observation.friction import DEFAULT_FRICTION, FRICTION_FORMS
 from identify.observation.friction_model import FrictionBase, coulomb_terms, own_terms
 from identify.observation.matrix import Observation, observation_matrix
 from identify.observation.processing import FrictionForm, friction_label, has_smooth_friction, uniform
 
-__all__ = ["DEFAULT_FORMS", "FRICTION_TIME_CAP", "FrictionChoice", "choose_friction"]
+__all__ = ["DEFAULT_FORMS", "FrictionChoice", "choose_friction"]
 
 #: Forms scored where the fit leaves the friction open. Stribeck is scored on request only
 #: (``forms=FRICTION_FORMS``): on the UR10e its fit gives FS1 < 0 (ill-posed on real data).
 DEFAULT_FORMS = ("coulomb", "tanh")
-#: Seconds after which no further form is scored (Coulomb, the first, always is).
-FRICTION_TIME_CAP = 60.0
 
 
 @dataclass(frozen=True)
@@ -220,10 +221,12 @@ def _per_joint_forms(scored: dict[str, _Scored], rows: Sequence[int], n: int) ->
 
 def choose_friction(robot: rx90sym.Robot, recordings: Sequence[Any], base: Any, options: dict[str, Any],
                     forms: Sequence[str] = DEFAULT_FORMS, blocks: int = DEFAULT_BLOCKS,
-                    time_cap: float = FRICTION_TIME_CAP) -> FrictionChoice:
+                    row_cap: int | None = DEFAULT_ROW_CAP, time_cap: float | None = None) -> FrictionChoice:
     """Score the friction ``forms`` (Coulomb first, the default) by blocked cross-validation with the
     fit's observation ``options`` (cutoff, decimate_to, min_velocity, rest, spring, delay) and choose
-    per joint (module docstring). time_cap [s]: no form is started after it."""
+    per joint (module docstring). row_cap: no form is started once the forms scored have processed
+    that many observation rows (one pass of the recordings each; None: no cap); time_cap [s]: the
+    same on the wall clock, on request (None, the default: off)."""
     unknown = [f for f in forms if f not in FRICTION_FORMS]
     if unknown or DEFAULT_FRICTION not in forms:
         raise ValueError(f"friction choice: forms must include {DEFAULT_FRICTION!r} and be among "
@@ -231,6 +234,7 @@ def choose_friction(robot: rx90sym.Robot, recordings: Sequence[Any], base: Any, 
     if blocks < 2:
         raise ValueError(f"cross-validation needs at least 2 blocks, got {blocks}")
     start = time.perf_counter()
+    budget, passes = Budget(observation_rows(robot, recordings), row_cap, time_cap), 0
     inner = base.base if isinstance(base, FrictionBase) else base
     terms = own_terms(coulomb_terms(robot, inner.names))
     asymmetric = any(rx90sym.parameters.split_name(t.name)[0] in ("FSP", "FSN") for t in terms)
@@ -247,10 +251,13 @@ def choose_friction(robot: rx90sym.Robot, recordings: Sequence[Any], base: Any, 
     ids = time_blocks([obs.t], blocks)[0][obs.samples]  # the processing choice's folds, by time
 
     def score(form: FrictionForm, label: str) -> tuple[_Scored, str | None]:
-        """The form scored (or not: time cap, too few rows) and why it cannot be chosen (None: it can)."""
-        if label != DEFAULT_FRICTION and time.perf_counter() - start > time_cap:
-            return _Scored(Candidate(obs.cutoffs[0], None, obs.rest, label=label)), "not scored: time cap"
+        """The form scored (or not: the budget spent, too few rows) and why it cannot be chosen (None: it can)."""
+        nonlocal passes
+        spent = budget.spent(passes, start)
+        if label != DEFAULT_FRICTION and spent:
+            return _Scored(Candidate(obs.cutoffs[0], None, obs.rest, label=label)), f"not scored: {spent}"
         t0 = time.perf_counter()
+        passes += 1
         try:
             done = _score_form(robot, recordings, inner, options, obs, terms, form, ids, blocks, label)
         except ValueError as exc:  # too few rows in a fold, a form's columns rank deficient on the fitting blocks

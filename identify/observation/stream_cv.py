@@ -20,8 +20,10 @@ without holding a log in memory:
    of ``R_b``'s last column: no second pass over the data.
 
 Each candidate costs one pass over the recordings (reading, filtering, regressor, decimation), about
-what the fit itself costs: the time cap (60 s by default) then leaves the cut-offs after the first
-unscored on a long log, listed as such in the table. With a Dask client every block of a candidate is
+what the fit itself costs: the row cap (:data:`~identify.observation.cross_validation.DEFAULT_ROW_CAP`
+observation rows, about 60 s of passes on the reference machine; a count, so the same log gets the
+same choice on any machine) then leaves the cut-offs after the first unscored on a long log, listed
+as such in the table. With a Dask client every block of a candidate is
 a task (its factors are folded in block order on the client: the serial result).
 """
 from __future__ import annotations
@@ -34,7 +36,7 @@ import rx90sym
 
 from identify.estimation.incremental_qr import JointFactors, stacked_rows
 from identify.io.blocks import BlockSource
-from identify.observation.cross_validation import (DEFAULT_BLOCKS, DEFAULT_TIME_CAP, SCORED_REST, Candidate,
+from identify.observation.cross_validation import (DEFAULT_BLOCKS, DEFAULT_ROW_CAP, SCORED_REST, Budget, Candidate,
                                                    ProcessingChoice, block_scores, fold_wls, grid_around,
                                                    scoring_rate, select_processing, time_folds)
 from identify.observation.matrix import DECIMATION_PASSBAND, DEFAULT_MIN_VELOCITY, presliding_base
@@ -65,7 +67,8 @@ def grid_of_scans(scans: Sequence[Scan], default_decimate: float | None) -> tupl
 def choose_processing_streamed(robot: rx90sym.Robot, sources: Sequence[BlockSource], base: Any = None,
                                min_velocity: float | None = DEFAULT_MIN_VELOCITY, rest: RestPolicy | None = None,
                                spring: bool = True, blocks: int = DEFAULT_BLOCKS,
-                               time_cap: float = DEFAULT_TIME_CAP, default_decimate: float | None = 50.0,
+                               row_cap: int | None = DEFAULT_ROW_CAP, time_cap: float | None = None,
+                               default_decimate: float | None = 50.0,
                                block: int = DEFAULT_BLOCK, client: Any = None,
                                policies: Sequence[str] = SCORED_REST,
                                scans: Sequence[Scan] | None = None) -> ProcessingChoice:
@@ -81,8 +84,9 @@ def choose_processing_streamed(robot: rx90sym.Robot, sources: Sequence[BlockSour
     knee, grid = grid_of_scans(scans, default_decimate)
     reference = scoring_rate(grid)
     context = (robot, sources, scans, base, reference, blocks, min_velocity, spring, block, client)
+    budget = Budget(robot.n * sum(g.samples for s in scans for g in s.segments), row_cap, time_cap)
     return select_processing(lambda cand: _score(cand, *context), knee, grid, reference, blocks, min_velocity,
-                             rest, time_cap, policies)
+                             rest, budget, policies)
 
 
 def scans_for_choice(sources: Sequence[BlockSource], block: int) -> list[Scan]:
