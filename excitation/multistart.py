@@ -118,7 +118,13 @@ def dask_client(workers: int | None = None, scheduler: str | None = None,
     if scheduler is not None:
         if workers is not None:
             raise ValueError("give either a scheduler address or a number of local workers, not both")
-        with Client(scheduler) as client:
+        try:
+            client = Client(scheduler)
+        except OSError as exc:  # refused, unreachable, timed out (Dask's connect timeout, 30 s by default)
+            raise ValueError(f"Dask scheduler {scheduler}: cannot connect ({str(exc).splitlines()[0]}); start one "
+                             f"there (`dask scheduler`, with workers) or give 'local' for workers on this "
+                             f"machine") from None
+        with client:
             yield client
         return
     if workers is None or workers < 1:

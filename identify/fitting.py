@@ -293,6 +293,8 @@ def fit(robot: rx90sym.Robot, recordings: Sequence[Any], processing: Processing 
                          f"MJCF holds), not {what}: use friction 'coulomb' and a rest policy other than "
                          f"'presliding', or method 'wls'")
     recordings = list(recordings) if isinstance(recordings, (list, tuple)) else [recordings]
+    for rec in recordings if observation is None else ():
+        rec.torques  # currents without gains: refused once, here, not by every candidate processing
     base = base if base is not None else rx90sym.base_parameters(robot)
     options = p.observation_options()
     choice = None

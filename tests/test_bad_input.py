@@ -353,3 +353,46 @@ def test_validation_on_a_recording_where_no_joint_moves_says_so(files, tmp_path,
     assert "still.csv: no joint moves" in err and "divide by zero" not in err, err
     code, _, err = rx90_cmd(capsys, "predict", files["loaded.csv"], "--identification", fit)
     assert code == 0 and "moves" not in err, err  # a recording that moves: no such line
+
+
+# --- options that would be ignored, and errors said once (fresh-user audit) --------------------
+
+def test_gains_on_torque_recordings_are_refused_not_recorded_as_applied(files, tmp_path, capsys):
+    """--gains on recordings of joint torques did nothing, yet the fit file recorded the gains."""
+    out = tmp_path / "fit.json"
+    msg = refused(capsys, out, "identify", files["empty.csv"], "--gains", ",".join(["3"] * 6), "--cutoff", 5,
+                  "--json", out)
+    assert "--gains given, but no recording holds motor currents (empty.csv: joint torques)" in msg
+
+
+def test_a_rest_policy_without_a_rest_threshold_is_refused(files, tmp_path, capsys):
+    """--min-velocity 0 turns rest handling off: --rest presliding printed and recorded, never applied."""
+    out = tmp_path / "fit.json"
+    msg = refused(capsys, out, "identify", files["empty.csv"], "--min-velocity", 0, "--rest", "presliding",
+                  "--cutoff", 5, "--json", out)
+    assert "conflicting options: --rest presliding and --min-velocity 0" in msg
+
+
+def test_currents_without_gains_are_refused_once_before_the_processing_choice(files, tmp_path, capsys):
+    """Every candidate processing failed alike and the error said the same sentence five times."""
+    out = tmp_path / "fit.json"
+    msg = refused(capsys, out, "identify", files["empty_i.csv"], "--json", out)
+    assert msg.count("holds motor currents") == 1 and "give drive gains" in msg, msg
+    assert "no candidate processing" not in msg
+
+
+def test_an_unreachable_dask_scheduler_is_one_clear_line(files, tmp_path, capsys):
+    import dask
+
+    out = tmp_path / "fit.json"
+    with dask.config.set({"distributed.comm.timeouts.connect": "1s"}):
+        msg = refused(capsys, out, "identify", files["empty.csv"], "--cutoff", 5, "--scheduler",
+                      "tcp://127.0.0.1:1", "--json", out)
+    assert "Dask scheduler tcp://127.0.0.1:1: cannot connect" in msg and "'local'" in msg, msg
+
+
+def test_a_smooth_friction_on_an_asymmetric_joint_names_the_joint(files, tmp_path, capsys):
+    out = tmp_path / "fit.json"
+    msg = refused(capsys, out, "identify", files["empty.csv"], "--cutoff", 5, "--friction", "tanh",
+                  "--asymmetric-coulomb", 2, "--json", out)
+    assert "asymmetric Coulomb (FS+, FS-) on joint(s) 2 of 'rx90'" in msg, msg

@@ -141,3 +141,18 @@ def test_a_mix_whose_combined_score_is_above_the_best_single_form_falls_back_to_
     better = replace(tanh, score=1.3, label="per joint")
     chosen, _, why = _check_mix(("tanh", "coulomb"), single, scored, lambda form, label: (_Scored(better), None))
     assert chosen == ("tanh", "coulomb") and not why
+
+
+def test_a_scale_on_its_lower_bound_keeps_coulomb_on_that_joint():
+    """Hand-given scores: tanh clearly below coulomb on both joints, but joint 1's scale stopped on
+    the lower bound in a fold (tanh there is Coulomb's sign): coulomb stays on joint 1, tanh is taken
+    on joint 2; the upper bound keeps coulomb the same way."""
+    blocks = ((2.0, 2.0), (2.1, 2.1), (1.9, 1.9))
+    coulomb = Candidate(10.0, None, None, 2.0, (2.0, 2.0), blocks, label="coulomb")
+    tanh = Candidate(10.0, None, None, 1.5, (1.5, 1.5), tuple((a - 0.5, b - 0.5) for a, b in blocks), label="tanh")
+    free = {"coulomb": _Scored(coulomb), "tanh": _Scored(tanh)}
+    assert _per_joint_forms(free, [0, 1], 2) == ("tanh", "tanh")
+    floor = {"coulomb": _Scored(coulomb), "tanh": _Scored(tanh, floor=frozenset({1}))}
+    assert _per_joint_forms(floor, [0, 1], 2) == ("coulomb", "tanh")
+    top = {"coulomb": _Scored(coulomb), "tanh": _Scored(tanh, bound=frozenset({2}))}
+    assert _per_joint_forms(top, [0, 1], 2) == ("tanh", "coulomb")

@@ -195,4 +195,14 @@ def read_recordings(paths: list[str], robot: rx90sym.Robot, convention: str | No
         check_units(r.t, r.q, r.dq, robot, r.source)
     if gains is None:
         return recs
+    check_gains_used([(r.source, r.current is not None) for r in recs])
     return [apply_gains(r, gains, robot) if r.current is not None else r for r in recs]
+
+
+def check_gains_used(recordings: Sequence[tuple[str, bool]]) -> None:
+    """Refuse ``--gains`` when no recording (name, holds motor currents) would use them: a fit on
+    joint torques would otherwise record gains it never applied."""
+    if recordings and not any(current for _, current in recordings):
+        names = ", ".join(name for name, _ in recordings)
+        raise UsageError(f"--gains given, but no recording holds motor currents ({names}: joint torques): "
+                         f"the gains would not be used; drop --gains")

@@ -244,9 +244,11 @@ def velocity_scales(robot: rx90sym.Robot, recordings: Sequence[Any], base: Any, 
     terms = own_terms(coulomb_terms(robot, inner.names))
     if not terms:
         raise ValueError(f"friction form {form!r}: robot {robot.name!r} has no Coulomb parameter in its columns")
-    if any(rx90sym.parameters.split_name(t.name)[0] in ("FSP", "FSN") for t in terms):
-        raise ValueError(f"friction form {form!r}: asymmetric Coulomb joints ({robot.name!r}) keep the "
-                         f"Coulomb form; give friction 'coulomb'")
+    asymmetric = sorted({t.row + 1 for t in terms if rx90sym.parameters.split_name(t.name)[0] in ("FSP", "FSN")})
+    if asymmetric:
+        raise ValueError(f"friction form {form!r}: asymmetric Coulomb (FS+, FS-) on joint(s) "
+                         f"{', '.join(map(str, asymmetric))} of {robot.name!r}: a smooth form has one magnitude per "
+                         f"joint; give friction 'coulomb', or symmetric Coulomb on those joints")
     probe = FrictionBase(inner, tuple((t.row, t.column, t.driver) for t in terms), "probe")
     obs = observation_matrix(robot, recordings, base=probe, **options)
     return scales_from_observation(obs, terms, form, robot.n)

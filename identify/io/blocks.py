@@ -56,6 +56,7 @@ class BlockSource:
     source: str = "<memory>"
     n_samples: int | None = None  # known after a scan
     stale_rows: int | None = None  # stale rows dropped when the log was read (None: not known)
+    holds_current: bool = False  # motor currents among its columns (drive gains turn them into torques)
 
     def __init__(self, robot: rx90sym.Robot, gains: DriveGains | None = None) -> None:
         self.robot, self.gains = robot, gains
@@ -155,6 +156,7 @@ class MemorySource(BlockSource):
     def __init__(self, rec: Recording, robot: rx90sym.Robot, gains: DriveGains | None = None) -> None:
         super().__init__(robot, gains)
         self.rec, self.source, self.n_samples = rec, rec.source, rec.n_samples
+        self.holds_current = rec.current is not None
         self.stale_rows = rec.meta.get("log", {}).get("stale_rows")
 
     def scan(self, block: int) -> Iterator[Recording]:
@@ -185,7 +187,8 @@ class CsvSource(BlockSource):
         self.index = _column_index(table, ["t", *self.names["q"]],
                                    [self.names["tau"], self.names["dq"], self.names["i"], ["measured"], ["segment"]],
                                    aux=True)
-        if "tau1" not in self.index and "i1" not in self.index:
+        self.holds_current = "i1" in self.index
+        if "tau1" not in self.index and not self.holds_current:
             raise RecordingError(f"{self.source}: column 'tau1' is missing (joint torques tau1..tau{n}, or "
                                  f"motor currents i1..i{n})")
         _warn_no_robot(meta.get("robot"), robot, self.source)

@@ -336,8 +336,10 @@ def _per_joint_rest(scored: Sequence[Candidate]) -> RestPolicy:
 
 def _best(scored: Sequence[Candidate]) -> Candidate:
     valid = [c for c in scored if not math.isnan(c.score)]
-    if not valid:
-        raise ValueError("no candidate processing could be fitted: " + "; ".join(c.label for c in scored))
+    if not valid:  # each reason once (a recording without torques fails every candidate alike)
+        reasons = dict.fromkeys(c.label.partition("not scored: ")[2] or c.label for c in scored)
+        raise ValueError(next(iter(reasons)) if len(reasons) == 1 else
+                         "no candidate processing could be fitted: " + "; ".join(reasons))
     return min(valid, key=lambda c: c.score)
 
 

@@ -23,9 +23,11 @@ joint, so each joint takes the form of lowest held-back error on that joint (100
 / ||Y_j||) where it is lower than Coulomb's by more than the standard error of the paired
 difference over the blocks on that joint (``clearly_better(a, b, joint)``, the rest policy's rule;
 the Coulomb column of joint j enters joint j's rows only, so the choice is nearly separable), else
-Coulomb. A form is not taken on a joint whose scale stopped on the upper bound in a fold (a second
-viscous term, the scale not identified; on the lower bound the form is a sign on that joint,
-Coulomb's column: allowed), nor anywhere when a fold's search did not converge.
+Coulomb. A form is not taken on a joint whose scale stopped on a bound in a fold: on the upper
+one it is a second viscous term, the scale not identified; on the lower one it is a sign on that
+joint, Coulomb's own column, so Coulomb, the simpler form, is kept (it used to be allowed, and a
+joint took tanh at the 0.006 rad/s floor for a held-back error 0.2 % below Coulomb's). Nor is a
+form taken anywhere when a fold's search did not converge.
 
 **One joint-combined check**: the joints share the other parameters, so when the per-joint forms
 mix, they are scored together (the scales of their smooth joints only searched on the fitting
@@ -82,8 +84,11 @@ class FrictionChoice:
 
     def table(self) -> str:
         n = max((len(c.per_joint) for c in self.candidates), default=0)
+        rate = self.candidates[0].decimate_to if self.candidates else None
         lines = [f"friction form chosen per joint by {self.blocks}-block cross-validation (velocity scales searched "
-                 f"on the fitting blocks)\n  form       held-back error [%]" + "".join(f"{'j' + str(j + 1):>7}" for j in range(n))]
+                 f"on the fitting blocks; scored on the fit's own rows, "
+                 f"{'not decimated' if rate is None else f'at {rate:.4g} Hz'}, not at the processing table's "
+                 f"common rate)\n  form       held-back error [%]" + "".join(f"{'j' + str(j + 1):>7}" for j in range(n))]
         notes = dict(self.notes)
         rows = self.candidates + ((self.combined,) if self.combined is not None else ())
         for c in rows:
@@ -150,11 +155,13 @@ def _exact(robot: rx90sym.Robot, recordings: Sequence[Any], base: Any, options: 
 @dataclass(frozen=True)
 class _Scored:
     """One form scored: the candidate, the joints (1-based) whose scale reached the upper bound in
-    some fold, the folds (1-based) whose search did not converge."""
+    some fold, those whose scale reached the lower bound in some fold (``floor``: the form is
+    Coulomb's sign there), the folds (1-based) whose search did not converge."""
 
     candidate: Candidate
     bound: frozenset[int] = frozenset()
     failed: frozenset[int] = frozenset()
+    floor: frozenset[int] = frozenset()
 
     def why(self) -> str | None:
         """Why the form cannot be chosen for the whole robot (None: it can)."""
@@ -174,7 +181,7 @@ def _score_form(robot: rx90sym.Robot, recordings: Sequence[Any], base: Any, opti
     from identify.estimation.separable import SCALE_BOUNDS, scales_from_observation
 
     err2, ref2 = np.zeros((blocks, n)), np.zeros((blocks, n))
-    bound, failed = set(), set()
+    bound, failed, floor = set(), set(), set()
     smooth = has_smooth_friction(form)
     W = None
     for b in range(blocks):
@@ -185,9 +192,11 @@ def _score_form(robot: rx90sym.Robot, recordings: Sequence[Any], base: Any, opti
                           samples=obs.samples[fit_rows])
             found = scales_from_observation(sub, terms, form, n)
             scales = found.scales
-            # The upper bound: the form is a second viscous term there, its scale not identified (on
-            # the lower one it is a sign on that joint, Coulomb's own column: no reason to refuse it).
-            bound.update(j + 1 for j, v in enumerate(found.scales) if v >= SCALE_BOUNDS[1] * (1 - 1e-3))
+            # The upper bound: the form is a second viscous term there, its scale not identified; on
+            # the lower one it is a sign on that joint, Coulomb's own column: Coulomb is kept there.
+            top = [v >= SCALE_BOUNDS[1] * (1 - 1e-3) for v in found.scales]
+            bound.update(j + 1 for j, high in enumerate(top) if high)
+            floor.update(j + 1 for j, (low, high) in enumerate(zip(found.at_bound, top)) if low and not high)
             if not found.converged:
                 failed.add(b + 1)
         if W is None or scales is not None:  # Coulomb's columns (and their factors) do not depend on the fold
@@ -200,19 +209,20 @@ def _score_form(robot: rx90sym.Robot, recordings: Sequence[Any], base: Any, opti
         np.add.at(err2[b], obs.joint[held], res ** 2)
         np.add.at(ref2[b], obs.joint[held], obs.Y[held] ** 2)
     cand = Candidate(obs.cutoffs[0], None, obs.rest, *block_scores(err2, ref2), label=label)
-    return _Scored(cand, frozenset(bound), frozenset(failed))
+    return _Scored(cand, frozenset(bound), frozenset(failed), frozenset(floor))
 
 
 def _per_joint_forms(scored: dict[str, _Scored], rows: Sequence[int], n: int) -> tuple[str, ...]:
     """Each joint's form: the one of lowest held-back error on that joint where it is clearly below
     Coulomb's on that joint (:func:`clearly_better`, paired blocks), else Coulomb. A form is not
-    taken on a joint whose scale reached the upper bound, nor anywhere when a fold's search failed;
+    taken on a joint whose scale reached a bound in a fold (the upper: a second viscous term; the
+    lower: Coulomb's sign, kept as Coulomb), nor anywhere when a fold's search failed;
     a joint without a Coulomb term (``rows``: those with one, 0-based) keeps Coulomb."""
     default = scored[DEFAULT_FRICTION].candidate
     forms = []
     for j in range(n):
         eligible = [x.candidate for x in scored.values() if x.candidate.per_joint and not x.failed
-                    and j + 1 not in x.bound and np.isfinite(x.candidate.per_joint[j])]
+                    and j + 1 not in x.bound | x.floor and np.isfinite(x.candidate.per_joint[j])]
         best = min(eligible, key=lambda c: c.per_joint[j], default=default)
         take = j in rows and best.label != DEFAULT_FRICTION and clearly_better(best, default, j)
         forms.append(best.label if take else DEFAULT_FRICTION)

@@ -73,7 +73,7 @@ def register(sub: Any) -> None:
     sp.add_argument("--cross-validate", action=argparse.BooleanOptionalAction, default=None,
                     help="choose the cut-off, the decimation and (without --rest) the rest policy per joint on "
                          "the torques by blocked cross-validation (a small grid around the position knee, capped "
-                         "in time; the candidate table is printed and saved). Default: on without --cutoff; "
+                         "by the rows processed, never the clock; the candidate table is printed and saved). Default: on without --cutoff; "
                          "--no-cross-validate: the position-spectrum cut-off and --decimate-to")
     sp.add_argument("--decimate-to", type=float, default=50.0,
                     help="rate after parallel filtering [Hz] (default 50; 0: no decimation)")
@@ -151,6 +151,10 @@ def _check(args: argparse.Namespace) -> None:
                          "the cut-off): give one of them")
     if args.min_velocity < 0:
         raise UsageError(f"--min-velocity must be >= 0 rad/s, got {args.min_velocity:g}")
+    if args.min_velocity == 0 and args.rest is not None:
+        rest = ",".join(args.rest) if isinstance(args.rest, tuple) else args.rest
+        raise UsageError(f"conflicting options: --rest {rest} and --min-velocity 0 (no rest threshold: every row "
+                         f"is a moving one, no rest policy applies): give a threshold or drop --rest")
     if args.urdf_out and args.method != "consistent":
         raise UsageError("--urdf-out needs --method consistent (a URDF holds physical bodies only)")
     if args.prior is not None and args.method != "consistent":
