@@ -33,8 +33,8 @@ from scipy.optimize import minimize
 import rx90sym
 from identify.estimation.least_squares import weighted_least_squares
 from identify.observation.friction import friction_columns
-from identify.observation.friction_model import PRESLIDING_PREFIX, FrictionBase, own_terms
-from identify.observation.matrix import Observation, coulomb_terms, observation_matrix
+from identify.observation.friction_model import PRESLIDING_PREFIX, FrictionBase, friction_probe
+from identify.observation.matrix import Observation, observation_matrix
 
 __all__ = ["SCALE_BOUNDS", "TRAVEL_CANDIDATES", "PreslidingTravels", "VelocityScales", "presliding_travels",
            "velocity_scales", "scales_from_observation"]
@@ -240,16 +240,13 @@ def velocity_scales(robot: rx90sym.Robot, recordings: Sequence[Any], base: Any, 
     ``recordings`` with the base columns ``base`` and the observation ``options`` of the fit
     (cutoff, decimate_to, min_velocity, rest, spring, delay: :func:`identify.observation_matrix`)."""
     base = base if base is not None else rx90sym.base_parameters(robot)
-    inner = base.base if isinstance(base, FrictionBase) else base
-    terms = own_terms(coulomb_terms(robot, inner.names))
+    _, probe, terms, asymmetric = friction_probe(robot, base)
     if not terms:
         raise ValueError(f"friction form {form!r}: robot {robot.name!r} has no Coulomb parameter in its columns")
-    asymmetric = sorted({t.row + 1 for t in terms if rx90sym.parameters.split_name(t.name)[0] in ("FSP", "FSN")})
     if asymmetric:
         raise ValueError(f"friction form {form!r}: asymmetric Coulomb (FS+, FS-) on joint(s) "
                          f"{', '.join(map(str, asymmetric))} of {robot.name!r}: a smooth form has one magnitude per "
                          f"joint; give friction 'coulomb', or symmetric Coulomb on those joints")
-    probe = FrictionBase(inner, tuple((t.row, t.column, t.driver) for t in terms), "probe")
     obs = observation_matrix(robot, recordings, base=probe, **options)
     return scales_from_observation(obs, terms, form, robot.n)
 
@@ -283,8 +280,7 @@ def presliding_travels(robot: rx90sym.Robot, recordings: Sequence[Any], base: An
     policy "presliding" in ``options``, the fit's other observation options); the other columns
     are projected out once and each joint's δ is chosen by coordinate descent on the weighted cost
     (two sweeps; eq. 11's weights from the fit at the middle candidate)."""
-    inner = base.base if isinstance(base, FrictionBase) else base
-    terms = own_terms(coulomb_terms(robot, inner.names))
+    inner, _, terms, _ = friction_probe(robot, base)
     form = base.form if isinstance(base, FrictionBase) else "coulomb"
     scales = base.scales if isinstance(base, FrictionBase) else None
     probe = FrictionBase(inner, tuple((t.row, t.column, t.driver) for t in terms), form, scales, True,

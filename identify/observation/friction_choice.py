@@ -53,7 +53,7 @@ from identify.observation.cross_validation import (DEFAULT_BLOCKS, DEFAULT_ROW_C
                                                    block_scores, clearly_better, fold_wls, observation_rows,
                                                    time_blocks)
 from identify.observation.friction import DEFAULT_FRICTION, FRICTION_FORMS
-from identify.observation.friction_model import FrictionBase, coulomb_terms, own_terms
+from identify.observation.friction_model import coulomb_terms, friction_probe
 from identify.observation.matrix import Observation, observation_matrix
 from identify.observation.processing import FrictionForm, friction_label, has_smooth_friction, uniform
 
@@ -245,14 +245,11 @@ def choose_friction(robot: rx90sym.Robot, recordings: Sequence[Any], base: Any, 
         raise ValueError(f"cross-validation needs at least 2 blocks, got {blocks}")
     start = time.perf_counter()
     budget, passes = Budget(observation_rows(robot, recordings), row_cap, time_cap), 0
-    inner = base.base if isinstance(base, FrictionBase) else base
-    terms = own_terms(coulomb_terms(robot, inner.names))
-    asymmetric = any(rx90sym.parameters.split_name(t.name)[0] in ("FSP", "FSN") for t in terms)
+    inner, probe, terms, asymmetric = friction_probe(robot, base)
     if not terms or asymmetric:
         why = "asymmetric Coulomb joints keep the Coulomb form" if terms else "no Coulomb parameter"
         return FrictionChoice((), DEFAULT_FRICTION, tuple((f, why) for f in forms if f != DEFAULT_FRICTION),
                               blocks, 0.0)
-    probe = FrictionBase(inner, tuple((t.row, t.column, t.driver) for t in terms), "probe")
     try:
         obs = observation_matrix(robot, recordings, base=probe, **options)
     except ValueError as exc:  # the fit's own observation then says what is wrong, in its words

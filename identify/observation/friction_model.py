@@ -29,7 +29,7 @@ from identify.observation.friction import (DEFAULT_FRICTION, FRICTION_FORMS, PRE
 from identify.observation.processing import uniform
 
 __all__ = ["CoulombTerm", "FrictionBase", "PRESLIDING_PREFIX", "STRIBECK_PREFIX", "coulomb_terms", "friction_base",
-           "own_terms", "presliding_base", "without_empty_presliding"]
+           "friction_probe", "own_terms", "presliding_base", "without_empty_presliding"]
 
 #: Column names: FPj the presliding magnitude [N·m] of joint j, FSTj its Stribeck (breakaway) level [N·m].
 PRESLIDING_PREFIX = "FP"
@@ -198,6 +198,18 @@ def coulomb_terms(robot: rx90sym.Robot, names: Sequence[str]) -> tuple[CoulombTe
                 drivers = {a: unit[b], b: unit[a]}
             out += [CoulombTerm(name, c, row, tuple(w)) for row, w in drivers.items()]
     return tuple(out)
+
+
+def friction_probe(robot: rx90sym.Robot, base: Any) -> tuple[Any, "FrictionBase", tuple[CoulombTerm, ...], tuple[int, ...]]:
+    """What a search over friction forms reads: (``base`` without its friction form, the probe
+    columns (form "probe": each own-joint Coulomb column holds the filtered, decimated driver
+    speed), those Coulomb terms, the joints (1-based) whose Coulomb is asymmetric (FS+, FS-), where
+    a smooth form has no single magnitude)."""
+    inner = base.base if isinstance(base, FrictionBase) else base
+    terms = own_terms(coulomb_terms(robot, inner.names))
+    asymmetric = tuple(sorted({t.row + 1 for t in terms
+                               if rx90sym.parameters.split_name(t.name)[0] in ("FSP", "FSN")}))
+    return inner, friction_base(inner, terms, "probe"), terms, asymmetric
 
 
 def presliding_base(robot: rx90sym.Robot, base: Any = None, rest: Any = None) -> Any:
