@@ -161,3 +161,22 @@ def test_an_rtde_csv_needs_no_column_map(tmp_path, capsys):
     out = tmp_path / "rec.csv"
     assert main(["convert", str(path), "--robot", "ur10e", "--gains", "10,10,10,10,10,10", "--out", str(out)]) == 0
     np.testing.assert_allclose(read_recording(out, ur).torques, 10 * cur, rtol=1e-14)
+
+
+def test_a_path_that_is_no_bag_says_what_a_bag_is(tmp_path, capsys):
+    """An empty directory, a directory of other files and a .mcap file without its bag's metadata.yaml:
+    one line naming the path and the forms a bag takes (rosbags said "Expected metadata file ... does
+    not exist.")."""
+    empty, other = tmp_path / "emptydir", tmp_path / "other"
+    empty.mkdir(), other.mkdir()
+    (other / "notes.txt").write_text("x")
+    (other / "run.mcap").write_bytes(b"")
+    cases = [(empty, "emptydir: an empty directory is not a ROS bag"),
+             (other, "other: a directory without metadata.yaml is not a ROS bag"),
+             (other / "run.mcap", "run.mcap: its directory holds no metadata.yaml")]
+    for path, needle in cases:
+        out = tmp_path / "rec.csv"
+        code = main(["convert", str(path), "--topic", "/joint_states", "--robot", "panda", "--out", str(out)])
+        err = capsys.readouterr().err.strip().splitlines()[-1]
+        assert code == 2 and needle in err and "a ROS 1 .bag file, a ROS 2 bag directory (holding metadata.yaml)" in err, err
+        assert not out.exists()
