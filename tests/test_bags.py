@@ -131,6 +131,26 @@ def test_bad_bags_exit_2_naming_the_problem(tmp_path, capsys, panda, host_table)
     assert code == 0 and out.exists() and "stale rows dropped" in printed and "lost packets" in printed
 
 
+def test_options_a_bag_does_not_take_are_named_in_bag_terms(tmp_path, capsys, host_table):
+    """Gains on a torque bag name --effort current (there is no column map); a motor-form option says
+    'not to a bag'; --block (a LOG.csv's lines per block, which a bag ignored) is refused in one line
+    whatever its value (500 was refused by argparse with the whole usage text)."""
+    bag = write_bag(tmp_path / "run.bag", host_table, [f"panda_joint{j}" for j in range(1, 8)], "ros1")
+    out = tmp_path / "rec.csv"
+    cases = [(["--gains", "1,1,1,1,1,1,1"], "drive gains given, but the messages' effort is read as joint torques "
+                                            "(--effort torque, the default; effort= in Python): give --effort current"),
+             (["--motor-positions", "p.csv"], "--motor-positions belongs to the motor form, not to a bag"),
+             (["--block", "500"], "--block belongs to the LOG.csv form, not to a bag (a bag is read whole)"),
+             (["--block", "5000"], "--block belongs to the LOG.csv form, not to a bag (a bag is read whole)")]
+    for extra, needle in cases:
+        code = main(["convert", str(bag), "--topic", "/joint_states", "--robot", "panda", *extra, "--out", str(out)])
+        err = capsys.readouterr().err.strip().splitlines()
+        assert code == 2 and needle in err[-1] and "column map" not in err[-1], err
+        assert not any(line.startswith("usage:") for line in err) and not out.exists()
+    with pytest.raises(ValueError, match="give --effort current"):
+        read_bag(bag, rx90sym.load_robot("panda"), "/joint_states", gains="1,1,1,1,1,1,1")
+
+
 def test_without_rosbags_the_message_names_the_extra(tmp_path, monkeypatch, panda):
     import sys
 

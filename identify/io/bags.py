@@ -171,11 +171,16 @@ def read_bag(path: str | os.PathLike[str], robot: rx90sym.Robot, topic: str = "/
 
     Raises:
         MissingExtra: rosbags is not installed (the message names the extra).
+        ValueError: gains with ``effort="torque"``.
         RecordingError: no such topic, no joint name matching, a bad message (named by number).
     """
     p = Path(path)
     if effort not in ("torque", "current"):
         raise ValueError(f"effort must be 'torque' or 'current', got {effort!r}")
+    if gains is not None and effort == "torque":  # a bag has no column map: name its own option
+        raise ValueError(f"{p.name}: drive gains given, but the messages' effort is read as joint torques "
+                         f"(--effort torque, the default; effort= in Python): give --effort current if it "
+                         f"holds motor currents")
     names = robot.ros_joint_names()
     if len(names) != robot.n:
         raise ValueError(f"robot {robot.name!r} has no ROS joint names: add joint_names = [...] ({robot.n} "
