@@ -151,6 +151,32 @@ def test_options_a_bag_does_not_take_are_named_in_bag_terms(tmp_path, capsys, ho
         read_bag(bag, rx90sym.load_robot("panda"), "/joint_states", gains="1,1,1,1,1,1,1")
 
 
+def test_refusals_of_a_bag_advise_only_what_a_bag_takes(tmp_path, capsys, host_table):
+    """A gap refused with --no-segments: the advice names --max-gap (with a value that bridges it) and
+    leaving out --no-segments, never --rows/--from (refused for a bag) nor the Python max_gap alone; a
+    position beyond the limits names the message and advises no window either."""
+    out = tmp_path / "rec.csv"
+    bag = write_bag(tmp_path / "run.bag", host_table, [f"panda_joint{j}" for j in range(1, 8)], "ros1")
+    code = main(["convert", str(bag), "--topic", "/joint_states", "--robot", "panda", "--resample", "1000",
+                 "--max-gap", "0.004", "--no-segments", "--out", str(out)])
+    err = capsys.readouterr().err.strip().splitlines()[-1]
+    assert code == 2 and "longer than the 0.004 s that can be bridged" in err, err
+    assert "; let it split the log into segments (without --no-segments) or bridge it with --max-gap " in err
+    assert "--rows" not in err and "--from" not in err and "a longer max_gap" not in err and not out.exists()
+    suggested = err.split("--max-gap ")[1].split()[0]  # bridges every gap: the same command then converts
+    assert main(["convert", str(bag), "--topic", "/joint_states", "--robot", "panda", "--resample", "1000",
+                 "--max-gap", suggested, "--no-segments", "--out", str(out)]) == 0 and out.exists()
+    out.unlink()
+    capsys.readouterr()
+    corrupt = host_table.copy()
+    corrupt[100, 1] = 50.0  # joint 1 far beyond its limits
+    bag = write_bag(tmp_path / "corrupt.bag", corrupt, [f"panda_joint{j}" for j in range(1, 8)], "ros1")
+    code = main(["convert", str(bag), "--topic", "/joint_states", "--robot", "panda", "--resample", "1000",
+                 "--out", str(out)])
+    err = capsys.readouterr().err.strip().splitlines()[-1]
+    assert code == 2 and "beyond joint 1's limits" in err and "--rows" not in err and not out.exists(), err
+
+
 def test_without_rosbags_the_message_names_the_extra(tmp_path, monkeypatch, panda):
     import sys
 

@@ -108,6 +108,10 @@ def test_a_long_gap_splits_the_log_unless_segments_are_refused(tmp_path, capsys,
                  "model", "--resample", "1000", "--no-segments", "--out", str(bad)])
     err = capsys.readouterr().err
     assert code == 2 and "longer than the 0.05 s that can be bridged" in err and not bad.exists()
+    # The advice speaks CLI and names what the CSV form takes: a window, segments, a --max-gap bridging it.
+    assert ("select a window without it with --rows FIRST:LAST or --from/--to, let it split the log into "
+            "segments (without --no-segments) or bridge it with --max-gap 0.21 (rows=, t_from=, t_to=, "
+            "segments=True, max_gap= in Python)") in err, err
     with pytest.raises(RecordingError, match="irregular time steps"):
         read_log(path, panda, cols, convention="model")  # without resampling: refused with the figures
 

@@ -207,6 +207,6 @@ def read_bag(path: str | os.PathLike[str], robot: rx90sym.Robot, topic: str = "/
         table = np.delete(table, np.s_[1 + n:1 + 2 * n], axis=1)
     spec = f"t,q1..q{n}," + (f"qd1..qd{n}," if has_qd else "") + f"{kind}1..{kind}{n}"
     rec = rows_to_recording(source, table, numbers, parse_columns(spec, robot), robot, convention,
-                            gains=gains, max_gap=max_gap, segments=segments, resample=resample)
+                            gains=gains, max_gap=max_gap, segments=segments, resample=resample, window=False)
     rec.meta["log"].update(report, t0_ns=t0)
     return rec

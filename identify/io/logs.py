@@ -58,7 +58,7 @@ import rx90sym
 from rx90sym.recording import Recording, RecordingError
 
 from identify.io.columns import ColumnMap, parse_columns, rtde_columns
-from identify.io.log_rows import ABSURD, bad_rows, data_lines, header_cells, parse_rows, row_window
+from identify.io.log_rows import ABSURD, WINDOW_ADVICE, bad_rows, data_lines, header_cells, parse_rows, row_window
 from identify.io.units import check_units
 from identify.io.gains import DriveGains, apply_gains, read_gains
 from identify.signal.gaps import DEFAULT_MAX_GAP, LogGaps, find_gaps, short_segments, stale_rows
@@ -82,32 +82,46 @@ MOVING_SPAN = 0.05
 #: fraction of the derivative's RMS (measured on the UR10e logs: see docs/real-logs.md).
 VELOCITY_MISMATCH = 0.5
 
-def check_increasing(t: np.ndarray, numbers: Sequence[int], source: str) -> None:
+def check_increasing(t: np.ndarray, numbers: Sequence[int], source: str, window: bool = True) -> None:
     """Time increases (a gap is not an error: :func:`identify.signal.gaps.find_gaps`). A log's
-    rule; a recording's regular clock is checked by :func:`identify.io.checks._check_time`."""
+    rule; a recording's regular clock is checked by :func:`identify.io.checks._check_time`.
+    ``window``: the input form can select a window of lines (a CSV log; a bag cannot)."""
     if t.size < 2:
         raise RecordingError(f"{source}: line {numbers[0]}: a log needs at least 2 rows")
     dt = np.diff(t)
     problems = [(numbers[k + 1], f"time {t[k + 1]:g} s does not increase (line {numbers[k]}: {t[k]:g} s)")
                 for k in np.flatnonzero(dt <= 0.0)]
     if problems:
-        raise bad_rows(source, problems)
+        raise bad_rows(source, problems, WINDOW_ADVICE if window else None)
 
 
-def refuse_splits(found: LogGaps, source: str) -> None:
-    """With segments refused: every gap longer than the limit, named by its lines."""
+def refuse_splits(found: LogGaps, source: str, window: bool = True) -> None:
+    """With segments refused: every gap longer than the limit, named by its lines, and what would
+    take it (``window``: the input form can select a window of lines, a CSV log; a bag cannot)."""
     problems = [(g.lines[0], f"gap of {g.duration:g} s to line {g.lines[1]} ({g.periods:.3g} median steps), "
                              f"longer than the {found.max_gap:g} s that can be bridged")
                 for g in found.splits]
     if problems:
-        err = bad_rows(source, problems)
-        raise RecordingError(f"{err} (or allow segments, or a longer max_gap)")
+        bridge = _round_up(max(g.duration for g in found.splits))
+        advice = (("select a window without it with --rows FIRST:LAST or --from/--to, " if window else "")
+                  + f"let it split the log into segments (without --no-segments) or bridge it with --max-gap "
+                    f"{bridge:g} (" + ("rows=, t_from=, t_to=, " if window else "")
+                  + "segments=True, max_gap= in Python)")
+        raise bad_rows(source, problems, advice)
+
+
+def _round_up(seconds: float) -> float:
+    """A round time just above ``seconds`` (2 significant digits), for a --max-gap that bridges it."""
+    scale = 10.0 ** (math.floor(math.log10(seconds)) - 1)
+    return math.floor(seconds / scale + 1.0) * scale
 
 
 def check_positions(q: np.ndarray, t: np.ndarray, numbers: Sequence[int], cmap: ColumnMap,
-                     robot: rx90sym.Robot, source: str) -> None:
+                     robot: rx90sym.Robot, source: str, window: bool = True) -> None:
     """Positions (model angles) within the limits + POSITION_MARGIN, and no faster jump than
-    JUMP_SAFETY x the velocity limit between two rows (a corrupt value inside the limits)."""
+    JUMP_SAFETY x the velocity limit between two rows (a corrupt value inside the limits);
+    ``window`` as for :func:`check_increasing`."""
+    advice = WINDOW_ADVICE if window else None
     lo = np.asarray(robot.limits.q_min, dtype=float) - POSITION_MARGIN
     hi = np.asarray(robot.limits.q_max, dtype=float) + POSITION_MARGIN
     problems = []
@@ -117,7 +131,7 @@ def check_positions(q: np.ndarray, t: np.ndarray, numbers: Sequence[int], cmap: 
                                      f"beyond joint {j + 1}'s limits [{lo[j] + POSITION_MARGIN:g}, "
                                      f"{hi[j] - POSITION_MARGIN:g}] rad by more than {POSITION_MARGIN:g} rad"))
     if problems:
-        raise bad_rows(source, problems)
+        raise bad_rows(source, problems, advice)
     qd_max = np.asarray(robot.limits.qd_max, dtype=float)
     allowed = JUMP_SAFETY * qd_max[None, :] * np.diff(t)[:, None] + JUMP_ATOL
     jumps = np.abs(np.diff(q, axis=0)) > allowed  # inf limits never flag
@@ -127,7 +141,7 @@ def check_positions(q: np.ndarray, t: np.ndarray, numbers: Sequence[int], cmap: 
                                          f"{numbers[k]} in {t[k + 1] - t[k]:g} s (more than {JUMP_SAFETY:g} x "
                                          f"its velocity limit {qd_max[j]:g} rad/s)"))
     if problems:
-        raise bad_rows(source, problems)
+        raise bad_rows(source, problems, advice)
 
 
 def check_velocities(dq: np.ndarray | None, q: np.ndarray, t: np.ndarray, span: np.ndarray,
@@ -264,16 +278,17 @@ def read_log(
 def rows_to_recording(source: str, values: np.ndarray, numbers: Sequence[int], cmap: ColumnMap,
                       robot: rx90sym.Robot, convention: str, gains: DriveGains | str | None = None,
                       max_gap: float = DEFAULT_MAX_GAP, segments: bool = True,
-                      resample: float | None = None) -> Recording:
+                      resample: float | None = None, window: bool = True) -> Recording:
     """The rows of a log (``values`` (N, columns) as ``cmap`` names them, ``numbers`` their line or
     message numbers) as a recording, by the rules of :func:`read_log`: stale rows dropped, time,
-    gaps, positions and velocities checked, resampled, currents through the gains."""
+    gaps, positions and velocities checked, resampled, currents through the gains. ``window``: the
+    input form can select a window of lines, advised by the refusals (False for a bag)."""
     drive = _drive(cmap, gains, robot)
     stale = stale_rows(values, cmap.t, [c for c, name in enumerate(cmap.names) if name != "_"])
     report = {"lines": [numbers[0], numbers[-1]], "rows": int(len(numbers)), "stale_rows": int(stale.sum()),
               "stale_lines": [int(numbers[k]) for k in np.flatnonzero(stale)[:LISTED_ROWS]]}
     values, numbers = values[~stale], [n for n, s in zip(numbers, stale) if not s]
-    rec = _recording(source, values, numbers, cmap, robot, convention, report, max_gap, segments, resample)
+    rec = _recording(source, values, numbers, cmap, robot, convention, report, max_gap, segments, resample, window)
     if drive is not None:
         rec = apply_gains(rec, drive, robot)
         rec.meta["log"]["gains"] = gains_label(drive)
@@ -285,19 +300,20 @@ LISTED_ROWS = 10
 
 
 def _recording(source: str, values: np.ndarray, numbers: list[int], cmap: ColumnMap, robot: rx90sym.Robot,
-               conv: str, report: dict, max_gap: float, segments: bool, resample: float | None) -> Recording:
+               conv: str, report: dict, max_gap: float, segments: bool, resample: float | None,
+               window: bool) -> Recording:
     """The checked rows as a recording: time, gaps, positions, velocities, then the grid."""
     t = values[:, cmap.t]
-    check_increasing(t, numbers, source)
+    check_increasing(t, numbers, source, window)
     found = find_gaps(t, numbers, max_gap)
     if not segments:
-        refuse_splits(found, source)
+        refuse_splits(found, source, window)
     q_file = values[:, list(cmap.q)]
     q = np.asarray(robot.to_model(q_file), dtype=float) if conv == "controller" else q_file
     dq = values[:, list(cmap.qd)] if cmap.qd else None
     # Degrees and swapped q/qd groups named as such, before they read as corrupt rows.
     check_units(t, q_file, dq, robot, source, numbers, to_model=conv == "controller", ranges=False)
-    check_positions(q, t, numbers, cmap, robot, source)
+    check_positions(q, t, numbers, cmap, robot, source, window)
     span = np.ptp(q, axis=0)
     check_velocities(dq, q, t, span, numbers, cmap, source)
     if np.all(span < STILL):
