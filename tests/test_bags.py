@@ -226,3 +226,29 @@ def test_a_path_that_is_no_bag_says_what_a_bag_is(tmp_path, capsys):
         err = capsys.readouterr().err.strip().splitlines()[-1]
         assert code == 2 and needle in err and "a ROS 1 .bag file, a ROS 2 bag directory (holding metadata.yaml)" in err, err
         assert not out.exists()
+
+
+def test_an_rtde_csv_without_currents_says_what_was_found_and_what_is_missing(tmp_path, capsys):
+    """Only target_moment (the controller's target) as effort: the message says the header was read as
+    RTDE, names the RTDE columns found and the actual_current_j missing (it said 'column map: neither
+    joint torques (tau1..tau6) nor motor currents', though no column map was given)."""
+    t = 0.002 * np.arange(300)
+    q = 0.3 * np.sin(np.outer(t, np.arange(1, 7)))
+    groups = [("actual_q", q), ("actual_qd", np.gradient(q, t, axis=0)), ("target_moment", np.cos(q)),
+              ("actual_current", np.sin(q))]
+    out = tmp_path / "rec.csv"
+    for kept, missing in ((3, "missing actual_current_0..actual_current_5 (motor currents"),
+                          (4, "missing actual_current_4, actual_current_5 (motor currents")):
+        header = ["timestamp"] + [f"{g}_{j}" for g, _ in groups[:kept] for j in range(6)]
+        table = np.column_stack([t] + [a for _, a in groups[:kept]])
+        if kept == 4:  # currents of joints 1-4 only
+            header, table = header[:-2], table[:, :-2]
+        path = tmp_path / "rtde.csv"
+        path.write_text(" ".join(header) + "\n" + "\n".join(" ".join(f"{v:.17g}" for v in r) for r in table) + "\n")
+        code = main(["convert", str(path), "--robot", "ur10e", "--out", str(out)])
+        err = capsys.readouterr().err.strip().splitlines()[-1]
+        assert code == 2 and "rtde.csv: the header was recognised as a UR RTDE log: found timestamp, " \
+            "actual_q_0..actual_q_5 (positions), actual_qd_0..actual_qd_5 (velocities), " in err, err
+        assert "target_moment_0..target_moment_5 (the controller's target torques, kept as x:target_moment1.., " \
+            "never a torque)" in err
+        assert missing in err and "column map" not in err and not out.exists()

@@ -57,7 +57,7 @@ import numpy as np
 import rx90sym
 from rx90sym.recording import Recording, RecordingError
 
-from identify.io.columns import ColumnMap, parse_columns, rtde_columns
+from identify.io.columns import ColumnMap, parse_columns, rtde_columns, rtde_refusal
 from identify.io.log_rows import ABSURD, WINDOW_ADVICE, bad_rows, data_lines, header_cells, parse_rows, row_window
 from identify.io.units import check_units
 from identify.io.gains import DriveGains, apply_gains, read_gains
@@ -264,6 +264,9 @@ def read_log(
         if columns is None:
             raise ValueError(f"{p.name}: give the column map (columns=, --columns): the first line is not a "
                              f"header this reader knows (UR RTDE: timestamp, actual_q_0..actual_q_{robot.n - 1})")
+        refusal = rtde_refusal(cells, robot)
+        if refusal:
+            raise ValueError(f"{p.name}: {refusal}")
     cmap = parse_columns(columns, robot)
     conv = _normalise_convention(convention, p.name) or "controller"
     lines = data_lines(p, header, len(cmap.names), blanks)
