@@ -44,7 +44,10 @@ def test_block_conversion_gives_the_whole_readers_recording_and_counts(panda, lo
     got = identify.read_recording(out, panda)
     log = whole.meta["log"]
     assert whole.n_segments == 3 and log["stale_rows"] > 100 and log["bridged_samples"] > 100
-    for key in ("rows", "stale_rows", "stale_lines", "bridged_samples", "samples", "lines", "largest_gap_lines"):
+    # The clock's figures too: the whole log's median step, steps off by 1 % and rate (the block path
+    # printed the median of its blocks' medians and counted off-steps against each block's median).
+    for key in ("rows", "stale_rows", "stale_lines", "bridged_samples", "samples", "lines", "largest_gap_lines",
+                "median_step_s", "irregular_steps", "rate_hz"):
         assert report[key] == log[key], key
     assert [(g["lines"], g["bridged"]) for g in report["gaps"]["gaps"]] == \
         [(g["lines"], g["bridged"]) for g in log["gaps"]["gaps"]]

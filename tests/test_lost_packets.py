@@ -116,6 +116,26 @@ def test_a_long_gap_splits_the_log_unless_segments_are_refused(tmp_path, capsys,
         read_log(path, panda, cols, convention="model")  # without resampling: refused with the figures
 
 
+def test_the_rate_and_the_resample_hint_are_the_streams_whatever_the_gaps(tmp_path, panda, short_run):
+    """A 1 kHz host log with stale rows and bursts of lost packets: the report's rate is 1 / the mean
+    step without lost packets (about 1 kHz), the same whatever --max-gap bridges or splits (it was
+    1 / mean step inside the segments: 943 vs 920 Hz), and the hint of the refusal without --resample
+    is 1000 (it was 1 / mean step, lost packets counted: 940). A log whose only fault is one gap: 1000."""
+    faults = HostFaults(gap_every_s=(0.3, 0.6), gap_periods=(20, 40), long_gaps=(2.0,), long_gap_s=0.2)
+    path, cols, _, _ = _log(tmp_path, short_run, faults, 3)
+    rates = [read_log(path, panda, cols, resample=1000.0, convention="model", max_gap=gap).meta["log"]["rate_hz"]
+             for gap in (0.05, 0.3)]
+    assert rates[0] == rates[1] and rates[0] == pytest.approx(1000.0, rel=2e-3)
+    with pytest.raises(RecordingError, match=r"e\.g\. --resample 1000 \(1 / mean step without lost packets\)"):
+        read_log(path, panda, cols, convention="model")
+    table = np.column_stack([short_run.t, short_run.q, np.gradient(short_run.q, short_run.t, axis=0),
+                             short_run.tau])
+    one = tmp_path / "one_gap.csv"
+    cols = write_host_log(one, np.delete(table, np.s_[1000:1045], axis=0))  # 46 ms without packets
+    with pytest.raises(RecordingError, match=r"1 of them lost packets .* e\.g\. --resample 1000 "):
+        read_log(one, panda, cols, convention="model")
+
+
 def _within(robot, base, truth, rec) -> float:
     res = fit(robot, [rec], Processing(estimate_delay=False, cross_validate=False), base=base).result
     values, std = dict(zip(res.names, res.values)), dict(zip(res.names, res.std))

@@ -8,6 +8,7 @@ import numpy as np
 
 from identify.io.recordings import TIME_RTOL
 from identify.signal.gaps import Gap, LogGaps
+from identify.signal.steps import StepCounts, log_steps, step_figures
 
 __all__ = ["BlockReport", "GAPS_KEPT"]
 
@@ -20,10 +21,10 @@ class BlockReport:
 
     def __init__(self) -> None:
         self.first_line = self.last_line = None
-        self.rows = self.samples = self.irregular = self.stale = self.bridged = 0
+        self.rows = self.samples = self.stale = self.bridged = 0
         self.stale_lines: list[int] = []
-        self.inside_sum, self.inside_count = 0.0, 0
-        self.gap, self.gap_lines, self.medians = -1.0, [0, 0], []
+        self.steps = StepCounts()  # every step of the log: the figures of the whole-log reader
+        self.gap, self.gap_lines = -1.0, [0, 0]
         self.gaps: list[Gap] = []  # the first GAPS_KEPT, the rest counted: memory bounded
         self.gap_count, self.bridged_gaps, self.lost_periods = 0, 0, 0.0
         self.segments = 1
@@ -41,11 +42,7 @@ class BlockReport:
         self.lost_periods += float(sum(g.periods - 1.0 for g in found.bridged))
         self.segments += int(found.segment[-1])
         if dt.size:
-            step = float(np.median(dt))
-            self.medians.append(step)
-            self.irregular += int(np.sum(np.abs(dt - step) > TIME_RTOL * step))
-            inside = dt[np.diff(found.segment) == 0]
-            self.inside_sum, self.inside_count = self.inside_sum + float(inside.sum()), self.inside_count + inside.size
+            self.steps.add(log_steps(dt))
             k = int(np.argmax(dt))
             if dt[k] > self.gap:
                 self.gap, self.gap_lines = float(dt[k]), [numbers[k], numbers[k + 1]]
@@ -56,8 +53,6 @@ class BlockReport:
                 "bridged_gaps": self.bridged_gaps, "bridged_lost_periods": self.lost_periods,
                 "gaps_total": self.gap_count}
         return {"lines": [self.first_line, self.last_line], "rows": self.rows, "stale_rows": self.stale,
-                "stale_lines": self.stale_lines,
-                "rate_hz": self.inside_count / self.inside_sum if self.inside_sum else float("nan"),
-                "median_step_s": float(np.median(self.medians)), "largest_gap_s": self.gap,
-                "largest_gap_lines": self.gap_lines, "irregular_steps": self.irregular, "gaps": gaps,
-                "bridged_samples": self.bridged, "samples": self.samples}
+                "stale_lines": self.stale_lines, **step_figures(self.steps, TIME_RTOL), "largest_gap_s": self.gap,
+                "largest_gap_lines": self.gap_lines, "gaps": gaps, "bridged_samples": self.bridged,
+                "samples": self.samples}

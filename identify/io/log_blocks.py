@@ -12,10 +12,12 @@ the atomic writer: an error leaves no file behind. The output always has a ``seg
 (and ``measured`` when resampled): the blocks to come may need them; the stale-row count goes in a
 header field filled in at the end.
 
-Differences from the whole-log reader, by construction: the median time step (irregular-step and
-gap checks, a gap's ``periods``, the report) is each block's, so a step is a lost packet when it is
+Differences from the whole-log reader, by construction: the median time step of the checks
+(irregular steps, gaps, a gap's ``periods``) is each block's, so a step is a lost packet when it is
 longer than 1.5 of its block's median step (the same steps as on the whole log unless the clock
-drifts by a third of a period between blocks); the recorded-velocity check compares each block's
+drifts by a third of a period between blocks); the report's median step, steps off by more than
+1 % and rate are the whole log's, as the whole-log reader prints them
+(:func:`identify.signal.steps.step_figures` on every step); the recorded-velocity check compares each block's
 RMS, and the units check (:func:`identify.io.units.check_units`: degrees, swapped q/qd groups)
 counts the rows of the block where it refuses (the same message, the block's counts); with
 ``t_from``/``t_to`` every row is parsed, so a corrupt row outside the window stops the

@@ -61,7 +61,8 @@ from identify.io.columns import ColumnMap, parse_columns, rtde_columns, rtde_ref
 from identify.io.log_rows import ABSURD, WINDOW_ADVICE, bad_rows, data_lines, header_cells, parse_rows, row_window
 from identify.io.units import check_units
 from identify.io.gains import DriveGains, apply_gains, read_gains
-from identify.signal.gaps import DEFAULT_MAX_GAP, LogGaps, find_gaps, short_segments, stale_rows
+from identify.signal.gaps import DEFAULT_MAX_GAP, LOST_STEPS, LogGaps, find_gaps, short_segments, stale_rows
+from identify.signal.steps import StepCounts, log_steps, step_figures
 from identify.signal.resampling import resample as resample_recording
 from identify.io.recordings import JUMP_ATOL, JUMP_SAFETY, TIME_RTOL, RecordingWarning, _normalise_convention
 
@@ -196,11 +197,13 @@ def irregular_refusal(t: np.ndarray, numbers: Sequence[int], source: str, found:
         return None
     lost = "" if found is None else (f", {len(found.bridged)} of them lost packets up to {found.max_gap:g} s that resampling bridges"
             if found.bridged else "")
+    stream = dt[dt <= LOST_STEPS * step]  # the stream's own steps: lost packets would lower its rate
     dt = dt[inside]
     return (f"{source}: irregular time steps: {off.size} of {dt.size} steps differ from the median step "
             f"{step:g} s by more than {TIME_RTOL:.0%} (steps from {dt.min():g} to {dt.max():g} s, the first "
             f"at line {numbers[off[0] + 1]}{lost}); resample on a uniform grid with --resample HZ (resample= in "
-            f"Python), e.g. --resample {_round_rate(1.0 / float(np.mean(dt))):g}")
+            f"Python), e.g. --resample {_round_rate(1.0 / float(np.mean(stream))):g} (1 / mean step without "
+            f"lost packets)")
 
 
 def _round_rate(rate: float) -> float:
@@ -245,7 +248,8 @@ def read_log(
         A recording in model angles, with ``measured`` (bridged samples False) and ``segment``
         when packets were lost; ``meta["log"]`` says what was done: ``lines`` (first, last line
         read), ``rows`` (count, stale rows included), ``stale_rows`` (dropped), ``stale_lines``
-        (the first few), ``rate_hz`` (1 / mean step), ``median_step_s``, ``largest_gap_s`` and
+        (the first few), ``rate_hz`` (1 / mean step, the gaps of lost packets left out),
+        ``median_step_s`` (:func:`identify.signal.steps.step_figures`), ``largest_gap_s`` and
         ``largest_gap_lines``, ``irregular_steps``, ``gaps`` (:meth:`LogGaps.summary`),
         ``bridged_samples``, ``resampled_hz`` (or None), ``samples``, ``gains``, ``convention``.
 
@@ -325,10 +329,10 @@ def _recording(source: str, values: np.ndarray, numbers: list[int], cmap: Column
                       RecordingWarning, stacklevel=3)
     dt = np.diff(t)
     k_gap = int(np.argmax(dt))
-    inside = dt[np.diff(found.segment) == 0]
-    report.update({"rate_hz": float(inside.size / inside.sum()), "median_step_s": float(np.median(dt)),
+    steps = StepCounts()
+    steps.add(log_steps(dt))  # the block converter's figures are the same: identify.signal.steps
+    report.update({**step_figures(steps, TIME_RTOL),
                    "largest_gap_s": float(dt[k_gap]), "largest_gap_lines": [numbers[k_gap], numbers[k_gap + 1]],
-                   "irregular_steps": int(np.sum(np.abs(dt - np.median(dt)) > TIME_RTOL * np.median(dt))),
                    "gaps": found.summary(), "bridged_samples": 0, "resampled_hz": None,
                    "samples": int(t.size), "gains": None, "convention": conv, "position_span_rad": span.tolist()})
     if resample is None:

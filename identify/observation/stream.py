@@ -36,6 +36,7 @@ from identify.observation.processing import RestPolicy
 from identify.signal.blocks import WelchAccumulator, decimation_margin, lowpass_margin, motion_windows
 from identify.signal.cutoff import choose_cutoff
 from identify.signal.filtering import EDGE_PERIODS, cutoff_from_spectrum, decimate, decimation_plan
+from identify.signal.steps import StepCounts
 
 __all__ = ["DEFAULT_BLOCK", "Piece", "Plan", "Scan", "SegmentScan", "StreamSettings", "in_order", "pieces",
            "plan_windows", "scan", "scan_all", "scanned_cutoff"]
@@ -100,26 +101,6 @@ class Scan:
         """As :func:`identify.io.recordings.layout_summary` for a recording in memory."""
         return {"source": self.source, "samples": self.samples, "bridged_samples": self.bridged,
                 "segments": len(self.segments), "stale_rows": self.stale_rows}
-
-
-class StepCounts:
-    """The distinct time steps of a log and how often each occurs (a regular log has a few hundred
-    distinct values whatever its length): their median is ``np.median`` of all the steps."""
-
-    def __init__(self) -> None:
-        self.values, self.counts = np.empty(0), np.empty(0, dtype=np.int64)
-
-    def add(self, steps: np.ndarray) -> None:
-        values, where = np.unique(np.concatenate([self.values, steps]), return_inverse=True)
-        weights = np.concatenate([self.counts, np.ones(steps.size, dtype=np.int64)])
-        self.values, self.counts = values, np.bincount(where, weights=weights).astype(np.int64)
-
-    def median(self) -> float:
-        total = int(self.counts.sum())
-        cum = np.cumsum(self.counts)
-        lo = self.values[np.searchsorted(cum, (total - 1) // 2, side="right")]
-        hi = self.values[np.searchsorted(cum, total // 2, side="right")]
-        return float((lo + hi) / 2.0) if lo != hi else float(lo)
 
 
 #: Length of a Welch segment of the automatic cut-off [s] (:func:`identify.choose_cutoff`'s default).

@@ -205,8 +205,8 @@ def _run_bag(args: argparse.Namespace) -> int:
 
 def _print_log(name: str, log: dict, what_else: str) -> str:
     """What the reader did, in the user's words: rows, rate, stale rows, gaps, grid, torques."""
-    steps = (f"rate {log['rate_hz']:.6g} Hz (1 / mean step; median step {log['median_step_s']:g} s, "
-             f"{log['irregular_steps']} steps off by more than 1 %)")
+    steps = (f"rate {log['rate_hz']:.6g} Hz (1 / mean step without lost packets; median step "
+             f"{log['median_step_s']:g} s, {log['irregular_steps']} steps off by more than 1 %)")
     grid = (f"resampled to {log['resampled_hz']:g} Hz: {log['samples']} samples"
             if log["resampled_hz"] else "not resampled")
     what = f"gains {log['gains']}: joint torques from the currents" if log["gains"] else what_else
