@@ -60,6 +60,11 @@ def test_block_conversion_gives_the_whole_readers_recording_and_counts(panda, lo
     np.testing.assert_array_equal(got.measured_mask, whole.measured_mask)
     np.testing.assert_array_equal(got.segment, whole.segment)
     assert got.meta["log"]["stale_rows"] == log["stale_rows"]
+    # The gaps that split the log, named in the report and kept in the file's header.
+    # (a gap's periods are counted in its block's median step: identify.io.log_blocks)
+    splits = [{"lines": g["lines"], "duration_s": g["duration_s"]} for g in log["gaps"]["splits"]]
+    assert [{k: g[k] for k in ("lines", "duration_s")} for g in report["gaps"]["splits"]] == splits
+    assert report["gaps"]["splits_total"] == 2 and got.meta["log"]["gaps"] == {"splits_total": 2, "splits": splits}
     # Blocks ending one, two or three rows into a segment (its first kept row alone in a block, when
     # the next is stale): the same recording.
     t = np.loadtxt(path, delimiter=",", usecols=0)

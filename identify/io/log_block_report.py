@@ -7,7 +7,7 @@ from typing import Any
 import numpy as np
 
 from identify.io.recordings import TIME_RTOL
-from identify.signal.gaps import Gap, LogGaps
+from identify.signal.gaps import SPLITS_LISTED, Gap, LogGaps
 from identify.signal.steps import StepCounts, log_steps, step_figures
 
 __all__ = ["BlockReport", "GAPS_KEPT"]
@@ -27,6 +27,8 @@ class BlockReport:
         self.gap, self.gap_lines = -1.0, [0, 0]
         self.gaps: list[Gap] = []  # the first GAPS_KEPT, the rest counted: memory bounded
         self.gap_count, self.bridged_gaps, self.lost_periods = 0, 0, 0.0
+        self.splits: list[Gap] = []  # the first SPLITS_LISTED gaps that split the log, the rest counted
+        self.split_count = 0
         self.segments = 1
         self.dropped: list[tuple[int, int, int]] = []  # segments too short to filter: lines, rows
 
@@ -40,6 +42,8 @@ class BlockReport:
         self.gap_count += len(found.gaps)
         self.bridged_gaps += len(found.bridged)
         self.lost_periods += float(sum(g.periods - 1.0 for g in found.bridged))
+        self.splits += found.splits[:max(0, SPLITS_LISTED - len(self.splits))]
+        self.split_count += len(found.splits)
         self.segments += int(found.segment[-1])
         if dt.size:
             self.steps.add(log_steps(dt))
@@ -51,7 +55,8 @@ class BlockReport:
         gaps = {**LogGaps(tuple(self.gaps), np.array([self.segments - 1 - len(self.dropped)]), max_gap,
                           tuple(self.dropped)).summary(),
                 "bridged_gaps": self.bridged_gaps, "bridged_lost_periods": self.lost_periods,
-                "gaps_total": self.gap_count}
+                "gaps_total": self.gap_count, "splits": [g.to_dict() for g in self.splits],
+                "splits_total": self.split_count}
         return {"lines": [self.first_line, self.last_line], "rows": self.rows, "stale_rows": self.stale,
                 "stale_lines": self.stale_lines, **step_figures(self.steps, TIME_RTOL), "largest_gap_s": self.gap,
                 "largest_gap_lines": self.gap_lines, "gaps": gaps, "bridged_samples": self.bridged,

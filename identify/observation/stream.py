@@ -31,6 +31,7 @@ import numpy as np
 import rx90sym
 
 from identify.io.blocks import DEFAULT_BLOCK, BlockSource
+from identify.io.log_fields import layout_fields
 from identify.observation.matrix import DECIMATION_PASSBAND, SPECTRUM_SAMPLES, filtered_motion, shifted_torques
 from identify.observation.processing import RestPolicy
 from identify.signal.blocks import WelchAccumulator, decimation_margin, lowpass_margin, motion_windows
@@ -87,7 +88,8 @@ class SegmentScan:
 class Scan:
     """What the first pass learnt of one recording: samples, rate [Hz] (1 / median step), its segments,
     the smallest and largest position of each joint ``q_range`` (2, n) [rad], the samples bridged over
-    lost packets and the stale rows dropped when the log was read (None: not known)."""
+    lost packets and what the file keeps of its log (``log``: stale rows, gaps that split it;
+    :mod:`identify.io.log_fields`; None: nothing)."""
 
     source: str
     samples: int
@@ -95,12 +97,12 @@ class Scan:
     segments: tuple[SegmentScan, ...]
     q_range: np.ndarray | None = None
     bridged: int = 0
-    stale_rows: int | None = None
+    log: dict | None = None
 
     def layout(self) -> dict[str, Any]:
         """As :func:`identify.io.recordings.layout_summary` for a recording in memory."""
         return {"source": self.source, "samples": self.samples, "bridged_samples": self.bridged,
-                "segments": len(self.segments), "stale_rows": self.stale_rows}
+                "segments": len(self.segments), **layout_fields(self.log)}
 
 
 #: Length of a Welch segment of the automatic cut-off [s] (:func:`identify.choose_cutoff`'s default).
@@ -200,7 +202,7 @@ def scan(src: BlockSource, block: int, floor: float | None, keep_s: float = 0.0)
         at += t.size
     done.append(current.result())
     return Scan(src.source, int(src.n_samples), 1.0 / steps.median(), tuple(done), np.vstack([lo, hi]), bridged,
-                getattr(src, "stale_rows", None))
+                getattr(src, "log", None))
 
 
 def scan_all(sources: Sequence[BlockSource], settings: StreamSettings) -> tuple[list[Scan], float]:

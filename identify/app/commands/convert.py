@@ -222,10 +222,7 @@ def _print_log(name: str, log: dict, what_else: str) -> str:
         lines.append(f"lost packets: {gaps.get('gaps_total', len(gaps['gaps']))} gaps; {gaps['bridged_gaps']} up to {gaps['max_gap_s']:g} s "
                      f"bridged ({log['bridged_samples']} samples interpolated, never used as measurements), "
                      f"{gaps['segments']} segment(s)")
-        lines += [f"  gap of {g['duration_s']:g} s ({g['periods']:.3g} steps) between lines {g['lines'][0]} and "
-                  f"{g['lines'][1]}: {'bridged' if g['bridged'] else 'new segment'}" for g in gaps["gaps"][:_GAPS_SHOWN]]
-        if gaps.get("gaps_total", len(gaps["gaps"])) > _GAPS_SHOWN:
-            lines.append(f"  ... and {gaps.get('gaps_total', len(gaps['gaps'])) - _GAPS_SHOWN} more gaps")
+        lines += _gap_lines(gaps)
     if gaps.get("dropped_segments"):
         from identify.signal.gaps import MIN_SEGMENT_ROWS
 
@@ -236,7 +233,24 @@ def _print_log(name: str, log: dict, what_else: str) -> str:
     return "\n".join(lines)
 
 
-#: How many gaps the output lists one by one.
+def _gap_lines(gaps: dict) -> list[str]:
+    """The gaps that split the log into segments, every one listed (up to SPLITS_LISTED), then the first
+    bridged ones (``gaps``: :meth:`identify.signal.gaps.LogGaps.summary`)."""
+    def line(g: dict, what: str) -> str:
+        return (f"  gap of {g['duration_s']:g} s ({g['periods']:.3g} steps) between lines {g['lines'][0]} and "
+                f"{g['lines'][1]}: {what}")
+
+    out = [line(g, "new segment") for g in gaps["splits"]]
+    if gaps["splits_total"] > len(gaps["splits"]):
+        out.append(f"  ... and {gaps['splits_total'] - len(gaps['splits'])} more gaps that start a new segment")
+    bridged = [g for g in gaps["gaps"] if g["bridged"]][:_GAPS_SHOWN]
+    out += [line(g, "bridged") for g in bridged]
+    if gaps["bridged_gaps"] > len(bridged):
+        out.append(f"  ... and {gaps['bridged_gaps'] - len(bridged)} more bridged gaps")
+    return out
+
+
+#: How many bridged gaps the output lists one by one.
 _GAPS_SHOWN = 10
 
 
