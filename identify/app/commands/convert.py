@@ -4,7 +4,7 @@ Log form (docs/real-logs.md)::
 
     rx90 convert LOG.csv --robot R --columns SPEC [--no-header] [--rows FIRST:LAST]
                  [--from S] [--to S] [--resample HZ] [--max-gap S] [--no-segments] [--gains LIST|FILE]
-                 [--convention C] --out REC.csv
+                 [--convention C] [--block LINES] --out REC.csv
 
 ROS bag form (joint_states; ROS 1, ROS 2 sqlite3 or MCAP; needs the ``ros`` extra)::
 
