@@ -131,6 +131,52 @@ def test_bad_bags_exit_2_naming_the_problem(tmp_path, capsys, panda, host_table)
     assert code == 0 and out.exists() and "stale rows dropped" in printed and "lost packets" in printed
 
 
+def test_options_a_bag_does_not_take_are_named_in_bag_terms(tmp_path, capsys, host_table):
+    """Gains on a torque bag name --effort current (there is no column map); a motor-form option says
+    'not to a bag'; --block (a LOG.csv's lines per block, which a bag ignored) is refused in one line
+    whatever its value (500 was refused by argparse with the whole usage text)."""
+    bag = write_bag(tmp_path / "run.bag", host_table, [f"panda_joint{j}" for j in range(1, 8)], "ros1")
+    out = tmp_path / "rec.csv"
+    cases = [(["--gains", "1,1,1,1,1,1,1"], "drive gains given, but the messages' effort is read as joint torques "
+                                            "(--effort torque, the default; effort= in Python): give --effort current"),
+             (["--motor-positions", "p.csv"], "--motor-positions belongs to the motor form, not to a bag"),
+             (["--block", "500"], "--block belongs to the LOG.csv form, not to a bag (a bag is read whole)"),
+             (["--block", "5000"], "--block belongs to the LOG.csv form, not to a bag (a bag is read whole)")]
+    for extra, needle in cases:
+        code = main(["convert", str(bag), "--topic", "/joint_states", "--robot", "panda", *extra, "--out", str(out)])
+        err = capsys.readouterr().err.strip().splitlines()
+        assert code == 2 and needle in err[-1] and "column map" not in err[-1], err
+        assert not any(line.startswith("usage:") for line in err) and not out.exists()
+    with pytest.raises(ValueError, match="give --effort current"):
+        read_bag(bag, rx90sym.load_robot("panda"), "/joint_states", gains="1,1,1,1,1,1,1")
+
+
+def test_refusals_of_a_bag_advise_only_what_a_bag_takes(tmp_path, capsys, host_table):
+    """A gap refused with --no-segments: the advice names --max-gap (with a value that bridges it) and
+    leaving out --no-segments, never --rows/--from (refused for a bag) nor the Python max_gap alone; a
+    position beyond the limits names the message and advises no window either."""
+    out = tmp_path / "rec.csv"
+    bag = write_bag(tmp_path / "run.bag", host_table, [f"panda_joint{j}" for j in range(1, 8)], "ros1")
+    code = main(["convert", str(bag), "--topic", "/joint_states", "--robot", "panda", "--resample", "1000",
+                 "--max-gap", "0.004", "--no-segments", "--out", str(out)])
+    err = capsys.readouterr().err.strip().splitlines()[-1]
+    assert code == 2 and "longer than the 0.004 s that can be bridged" in err, err
+    assert "; let it split the log into segments (without --no-segments) or bridge it with --max-gap " in err
+    assert "--rows" not in err and "--from" not in err and "a longer max_gap" not in err and not out.exists()
+    suggested = err.split("--max-gap ")[1].split()[0]  # bridges every gap: the same command then converts
+    assert main(["convert", str(bag), "--topic", "/joint_states", "--robot", "panda", "--resample", "1000",
+                 "--max-gap", suggested, "--no-segments", "--out", str(out)]) == 0 and out.exists()
+    out.unlink()
+    capsys.readouterr()
+    corrupt = host_table.copy()
+    corrupt[100, 1] = 50.0  # joint 1 far beyond its limits
+    bag = write_bag(tmp_path / "corrupt.bag", corrupt, [f"panda_joint{j}" for j in range(1, 8)], "ros1")
+    code = main(["convert", str(bag), "--topic", "/joint_states", "--robot", "panda", "--resample", "1000",
+                 "--out", str(out)])
+    err = capsys.readouterr().err.strip().splitlines()[-1]
+    assert code == 2 and "beyond joint 1's limits" in err and "--rows" not in err and not out.exists(), err
+
+
 def test_without_rosbags_the_message_names_the_extra(tmp_path, monkeypatch, panda):
     import sys
 
@@ -161,3 +207,48 @@ def test_an_rtde_csv_needs_no_column_map(tmp_path, capsys):
     out = tmp_path / "rec.csv"
     assert main(["convert", str(path), "--robot", "ur10e", "--gains", "10,10,10,10,10,10", "--out", str(out)]) == 0
     np.testing.assert_allclose(read_recording(out, ur).torques, 10 * cur, rtol=1e-14)
+
+
+def test_a_path_that_is_no_bag_says_what_a_bag_is(tmp_path, capsys):
+    """An empty directory, a directory of other files and a .mcap file without its bag's metadata.yaml:
+    one line naming the path and the forms a bag takes (rosbags said "Expected metadata file ... does
+    not exist.")."""
+    empty, other = tmp_path / "emptydir", tmp_path / "other"
+    empty.mkdir(), other.mkdir()
+    (other / "notes.txt").write_text("x")
+    (other / "run.mcap").write_bytes(b"")
+    cases = [(empty, "emptydir: an empty directory is not a ROS bag"),
+             (other, "other: a directory without metadata.yaml is not a ROS bag"),
+             (other / "run.mcap", "run.mcap: its directory holds no metadata.yaml")]
+    for path, needle in cases:
+        out = tmp_path / "rec.csv"
+        code = main(["convert", str(path), "--topic", "/joint_states", "--robot", "panda", "--out", str(out)])
+        err = capsys.readouterr().err.strip().splitlines()[-1]
+        assert code == 2 and needle in err and "a ROS 1 .bag file, a ROS 2 bag directory (holding metadata.yaml)" in err, err
+        assert not out.exists()
+
+
+def test_an_rtde_csv_without_currents_says_what_was_found_and_what_is_missing(tmp_path, capsys):
+    """Only target_moment (the controller's target) as effort: the message says the header was read as
+    RTDE, names the RTDE columns found and the actual_current_j missing (it said 'column map: neither
+    joint torques (tau1..tau6) nor motor currents', though no column map was given)."""
+    t = 0.002 * np.arange(300)
+    q = 0.3 * np.sin(np.outer(t, np.arange(1, 7)))
+    groups = [("actual_q", q), ("actual_qd", np.gradient(q, t, axis=0)), ("target_moment", np.cos(q)),
+              ("actual_current", np.sin(q))]
+    out = tmp_path / "rec.csv"
+    for kept, missing in ((3, "missing actual_current_0..actual_current_5 (motor currents"),
+                          (4, "missing actual_current_4, actual_current_5 (motor currents")):
+        header = ["timestamp"] + [f"{g}_{j}" for g, _ in groups[:kept] for j in range(6)]
+        table = np.column_stack([t] + [a for _, a in groups[:kept]])
+        if kept == 4:  # currents of joints 1-4 only
+            header, table = header[:-2], table[:, :-2]
+        path = tmp_path / "rtde.csv"
+        path.write_text(" ".join(header) + "\n" + "\n".join(" ".join(f"{v:.17g}" for v in r) for r in table) + "\n")
+        code = main(["convert", str(path), "--robot", "ur10e", "--out", str(out)])
+        err = capsys.readouterr().err.strip().splitlines()[-1]
+        assert code == 2 and "rtde.csv: the header was recognised as a UR RTDE log: found timestamp, " \
+            "actual_q_0..actual_q_5 (positions), actual_qd_0..actual_qd_5 (velocities), " in err, err
+        assert "target_moment_0..target_moment_5 (the controller's target torques, kept as x:target_moment1.., " \
+            "never a torque)" in err
+        assert missing in err and "column map" not in err and not out.exists()

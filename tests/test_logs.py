@@ -230,10 +230,10 @@ def test_options_of_the_other_form_are_usage_errors(tmp_path, capsys):
     path, _ = regular_log(tmp_path)
     out = str(tmp_path / "rec.csv")
     code, _, err = convert([str(path), "--columns", COLUMNS, "--period", "0.01", "--out", out], capsys)
-    assert code == 2 and "--period belong to the motor form" in err
+    assert code == 2 and "--period belongs to the motor form, not to a LOG.csv" in err
     code, _, err = convert(["--motor-positions", "p.csv", "--motor-torques", "t.csv", "--period", "0.01",
                             "--resample", "100", "--out", out], capsys)
-    assert code == 2 and "--resample belong to the log form" in err
+    assert code == 2 and "--resample belongs to the log form" in err
     code, _, err = convert([str(path), "--robot", str(ur10e_toml(tmp_path)), "--columns", COLUMNS,
                             "--rows", "2:50", "--from", "838", "--out", out], capsys)
     assert code == 2 and "not both" in err and not Path(out).exists()

@@ -44,7 +44,10 @@ def test_block_conversion_gives_the_whole_readers_recording_and_counts(panda, lo
     got = identify.read_recording(out, panda)
     log = whole.meta["log"]
     assert whole.n_segments == 3 and log["stale_rows"] > 100 and log["bridged_samples"] > 100
-    for key in ("rows", "stale_rows", "stale_lines", "bridged_samples", "samples", "lines", "largest_gap_lines"):
+    # The clock's figures too: the whole log's median step, steps off by 1 % and rate (the block path
+    # printed the median of its blocks' medians and counted off-steps against each block's median).
+    for key in ("rows", "stale_rows", "stale_lines", "bridged_samples", "samples", "lines", "largest_gap_lines",
+                "median_step_s", "irregular_steps", "rate_hz"):
         assert report[key] == log[key], key
     assert [(g["lines"], g["bridged"]) for g in report["gaps"]["gaps"]] == \
         [(g["lines"], g["bridged"]) for g in log["gaps"]["gaps"]]
@@ -57,6 +60,11 @@ def test_block_conversion_gives_the_whole_readers_recording_and_counts(panda, lo
     np.testing.assert_array_equal(got.measured_mask, whole.measured_mask)
     np.testing.assert_array_equal(got.segment, whole.segment)
     assert got.meta["log"]["stale_rows"] == log["stale_rows"]
+    # The gaps that split the log, named in the report and kept in the file's header.
+    # (a gap's periods are counted in its block's median step: identify.io.log_blocks)
+    splits = [{"lines": g["lines"], "duration_s": g["duration_s"]} for g in log["gaps"]["splits"]]
+    assert [{k: g[k] for k in ("lines", "duration_s")} for g in report["gaps"]["splits"]] == splits
+    assert report["gaps"]["splits_total"] == 2 and got.meta["log"]["gaps"] == {"splits_total": 2, "splits": splits}
     # Blocks ending one, two or three rows into a segment (its first kept row alone in a block, when
     # the next is stale): the same recording.
     t = np.loadtxt(path, delimiter=",", usecols=0)

@@ -11,7 +11,7 @@ import pytest
 import rx90sym
 from identify.app.cli import main
 from identify.io.logs import read_log
-from identify.io.recordings import read_recording, write_recording
+from identify.io.recordings import layout_summary, read_recording, write_recording
 from identify.observation.matrix import observation_matrix
 from identify import Processing, fit
 from motions import multisine, panda_truth
@@ -82,7 +82,11 @@ def test_bridged_samples_never_enter_the_observation_matrix(panda, panda_base, s
 
 
 def test_a_long_gap_splits_the_log_unless_segments_are_refused(tmp_path, capsys, panda, panda_base, short_run):
-    faults = HostFaults(gap_every_s=(0.7, 1.0), long_gaps=(2.0,), long_gap_s=0.2)
+    """The gap that splits is named by its lines and duration in convert's output (before the bridged
+    gaps: more than 10 of them come first in the log, and it was hidden in '... and N more gaps'), in
+    the recording file, CSV or NPZ (with the stale rows: an NPZ dropped both), and in identify's
+    output and JSON (which held only counts)."""
+    faults = HostFaults(gap_every_s=(0.1, 0.15), gap_periods=(2, 6), long_gaps=(2.0,), long_gap_s=0.2)
     path, cols, _, _ = _log(tmp_path, short_run, faults, 2)
     rec = read_log(path, panda, cols, resample=1000.0, convention="model")
     assert rec.n_segments == 2 and rec.meta["log"]["gaps"]["segments"] == 2
@@ -95,12 +99,28 @@ def test_a_long_gap_splits_the_log_unless_segments_are_refused(tmp_path, capsys,
     np.testing.assert_array_equal(back.measured_mask, rec.measured_mask)
     obs = observation_matrix(panda, [back], decimate_to=50.0, base=panda_base)
     assert obs.rows > 0 and len(obs.sources) == 2
+    gaps = rec.meta["log"]["gaps"]
+    (split,) = gaps["splits"]
+    a, b = split["lines"]
+    assert gaps["splits_total"] == 1 and split["duration_s"] > 0.19 and gaps["gaps"].index(split) >= 10
+    npz = tmp_path / "rec.npz"
+    assert main(["convert", str(path), "--robot", "panda", "--columns", cols, "--no-header", "--convention", "model",
+                 "--resample", "1000", "--out", str(npz)]) == 0
+    listed = [line for line in capsys.readouterr().out.splitlines() if line.startswith("  gap of")]
+    assert listed[0] == (f"  gap of {split['duration_s']:g} s ({split['periods']:.3g} steps) between lines {a} and "
+                         f"{b}: new segment") and all(line.endswith(": bridged") for line in listed[1:])
+    expected = {"samples": rec.n_samples, "segments": 2, "bridged_samples": int(np.sum(~rec.measured_mask)),
+                "stale_rows": rec.meta["log"]["stale_rows"], "split_gaps_total": 1,
+                "split_gaps": [{"lines": [a, b], "duration_s": split["duration_s"]}]}
+    assert expected["stale_rows"] > 0
+    assert layout_summary(back) == {"source": "rec.csv", **expected}
+    assert layout_summary(read_recording(npz, panda)) == {"source": "rec.npz", **expected}
     report = tmp_path / "id.json"
-    assert main(["identify", str(out), "--robot", "panda", "--json", str(report)]) == 0
-    layout = json.loads(report.read_text())["recordings"][0]
-    assert layout == {"source": "rec.csv", "samples": rec.n_samples, "segments": 2,
-                      "bridged_samples": int(np.sum(~rec.measured_mask)), "stale_rows": rec.meta["log"]["stale_rows"]}
-    assert "2 segment(s)" in capsys.readouterr().out
+    assert main(["identify", str(npz), "--robot", "panda", "--json", str(report)]) == 0
+    assert json.loads(report.read_text())["recordings"][0] == {"source": "rec.npz", **expected}
+    assert (f"rec.npz: 2 segment(s) (split by the gap at lines {a}-{b} ({split['duration_s']:g} s)), "
+            f"{expected['bridged_samples']} samples bridged over lost packets (not fitted), {expected['stale_rows']} "
+            f"stale rows dropped when read") in capsys.readouterr().out
     with pytest.raises(RecordingError, match="gap of 0.2"):
         read_log(path, panda, cols, resample=1000.0, convention="model", segments=False)
     bad = tmp_path / "bad.csv"
@@ -108,8 +128,32 @@ def test_a_long_gap_splits_the_log_unless_segments_are_refused(tmp_path, capsys,
                  "model", "--resample", "1000", "--no-segments", "--out", str(bad)])
     err = capsys.readouterr().err
     assert code == 2 and "longer than the 0.05 s that can be bridged" in err and not bad.exists()
+    # The advice speaks CLI and names what the CSV form takes: a window, segments, a --max-gap bridging it.
+    assert ("select a window without it with --rows FIRST:LAST or --from/--to, let it split the log into "
+            "segments (without --no-segments) or bridge it with --max-gap 0.21 (rows=, t_from=, t_to=, "
+            "segments=True, max_gap= in Python)") in err, err
     with pytest.raises(RecordingError, match="irregular time steps"):
         read_log(path, panda, cols, convention="model")  # without resampling: refused with the figures
+
+
+def test_the_rate_and_the_resample_hint_are_the_streams_whatever_the_gaps(tmp_path, panda, short_run):
+    """A 1 kHz host log with stale rows and bursts of lost packets: the report's rate is 1 / the mean
+    step without lost packets (about 1 kHz), the same whatever --max-gap bridges or splits (it was
+    1 / mean step inside the segments: 943 vs 920 Hz), and the hint of the refusal without --resample
+    is 1000 (it was 1 / mean step, lost packets counted: 940). A log whose only fault is one gap: 1000."""
+    faults = HostFaults(gap_every_s=(0.3, 0.6), gap_periods=(20, 40), long_gaps=(2.0,), long_gap_s=0.2)
+    path, cols, _, _ = _log(tmp_path, short_run, faults, 3)
+    rates = [read_log(path, panda, cols, resample=1000.0, convention="model", max_gap=gap).meta["log"]["rate_hz"]
+             for gap in (0.05, 0.3)]
+    assert rates[0] == rates[1] and rates[0] == pytest.approx(1000.0, rel=2e-3)
+    with pytest.raises(RecordingError, match=r"e\.g\. --resample 1000 \(1 / mean step without lost packets\)"):
+        read_log(path, panda, cols, convention="model")
+    table = np.column_stack([short_run.t, short_run.q, np.gradient(short_run.q, short_run.t, axis=0),
+                             short_run.tau])
+    one = tmp_path / "one_gap.csv"
+    cols = write_host_log(one, np.delete(table, np.s_[1000:1045], axis=0))  # 46 ms without packets
+    with pytest.raises(RecordingError, match=r"1 of them lost packets .* e\.g\. --resample 1000 "):
+        read_log(one, panda, cols, convention="model")
 
 
 def _within(robot, base, truth, rec) -> float:

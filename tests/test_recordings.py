@@ -552,3 +552,30 @@ def test_a_file_naming_no_robot_warns_under_another_robot(tmp_path, rx90, tx40):
     with pytest.warns(rec_mod.RecordingWarning, match="anon.csv: the file names no robot.*read as robot 'tx40'"):
         read_recording(path, tx40)
     read_recording(path, rx90)  # the default robot: no warning (warnings are errors in this suite)
+
+
+@pytest.mark.parametrize("suffix", [".csv", ".npz"])
+def test_a_converted_logs_report_round_trips_and_bad_fields_are_named(tmp_path, rx90, suffix):
+    """The stale rows and the gaps that split the log come back from either format (an NPZ kept neither);
+    a field that does not read is refused naming the file and the field."""
+    t, q, tau, _ = motion(rx90)
+    rec = recording_from_arrays(t, q, tau, rx90)
+    splits = [{"lines": [120, 121], "duration_s": 0.21000000000000002}, {"lines": [300, 302], "duration_s": 1.5}]
+    rec.meta["log"] = {"stale_rows": 357, "gaps": {"splits": splits, "splits_total": 12, "gaps": []}}
+    path = tmp_path / f"rec{suffix}"
+    write_recording(path, rec, rx90)
+    assert read_recording(path, rx90).meta["log"] == {"stale_rows": 357, "gaps": {"splits": splits, "splits_total": 12}}
+    assert rec_mod.layout_summary(read_recording(path, rx90))["split_gaps_total"] == 12
+    for field, value, what in (("stale_rows", "-3", "'# stale_rows: -3' is not a whole number"),
+                               ("split_gaps", "1; 12-x 0.2", "'12-x 0.2' is not 'LINE-LINE SECONDS'"),
+                               ("split_gaps", "1; 1-2 0.2; 3-4 0.3", "lists 2 gaps, more than its count 1")):
+        bad = tmp_path / f"bad{suffix}"
+        if suffix == ".csv":
+            bad.write_text("".join(f"# {field}: {value}\n" if line.startswith(f"# {field}:") else line
+                                   for line in path.read_text().splitlines(keepends=True)))
+        else:
+            with np.load(path) as archive:
+                np.savez(bad, **{**{k: archive[k] for k in archive.files}, field: np.array(value)})
+        with pytest.raises(RecordingError) as exc:
+            read_recording(bad, rx90)
+        assert_names(exc, bad.name, what)

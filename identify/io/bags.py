@@ -51,23 +51,49 @@ def is_bag(path: str | os.PathLike[str]) -> bool:
 
 
 def _reader(path: Path) -> Any:
+    """rosbags' reader of the bag ``path`` (checked first: the extra installed, the path a bag)."""
     try:
         from rosbags.highlevel import AnyReader
         from rosbags.typesys import Stores, get_typestore
     except ImportError:
         raise MissingExtra(f"{path.name}: reading ROS bags needs the package rosbags: pip install "
                            f"'{EXTRA}'") from None
+    _check_bag_path(path)
     # A ROS 2 bag whose messages carry no definitions is read with the standard (Humble) types.
     bag = path.parent if path.suffix.lower() in (".db3", ".mcap") else path
-    return AnyReader([bag], default_typestore=get_typestore(Stores.ROS2_HUMBLE))
+    try:
+        return AnyReader([bag], default_typestore=get_typestore(Stores.ROS2_HUMBLE))
+    except Exception as exc:  # rosbags' own errors: a file that is not a bag, a missing part
+        raise _unreadable(path, exc) from None
+
+
+def _unreadable(path: Path, exc: Exception) -> RecordingError:
+    return RecordingError(f"{path.name}: not a readable ROS bag ({type(exc).__name__}: {exc}); expected {_BAG_FORMS}")
+
+
+#: What a bag path may be, for the messages that refuse one.
+_BAG_FORMS = ("a ROS 1 .bag file, a ROS 2 bag directory (holding metadata.yaml), or the .db3 or .mcap file "
+              "inside one")
+
+
+def _check_bag_path(path: Path) -> None:
+    """A bag that exists and that rosbags can open: a ROS 2 bag (a directory, or its ``.db3``/``.mcap``
+    file) is read through its ``metadata.yaml``."""
+    if not path.exists():
+        raise FileNotFoundError(f"{path}: no such bag")
+    if path.is_dir() and not (path / "metadata.yaml").is_file():
+        what = "an empty directory" if not any(path.iterdir()) else "a directory without metadata.yaml"
+        raise RecordingError(f"{path.name}: {what} is not a ROS bag; expected {_BAG_FORMS}")
+    if path.suffix.lower() in (".db3", ".mcap") and not (path.parent / "metadata.yaml").is_file():
+        raise RecordingError(f"{path.name}: its directory holds no metadata.yaml (a ROS 2 .db3 or .mcap file is "
+                             f"read with its bag's metadata.yaml); expected {_BAG_FORMS}")
 
 
 def _messages(path: Path, topic: str) -> list[tuple[int, int, Any]]:
     """(header stamp ns, receive time ns, message) of every message of ``topic``, bag order."""
-    if not path.exists():
-        raise FileNotFoundError(f"{path}: no such bag")
+    bag = _reader(path)
     try:
-        with _reader(path) as reader:
+        with bag as reader:
             conns = [c for c in reader.connections if c.topic == topic]
             if not conns:
                 found = ", ".join(sorted(f"{c.topic} ({c.msgtype})" for c in reader.connections)) or "none"
@@ -80,10 +106,10 @@ def _messages(path: Path, topic: str) -> list[tuple[int, int, Any]]:
                 msg = reader.deserialize(raw, conn.msgtype)
                 stamp = int(msg.header.stamp.sec) * 1_000_000_000 + int(msg.header.stamp.nanosec)
                 out.append((stamp, int(received), msg))
-    except (MissingExtra, RecordingError, FileNotFoundError):
+    except (MissingExtra, RecordingError):
         raise
-    except Exception as exc:  # rosbags' own errors: a file that is not a bag, a broken index
-        raise RecordingError(f"{path.name}: not a readable ROS bag ({type(exc).__name__}: {exc})") from None
+    except Exception as exc:  # rosbags' own errors: a file that is not a bag, a broken index, a missing part
+        raise _unreadable(path, exc) from None
     if not out:
         raise RecordingError(f"{path.name}: topic {topic!r} holds no message")
     return out
@@ -145,11 +171,16 @@ def read_bag(path: str | os.PathLike[str], robot: rx90sym.Robot, topic: str = "/
 
     Raises:
         MissingExtra: rosbags is not installed (the message names the extra).
+        ValueError: gains with ``effort="torque"``.
         RecordingError: no such topic, no joint name matching, a bad message (named by number).
     """
     p = Path(path)
     if effort not in ("torque", "current"):
         raise ValueError(f"effort must be 'torque' or 'current', got {effort!r}")
+    if gains is not None and effort == "torque":  # a bag has no column map: name its own option
+        raise ValueError(f"{p.name}: drive gains given, but the messages' effort is read as joint torques "
+                         f"(--effort torque, the default; effort= in Python): give --effort current if it "
+                         f"holds motor currents")
     names = robot.ros_joint_names()
     if len(names) != robot.n:
         raise ValueError(f"robot {robot.name!r} has no ROS joint names: add joint_names = [...] ({robot.n} "
@@ -176,6 +207,6 @@ def read_bag(path: str | os.PathLike[str], robot: rx90sym.Robot, topic: str = "/
         table = np.delete(table, np.s_[1 + n:1 + 2 * n], axis=1)
     spec = f"t,q1..q{n}," + (f"qd1..qd{n}," if has_qd else "") + f"{kind}1..{kind}{n}"
     rec = rows_to_recording(source, table, numbers, parse_columns(spec, robot), robot, convention,
-                            gains=gains, max_gap=max_gap, segments=segments, resample=resample)
+                            gains=gains, max_gap=max_gap, segments=segments, resample=resample, window=False)
     rec.meta["log"].update(report, t0_ns=t0)
     return rec

@@ -29,7 +29,7 @@ from identify.io.arrays import _check_layout, _resolve_convention, _to_model
 from identify.io.checks import _check_robot_name, _default_labels, _validate, _warn_no_robot
 from identify.io.csv_tables import _column_index, _semicolon_hint, _Table
 from identify.io.gains import DriveGains, apply_gains
-from identify.io.recordings import _count
+from identify.io.log_fields import read_fields
 
 __all__ = ["BlockSource", "CsvSource", "MemorySource", "block_source", "count_rows", "CSV_BATCH_BYTES",
            "DEFAULT_BLOCK", "DEFAULT_LOG_BLOCK"]
@@ -55,7 +55,7 @@ class BlockSource:
 
     source: str = "<memory>"
     n_samples: int | None = None  # known after a scan
-    stale_rows: int | None = None  # stale rows dropped when the log was read (None: not known)
+    log: dict | None = None  # what the file keeps of its log (identify.io.log_fields; None: nothing)
     holds_current: bool = False  # motor currents among its columns (drive gains turn them into torques)
 
     def __init__(self, robot: rx90sym.Robot, gains: DriveGains | None = None) -> None:
@@ -157,7 +157,7 @@ class MemorySource(BlockSource):
         super().__init__(robot, gains)
         self.rec, self.source, self.n_samples = rec, rec.source, rec.n_samples
         self.holds_current = rec.current is not None
-        self.stale_rows = rec.meta.get("log", {}).get("stale_rows")
+        self.log = rec.meta.get("log")
 
     def scan(self, block: int) -> Iterator[Recording]:
         keep = len(self.robot.parameter_names)
@@ -192,7 +192,7 @@ class CsvSource(BlockSource):
             raise RecordingError(f"{self.source}: column 'tau1' is missing (joint torques tau1..tau{n}, or "
                                  f"motor currents i1..i{n})")
         _warn_no_robot(meta.get("robot"), robot, self.source)
-        self.stale_rows = _count(meta["stale_rows"], self.source) if "stale_rows" in meta else None
+        self.log = read_fields(meta, self.source)
         self.convention = _resolve_convention(convention, meta.get("convention"), self.source)
         self.columns = columns
 

@@ -13,7 +13,7 @@ from typing import Sequence
 
 import rx90sym
 
-__all__ = ["ColumnMap", "parse_columns", "rtde_columns", "RTDE_NAMES"]
+__all__ = ["ColumnMap", "parse_columns", "rtde_columns", "rtde_refusal", "RTDE_NAMES"]
 
 #: UR's RTDE recorder's column names -> the column map's (``actual_q_0`` is joint 1's position):
 #: measured positions, velocities and motor currents; the controller's target torque
@@ -145,3 +145,31 @@ def rtde_columns(header: Sequence[str], robot: rx90sym.Robot) -> str | None:
         else:
             out.append("_")
     return ",".join(out)
+
+
+def rtde_refusal(header: Sequence[str], robot: rx90sym.Robot) -> str | None:
+    """Why a header :func:`rtde_columns` recognises cannot be read without a column map (None: it can):
+    the RTDE columns found and used, and the motor currents ``actual_current_j`` missing, the only
+    effort this reader takes from an RTDE log (``target_moment_j`` is the controller's target, kept
+    as an auxiliary, never a torque)."""
+    names = {h.strip() for h in header}
+    n = robot.n
+    missing = [f"actual_current_{j}" for j in range(n) if f"actual_current_{j}" not in names]
+    if not missing:
+        return None
+
+    def listed(prefix: str) -> str | None:
+        have = [j for j in range(n) if f"{prefix}_{j}" in names]
+        if not have:
+            return None
+        return (f"{prefix}_0..{prefix}_{n - 1}" if len(have) == n
+                else ", ".join(f"{prefix}_{j}" for j in have))
+
+    found = [f"{listed(prefix)} ({what})" for prefix, what in (
+        ("actual_q", "positions"), ("actual_qd", "velocities"), ("actual_current", "motor currents"),
+        ("target_moment", "the controller's target torques, kept as x:target_moment1.., never a torque"),
+        ("target_current", "target currents, kept as x:target_current1..")) if listed(prefix)]
+    gone = (f"actual_current_0..actual_current_{n - 1}" if len(missing) == n else ", ".join(missing))
+    return (f"the header was recognised as a UR RTDE log: found timestamp, {', '.join(found)}; missing "
+            f"{gone} (motor currents, the only effort read from an RTDE log: record them; --gains then turns "
+            f"them into joint torques)")

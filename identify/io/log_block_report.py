@@ -7,7 +7,8 @@ from typing import Any
 import numpy as np
 
 from identify.io.recordings import TIME_RTOL
-from identify.signal.gaps import Gap, LogGaps
+from identify.signal.gaps import SPLITS_LISTED, Gap, LogGaps
+from identify.signal.steps import StepCounts, log_steps, step_figures
 
 __all__ = ["BlockReport", "GAPS_KEPT"]
 
@@ -20,12 +21,14 @@ class BlockReport:
 
     def __init__(self) -> None:
         self.first_line = self.last_line = None
-        self.rows = self.samples = self.irregular = self.stale = self.bridged = 0
+        self.rows = self.samples = self.stale = self.bridged = 0
         self.stale_lines: list[int] = []
-        self.inside_sum, self.inside_count = 0.0, 0
-        self.gap, self.gap_lines, self.medians = -1.0, [0, 0], []
+        self.steps = StepCounts()  # every step of the log: the figures of the whole-log reader
+        self.gap, self.gap_lines = -1.0, [0, 0]
         self.gaps: list[Gap] = []  # the first GAPS_KEPT, the rest counted: memory bounded
         self.gap_count, self.bridged_gaps, self.lost_periods = 0, 0, 0.0
+        self.splits: list[Gap] = []  # the first SPLITS_LISTED gaps that split the log, the rest counted
+        self.split_count = 0
         self.segments = 1
         self.dropped: list[tuple[int, int, int]] = []  # segments too short to filter: lines, rows
 
@@ -39,13 +42,11 @@ class BlockReport:
         self.gap_count += len(found.gaps)
         self.bridged_gaps += len(found.bridged)
         self.lost_periods += float(sum(g.periods - 1.0 for g in found.bridged))
+        self.splits += found.splits[:max(0, SPLITS_LISTED - len(self.splits))]
+        self.split_count += len(found.splits)
         self.segments += int(found.segment[-1])
         if dt.size:
-            step = float(np.median(dt))
-            self.medians.append(step)
-            self.irregular += int(np.sum(np.abs(dt - step) > TIME_RTOL * step))
-            inside = dt[np.diff(found.segment) == 0]
-            self.inside_sum, self.inside_count = self.inside_sum + float(inside.sum()), self.inside_count + inside.size
+            self.steps.add(log_steps(dt))
             k = int(np.argmax(dt))
             if dt[k] > self.gap:
                 self.gap, self.gap_lines = float(dt[k]), [numbers[k], numbers[k + 1]]
@@ -54,10 +55,9 @@ class BlockReport:
         gaps = {**LogGaps(tuple(self.gaps), np.array([self.segments - 1 - len(self.dropped)]), max_gap,
                           tuple(self.dropped)).summary(),
                 "bridged_gaps": self.bridged_gaps, "bridged_lost_periods": self.lost_periods,
-                "gaps_total": self.gap_count}
+                "gaps_total": self.gap_count, "splits": [g.to_dict() for g in self.splits],
+                "splits_total": self.split_count}
         return {"lines": [self.first_line, self.last_line], "rows": self.rows, "stale_rows": self.stale,
-                "stale_lines": self.stale_lines,
-                "rate_hz": self.inside_count / self.inside_sum if self.inside_sum else float("nan"),
-                "median_step_s": float(np.median(self.medians)), "largest_gap_s": self.gap,
-                "largest_gap_lines": self.gap_lines, "irregular_steps": self.irregular, "gaps": gaps,
-                "bridged_samples": self.bridged, "samples": self.samples}
+                "stale_lines": self.stale_lines, **step_figures(self.steps, TIME_RTOL), "largest_gap_s": self.gap,
+                "largest_gap_lines": self.gap_lines, "gaps": gaps, "bridged_samples": self.bridged,
+                "samples": self.samples}

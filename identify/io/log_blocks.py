@@ -9,13 +9,15 @@ block's first row compared with the previous block's last), checked with the who
 checked too), gaps bridged or split into segments (:mod:`identify.signal.gaps`; a new segment gets
 its own grid), resampled when asked (see :class:`_Resampler`), and appended to the output through
 the atomic writer: an error leaves no file behind. The output always has a ``segment`` column
-(and ``measured`` when resampled): the blocks to come may need them; the stale-row count goes in a
-header field filled in at the end.
+(and ``measured`` when resampled): the blocks to come may need them; the stale-row count and the
+gaps that split the log go in header fields filled in at the end (:mod:`identify.io.log_fields`).
 
-Differences from the whole-log reader, by construction: the median time step (irregular-step and
-gap checks, a gap's ``periods``, the report) is each block's, so a step is a lost packet when it is
+Differences from the whole-log reader, by construction: the median time step of the checks
+(irregular steps, gaps, a gap's ``periods``) is each block's, so a step is a lost packet when it is
 longer than 1.5 of its block's median step (the same steps as on the whole log unless the clock
-drifts by a third of a period between blocks); the recorded-velocity check compares each block's
+drifts by a third of a period between blocks); the report's median step, steps off by more than
+1 % and rate are the whole log's, as the whole-log reader prints them
+(:func:`identify.signal.steps.step_figures` on every step); the recorded-velocity check compares each block's
 RMS, and the units check (:func:`identify.io.units.check_units`: degrees, swapped q/qd groups)
 counts the rows of the block where it refuses (the same message, the block's counts); with
 ``t_from``/``t_to`` every row is parsed, so a corrupt row outside the window stops the
@@ -41,6 +43,7 @@ from identify.io.log_rows import ABSURD, LogLines, check_header, parse_rows
 from identify.io.logs import (LISTED_ROWS, check_increasing, check_positions, check_velocities, gains_label,
                               irregular_refusal, log_options, refuse_splits)
 from identify.io.log_block_report import BlockReport
+from identify.io.log_fields import SPLITS_LISTED, format_splits
 from identify.io.units import check_units
 from identify.signal.gaps import (DEFAULT_MAX_GAP, MIN_SEGMENT_ROWS, LogGaps, all_segments_short, find_gaps,
                                   stale_rows)
@@ -302,7 +305,7 @@ def convert_log(path: str | os.PathLike[str], robot: rx90sym.Robot, columns: str
     stream = _LogStream(cmap, robot, conv, p.name, resample, max_gap, segments, report)
 
     def write(fh: IO) -> None:
-        stale_at = None
+        fields_at = None
         blocks = _selected(_line_blocks(p, header, len(cmap.names), block), cmap, rows, t_from, t_to)
         pending = next(blocks, None)
         if pending is None:
@@ -314,16 +317,23 @@ def convert_log(path: str | os.PathLike[str], robot: rx90sym.Robot, columns: str
                 if drive is not None:
                     rec = apply_gains(rec, drive, robot)
                 names, table = _columns(rec, robot, "controller", segment, resample is not None)
-                if stale_at is None:
-                    fh.write(f"# convention: controller\n# robot: {robot.name}\n# stale_rows: ")
-                    stale_at = fh.tell()  # the count is known at the end: a blank field, filled in then
-                    fh.write(" " * _COUNT_WIDTH + "\n" + ",".join(names) + "\n")
+                if fields_at is None:
+                    fh.write(f"# convention: controller\n# robot: {robot.name}\n")
+                    fields_at = {}  # the fields are known at the end: blank, filled in then
+                    for key, width in _FIELD_WIDTHS.items():
+                        fh.write(f"# {key}: ")
+                        fields_at[key] = fh.tell()
+                        fh.write(" " * width + "\n")
+                    fh.write(",".join(names) + "\n")
                 report.samples += table.shape[0]
                 report.bridged += int(np.sum(~rec.measured_mask))
                 _write_rows(fh, table)
-        if stale_at is not None:
-            fh.seek(stale_at)
-            fh.write(f"{report.stale:<{_COUNT_WIDTH}d}")
+        if fields_at is not None:
+            splits = report.result(max_gap)["gaps"]
+            values = {"stale_rows": str(report.stale), "split_gaps": format_splits(splits["splits"], splits["splits_total"])}
+            for key, at in fields_at.items():
+                fh.seek(at)
+                fh.write(f"{values[key]:<{_FIELD_WIDTHS[key]}}")
 
     atomic_write(out, write, binary=False)
     if report.rows - report.stale < 2:
@@ -332,8 +342,9 @@ def convert_log(path: str | os.PathLike[str], robot: rx90sym.Robot, columns: str
             "gains": None if drive is None else gains_label(drive), "convention": conv, "blocks_of_lines": block}
 
 
-#: Characters kept for the stale-row count in the header.
-_COUNT_WIDTH = 20
+#: Characters kept in the header for the fields of identify.io.log_fields (filled in at the end): a
+#: count, and a count with SPLITS_LISTED gaps of two line numbers and a duration each.
+_FIELD_WIDTHS = {"stale_rows": 20, "split_gaps": 20 + SPLITS_LISTED * 64}
 
 
 def _selected(blocks: Iterator[LogLines], cmap: ColumnMap, rows: tuple[int, int] | None, t_from: float | None,

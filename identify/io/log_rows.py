@@ -15,7 +15,8 @@ from rx90sym.recording import RecordingError
 
 from identify.io.columns import ColumnMap
 
-__all__ = ["ABSURD", "LogLines", "header_cells", "data_lines", "check_header", "row_window", "bad_rows", "parse_rows"]
+__all__ = ["ABSURD", "WINDOW_ADVICE", "LogLines", "header_cells", "data_lines", "check_header", "row_window", "bad_rows",
+           "parse_rows"]
 
 #: A value larger than this in magnitude (any column but time) marks its row as corrupt.
 ABSURD = 1e6
@@ -136,14 +137,18 @@ def row_window(lines: LogLines, rows: tuple[int, int] | None, t_from: float | No
     return int(after[0]), int(before[-1]) + 1
 
 
-def bad_rows(source: str, problems: list[tuple[int, str]]) -> RecordingError:
-    """One message naming the first bad rows by line number and what is wrong with them."""
+#: The advice of a message naming bad rows of a CSV log (a bag has no window: its messages name none).
+WINDOW_ADVICE = "select a clean window with --rows FIRST:LAST or --from/--to (rows=, t_from=, t_to= in Python)"
+
+
+def bad_rows(source: str, problems: list[tuple[int, str]], advice: str | None = WINDOW_ADVICE) -> RecordingError:
+    """One message naming the first bad rows by line number and what is wrong with them, then
+    ``advice`` (None: none, for an input whose form has no option that helps)."""
     problems = sorted(problems)
     shown = "; ".join(f"line {line}: {what}" for line, what in problems[:_SHOWN])
     more = len(problems) - _SHOWN
     tail = f" (and {more} more bad rows, the last at line {problems[-1][0]})" if more > 0 else ""
-    return RecordingError(f"{source}: {shown}{tail}; select a clean window with --rows FIRST:LAST "
-                          f"or --from/--to (rows=, t_from=, t_to= in Python)")
+    return RecordingError(f"{source}: {shown}{tail}" + (f"; {advice}" if advice else ""))
 
 
 def parse_rows(lines: LogLines, a: int, b: int, cmap: ColumnMap) -> np.ndarray:

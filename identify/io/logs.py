@@ -57,11 +57,12 @@ import numpy as np
 import rx90sym
 from rx90sym.recording import Recording, RecordingError
 
-from identify.io.columns import ColumnMap, parse_columns, rtde_columns
-from identify.io.log_rows import ABSURD, bad_rows, data_lines, header_cells, parse_rows, row_window
+from identify.io.columns import ColumnMap, parse_columns, rtde_columns, rtde_refusal
+from identify.io.log_rows import ABSURD, WINDOW_ADVICE, bad_rows, data_lines, header_cells, parse_rows, row_window
 from identify.io.units import check_units
 from identify.io.gains import DriveGains, apply_gains, read_gains
-from identify.signal.gaps import DEFAULT_MAX_GAP, LogGaps, find_gaps, short_segments, stale_rows
+from identify.signal.gaps import DEFAULT_MAX_GAP, LOST_STEPS, LogGaps, find_gaps, short_segments, stale_rows
+from identify.signal.steps import StepCounts, log_steps, step_figures
 from identify.signal.resampling import resample as resample_recording
 from identify.io.recordings import JUMP_ATOL, JUMP_SAFETY, TIME_RTOL, RecordingWarning, _normalise_convention
 
@@ -82,32 +83,46 @@ MOVING_SPAN = 0.05
 #: fraction of the derivative's RMS (measured on the UR10e logs: see docs/real-logs.md).
 VELOCITY_MISMATCH = 0.5
 
-def check_increasing(t: np.ndarray, numbers: Sequence[int], source: str) -> None:
+def check_increasing(t: np.ndarray, numbers: Sequence[int], source: str, window: bool = True) -> None:
     """Time increases (a gap is not an error: :func:`identify.signal.gaps.find_gaps`). A log's
-    rule; a recording's regular clock is checked by :func:`identify.io.checks._check_time`."""
+    rule; a recording's regular clock is checked by :func:`identify.io.checks._check_time`.
+    ``window``: the input form can select a window of lines (a CSV log; a bag cannot)."""
     if t.size < 2:
         raise RecordingError(f"{source}: line {numbers[0]}: a log needs at least 2 rows")
     dt = np.diff(t)
     problems = [(numbers[k + 1], f"time {t[k + 1]:g} s does not increase (line {numbers[k]}: {t[k]:g} s)")
                 for k in np.flatnonzero(dt <= 0.0)]
     if problems:
-        raise bad_rows(source, problems)
+        raise bad_rows(source, problems, WINDOW_ADVICE if window else None)
 
 
-def refuse_splits(found: LogGaps, source: str) -> None:
-    """With segments refused: every gap longer than the limit, named by its lines."""
+def refuse_splits(found: LogGaps, source: str, window: bool = True) -> None:
+    """With segments refused: every gap longer than the limit, named by its lines, and what would
+    take it (``window``: the input form can select a window of lines, a CSV log; a bag cannot)."""
     problems = [(g.lines[0], f"gap of {g.duration:g} s to line {g.lines[1]} ({g.periods:.3g} median steps), "
                              f"longer than the {found.max_gap:g} s that can be bridged")
                 for g in found.splits]
     if problems:
-        err = bad_rows(source, problems)
-        raise RecordingError(f"{err} (or allow segments, or a longer max_gap)")
+        bridge = _round_up(max(g.duration for g in found.splits))
+        advice = (("select a window without it with --rows FIRST:LAST or --from/--to, " if window else "")
+                  + f"let it split the log into segments (without --no-segments) or bridge it with --max-gap "
+                    f"{bridge:g} (" + ("rows=, t_from=, t_to=, " if window else "")
+                  + "segments=True, max_gap= in Python)")
+        raise bad_rows(source, problems, advice)
+
+
+def _round_up(seconds: float) -> float:
+    """A round time just above ``seconds`` (2 significant digits), for a --max-gap that bridges it."""
+    scale = 10.0 ** (math.floor(math.log10(seconds)) - 1)
+    return math.floor(seconds / scale + 1.0) * scale
 
 
 def check_positions(q: np.ndarray, t: np.ndarray, numbers: Sequence[int], cmap: ColumnMap,
-                     robot: rx90sym.Robot, source: str) -> None:
+                     robot: rx90sym.Robot, source: str, window: bool = True) -> None:
     """Positions (model angles) within the limits + POSITION_MARGIN, and no faster jump than
-    JUMP_SAFETY x the velocity limit between two rows (a corrupt value inside the limits)."""
+    JUMP_SAFETY x the velocity limit between two rows (a corrupt value inside the limits);
+    ``window`` as for :func:`check_increasing`."""
+    advice = WINDOW_ADVICE if window else None
     lo = np.asarray(robot.limits.q_min, dtype=float) - POSITION_MARGIN
     hi = np.asarray(robot.limits.q_max, dtype=float) + POSITION_MARGIN
     problems = []
@@ -117,7 +132,7 @@ def check_positions(q: np.ndarray, t: np.ndarray, numbers: Sequence[int], cmap: 
                                      f"beyond joint {j + 1}'s limits [{lo[j] + POSITION_MARGIN:g}, "
                                      f"{hi[j] - POSITION_MARGIN:g}] rad by more than {POSITION_MARGIN:g} rad"))
     if problems:
-        raise bad_rows(source, problems)
+        raise bad_rows(source, problems, advice)
     qd_max = np.asarray(robot.limits.qd_max, dtype=float)
     allowed = JUMP_SAFETY * qd_max[None, :] * np.diff(t)[:, None] + JUMP_ATOL
     jumps = np.abs(np.diff(q, axis=0)) > allowed  # inf limits never flag
@@ -127,7 +142,7 @@ def check_positions(q: np.ndarray, t: np.ndarray, numbers: Sequence[int], cmap: 
                                          f"{numbers[k]} in {t[k + 1] - t[k]:g} s (more than {JUMP_SAFETY:g} x "
                                          f"its velocity limit {qd_max[j]:g} rad/s)"))
     if problems:
-        raise bad_rows(source, problems)
+        raise bad_rows(source, problems, advice)
 
 
 def check_velocities(dq: np.ndarray | None, q: np.ndarray, t: np.ndarray, span: np.ndarray,
@@ -182,11 +197,13 @@ def irregular_refusal(t: np.ndarray, numbers: Sequence[int], source: str, found:
         return None
     lost = "" if found is None else (f", {len(found.bridged)} of them lost packets up to {found.max_gap:g} s that resampling bridges"
             if found.bridged else "")
+    stream = dt[dt <= LOST_STEPS * step]  # the stream's own steps: lost packets would lower its rate
     dt = dt[inside]
     return (f"{source}: irregular time steps: {off.size} of {dt.size} steps differ from the median step "
             f"{step:g} s by more than {TIME_RTOL:.0%} (steps from {dt.min():g} to {dt.max():g} s, the first "
             f"at line {numbers[off[0] + 1]}{lost}); resample on a uniform grid with --resample HZ (resample= in "
-            f"Python), e.g. --resample {_round_rate(1.0 / float(np.mean(dt))):g}")
+            f"Python), e.g. --resample {_round_rate(1.0 / float(np.mean(stream))):g} (1 / mean step without "
+            f"lost packets)")
 
 
 def _round_rate(rate: float) -> float:
@@ -231,7 +248,8 @@ def read_log(
         A recording in model angles, with ``measured`` (bridged samples False) and ``segment``
         when packets were lost; ``meta["log"]`` says what was done: ``lines`` (first, last line
         read), ``rows`` (count, stale rows included), ``stale_rows`` (dropped), ``stale_lines``
-        (the first few), ``rate_hz`` (1 / mean step), ``median_step_s``, ``largest_gap_s`` and
+        (the first few), ``rate_hz`` (1 / mean step, the gaps of lost packets left out),
+        ``median_step_s`` (:func:`identify.signal.steps.step_figures`), ``largest_gap_s`` and
         ``largest_gap_lines``, ``irregular_steps``, ``gaps`` (:meth:`LogGaps.summary`),
         ``bridged_samples``, ``resampled_hz`` (or None), ``samples``, ``gains``, ``convention``.
 
@@ -250,6 +268,9 @@ def read_log(
         if columns is None:
             raise ValueError(f"{p.name}: give the column map (columns=, --columns): the first line is not a "
                              f"header this reader knows (UR RTDE: timestamp, actual_q_0..actual_q_{robot.n - 1})")
+        refusal = rtde_refusal(cells, robot)
+        if refusal:
+            raise ValueError(f"{p.name}: {refusal}")
     cmap = parse_columns(columns, robot)
     conv = _normalise_convention(convention, p.name) or "controller"
     lines = data_lines(p, header, len(cmap.names), blanks)
@@ -264,16 +285,17 @@ def read_log(
 def rows_to_recording(source: str, values: np.ndarray, numbers: Sequence[int], cmap: ColumnMap,
                       robot: rx90sym.Robot, convention: str, gains: DriveGains | str | None = None,
                       max_gap: float = DEFAULT_MAX_GAP, segments: bool = True,
-                      resample: float | None = None) -> Recording:
+                      resample: float | None = None, window: bool = True) -> Recording:
     """The rows of a log (``values`` (N, columns) as ``cmap`` names them, ``numbers`` their line or
     message numbers) as a recording, by the rules of :func:`read_log`: stale rows dropped, time,
-    gaps, positions and velocities checked, resampled, currents through the gains."""
+    gaps, positions and velocities checked, resampled, currents through the gains. ``window``: the
+    input form can select a window of lines, advised by the refusals (False for a bag)."""
     drive = _drive(cmap, gains, robot)
     stale = stale_rows(values, cmap.t, [c for c, name in enumerate(cmap.names) if name != "_"])
     report = {"lines": [numbers[0], numbers[-1]], "rows": int(len(numbers)), "stale_rows": int(stale.sum()),
               "stale_lines": [int(numbers[k]) for k in np.flatnonzero(stale)[:LISTED_ROWS]]}
     values, numbers = values[~stale], [n for n, s in zip(numbers, stale) if not s]
-    rec = _recording(source, values, numbers, cmap, robot, convention, report, max_gap, segments, resample)
+    rec = _recording(source, values, numbers, cmap, robot, convention, report, max_gap, segments, resample, window)
     if drive is not None:
         rec = apply_gains(rec, drive, robot)
         rec.meta["log"]["gains"] = gains_label(drive)
@@ -285,19 +307,20 @@ LISTED_ROWS = 10
 
 
 def _recording(source: str, values: np.ndarray, numbers: list[int], cmap: ColumnMap, robot: rx90sym.Robot,
-               conv: str, report: dict, max_gap: float, segments: bool, resample: float | None) -> Recording:
+               conv: str, report: dict, max_gap: float, segments: bool, resample: float | None,
+               window: bool) -> Recording:
     """The checked rows as a recording: time, gaps, positions, velocities, then the grid."""
     t = values[:, cmap.t]
-    check_increasing(t, numbers, source)
+    check_increasing(t, numbers, source, window)
     found = find_gaps(t, numbers, max_gap)
     if not segments:
-        refuse_splits(found, source)
+        refuse_splits(found, source, window)
     q_file = values[:, list(cmap.q)]
     q = np.asarray(robot.to_model(q_file), dtype=float) if conv == "controller" else q_file
     dq = values[:, list(cmap.qd)] if cmap.qd else None
     # Degrees and swapped q/qd groups named as such, before they read as corrupt rows.
     check_units(t, q_file, dq, robot, source, numbers, to_model=conv == "controller", ranges=False)
-    check_positions(q, t, numbers, cmap, robot, source)
+    check_positions(q, t, numbers, cmap, robot, source, window)
     span = np.ptp(q, axis=0)
     check_velocities(dq, q, t, span, numbers, cmap, source)
     if np.all(span < STILL):
@@ -306,10 +329,10 @@ def _recording(source: str, values: np.ndarray, numbers: list[int], cmap: Column
                       RecordingWarning, stacklevel=3)
     dt = np.diff(t)
     k_gap = int(np.argmax(dt))
-    inside = dt[np.diff(found.segment) == 0]
-    report.update({"rate_hz": float(inside.size / inside.sum()), "median_step_s": float(np.median(dt)),
+    steps = StepCounts()
+    steps.add(log_steps(dt))  # the block converter's figures are the same: identify.signal.steps
+    report.update({**step_figures(steps, TIME_RTOL),
                    "largest_gap_s": float(dt[k_gap]), "largest_gap_lines": [numbers[k_gap], numbers[k_gap + 1]],
-                   "irregular_steps": int(np.sum(np.abs(dt - np.median(dt)) > TIME_RTOL * np.median(dt))),
                    "gaps": found.summary(), "bridged_samples": 0, "resampled_hz": None,
                    "samples": int(t.size), "gains": None, "convention": conv, "position_span_rad": span.tolist()})
     if resample is None:

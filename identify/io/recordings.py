@@ -9,7 +9,8 @@ File formats
 ------------
 CSV
     Optional leading comment lines ``# key: value`` (keys ``convention`` and ``robot`` are
-    understood, other comments are ignored), then a header line naming the columns
+    understood, and of a converted log ``stale_rows`` and ``split_gaps``,
+    :mod:`identify.io.log_fields`; other comments are ignored), then a header line naming the columns
     ``t, q1..qn``, joint torques ``tau1..taun`` (N·m) and/or motor currents ``i1..in`` (A), and
     optionally recorded velocities ``dq1..dqn`` (rad/s), auxiliary columns ``x:NAME`` (kept,
     never used as torque), ``measured`` (1, or 0 for a sample bridged over lost packets) and
@@ -18,7 +19,8 @@ CSV
     read as another robot than ``rx90`` gives a :class:`RecordingWarning`.
 NPZ
     Arrays ``t`` (N,), ``q`` (N, n), ``tau`` (N, n) and/or ``current`` (N, n), optional ``dq``
-    (N, n) and ``x:NAME`` (N,), and optional 0-d strings ``convention`` and ``robot``.
+    (N, n), ``x:NAME``, ``measured`` and ``segment`` (N,), and optional 0-d strings ``convention``,
+    ``robot``, ``stale_rows`` and ``split_gaps`` (the same text as the CSV's comment lines).
 Motor files (Stäubli CS8 / TX40)
     Two CSV files with header ``Joint_1..Joint_n``: motor-side positions (rad) and motor torques
     (N·m), no time column (the sampling period is given by the caller).
@@ -47,6 +49,7 @@ from rx90sym.messages import plain
 from rx90sym.recording import Recording, RecordingError  # noqa: F401 (re-exported)
 
 from identify.io.csv_tables import _column_index, _read_table
+from identify.io.log_fields import FIELDS, file_fields, layout_fields, read_fields
 from identify.io.motor_files import read_motor_recording
 from identify.io.arrays import _build, _normalise_convention, _resolve_convention, recording_from_arrays
 from identify.io.checks import (JUMP_ATOL, JUMP_SAFETY, TIME_RTOL, RecordingWarning,
@@ -94,16 +97,10 @@ def _read_csv(path: Path, robot: rx90sym.Robot, convention: str | None) -> Recor
     layout = {k: table.values[:, index[k]] for k in ("measured", "segment") if k in index}
     rec = _build(t, take("q"), take("tau"), take("dq"), robot, labels, table.source, conv, take("i"), aux,
                  **layout)
-    if "stale_rows" in table.meta:
-        rec.meta["log"] = {"stale_rows": _count(table.meta["stale_rows"], table.source)}
+    log = read_fields(table.meta, table.source)
+    if log is not None:
+        rec.meta["log"] = log
     return rec
-
-
-def _count(text: str, source: str) -> int:
-    try:
-        return int(text)
-    except ValueError:
-        raise RecordingError(f"{source}: '# stale_rows: {text}' is not a whole number") from None
 
 
 # --------------------------------------------------------------------------------------------
@@ -112,7 +109,7 @@ def _count(text: str, source: str) -> int:
 
 _NPZ_ARRAYS = ("t", "q", "tau", "dq", "current")
 _NPZ_LAYOUT = ("measured", "segment")
-_NPZ_STRINGS = ("convention", "robot")
+_NPZ_STRINGS = ("convention", "robot") + FIELDS
 
 
 def _npz_string(archive: Any, key: str, source: str) -> str | None:
@@ -144,7 +141,7 @@ def _read_npz(path: Path, robot: rx90sym.Robot, convention: str | None) -> Recor
             if key not in _NPZ_ARRAYS + _NPZ_STRINGS + _NPZ_LAYOUT and not (key.startswith("x:") and len(key) > 2):
                 raise RecordingError(
                     f"{source}: column '{key}' is unknown (expected t, q, tau and/or current, optionally "
-                    f"dq, x:NAME, convention, robot)"
+                    f"dq, x:NAME, measured, segment, convention, robot, {', '.join(FIELDS)})"
                 )
         for key in ("t", "q") + (() if "current" in archive.files else ("tau",)):
             if key not in archive.files:
@@ -153,6 +150,7 @@ def _read_npz(path: Path, robot: rx90sym.Robot, convention: str | None) -> Recor
         aux = {k[2:]: _npz_array(archive, k, source) for k in archive.files if k.startswith("x:")}
         layout = {k: _npz_array(archive, k, source) for k in _NPZ_LAYOUT if k in archive.files}
         declared_conv = _npz_string(archive, "convention", source)
+        fields = {k: _npz_string(archive, k, source) for k in FIELDS if k in archive.files}
     _warn_no_robot(declared_robot, robot, source)
     conv = _resolve_convention(convention, declared_conv, source)
     _check_shapes({k: v.shape for k, v in arrays.items()}, robot, source)
@@ -163,8 +161,12 @@ def _read_npz(path: Path, robot: rx90sym.Robot, convention: str | None) -> Recor
     for name, v in layout.items():
         if v.shape != arrays["t"].shape:
             raise RecordingError(f"{source}: '{name}' must have shape {arrays['t'].shape}, got {v.shape}")
-    return _build(arrays["t"], arrays["q"], arrays.get("tau"), arrays.get("dq"), robot, labels, source, conv,
-                  arrays.get("current"), aux, **layout)
+    rec = _build(arrays["t"], arrays["q"], arrays.get("tau"), arrays.get("dq"), robot, labels, source, conv,
+                 arrays.get("current"), aux, **layout)
+    log = read_fields(fields, source)
+    if log is not None:
+        rec.meta["log"] = log
+    return rec
 
 
 # --------------------------------------------------------------------------------------------
@@ -260,9 +262,10 @@ def write_recording(
         raise RecordingError(f"{p.name}: auxiliary column name {bad_aux[0]!r} cannot be a CSV/NPZ column name")
     q_file = _file_arrays(rec, robot, conv)
     signals = {"tau": rec.tau, "dq": rec.dq, "current": rec.current}
+    fields = file_fields(rec.meta.get("log"))  # what the log's reader reported: stale rows, gaps that split
     if suffix == ".npz":
         arrays: dict[str, Any] = {"t": rec.t, "q": q_file, "convention": np.array(conv),
-                                  "robot": np.array(robot.name)}
+                                  "robot": np.array(robot.name), **{k: np.array(v) for k, v in fields.items()}}
         arrays.update({k: v for k, v in signals.items() if v is not None})
         arrays.update({f"x:{k}": v for k, v in rec.aux.items()})
         arrays.update({k: v for k, v in _layout(rec).items()})
@@ -281,8 +284,7 @@ def write_recording(
     names += list(layout)
     blocks += [v[:, None].astype(float) for v in layout.values()]
     table = np.hstack(blocks)
-    stale = rec.meta.get("log", {}).get("stale_rows")
-    header = (f"# convention: {conv}\n# robot: {robot.name}\n" + (f"# stale_rows: {stale}\n" if stale else "")
+    header = (f"# convention: {conv}\n# robot: {robot.name}\n" + "".join(f"# {k}: {v}\n" for k, v in fields.items())
               + ",".join(names) + "\n")
 
     def write_csv(fh: Any) -> None:
@@ -304,10 +306,12 @@ def _layout(rec: Recording) -> dict[str, np.ndarray]:
 
 def layout_summary(rec: Recording) -> dict[str, Any]:
     """What a recording holds beyond its samples, for reports and JSON: ``source``, ``samples``,
-    ``bridged_samples`` (interpolated over lost packets, never measurements), ``segments`` and
-    ``stale_rows`` (dropped when the log was read; None when not known)."""
+    ``bridged_samples`` (interpolated over lost packets, never measurements), ``segments``, and of the
+    log it was read from (:func:`identify.io.log_fields.layout_fields`; None when not known)
+    ``stale_rows`` (dropped when the log was read), ``split_gaps`` (the gaps that split it into the
+    segments: ``lines``, ``duration_s`` [s]) and ``split_gaps_total``."""
     return {"source": rec.source, "samples": rec.n_samples, "bridged_samples": int(np.sum(~rec.measured_mask)),
-            "segments": rec.n_segments, "stale_rows": rec.meta.get("log", {}).get("stale_rows")}
+            "segments": rec.n_segments, **layout_fields(rec.meta.get("log"))}
 
 
 def split(rec: Recording, fraction: float) -> tuple[Recording, Recording]:

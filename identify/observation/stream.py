@@ -31,11 +31,13 @@ import numpy as np
 import rx90sym
 
 from identify.io.blocks import DEFAULT_BLOCK, BlockSource
+from identify.io.log_fields import layout_fields
 from identify.observation.matrix import DECIMATION_PASSBAND, SPECTRUM_SAMPLES, filtered_motion, shifted_torques
 from identify.observation.processing import RestPolicy
 from identify.signal.blocks import WelchAccumulator, decimation_margin, lowpass_margin, motion_windows
 from identify.signal.cutoff import choose_cutoff
 from identify.signal.filtering import EDGE_PERIODS, cutoff_from_spectrum, decimate, decimation_plan
+from identify.signal.steps import StepCounts
 
 __all__ = ["DEFAULT_BLOCK", "Piece", "Plan", "Scan", "SegmentScan", "StreamSettings", "in_order", "pieces",
            "plan_windows", "scan", "scan_all", "scanned_cutoff"]
@@ -86,7 +88,8 @@ class SegmentScan:
 class Scan:
     """What the first pass learnt of one recording: samples, rate [Hz] (1 / median step), its segments,
     the smallest and largest position of each joint ``q_range`` (2, n) [rad], the samples bridged over
-    lost packets and the stale rows dropped when the log was read (None: not known)."""
+    lost packets and what the file keeps of its log (``log``: stale rows, gaps that split it;
+    :mod:`identify.io.log_fields`; None: nothing)."""
 
     source: str
     samples: int
@@ -94,32 +97,12 @@ class Scan:
     segments: tuple[SegmentScan, ...]
     q_range: np.ndarray | None = None
     bridged: int = 0
-    stale_rows: int | None = None
+    log: dict | None = None
 
     def layout(self) -> dict[str, Any]:
         """As :func:`identify.io.recordings.layout_summary` for a recording in memory."""
         return {"source": self.source, "samples": self.samples, "bridged_samples": self.bridged,
-                "segments": len(self.segments), "stale_rows": self.stale_rows}
-
-
-class StepCounts:
-    """The distinct time steps of a log and how often each occurs (a regular log has a few hundred
-    distinct values whatever its length): their median is ``np.median`` of all the steps."""
-
-    def __init__(self) -> None:
-        self.values, self.counts = np.empty(0), np.empty(0, dtype=np.int64)
-
-    def add(self, steps: np.ndarray) -> None:
-        values, where = np.unique(np.concatenate([self.values, steps]), return_inverse=True)
-        weights = np.concatenate([self.counts, np.ones(steps.size, dtype=np.int64)])
-        self.values, self.counts = values, np.bincount(where, weights=weights).astype(np.int64)
-
-    def median(self) -> float:
-        total = int(self.counts.sum())
-        cum = np.cumsum(self.counts)
-        lo = self.values[np.searchsorted(cum, (total - 1) // 2, side="right")]
-        hi = self.values[np.searchsorted(cum, total // 2, side="right")]
-        return float((lo + hi) / 2.0) if lo != hi else float(lo)
+                "segments": len(self.segments), **layout_fields(self.log)}
 
 
 #: Length of a Welch segment of the automatic cut-off [s] (:func:`identify.choose_cutoff`'s default).
@@ -219,7 +202,7 @@ def scan(src: BlockSource, block: int, floor: float | None, keep_s: float = 0.0)
         at += t.size
     done.append(current.result())
     return Scan(src.source, int(src.n_samples), 1.0 / steps.median(), tuple(done), np.vstack([lo, hi]), bridged,
-                getattr(src, "stale_rows", None))
+                getattr(src, "log", None))
 
 
 def scan_all(sources: Sequence[BlockSource], settings: StreamSettings) -> tuple[list[Scan], float]:

@@ -29,7 +29,7 @@ from rx90sym.recording import RecordingError
 
 from identify.signal.filtering import EDGE_PERIODS
 
-__all__ = ["DEFAULT_MAX_GAP", "LOST_STEPS", "MIN_SEGMENT_ROWS", "Gap", "LogGaps", "stale_rows", "find_gaps",
+__all__ = ["DEFAULT_MAX_GAP", "LOST_STEPS", "MIN_SEGMENT_ROWS", "SPLITS_LISTED", "Gap", "LogGaps", "stale_rows", "find_gaps",
            "short_segments", "all_segments_short"]
 
 #: Longest gap (s) bridged by interpolation; a longer one starts a new segment.
@@ -42,6 +42,8 @@ LOST_STEPS = 1.5
 #: identify.observation.matrix.filtered_motions). A shorter segment (e.g. one row between two
 #: gaps) holds no row of W at any cut-off, and cannot even be resampled with one row.
 MIN_SEGMENT_ROWS = 2 * (2 * int(EDGE_PERIODS) + 1) + 5
+#: How many gaps that split a log (and dropped segments) the summary lists by lines; the counts cover all.
+SPLITS_LISTED = 10
 
 
 @dataclass(frozen=True)
@@ -78,13 +80,15 @@ class LogGaps:
         return tuple(g for g in self.gaps if not g.bridged)
 
     def summary(self) -> dict:
-        """Counts and the gaps themselves, for the JSON and the printed report."""
+        """Counts and the gaps themselves, for the JSON and the printed report; ``splits``: the first
+        SPLITS_LISTED gaps that split the log (``splits_total`` of them)."""
         return {"max_gap_s": self.max_gap, "bridged_gaps": len(self.bridged),
                 "bridged_lost_periods": float(sum(g.periods - 1.0 for g in self.bridged)),
                 "segments": int(self.segment[-1]) + 1 if self.segment.size else 0,
-                "gaps": [g.to_dict() for g in self.gaps], "dropped_segments": len(self.dropped),
+                "gaps": [g.to_dict() for g in self.gaps], "splits_total": len(self.splits),
+                "splits": [g.to_dict() for g in self.splits[:SPLITS_LISTED]], "dropped_segments": len(self.dropped),
                 "dropped_rows": int(sum(rows for _, _, rows in self.dropped)),
-                "dropped_lines": [[a, b] for a, b, _ in self.dropped[:_LISTED]]}
+                "dropped_lines": [[a, b] for a, b, _ in self.dropped[:SPLITS_LISTED]]}
 
 
 def stale_rows(values: np.ndarray, t_col: int, used: Sequence[int]) -> np.ndarray:
@@ -119,8 +123,6 @@ def find_gaps(t: np.ndarray, numbers: Sequence[int], max_gap: float = DEFAULT_MA
     return LogGaps(tuple(found), segment, float(max_gap))
 
 
-#: How many dropped segments the summary lists by lines.
-_LISTED = 10
 
 
 def short_segments(found: LogGaps, numbers: Sequence[int], source: str) -> tuple[LogGaps, np.ndarray]:

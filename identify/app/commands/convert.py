@@ -4,7 +4,7 @@ Log form (docs/real-logs.md)::
 
     rx90 convert LOG.csv --robot R --columns SPEC [--no-header] [--rows FIRST:LAST]
                  [--from S] [--to S] [--resample HZ] [--max-gap S] [--no-segments] [--gains LIST|FILE]
-                 [--convention C] --out REC.csv
+                 [--convention C] [--block LINES] --out REC.csv
 
 ROS bag form (joint_states; ROS 1, ROS 2 sqlite3 or MCAP; needs the ``ros`` extra)::
 
@@ -69,14 +69,29 @@ def register(sub: Any) -> None:
     sp.add_argument("--motor-torques", help="motor form: CSV of motor torques [N m]")
     sp.add_argument("--period", type=float, help="motor form: sampling period [s]")
     sp.add_argument("--out", required=True, help="recording file (.csv or .npz)")
-    sp.add_argument("--block", type=block_option, default=DEFAULT_LOG_BLOCK,
-                    help=f"lines per block: a longer log is converted block by block, memory bounded by the "
-                         f"block (default {DEFAULT_LOG_BLOCK}; output CSV)")
+    sp.add_argument("--block", metavar="LINES",  # checked by run: refused for a bag in one line, not by argparse
+                    help=f"LOG.csv form: lines per block: a longer log is converted block by block, memory bounded "
+                         f"by the block (default {DEFAULT_LOG_BLOCK}, at least 1000; output CSV)")
 
 
 def _given(args: argparse.Namespace, names: tuple[str, ...]) -> list[str]:
     flags = {"no_header": "--no-header", "t_from": "--from", "t_to": "--to"}
     return [flags.get(n, "--" + n.replace("_", "-")) for n in names if getattr(args, n) not in (None, False)]
+
+
+def _belong(flags: list[str]) -> str:
+    """``--a belongs`` / ``--a, --b belong``: the start of a refusal of options of another form."""
+    return f"{', '.join(flags)} {'belongs' if len(flags) == 1 else 'belong'}"
+
+
+def _block(text: str | None) -> int:
+    """``--block`` of the LOG.csv form: lines per block (identify_runs.block_option's rule)."""
+    if text is None:
+        return DEFAULT_LOG_BLOCK
+    try:
+        return block_option(text, "lines")
+    except argparse.ArgumentTypeError as exc:
+        raise UsageError(str(exc)) from None
 
 
 def _rows(text: str | None) -> tuple[int, int] | None:
@@ -104,22 +119,24 @@ def run(args: argparse.Namespace) -> int:
 
     if args.log is None:
         return _run_motor(args)
+    bag = is_bag(args.log) or args.topic is not None
     mixed = _given(args, _MOTOR_OPTIONS)
     if mixed:
-        raise UsageError(f"{', '.join(mixed)} belong to the motor form, not to a LOG.csv")
+        raise UsageError(f"{_belong(mixed)} to the motor form, not to {'a bag' if bag else 'a LOG.csv'}")
     if args.max_gap is not None and not args.max_gap > 0:
         raise UsageError(f"--max-gap must be a positive time in s, got {args.max_gap:g}")
-    if is_bag(args.log) or args.topic is not None:
+    if bag:
         return _run_bag(args)
+    block = _block(args.block)
     extra = _given(args, _BAG_OPTIONS)
     if extra:
-        raise UsageError(f"{', '.join(extra)} belong to the bag form (a .bag, .db3, .mcap or ROS 2 bag directory)")
+        raise UsageError(f"{_belong(extra)} to the bag form (a .bag, .db3, .mcap or ROS 2 bag directory)")
     if args.columns is None and args.no_header:
         raise UsageError("a LOG.csv without header needs --columns SPEC (e.g. t,q1..q6,qd1..qd6,i1..i6)")
     robot = _robot(args)
     check_output(args.out)
-    if count_rows(args.log) > args.block:
-        return _run_long(args, robot)
+    if count_rows(args.log) > block:
+        return _run_long(args, robot, block)
     progress(f"reading the log {args.log}")
     rec = read_log(args.log, robot, args.columns, header=not args.no_header, rows=_rows(args.rows),
                    t_from=args.t_from, t_to=args.t_to, resample=args.resample, gains=args.gains,
@@ -132,22 +149,22 @@ def run(args: argparse.Namespace) -> int:
     return 0
 
 
-def _run_long(args: argparse.Namespace, robot: Any) -> int:
-    """A log longer than --block: converted block by block (identify.io.log_blocks)."""
+def _run_long(args: argparse.Namespace, robot: Any, block: int) -> int:
+    """A log longer than ``block`` lines (--block): converted block by block (identify.io.log_blocks)."""
     if not args.out.lower().endswith(".csv"):
-        raise UsageError(f"--out {args.out}: a log longer than --block ({args.block} lines) is converted block by "
+        raise UsageError(f"--out {args.out}: a log longer than --block ({block} lines) is converted block by "
                          f"block into a CSV recording")
     if args.columns is None:
-        raise UsageError(f"a log longer than --block ({args.block} lines) is converted block by block, which "
+        raise UsageError(f"a log longer than --block ({block} lines) is converted block by block, which "
                          f"needs --columns")
     from identify.io.columns import parse_columns
     from identify.io.log_blocks import convert_log
     from identify.signal.gaps import DEFAULT_MAX_GAP
 
-    progress(f"converting the log {args.log} block by block ({args.block} lines per block)")
+    progress(f"converting the log {args.log} block by block ({block} lines per block)")
     log = convert_log(args.log, robot, args.columns, args.out, header=not args.no_header, rows=_rows(args.rows),
                       t_from=args.t_from, t_to=args.t_to, resample=args.resample, gains=args.gains,
-                      convention=args.convention, block=args.block, max_gap=args.max_gap or DEFAULT_MAX_GAP,
+                      convention=args.convention, block=block, max_gap=args.max_gap or DEFAULT_MAX_GAP,
                       segments=not args.no_segments)
     currents = bool(parse_columns(args.columns, robot).i)
     print(_print_log(args.log, log, "no gains: the file keeps currents (give --gains to identify with it)"
@@ -161,9 +178,9 @@ def _run_bag(args: argparse.Namespace) -> int:
     from identify.io.recordings import write_recording
     from identify.signal.gaps import DEFAULT_MAX_GAP
 
-    wrong = _given(args, _CSV_ONLY)
+    wrong = _given(args, _CSV_ONLY + ("block",))
     if wrong:
-        raise UsageError(f"{', '.join(wrong)} belong to the LOG.csv form, not to a bag")
+        raise UsageError(f"{_belong(wrong)} to the LOG.csv form, not to a bag (a bag is read whole)")
     if args.topic is None:
         raise UsageError("a bag needs --topic (the sensor_msgs/JointState topic, e.g. /joint_states)")
     robot = _robot(args)
@@ -188,8 +205,8 @@ def _run_bag(args: argparse.Namespace) -> int:
 
 def _print_log(name: str, log: dict, what_else: str) -> str:
     """What the reader did, in the user's words: rows, rate, stale rows, gaps, grid, torques."""
-    steps = (f"rate {log['rate_hz']:.6g} Hz (1 / mean step; median step {log['median_step_s']:g} s, "
-             f"{log['irregular_steps']} steps off by more than 1 %)")
+    steps = (f"rate {log['rate_hz']:.6g} Hz (1 / mean step without lost packets; median step "
+             f"{log['median_step_s']:g} s, {log['irregular_steps']} steps off by more than 1 %)")
     grid = (f"resampled to {log['resampled_hz']:g} Hz: {log['samples']} samples"
             if log["resampled_hz"] else "not resampled")
     what = f"gains {log['gains']}: joint torques from the currents" if log["gains"] else what_else
@@ -205,10 +222,7 @@ def _print_log(name: str, log: dict, what_else: str) -> str:
         lines.append(f"lost packets: {gaps.get('gaps_total', len(gaps['gaps']))} gaps; {gaps['bridged_gaps']} up to {gaps['max_gap_s']:g} s "
                      f"bridged ({log['bridged_samples']} samples interpolated, never used as measurements), "
                      f"{gaps['segments']} segment(s)")
-        lines += [f"  gap of {g['duration_s']:g} s ({g['periods']:.3g} steps) between lines {g['lines'][0]} and "
-                  f"{g['lines'][1]}: {'bridged' if g['bridged'] else 'new segment'}" for g in gaps["gaps"][:_GAPS_SHOWN]]
-        if gaps.get("gaps_total", len(gaps["gaps"])) > _GAPS_SHOWN:
-            lines.append(f"  ... and {gaps.get('gaps_total', len(gaps['gaps'])) - _GAPS_SHOWN} more gaps")
+        lines += _gap_lines(gaps)
     if gaps.get("dropped_segments"):
         from identify.signal.gaps import MIN_SEGMENT_ROWS
 
@@ -219,16 +233,33 @@ def _print_log(name: str, log: dict, what_else: str) -> str:
     return "\n".join(lines)
 
 
-#: How many gaps the output lists one by one.
+def _gap_lines(gaps: dict) -> list[str]:
+    """The gaps that split the log into segments, every one listed (up to SPLITS_LISTED), then the first
+    bridged ones (``gaps``: :meth:`identify.signal.gaps.LogGaps.summary`)."""
+    def line(g: dict, what: str) -> str:
+        return (f"  gap of {g['duration_s']:g} s ({g['periods']:.3g} steps) between lines {g['lines'][0]} and "
+                f"{g['lines'][1]}: {what}")
+
+    out = [line(g, "new segment") for g in gaps["splits"]]
+    if gaps["splits_total"] > len(gaps["splits"]):
+        out.append(f"  ... and {gaps['splits_total'] - len(gaps['splits'])} more gaps that start a new segment")
+    bridged = [g for g in gaps["gaps"] if g["bridged"]][:_GAPS_SHOWN]
+    out += [line(g, "bridged") for g in bridged]
+    if gaps["bridged_gaps"] > len(bridged):
+        out.append(f"  ... and {gaps['bridged_gaps'] - len(bridged)} more bridged gaps")
+    return out
+
+
+#: How many bridged gaps the output lists one by one.
 _GAPS_SHOWN = 10
 
 
 def _run_motor(args: argparse.Namespace) -> int:
     from identify.io.recordings import read_motor_recording, write_recording
 
-    extra = _given(args, _LOG_OPTIONS + _BAG_OPTIONS) + (["--block"] if args.block != DEFAULT_LOG_BLOCK else [])
+    extra = _given(args, _LOG_OPTIONS + _BAG_OPTIONS + ("block",))
     if extra:
-        raise UsageError(f"{', '.join(extra)} belong to the log form (give LOG.csv or a bag)")
+        raise UsageError(f"{_belong(extra)} to the log form (give LOG.csv or a bag)")
     missing = [f for f, v in (("--motor-positions", args.motor_positions), ("--motor-torques", args.motor_torques),
                               ("--period", args.period)) if v is None]
     if missing:

@@ -277,14 +277,22 @@ def _fit_flags(f: Fit, method: str, prior: Any = None) -> list:
     return flags
 
 
+def _splits(lay: dict) -> str:
+    """Where a recording's log was split into segments (``lay``: its layout_summary), or nothing."""
+    splits, total = lay.get("split_gaps") or [], lay.get("split_gaps_total")
+    where = ", ".join(f"lines {g['lines'][0]}-{g['lines'][1]} ({g['duration_s']:g} s)" for g in splits)
+    more = f" and {total - len(splits)} more" if splits and total > len(splits) else ""
+    return f" (split by the gap{'s' if total > 1 else ''} at {where}{more})" if splits else ""
+
+
 def _print_fit(f: Fit, recs: list, auto_delay: bool, prior: Any = None) -> None:
     obs, res = f.observation or f.streamed, f.result
     progress(f.delay_estimate.summary() + ("" if auto_delay else " (not compensated: --delay auto does)"))
     progress(obs.summary().replace("\n", "\n  "))
     for lay in f.recordings:
         if lay["bridged_samples"] or lay["segments"] > 1 or lay["stale_rows"]:
-            print(f"{lay['source']}: {lay['segments']} segment(s), {lay['bridged_samples']} samples bridged over lost "
-                  f"packets (not fitted), {lay['stale_rows'] or 0} stale rows dropped when read")
+            print(f"{lay['source']}: {lay['segments']} segment(s){_splits(lay)}, {lay['bridged_samples']} samples "
+                  f"bridged over lost packets (not fitted), {lay['stale_rows'] or 0} stale rows dropped when read")
     if f.choice is not None:
         print(f.choice["table"])
     else:

@@ -49,12 +49,12 @@ def fit_long(args: argparse.Namespace, robot: rx90sym.Robot, processing: Process
         return fit(robot, args.recordings, processing, args.method, client=client, **options)
 
 
-def block_option(text: str) -> int:
-    """``--block``: a whole number of samples (lines), at least 1000."""
+def block_option(text: str, unit: str = "samples") -> int:
+    """``--block``: a whole number of samples (``unit``: lines, for convert), at least 1000."""
     try:
         value = int(text)
     except ValueError:
-        raise argparse.ArgumentTypeError(f"--block takes a whole number of samples, got {text!r}") from None
+        raise argparse.ArgumentTypeError(f"--block takes a whole number of {unit}, got {text!r}") from None
     if value < 1000:
-        raise argparse.ArgumentTypeError(f"--block must be at least 1000 samples, got {value}")
+        raise argparse.ArgumentTypeError(f"--block must be at least 1000 {unit}, got {value}")
     return value
