@@ -358,3 +358,10 @@ def test_the_report_shows_the_cross_validated_choices_and_the_friction_per_joint
     settings = dict((row[0], row[-1]) for row in processing_table(record).rows)
     assert settings["Friction form per joint"] == "tanh, coulomb; velocity scales 0.05, – rad/s"
     assert choice_blocks({}) == ()
+    # Forms chosen per joint: the joint-combined row is the one marked; no form's name repeated as a label.
+    mixed = {"chosen": ["tanh", "coulomb"], "reason": "chosen per joint",
+             "candidates": [cand(4.0, 1.2, form="coulomb"), cand(4.0, 1.0, form="tanh")],
+             "combined": dict(cand(4.0, 0.9, form=["tanh", "coulomb"]), label="per joint")}
+    _, _, friction, _ = choice_blocks({"processing_choice": dict(record["processing_choice"], friction=mixed)})
+    assert [(row[0], row[-1]) for row in friction.rows] == [("coulomb", ""), ("tanh", ""),
+                                                           ("per joint", "chosen")]

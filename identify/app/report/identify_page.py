@@ -185,17 +185,18 @@ def choice_blocks(record: Mapping[str, Any]) -> tuple:
     choice = record.get("processing_choice") or {}
     blocks: list = []
     for key, title, first in ((None, "Processing candidates", "cut-off [Hz]"), ("friction", "Friction forms", "form")):
-        part = choice.get(key) if key else choice
-        candidates = (part or {}).get("candidates") or []
+        part = (choice.get(key) if key else choice) or {}
+        # The friction's joint-combined candidate (the per-joint forms scored together) is a row too.
+        candidates = [*(part.get("candidates") or []), *([part["combined"]] if key and part.get("combined") else [])]
         if not candidates:
             continue
         n = max(len(c.get("per_joint_pct") or []) for c in candidates)
         chosen = part.get("chosen")
-        rows = tuple((c.get("form") or fmt(c.get("cutoff_hz"), 4),
+        rows = tuple((_first_cell(c),
                       "none" if c.get("decimate_to_hz") is None else fmt(c.get("decimate_to_hz"), 4),
                       rest_label(c["rest"]) if c.get("rest") else "no threshold",
                       c.get("score_pct"), *(list(c.get("per_joint_pct") or []) + [None] * n)[:n],
-                      "chosen" if _is_chosen(c, chosen) else (c.get("label") or ""))
+                      "chosen" if _is_chosen(c, chosen) else ("" if key else c.get("label") or ""))
                      for c in candidates)
         columns = (Column(first, text=True), Column("decimated to", "Hz", text=True), Column("rest", text=True),
                    Column("held-back error", "%", digits=3), *(Column(f"j{j + 1}", "%", digits=3) for j in range(n)),
@@ -203,6 +204,15 @@ def choice_blocks(record: Mapping[str, Any]) -> tuple:
         blocks += [Table(f"choice-{key or 'processing'}", f"{title}: {choice.get('blocks', part.get('blocks', ''))}-block "
                          f"cross-validation inside the fitted data", columns, rows), Text((str(part.get("reason", "")),))]
     return tuple(blocks)
+
+
+def _first_cell(candidate: Mapping[str, Any]) -> str:
+    """A processing candidate's cut-off [Hz], or a friction form ("per joint": the forms scored
+    together, named in the reason below the table and in the processing record)."""
+    form = candidate.get("form")
+    if form is None:
+        return fmt(candidate.get("cutoff_hz"), 4)
+    return form if isinstance(form, str) else "per joint"
 
 
 def _is_chosen(candidate: Mapping[str, Any], chosen: Any) -> bool:
