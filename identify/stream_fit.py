@@ -202,6 +202,9 @@ def fit_streamed(robot: rx90sym.Robot, recordings: Sequence[Any], method: str = 
     if int(block) != block or block < 1000:
         raise ValueError(f"block must be a whole number of samples >= 1000, got {block!r}")
     sources = [block_source(r, robot, convention, gains) for r in recordings]
+    if gains is not None and sources and not any(s.holds_current for s in sources):
+        raise ValueError(f"drive gains given, but no recording holds motor currents "
+                         f"({', '.join(s.source for s in sources)}: joint torques): the gains would not be used")
     choice = scans = None
     if (cutoff is None) if cross_validate is None else cross_validate:
         choice, scans = _choose(robot, sources, base, cutoff, decimate_to, min_velocity, rest, spring, int(block),

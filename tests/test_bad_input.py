@@ -363,6 +363,10 @@ def test_gains_on_torque_recordings_are_refused_not_recorded_as_applied(files, t
     msg = refused(capsys, out, "identify", files["empty.csv"], "--gains", ",".join(["3"] * 6), "--cutoff", 5,
                   "--json", out)
     assert "--gains given, but no recording holds motor currents (empty.csv: joint torques)" in msg
+    # Block by block (the library's streamed fit checks its sources, reading nothing twice).
+    msg = refused(capsys, out, "identify", files["empty.csv"], "--gains", ",".join(["3"] * 6), "--cutoff", 5,
+                  "--block", 1000, "--json", out)
+    assert "drive gains given, but no recording holds motor currents (empty.csv: joint torques)" in msg, msg
 
 
 def test_a_rest_policy_without_a_rest_threshold_is_refused(files, tmp_path, capsys):
@@ -383,6 +387,7 @@ def test_currents_without_gains_are_refused_once_before_the_processing_choice(fi
 
 def test_an_unreachable_dask_scheduler_is_one_clear_line(files, tmp_path, capsys):
     import dask
+    import distributed  # noqa: F401  (its config defaults first: set() then restores them, not deletes them)
 
     out = tmp_path / "fit.json"
     with dask.config.set({"distributed.comm.timeouts.connect": "1s"}):

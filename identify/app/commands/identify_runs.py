@@ -11,13 +11,13 @@ import os
 from typing import TYPE_CHECKING, Any
 
 import rx90sym
-from identify.io.blocks import block_source, count_rows
+from identify.io.blocks import count_rows
 
 if TYPE_CHECKING:  # for annotations only: the method is imported when a fit runs
     from identify.fitting import Fit
     from identify.observation.processing import Processing
 
-from ..common import check_gains_used, progress
+from ..common import progress
 
 
 def streamed(paths: list[str], block: int, scheduler: str | None) -> bool:
@@ -35,8 +35,6 @@ def fit_long(args: argparse.Namespace, robot: rx90sym.Robot, processing: Process
              + (f", Dask scheduler {args.scheduler}" if args.scheduler else "") + ")"
              + ("; the processing chosen first by cross-validation, one pass over the logs per candidate"
                 if processing.cross_validates else ""))
-    if gains is not None:
-        check_gains_used([(str(p), block_source(p, robot, args.convention).holds_current) for p in args.recordings])
     options = dict(base=base, gains=gains, convention=args.convention, spring_source=args.spring,
                    block=args.block, bootstrap_seed=args.bootstrap_seed)
     if args.scheduler is None:
