@@ -202,7 +202,7 @@ def scan(src: BlockSource, block: int, floor: float | None, keep_s: float = 0.0)
         at += t.size
     done.append(current.result())
     return Scan(src.source, int(src.n_samples), 1.0 / steps.median(), tuple(done), np.vstack([lo, hi]), bridged,
-                getattr(src, "log", None))
+                src.log)
 
 
 def scan_all(sources: Sequence[BlockSource], settings: StreamSettings) -> tuple[list[Scan], float]:
