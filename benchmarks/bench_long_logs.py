@@ -163,7 +163,7 @@ def dask_throughput(folder: Path, rec, env: dict) -> None:
     import rx90sym  # noqa: F401
     from dask.distributed import Client, LocalCluster
 
-    from identify.stream_fit import fit_streamed
+    from identify.fitting.streamed import fit_streamed
 
     log = folder / "dask_rec.csv"
     rec_long = _long_recording(rec, 10)

@@ -9,7 +9,7 @@ trajectory (default criterion). Noise: 1 % of each joint's torque limit, samples
     PYTHONPATH=. python benchmarks/compare_payload.py [--durations 5,10,15] [--starts 1] [--twin]
 
 --twin: instead, identify the payload of Table 4 on the twin (realistic noise, seeds 1 and 2) by
-methods 3 and 4 from the 20 s robot trajectory and the 10 s payload motion (identify.payload).
+methods 3 and 4 from the 20 s robot trajectory and the 10 s payload motion (identify.payloads.methods).
 """
 from __future__ import annotations
 
@@ -57,7 +57,7 @@ def twin_check(starts: int = 1) -> None:
     import excitation
     import rx90sym
     from excitation.api import optimise_payload
-    from identify.payload import payload
+    from identify.payloads.methods import payload
 
     robot = rx90sym.load_robot("rx90")
     bp = rx90sym.base_parameters(robot)

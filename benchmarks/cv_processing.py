@@ -7,7 +7,7 @@ choice (identify.observation.cross_validation, rest policy chosen per joint), th
 of its grid, the toolkit's defaults (``identify.fit`` with ``Processing()``: the cross-validation
 runs inside the fit), the former defaults (automatic cut-off, zero-coulomb, no cross-validation),
 and the plain least squares of benchmarks/plain_ls.py (the reference measured in the same run); the
-friction form the defaults chose (identify.observation.friction_choice; the twin's is Coulomb + viscous).
+friction form the defaults chose (identify.estimation.friction_choice; the twin's is Coulomb + viscous).
 
 Two scorings of the held-out third: each processing on the samples it keeps (its own filter's edges
 dropped, as `rx90 predict` does: a 2 Hz cut-off keeps the central 55 %, 20 Hz 95 %), and every one

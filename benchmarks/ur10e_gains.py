@@ -29,12 +29,12 @@ import numpy as np
 
 import rx90sym
 from identify import Processing, fit
-from identify.drive_gains import drive_gains
+from identify.gains.drive_gains import drive_gains
 from identify.io.gains import DriveGains, apply_gains
 from identify.io.logs import read_log
 from identify.io.recordings import RecordingWarning
 from identify.signal.pairing import pair_runs
-from identify.payload import payload
+from identify.payloads.methods import payload
 from rx90sym.recording import Recording
 
 DATA = Path(__file__).resolve().parents[2] / "shared" / "data" / "ur10e"

@@ -29,9 +29,9 @@ from pathlib import Path
 
 import numpy as np
 
-from identify.drive_gains import DEFAULT_METHOD, GAIN_METHODS, drive_gains
+from identify.gains.drive_gains import DEFAULT_METHOD, GAIN_METHODS, drive_gains
 from identify.io.gains import DriveGains, apply_gains
-from identify.payload import payload
+from identify.payloads.methods import payload
 from identify.signal.pairing import pair_runs
 
 WINDOWS = 4

@@ -18,9 +18,9 @@ _EXPORTS = {
     "split": "identify.io.recordings",
     # signal: filtering, resampling, pairing, delay
     "choose_cutoff": "identify.signal.filtering",
-    "resample": "identify.signal.resampling",
+    "resample": "identify.io.resampling",
     "pair_runs": "identify.signal.pairing",
-    "estimate_delay": "identify.signal.delay",
+    "estimate_delay": "identify.estimation.delay",
     # observation: one processing record, W and Y (eqs. 6-8)
     "Processing": "identify.observation.processing",
     "Observation": "identify.observation.matrix",
@@ -38,22 +38,22 @@ _EXPORTS = {
     "consistency_report": "identify.estimation.consistency",
     "pseudo_inertia": "identify.estimation.consistency",
     # the fit and its file; prediction and validation
-    "fit": "identify.fitting",
-    "Fit": "identify.fitting",
-    "load_fit": "identify.fitting",
-    "fit_fleet": "identify.fleet",
-    "FleetFit": "identify.fleet",
-    "predict": "identify.validation",
-    "validate": "identify.validation",
-    "Validation": "identify.validation",
+    "fit": "identify.fitting.fit",
+    "Fit": "identify.fitting.fit",
+    "load_fit": "identify.fitting.fit",
+    "fit_fleet": "identify.fitting.fleet",
+    "FleetFit": "identify.fitting.fleet",
+    "predict": "identify.fitting.validation",
+    "validate": "identify.fitting.validation",
+    "Validation": "identify.fitting.validation",
     # what the fit is used for: payloads (section IV), drive gains
-    "payload": "identify.payload",
-    "PayloadMonitor": "identify.payload_monitor",
-    "PayloadResult": "identify.payload_result",
-    "drive_gains": "identify.drive_gains",
+    "payload": "identify.payloads.methods",
+    "PayloadMonitor": "identify.monitor.payload",
+    "PayloadResult": "identify.payloads.result",
+    "drive_gains": "identify.gains.drive_gains",
     # models out: URDF and MJCF with actuator terms
-    "export_urdf": "identify.export",
-    "export_mjcf": "identify.export",
+    "export_urdf": "identify.export.models",
+    "export_mjcf": "identify.export.models",
 }
 __all__ = list(_EXPORTS)
 
@@ -69,7 +69,7 @@ _EXPORTS.update({
     "decimation_plan": "identify.signal.filtering",
     "derivatives": "identify.signal.filtering",
     "lowpass": "identify.signal.filtering",
-    "DelayEstimate": "identify.signal.delay",
+    "DelayEstimate": "identify.estimation.delay",
     "PairedRuns": "identify.signal.pairing",
     "DEFAULT_MIN_VELOCITY": "identify.observation.processing",
     "DEFAULT_REST": "identify.observation.processing",
@@ -83,12 +83,10 @@ _EXPORTS.update({
     "ConsistentSolution": "identify.estimation.consistency",
     "consistency_margin": "identify.estimation.consistency",
     "consistent_least_squares": "identify.estimation.consistency",
-    "Bootstrap": "identify.fitting",
-    "FitModel": "identify.fit_file",
-    "grouping_relations": "identify.payload",
-    "DriveGainsResult": "identify.drive_gains",
-    "identify": "identify.identification",       # deprecated: fit
-    "fit_recordings": "identify.real_fit",       # deprecated: fit
+    "Bootstrap": "identify.fitting.fit",
+    "FitModel": "identify.fitting.file",
+    "grouping_relations": "identify.payloads.methods",
+    "DriveGainsResult": "identify.gains.drive_gains",
 })
 
 lazy_package(__name__, _EXPORTS)

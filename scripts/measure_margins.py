@@ -14,7 +14,7 @@ import numpy as np
 
 import identify
 import rx90sym
-from identify.payload import payload
+from identify.payloads.methods import payload
 from motions import multisine
 
 TABLE_3 = ["ZZ1R", "FV1", "FS1", "XX2R", "XZ2R", "ZZ2R", "MX2R", "FV2", "FS2", "XX3R", "ZZ3R",

@@ -30,7 +30,7 @@ def ur10e_gains_25s():
     b = benchmark_module("ur10e_gains")
     if not (b.DATA / b.EMPTY[0]).exists():
         pytest.skip(f"UR10e logs not found in {b.DATA} (../shared is absent)")
-    from identify.drive_gains import drive_gains
+    from identify.gains.drive_gains import drive_gains
     from identify.signal.pairing import pair_runs
 
     robot = b.ur10e_robot()

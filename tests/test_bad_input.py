@@ -17,9 +17,9 @@ import pytest
 
 import rx90sym
 from identify.app.cli import main
-from identify.fitting import load_fit
+from identify.fitting.fit import load_fit
 from identify.io.recordings import write_recording
-from identify.plausibility import (RESIDUAL_SHARE, Flag, estimate_flags, gain_flags, margin_flags, mass_bound_flags,
+from identify.fitting.plausibility import (RESIDUAL_SHARE, Flag, estimate_flags, gain_flags, margin_flags, mass_bound_flags,
                                    payload_flags,
                                    residual_flags, static_gravity_flags, torque_scale_flags)
 from rx90sym.twin import CurrentSensor

@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 
 import rx90sym
-from identify.drive_gains import drive_gains
+from identify.gains.drive_gains import drive_gains
 from identify.io.gains import apply_gains, read_gains
 from identify.signal.pairing import pair_runs
 from rx90sym.files import write_json

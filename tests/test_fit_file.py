@@ -5,7 +5,6 @@ from __future__ import annotations
 import json
 import subprocess
 import sys
-import warnings
 from pathlib import Path
 
 import numpy as np
@@ -56,7 +55,7 @@ def _without(d: dict, keys) -> dict:
         choice = {k: v for k, v in out["processing_choice"].items() if k != "seconds"}
         choice["candidates"] = [{k: v for k, v in c.items() if k != "seconds"} for c in choice["candidates"]]
         choice["chosen"] = {k: v for k, v in choice["chosen"].items() if k != "seconds"}
-        if "friction" in choice:  # the friction form's choice (identify.observation.friction_choice)
+        if "friction" in choice:  # the friction form's choice (identify.estimation.friction_choice)
             forms = {k: v for k, v in choice["friction"].items() if k != "seconds"}
             forms["candidates"] = [{k: v for k, v in c.items() if k != "seconds"} for c in forms["candidates"]]
             if forms.get("combined"):  # the per-joint forms scored together
@@ -79,7 +78,7 @@ def test_library_defaults_and_command_defaults_give_the_same_file(cli_fit, lib_f
     chosen = cli["processing_choice"]["chosen"]
     assert cli["model"]["cutoff_hz"] == chosen["cutoff_hz"] and cli["model"]["rest"] == chosen["rest"]
     assert cli["delay_estimate_s"] is not None and cli["model"]["delay_s"] == 0.0
-    assert cli["schema_version"] == identify.fit_file.SCHEMA_VERSION
+    assert cli["schema_version"] == identify.fitting.file.SCHEMA_VERSION
 
 
 def test_former_keys_of_the_identification_json_are_kept(cli_fit):
@@ -135,25 +134,17 @@ def test_processing_record_checks_and_round_trips():
             identify.Processing(**bad)
 
 
-def test_deprecated_entry_points_warn_and_agree_with_fit(lib_fit, runs, rx90):
-    rec = identify.read_recording(runs / "fit.csv", rx90)
-    with pytest.warns(DeprecationWarning, match="identify.fit"):
-        old = identify.fit_recordings(rx90, [rec])
-    with pytest.warns(DeprecationWarning, match="identify.fit"):
-        res = identify.identify(rx90, [rec], cutoff=lib_fit.cutoff, decimate_to=lib_fit.decimate_to,
-                                min_velocity=identify.DEFAULT_MIN_VELOCITY, rest=lib_fit.rest)
-    np.testing.assert_array_equal(old.result.values, lib_fit.result.values)
-    np.testing.assert_array_equal(res.values, lib_fit.result.values)
-    with warnings.catch_warnings():
-        warnings.simplefilter("error")
-        identify.Processing()  # the record itself warns of nothing
+def test_the_deprecated_entry_points_are_gone():
+    """identify.identify and identify.fit_recordings were removed (the project has no outside users)."""
+    for name in ("identify", "fit_recordings"):
+        assert not hasattr(identify, name)
 
 
 def test_a_bootstrap_sigma_the_draws_could_not_estimate_is_null_in_the_file_and_nan_again():
     """A spring coefficient's bootstrap σ can be NaN (rank-deficient draws): the file stays JSON."""
     import json as _json
 
-    from identify.fitting import Bootstrap
+    from identify.fitting.fit import Bootstrap
     b = Bootstrap(np.array([0.5, np.nan, 2.0]), 0.5, 200, 0)
     text = _json.dumps(b.to_json(), allow_nan=False)      # raised "Out of range float values" before
     back = Bootstrap.from_json(_json.loads(text))

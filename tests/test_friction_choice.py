@@ -12,7 +12,7 @@ import identify
 import rx90sym
 from identify import Processing, fit, load_fit, split
 from identify.observation.cross_validation import Candidate
-from identify.observation.friction_choice import _check_mix, _per_joint_forms, _Scored, _single_choice, choose_friction
+from identify.estimation.friction_choice import _check_mix, _per_joint_forms, _Scored, _single_choice, choose_friction
 from rx90sym.recording import Recording
 from test_friction_forms import TRUE_SCALE, friction_twin
 

@@ -21,7 +21,8 @@ from identify.io.log_blocks import convert_log
 from identify.observation.processing import Processing
 from identify.signal.blocks import WelchAccumulator, decimation_margin, lowpass_margin, motion_windows
 from identify.signal.filtering import decimate, lowpass
-from identify.stream_fit import BootstrapSpec, fit_streamed, predict_streamed
+from identify.fitting.streamed import BootstrapSpec, fit_streamed
+from identify.fitting.validation import predict_streamed
 
 RX90 = str(Path(sys.executable).parent / "rx90")
 
@@ -214,7 +215,7 @@ def test_cli_identify_streams_a_log_longer_than_the_block(rx90, twin_empty, whol
 def test_fleet_fits_every_robot_on_its_own_logs(rx90, rx90_base, twin_empty, whole_fit):
     """Two robots in one call (two RX90 cells, each with its own log): one fit each, equal to that
     robot's whole-signal fit, and one table line each."""
-    from identify.fleet import fit_fleet
+    from identify.fitting.fleet import fit_fleet
 
     fleet = fit_fleet({"cell-1": (rx90, twin_empty[:1]), "cell-2": (rx90, twin_empty[1:2])}, WHOLE, base=rx90_base,
                       block=2000)

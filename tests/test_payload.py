@@ -6,8 +6,8 @@ import pytest
 
 import identify
 import rx90sym
-from identify.payload import grouping_relations, payload
-from identify.payload_monitor import PayloadMonitor
+from identify.payloads.methods import grouping_relations, payload
+from identify.monitor.payload import PayloadMonitor
 
 from motions import multisine
 

@@ -34,7 +34,7 @@ def perturbed(truth: dict, rng: np.random.Generator, by: float = 0.3) -> dict:
 def twin_fit(rx90):
     """Two 20 s motions of the twin with quantisation and white torque noise (the model holds at
     rest too: no rest mask); the WLS fit."""
-    from identify.fitting import _honest_covariance
+    from identify.fitting.fit import _honest_covariance
 
     recs = [rx90sym.twin.simulate(rx90, multisine(rx90, s), duration=20.0, noise="quantised", seed=s)
             for s in (0, 1)]
@@ -85,14 +85,14 @@ def test_the_ellipsoid_condition_is_the_mass_weighted_quadric():
 
 
 def test_a_wrong_prior_is_flagged_and_the_right_one_is_not(rx90, twin_fit):
-    """bodies_far_from_prior / consistent_cost_high (identify.plausibility.prior_flags), as the
+    """bodies_far_from_prior / consistent_cost_high (identify.fitting.plausibility.prior_flags), as the
     identify command computes them (its _fit_flags): the twin against its own parameters (the
     right robot file) gives neither (cost +0.04 %); against a prior whose bodies are 5x heavier
     (a robot file of another, heavier arm) links are flagged, each with both masses and the ratio.
     (The RX90 file's [nominal] table is not the twin's truth: against it the fit costs +330 % and
     both flags are raised, docs/plausibility.md.)"""
     from identify.app.commands.identify_cmd import _fit_flags
-    from identify.plausibility import CONSISTENT_COST_PCT, PRIOR_MASS_RATIO
+    from identify.fitting.plausibility import CONSISTENT_COST_PCT, PRIOR_MASS_RATIO
 
     recs, wls, _, covariance = twin_fit
     truth = rx90sym.default_parameters(rx90)
@@ -121,7 +121,7 @@ def test_a_wrong_prior_is_flagged_and_the_right_one_is_not(rx90, twin_fit):
 def test_the_cost_flag_judges_the_increase_over_wls():
     """consistent_cost_high on the cost increase alone (the measured cases of docs/plausibility.md:
     good real fits +1.4 % and +1.8 %, the UR10e identified as a TX40 +20 %)."""
-    from identify.plausibility import CONSISTENT_COST_PCT, prior_flags
+    from identify.fitting.plausibility import CONSISTENT_COST_PCT, prior_flags
 
     assert prior_flags({}, {}, 1.82) == [] and prior_flags({}, {}, float("nan")) == []
     (flag,) = prior_flags({"M1": 1.0}, {"M1": 1.2}, 20.0, "tx40")

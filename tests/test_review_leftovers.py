@@ -11,7 +11,7 @@ import pytest
 import rx90sym
 from identify import Processing, fit
 from identify.observation.cross_validation import Candidate, choose_processing
-from identify.observation.friction_choice import choose_friction
+from identify.estimation.friction_choice import choose_friction
 from motions import multisine
 from rx90sym.recording import Recording
 from test_friction_choice import OPTIONS, coulomb_twin
@@ -141,7 +141,7 @@ def test_a_segment_too_short_to_filter_is_dropped_and_counted(rx90, rx90_logs, t
     line = {int(r): k + 1 for k, r in enumerate(rows[keep])}  # file line of each row kept
     whole = read_log(path, rx90, cols, resample=250.0)
     gaps = whole.meta["log"]["gaps"]
-    from identify.signal.gaps import MIN_SEGMENT_ROWS
+    from identify.io.gaps import MIN_SEGMENT_ROWS
     assert MIN_SEGMENT_ROWS == 19 and whole.n_segments == gaps["segments"] == 3
     assert gaps["dropped_segments"] == 2 and gaps["dropped_rows"] == 19
     assert gaps["dropped_lines"] == [[line[720], line[720]], [line[741], line[758]]]

@@ -1,5 +1,5 @@
 """The processing chosen by blocked cross-validation on a log read block by block
-(identify.observation.stream_cv) against the in-memory choice on the same recording
+(identify.estimation.stream_cv) against the in-memory choice on the same recording
 (identify.observation.cross_validation.choose_processing), and through ``rx90 identify``."""
 from __future__ import annotations
 
@@ -16,7 +16,7 @@ from identify.io.blocks import block_source
 from identify.io.logs import read_log
 from identify.observation.cross_validation import choose_processing
 from identify.observation.stream import StreamSettings, plan_windows, scan
-from identify.observation.stream_cv import choose_processing_streamed
+from identify.estimation.stream_cv import choose_processing_streamed
 from motions import multisine
 from rx90sym.host_log import HostFaults, host_log, write_host_log
 

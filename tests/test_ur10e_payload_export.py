@@ -13,7 +13,7 @@ import pytest
 
 from identify.app.cli import main
 from identify.io.gains import DriveGains, apply_gains
-from identify.payload import payload
+from identify.payloads.methods import payload
 from rx90sym.flange_payload import flange_payload
 
 from conftest import SHARED

@@ -372,7 +372,7 @@ def test_payload_of_a_urdf_robot_is_given_in_the_tip_frame(tmp_path):
 
 
 def test_payload_identified_on_a_urdf_robot_is_reported_in_the_tip_frame():
-    from identify.payload import payload
+    from identify.payloads.methods import payload
     from identify.io.recordings import recording_from_arrays
 
     robot = _load(DATA / "ur10_robot.urdf", "tool0")

@@ -131,7 +131,7 @@ def _robot_fits(robot: Any, bp: Any, recs: dict[str, Any], truth: dict[str, floa
 
 def _payloads(robot: Any, bp: Any, recs: dict[str, Any], res: Any) -> dict[str, list[Any]]:
     """Both payloads by the four methods of section IV."""
-    from identify.payload import payload
+    from identify.payloads.methods import payload
 
     _say("[5/6] identifying the payloads by the four methods of section IV...")
     return {name: [payload(robot, m, empty=[recs["empty"]] if m != 1 else [], loaded=[recs[name]],

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from typing import Sequence
 
-from identify.plausibility import Flag, raise_errors
+from identify.fitting.plausibility import Flag, raise_errors
 
 from .common import progress
 
@@ -29,7 +29,7 @@ def given_gain_flags(gains: object) -> list[Flag]:
     """Gains given with --gains (a DriveGains): all negative stops, one negative is a warning."""
     import numpy as np
 
-    from identify.plausibility import gain_flags
+    from identify.fitting.plausibility import gain_flags
 
     return settle(gain_flags(gains.gains, np.zeros_like(gains.gains)))
 

@@ -15,7 +15,10 @@ from rx90sym.recording import frozen_array
 
 from identify.estimation.compression import CompressedSystem
 
-__all__ = ["EliminationStep", "IdentificationResult"]
+__all__ = ["METHODS", "EliminationStep", "IdentificationResult"]
+
+#: The estimators a fit can use: ordinary, weighted (eqs. 9-15) and physically consistent least squares.
+METHODS = ("ols", "wls", "consistent")
 
 
 def _frozen_array(a: Any, name: str, shape: tuple[int, ...] | None = None) -> np.ndarray:

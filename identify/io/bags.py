@@ -31,7 +31,7 @@ from rx90sym.recording import Recording, RecordingError
 from identify.io.columns import parse_columns
 from identify.io.gains import DriveGains
 from identify.io.logs import rows_to_recording
-from identify.signal.gaps import DEFAULT_MAX_GAP
+from identify.io.gaps import DEFAULT_MAX_GAP
 
 __all__ = ["MissingExtra", "is_bag", "read_bag", "EXTRA"]
 

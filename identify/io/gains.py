@@ -8,7 +8,7 @@ Joint torques follow from motor currents through one gain per motor and the robo
 ``Rt`` is the robot's motor-to-joint torque map (gear ratios and the coupled wrist of the RX90 and
 TX40); ``i0`` are optional current offsets (A). An uncoupled arm without gear data (UR10e) uses
 joint-side gains. The estimation of the gains with a payload of known mass lives in
-:mod:`identify.drive_gains`; this module only reads, writes and applies them.
+:mod:`identify.gains.drive_gains`; this module only reads, writes and applies them.
 
 JSON format (written by ``rx90 gains --json``, read by every ``--gains``)::
 

@@ -7,8 +7,8 @@ from typing import Any
 import numpy as np
 
 from identify.io.recordings import TIME_RTOL
-from identify.signal.gaps import SPLITS_LISTED, Gap, LogGaps
-from identify.signal.steps import StepCounts, log_steps, step_figures
+from identify.io.gaps import SPLITS_LISTED, Gap, LogGaps
+from identify.io.steps import StepCounts, log_steps, step_figures
 
 __all__ = ["BlockReport", "GAPS_KEPT"]
 

@@ -6,7 +6,7 @@ each block's numbers parsed by pyarrow's CSV parser (C++, multithreaded; a block
 parsed again by the whole-log parser, whose message names the bad lines), stale rows dropped (each
 block's first row compared with the previous block's last), checked with the whole-log checks
 (each block after the previous block's last kept row, so steps, jumps and gaps across blocks are
-checked too), gaps bridged or split into segments (:mod:`identify.signal.gaps`; a new segment gets
+checked too), gaps bridged or split into segments (:mod:`identify.io.gaps`; a new segment gets
 its own grid), resampled when asked (see :class:`_Resampler`), and appended to the output through
 the atomic writer: an error leaves no file behind. The output always has a ``segment`` column
 (and ``measured`` when resampled): the blocks to come may need them; the stale-row count and the
@@ -17,7 +17,7 @@ Differences from the whole-log reader, by construction: the median time step of 
 longer than 1.5 of its block's median step (the same steps as on the whole log unless the clock
 drifts by a third of a period between blocks); the report's median step, steps off by more than
 1 % and rate are the whole log's, as the whole-log reader prints them
-(:func:`identify.signal.steps.step_figures` on every step); the recorded-velocity check compares each block's
+(:func:`identify.io.steps.step_figures` on every step); the recorded-velocity check compares each block's
 RMS, and the units check (:func:`identify.io.units.check_units`: degrees, swapped q/qd groups)
 counts the rows of the block where it refuses (the same message, the block's counts); with
 ``t_from``/``t_to`` every row is parsed, so a corrupt row outside the window stops the
@@ -45,9 +45,9 @@ from identify.io.logs import (LISTED_ROWS, check_increasing, check_positions, ch
 from identify.io.log_block_report import BlockReport
 from identify.io.log_fields import SPLITS_LISTED, format_splits
 from identify.io.units import check_units
-from identify.signal.gaps import (DEFAULT_MAX_GAP, MIN_SEGMENT_ROWS, LogGaps, all_segments_short, find_gaps,
+from identify.io.gaps import (DEFAULT_MAX_GAP, MIN_SEGMENT_ROWS, LogGaps, all_segments_short, find_gaps,
                                   stale_rows)
-from identify.signal.resampling import interpolate
+from identify.io.resampling import interpolate
 
 __all__ = ["DEFAULT_LOG_BLOCK", "convert_log"]
 

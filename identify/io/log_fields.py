@@ -13,7 +13,7 @@ and NPZ 0-d strings ``key``:
     in s, e.g. ``1; 3916-3917 0.200732``.
 
 :func:`read_fields` turns them back into the recording's ``meta["log"]`` (``stale_rows`` and
-``gaps["splits"]``, ``gaps["splits_total"]`` as :meth:`identify.signal.gaps.LogGaps.summary` gives
+``gaps["splits"]``, ``gaps["splits_total"]`` as :meth:`identify.io.gaps.LogGaps.summary` gives
 them), and :func:`layout_fields` into the ``recordings`` entry of ``rx90 identify``'s JSON.
 """
 from __future__ import annotations
@@ -22,7 +22,7 @@ from typing import Any, Mapping, Sequence
 
 from rx90sym.recording import RecordingError
 
-from identify.signal.gaps import SPLITS_LISTED
+from identify.io.gaps import SPLITS_LISTED
 
 __all__ = ["FIELDS", "SPLITS_LISTED", "file_fields", "format_splits", "read_fields", "layout_fields"]
 
@@ -32,7 +32,7 @@ FIELDS = ("stale_rows", "split_gaps")
 
 def format_splits(splits: Sequence[Mapping[str, Any]], total: int) -> str:
     """The ``split_gaps`` field: ``total``, then ``; A-B DURATION`` for each of ``splits`` (dicts of
-    :meth:`identify.signal.gaps.Gap.to_dict`: ``lines``, ``duration_s`` in s; at most SPLITS_LISTED)."""
+    :meth:`identify.io.gaps.Gap.to_dict`: ``lines``, ``duration_s`` in s; at most SPLITS_LISTED)."""
     return f"{int(total)}" + "".join(f"; {int(g['lines'][0])}-{int(g['lines'][1])} {float(g['duration_s'])!r}"
                                      for g in splits[:SPLITS_LISTED])
 

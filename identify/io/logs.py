@@ -27,7 +27,7 @@ Rules (one time tolerance everywhere, as in :mod:`identify.io.recordings`):
 * A row is corrupt when it has the wrong number of cells, a cell that is not a number, a value
   that is not finite or larger than :data:`ABSURD` in magnitude, a position more than
   :data:`POSITION_MARGIN` beyond the robot's limits, or a time that does not increase (a gap is
-  not corrupt: stale rows, lost packets and segments in :mod:`identify.signal.gaps`). Corrupt rows
+  not corrupt: stale rows, lost packets and segments in :mod:`identify.io.gaps`). Corrupt rows
   inside the window raise :class:`RecordingError` naming the first bad rows by line number of the file.
 * ``rows=(FIRST, LAST)`` (1-based line numbers, inclusive) or ``t_from``/``t_to`` (seconds of
   the log's clock: from the first row at or after ``t_from`` to the last row at or before
@@ -35,7 +35,7 @@ Rules (one time tolerance everywhere, as in :mod:`identify.io.recordings`):
   corrupt head jump forward and back, select by ``rows``.
 * Time steps within 1 % of the median step are regular (rate = 1 / mean step). Beyond that the
   log is refused with the figures unless ``resample=HZ`` puts every signal on a uniform grid
-  ``t0 + k/HZ`` (:func:`identify.signal.resampling.resample`: positions by cubic Hermite interpolation
+  ``t0 + k/HZ`` (:func:`identify.io.resampling.resample`: positions by cubic Hermite interpolation
   with the recorded velocities when there are some, the rest linearly), before any filtering.
 * A recorded-velocity column that is 0 on every row while its joint moves is refused (it holds
   no velocities); a window where no joint moves more than :data:`STILL` gives a
@@ -61,9 +61,9 @@ from identify.io.columns import ColumnMap, parse_columns, rtde_columns, rtde_ref
 from identify.io.log_rows import ABSURD, WINDOW_ADVICE, bad_rows, data_lines, header_cells, parse_rows, row_window
 from identify.io.units import check_units
 from identify.io.gains import DriveGains, apply_gains, read_gains
-from identify.signal.gaps import DEFAULT_MAX_GAP, LOST_STEPS, LogGaps, find_gaps, short_segments, stale_rows
-from identify.signal.steps import StepCounts, log_steps, step_figures
-from identify.signal.resampling import resample as resample_recording
+from identify.io.gaps import DEFAULT_MAX_GAP, LOST_STEPS, LogGaps, find_gaps, short_segments, stale_rows
+from identify.io.steps import StepCounts, log_steps, step_figures
+from identify.io.resampling import resample as resample_recording
 from identify.io.recordings import JUMP_ATOL, JUMP_SAFETY, TIME_RTOL, RecordingWarning, _normalise_convention
 
 __all__ = ["ColumnMap", "parse_columns", "read_log", "ABSURD", "POSITION_MARGIN", "DEFAULT_MAX_GAP",
@@ -84,7 +84,7 @@ MOVING_SPAN = 0.05
 VELOCITY_MISMATCH = 0.5
 
 def check_increasing(t: np.ndarray, numbers: Sequence[int], source: str, window: bool = True) -> None:
-    """Time increases (a gap is not an error: :func:`identify.signal.gaps.find_gaps`). A log's
+    """Time increases (a gap is not an error: :func:`identify.io.gaps.find_gaps`). A log's
     rule; a recording's regular clock is checked by :func:`identify.io.checks._check_time`.
     ``window``: the input form can select a window of lines (a CSV log; a bag cannot)."""
     if t.size < 2:
@@ -241,7 +241,7 @@ def read_log(
         convention: angles of the log, ``"controller"`` (default: what a controller logs) or
             ``"model"`` (Khalil); converted once to model angles.
         max_gap: longest gap (s) of lost packets bridged by interpolation (default 50 ms,
-            :mod:`identify.signal.gaps`); a longer one starts a new segment.
+            :mod:`identify.io.gaps`); a longer one starts a new segment.
         segments: False refuses a gap longer than ``max_gap`` instead of splitting the log.
 
     Returns:
@@ -249,7 +249,7 @@ def read_log(
         when packets were lost; ``meta["log"]`` says what was done: ``lines`` (first, last line
         read), ``rows`` (count, stale rows included), ``stale_rows`` (dropped), ``stale_lines``
         (the first few), ``rate_hz`` (1 / mean step, the gaps of lost packets left out),
-        ``median_step_s`` (:func:`identify.signal.steps.step_figures`), ``largest_gap_s`` and
+        ``median_step_s`` (:func:`identify.io.steps.step_figures`), ``largest_gap_s`` and
         ``largest_gap_lines``, ``irregular_steps``, ``gaps`` (:meth:`LogGaps.summary`),
         ``bridged_samples``, ``resampled_hz`` (or None), ``samples``, ``gains``, ``convention``.
 
@@ -330,7 +330,7 @@ def _recording(source: str, values: np.ndarray, numbers: list[int], cmap: Column
     dt = np.diff(t)
     k_gap = int(np.argmax(dt))
     steps = StepCounts()
-    steps.add(log_steps(dt))  # the block converter's figures are the same: identify.signal.steps
+    steps.add(log_steps(dt))  # the block converter's figures are the same: identify.io.steps
     report.update({**step_figures(steps, TIME_RTOL),
                    "largest_gap_s": float(dt[k_gap]), "largest_gap_lines": [numbers[k_gap], numbers[k_gap + 1]],
                    "gaps": found.summary(), "bridged_samples": 0, "resampled_hz": None,

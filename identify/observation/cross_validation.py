@@ -38,7 +38,7 @@ machine under any load (a 60 s wall-clock cap scored 5 of 5 cut-offs of one 10.5
 and 4 of 5 in another). ``time_cap`` adds a wall-clock cap on request. The rest policies and the
 first cut-off are always scored. Bridged samples and rest rows follow the fit's rules (the
 same rows as W). :func:`select_processing` is this selection whatever scores the candidates (in
-memory here; block by block in :mod:`identify.observation.stream_cv`).
+memory here; block by block in :mod:`identify.estimation.stream_cv`).
 """
 from __future__ import annotations
 
@@ -276,7 +276,7 @@ def select_processing(score: Scorer, knee: float, grid: Sequence[Candidate], ref
                       min_velocity: float | None, rest: RestPolicy | None, budget: Budget,
                       policies: Sequence[str] = SCORED_REST) -> ProcessingChoice:
     """The selection of :func:`choose_processing` (and of the block-by-block choice,
-    :mod:`identify.observation.stream_cv`) whatever computes the scores: the rest policy per joint at
+    :mod:`identify.estimation.stream_cv`) whatever computes the scores: the rest policy per joint at
     the knee where it is open, the cut-offs from the knee outwards within the ``budget``, the
     default unless clearly beaten. ``grid``: the knee's candidate first, the default among them;
     ``reference``: the common scoring rate [Hz] (None: not decimated)."""

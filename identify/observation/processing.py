@@ -131,7 +131,7 @@ class Processing:
     friction: the friction form of the moving rows, one of FRICTION_FORMS ("coulomb"; "tanh",
     "stribeck": velocity scale per joint by separable least squares, identify.estimation.separable),
     or a tuple of them, one per joint (the same on every joint is kept as one name); None: open
-    (chosen per joint by the cross-validation, :mod:`identify.observation.friction_choice`, else
+    (chosen per joint by the cross-validation, :mod:`identify.estimation.friction_choice`, else
     :data:`DEFAULT_FRICTION`);
     cross_validate: choose the cut-off, the decimation and (where ``rest`` is None) the rest
     policy per joint on the torques by blocked cross-validation

@@ -25,7 +25,7 @@ SpringModel = SpringBasis | SpringStiffness
 @dataclass(frozen=True, eq=False)
 class BaseWithSpring:
     """Base parameters plus the spring's kept coefficients; usable as ``base`` of
-    identify.identify / predict / validate with ``spring=False`` (the measured torque is then
+    identify.fit / predict / validate with ``spring=False`` (the measured torque is then
     the motor torque alone, the spring being part of the model).
 
     base: the rigid-body base parameters; model: the spring's basis; kept: names of the

@@ -37,7 +37,7 @@ from identify.observation.processing import RestPolicy
 from identify.signal.blocks import WelchAccumulator, decimation_margin, lowpass_margin, motion_windows
 from identify.signal.cutoff import choose_cutoff
 from identify.signal.filtering import EDGE_PERIODS, cutoff_from_spectrum, decimate, decimation_plan
-from identify.signal.steps import StepCounts
+from identify.io.steps import StepCounts
 
 __all__ = ["DEFAULT_BLOCK", "Piece", "Plan", "Scan", "SegmentScan", "StreamSettings", "in_order", "pieces",
            "plan_windows", "scan", "scan_all", "scanned_cutoff"]
@@ -294,7 +294,7 @@ def piece(robot: rx90sym.Robot, rec: Any, window: Any, plan: Plan, cutoff: float
     j0 = (d0 - plan.edge) // plan.factor
     core = slice(window.core[0] - j0, window.core[1] - j0)
     extra = []
-    for lag in lags:  # the delay search: only Y moves (identify.signal.delay)
+    for lag in lags:  # the delay search: only Y moves (identify.estimation.delay)
         Y = shifted_torques(rec, lag)[m.kept] + m.extra
         extra.append((decimate(Y, m.factor) if m.factor > 1 else Y)[core])
     cut = type(m)(m.t[core], m.q[core], m.dq[core], m.ddq[core], m.Y[core], m.Phi[core], m.cutoff, m.rate,

@@ -22,6 +22,7 @@ import numpy as np
 
 from rx90sym.messages import plain
 
+from identify.io.gaps import EDGE_PERIODS  # defined where the log reader sizes its segments
 from identify.signal._checks import _as_samples, _check_rate
 from identify.signal.cutoff import choose_cutoff, crossover_frequencies, cutoff_from_spectrum, welch_segment
 
@@ -40,11 +41,6 @@ __all__ = [
     "EDGE_PERIODS",
 ]
 
-#: Samples dropped at each end by :func:`derivatives`, in periods of the cut-off frequency.
-#: The impulse response of the order-4 Butterworth filter has decayed to 1e-3 of its peak after
-#: 3 periods of the cut-off (1e-4 after 4), so the start-up transients left by the forward–backward
-#: pass (already reduced by sosfiltfilt's odd-extension padding) are gone after 3 periods.
-EDGE_PERIODS = 3.0
 
 
 def lowpass(x: np.ndarray, rate: float, cutoff: float, order: int = 4) -> np.ndarray:

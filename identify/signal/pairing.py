@@ -14,7 +14,7 @@ import numpy as np
 
 from rx90sym.recording import Recording
 
-from identify.signal.resampling import interpolate
+from identify.io.resampling import interpolate
 
 __all__ = ["PairedRuns", "pair_runs", "POSITION_TOLERANCE"]
 

@@ -58,7 +58,7 @@ def register(sub: Any) -> None:
                     help="put every signal on a uniform grid at HZ (needed for irregular time stamps)")
     sp.add_argument("--max-gap", type=float, metavar="S",
                     help="longest gap of lost packets bridged by --resample, s (default 0.05, "
-                         "identify.signal.gaps.DEFAULT_MAX_GAP); a longer gap starts a new segment")
+                         "identify.io.gaps.DEFAULT_MAX_GAP); a longer gap starts a new segment")
     sp.add_argument("--no-segments", action="store_true",
                     help="refuse a gap longer than --max-gap instead of splitting the log into segments")
     sp.add_argument("--gains", metavar="LIST|FILE",
@@ -115,7 +115,7 @@ def run(args: argparse.Namespace) -> int:
     from identify.io.bags import is_bag
     from identify.io.logs import read_log
     from identify.io.recordings import write_recording
-    from identify.signal.gaps import DEFAULT_MAX_GAP
+    from identify.io.gaps import DEFAULT_MAX_GAP
 
     if args.log is None:
         return _run_motor(args)
@@ -159,7 +159,7 @@ def _run_long(args: argparse.Namespace, robot: Any, block: int) -> int:
                          f"needs --columns")
     from identify.io.columns import parse_columns
     from identify.io.log_blocks import convert_log
-    from identify.signal.gaps import DEFAULT_MAX_GAP
+    from identify.io.gaps import DEFAULT_MAX_GAP
 
     progress(f"converting the log {args.log} block by block ({block} lines per block)")
     log = convert_log(args.log, robot, args.columns, args.out, header=not args.no_header, rows=_rows(args.rows),
@@ -176,7 +176,7 @@ def _run_long(args: argparse.Namespace, robot: Any, block: int) -> int:
 def _run_bag(args: argparse.Namespace) -> int:
     from identify.io.bags import MissingExtra, read_bag
     from identify.io.recordings import write_recording
-    from identify.signal.gaps import DEFAULT_MAX_GAP
+    from identify.io.gaps import DEFAULT_MAX_GAP
 
     wrong = _given(args, _CSV_ONLY + ("block",))
     if wrong:
@@ -224,7 +224,7 @@ def _print_log(name: str, log: dict, what_else: str) -> str:
                      f"{gaps['segments']} segment(s)")
         lines += _gap_lines(gaps)
     if gaps.get("dropped_segments"):
-        from identify.signal.gaps import MIN_SEGMENT_ROWS
+        from identify.io.gaps import MIN_SEGMENT_ROWS
 
         shown = ", ".join(f"{a}..{b}" for a, b in gaps["dropped_lines"])
         lines.append(f"segments too short to filter dropped: {gaps['dropped_segments']} ({gaps['dropped_rows']} rows, "
@@ -235,7 +235,7 @@ def _print_log(name: str, log: dict, what_else: str) -> str:
 
 def _gap_lines(gaps: dict) -> list[str]:
     """The gaps that split the log into segments, every one listed (up to SPLITS_LISTED), then the first
-    bridged ones (``gaps``: :meth:`identify.signal.gaps.LogGaps.summary`)."""
+    bridged ones (``gaps``: :meth:`identify.io.gaps.LogGaps.summary`)."""
     def line(g: dict, what: str) -> str:
         return (f"  gap of {g['duration_s']:g} s ({g['periods']:.3g} steps) between lines {g['lines'][0]} and "
                 f"{g['lines'][1]}: {what}")

@@ -95,7 +95,7 @@ def _payload(args: argparse.Namespace, data: dict) -> int:
 
 def _model(args: argparse.Namespace, data: dict) -> int:
     from identify import load_fit
-    from identify.export import fit_standard
+    from identify.export.models import fit_standard
 
     if data.get("method") != "consistent":
         raise ValueError(f"{args.input}: a {data.get('method') or 'unknown'} fit holds base parameters, not "

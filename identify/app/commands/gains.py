@@ -8,10 +8,10 @@ from typing import Any
 import numpy as np
 
 from rx90sym.files import file_sha256, write_json
-from identify.drive_gains import DEFAULT_METHOD, FLAG_PCT, GAIN_METHODS
+from identify.gains.drive_gains import DEFAULT_METHOD, FLAG_PCT, GAIN_METHODS
 from identify.signal.pairing import POSITION_TOLERANCE
 
-from identify.plausibility import Flag, PlausibilityError, gain_flags, torque_scale_flags
+from identify.fitting.plausibility import Flag, PlausibilityError, gain_flags, torque_scale_flags
 
 from ..flags import checked, flag_lines, settle
 from ..common import UsageError, check_output, convention_option, load_robot, progress, robot_option
@@ -66,7 +66,7 @@ def parse_fix(items: list[str], n: int) -> dict[int, float]:
 
 
 def run(args: argparse.Namespace) -> int:
-    from identify.drive_gains import drive_gains
+    from identify.gains.drive_gains import drive_gains
     from identify.io.gains import read_gains
     from identify.io.recordings import read_recording
 

@@ -17,7 +17,7 @@ import rx90sym
 from identify.observation.processing import (DEFAULT_MIN_VELOCITY, DEFAULT_REST, FRICTION_FORMS, REST_POLICIES,
                                              Processing, rest_label)
 from identify.io.blocks import DEFAULT_BLOCK
-from identify.plausibility import estimate_flags, prior_flags, residual_flags, static_gravity_flags, torque_scale_flags
+from identify.fitting.plausibility import estimate_flags, prior_flags, residual_flags, static_gravity_flags, torque_scale_flags
 
 from ..flags import flag_lines, given_gain_flags, settle
 from ..common import (UsageError, check_output, convention_option, progress, read_recordings, robot_option,
@@ -26,7 +26,7 @@ from ..common import (UsageError, check_output, convention_option, progress, rea
 from .identify_runs import block_option, fit_long, streamed
 
 if TYPE_CHECKING:  # the method is imported when the command runs, not for its --help
-    from identify.fitting import Fit
+    from identify.fitting.fit import Fit
 
 
 def _delay(text: str) -> str | float:
@@ -189,7 +189,7 @@ def processing_of(args: argparse.Namespace, spring: bool) -> Processing:
 
 
 def run(args: argparse.Namespace) -> int:
-    from identify.fitting import fit
+    from identify.fitting.fit import fit
     from identify.io.gains import read_gains
 
     from ..spring_output import attach_spring
@@ -396,7 +396,7 @@ def data_record(recs: list, obs: Any, validation: Any = None, samples: list[int]
 def _write_urdf(args: argparse.Namespace, f: Fit) -> None:
     """--urdf-out: a shortcut of rx90 export --urdf (identify.export_urdf)."""
     from rx90sym import UrdfError
-    from identify.export import export_urdf
+    from identify.export.models import export_urdf
 
     try:
         written = export_urdf(f, args.urdf_out)

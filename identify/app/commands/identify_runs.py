@@ -14,7 +14,7 @@ import rx90sym
 from identify.io.blocks import count_rows
 
 if TYPE_CHECKING:  # for annotations only: the method is imported when a fit runs
-    from identify.fitting import Fit
+    from identify.fitting.fit import Fit
     from identify.observation.processing import Processing
 
 from ..common import progress
@@ -29,7 +29,7 @@ def streamed(paths: list[str], block: int, scheduler: str | None) -> bool:
 
 def fit_long(args: argparse.Namespace, robot: rx90sym.Robot, processing: Processing, base: Any, gains: Any) -> Fit:
     """The fit of ``args.recordings`` block by block (on Dask with ``--scheduler``)."""
-    from identify.fitting import fit
+    from identify.fitting.fit import fit
 
     progress(f"identifying ({args.method}) block by block ({args.block} samples per block"
              + (f", Dask scheduler {args.scheduler}" if args.scheduler else "") + ")"

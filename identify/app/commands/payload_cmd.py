@@ -11,7 +11,7 @@ from rx90sym.files import write_json
 from rx90sym.flange_payload import flange_payload
 from identify.signal.pairing import POSITION_TOLERANCE
 
-from identify.plausibility import mass_bound_flags, payload_flags, torque_scale_flags
+from identify.fitting.plausibility import mass_bound_flags, payload_flags, torque_scale_flags
 
 from ..flags import checked, flag_lines, given_gain_flags, settle
 from ..common import (UsageError, check_output, convention_option, load_robot, progress, robot_option,
@@ -53,10 +53,10 @@ def register(sub: Any) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from identify.fitting import load_fit
+    from identify.fitting.fit import load_fit
     from identify.io.gains import apply_gains, read_gains
     from identify.io.recordings import read_recording
-    from identify.payload import payload
+    from identify.payloads.methods import payload
 
     _check_options(args)
     check_output(args.json)
@@ -141,7 +141,7 @@ def circular_gain_flags(gains: Any, paths: list[str]) -> list:
     """A warning when a recording of this payload run is one the drive gains were fitted on
     (``fitted_on`` of rx90 gains --json, matched by content): the gains were scaled to the known
     mass on it, so the payload's Mc there returns that mass and checks nothing."""
-    from identify.plausibility import Flag
+    from identify.fitting.plausibility import Flag
     from rx90sym.files import file_sha256
 
     fitted = {d.get("sha256"): d.get("source") for d in gains.extra.get("fitted_on") or () if d.get("sha256")}

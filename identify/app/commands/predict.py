@@ -45,7 +45,7 @@ def write_prediction(path: str, val: Any) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from identify.fitting import load_fit
+    from identify.fitting.fit import load_fit
 
     for out in (args.out, args.json):
         check_output(out)
@@ -55,7 +55,7 @@ def run(args: argparse.Namespace) -> int:
     if warning:
         progress(f"warning: {warning}")
     if streamed([args.recording], args.block, None):  # a long log: predicted block by block
-        from identify.stream_fit import predict_streamed
+        from identify.fitting.validation import predict_streamed
 
         val = predict_streamed(f.robot, f.result, args.recording, base=f.base,
                                block=args.block, convention=args.convention or f.model.convention, gains=f.gains,

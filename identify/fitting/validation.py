@@ -17,6 +17,9 @@ import rx90sym
 from identify.observation.matrix import automatic_cutoff, filtered_motions, presliding_base
 from identify.observation.processing import RestPolicy, has_policy, predicted_rest
 from identify.estimation.results import IdentificationResult, json_number
+from identify.io.blocks import block_source
+from identify.observation.matrix import column_regressor
+from identify.observation.stream import DEFAULT_BLOCK, StreamSettings, piece, plan_windows, scan_all, windows_in_order
 
 __all__ = ["Validation", "predict", "validate"]
 
@@ -143,3 +146,33 @@ def predict(robot: rx90sym.Robot, result: IdentificationResult, recording: Any, 
 def validate(robot: rx90sym.Robot, result: IdentificationResult, recording: Any, **options: Any) -> Validation:
     """Cross-validation: torque error per joint on a recording not used in the fit (see :func:`predict`)."""
     return predict(robot, result, recording, **options)
+
+
+def predict_streamed(robot: rx90sym.Robot, result: IdentificationResult, recording: Any, base: Any = None,
+                     cutoff: float | None = None, decimate_to: float | None = 50.0, spring: bool = True,
+                     min_velocity: float | None = None, delay: float = 0.0, block: int = DEFAULT_BLOCK,
+                     convention: str | None = None, gains: Any = None, rest: RestPolicy = "zero-coulomb") -> Validation:
+    """:func:`identify.predict` on a recording of any length: predicted and measured torques block by block
+    (only the decimated torques are held, n columns at the decimated rate)."""
+    base = presliding_base(robot, base, rest if min_velocity else None)
+    beta = base_vector(result, base, robot)
+    src = block_source(recording, robot, convention, gains)
+    # As identify.predict: every sample predicted (a dropped joint's rest with Coulomb 0).
+    settings = StreamSettings(cutoff, decimate_to or None, min_velocity or None, predicted_rest(rest), float(delay),
+                              spring, int(block))
+    scans, fc = scan_all([src], settings)
+    plans, _ = plan_windows(scans[0], fc, settings)
+    names, regressor = column_regressor(robot, base)
+    parts = []
+    for plan, window, rec, _ in windows_in_order([src], [plans]):
+        m = piece(robot, rec, window, plan, fc, settings, regressor, names, 0).motion
+        rows = m.measured if m.measured is not None else slice(None)  # as identify.predict: measured samples
+        parts.append((m.Y[rows], (m.Phi @ beta)[rows], m.t[rows], m.moving[rows]))
+    Y, pred, t, mov = (np.concatenate(a) for a in zip(*parts))
+    err = Y - pred
+    every = np.ones_like(mov)
+    return Validation(
+        relative_error_pct=_relative(err, Y, every), rms_error=_rms(err, every), measured=Y, predicted=pred, t=t,
+        source=src.source, relative_error_pct_moving=_relative(err, Y, mov), rms_error_moving=_rms(err, mov),
+        moving_fraction=mov.mean(axis=0), moving_threshold=settings.min_velocity, moving=mov, cutoff=fc,
+        rate=plans[0].rate)

@@ -37,7 +37,7 @@ from identify.estimation.least_squares import triangular_cond, weighted_least_sq
 from identify.observation.matrix import FilteredMotion, column_regressor, filtered_motion, stack_rows
 from identify.signal.pairing import POSITION_TOLERANCE, PairedRuns, pair_runs
 from identify.estimation.results import IdentificationResult, json_number
-from identify.plausibility import gain_flags, raise_errors
+from identify.fitting.plausibility import gain_flags, raise_errors
 
 __all__ = ["DriveGainsResult", "drive_gains", "GAIN_METHODS", "DEFAULT_METHOD", "FLAG_PCT"]
 
@@ -180,7 +180,7 @@ def drive_gains(robot: rx90sym.Robot, empty: Sequence[Recording], loaded: Sequen
         flag_pct: flag a gain whose relative sigma exceeds this, %.
         position_tol: same-motion: largest position gap between paired runs, rad.
         base: base parameters of ``robot`` (``global``; computed when None).
-        cutoff, decimate_to, min_velocity, spring: filtering as in :func:`identify.identify`.
+        cutoff, decimate_to, min_velocity, spring: filtering as in :func:`identify.fit`.
         iterations: at most this many instrumental-variable iterations (0: least squares, biased
             toward zero gains by the current noise).
         bootstrap_seed: seed of the segment bootstrap (identify.estimation.bootstrap) whose sigma,

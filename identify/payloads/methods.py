@@ -11,7 +11,7 @@ observation matrix Wc is the ten columns of link n in the standard regressor (eq
 - method 4 (eq. 29): global system of empty and loaded motions, which may differ.
 
 Each has a constrained variant (payload pseudo-inertia PSD, mass within a scale's tolerance),
-and identify.payload_monitor.PayloadMonitor updates method 4 after every new loaded motion (the
+and identify.monitor.payload.PayloadMonitor updates method 4 after every new loaded motion (the
 paper's conclusion).
 """
 from __future__ import annotations
@@ -33,7 +33,7 @@ from identify.signal.filtering import choose_cutoff
 from identify.observation.matrix import column_regressor, filtered_motion, stack_rows
 from identify.signal.pairing import POSITION_TOLERANCE, PairedRuns, pair_runs
 from identify.estimation.results import IdentificationResult
-from identify.payload_result import PayloadResult
+from identify.payloads.result import PayloadResult
 
 METHODS = (1, 2, 3, 4)
 # A loaded motion must move the wrist: otherwise Wc is (nearly) rank deficient (eq. 22).
@@ -241,7 +241,7 @@ def grouping_relations(robot: rx90sym.Robot, base: Any) -> np.ndarray:
 
 
 def _method_2(robot, base, empty, loaded, options, **_):
-    from identify.fitting import fit
+    from identify.fitting.fit import fit
 
     kw = {k: options[k] for k in ("cutoff", "decimate_to", "spring", "min_velocity", "delay") if k in options}
     # One processing for both runs (their difference is the payload): not chosen on each run.

@@ -20,13 +20,13 @@ __all__ = ["chosen_friction", "defaulted_travels", "friction_columns"]
 def chosen_friction(robot: rx90sym.Robot, recordings: Sequence[Any], base: Any, p: Processing, method: str,
                      choice: Any, options: dict[str, Any]) -> tuple[FrictionForm, dict | None]:
     """(the friction form, one or one per joint; the processing choice's record): chosen per joint by the
-    cross-validation (identify.observation.friction_choice) where it is left open and the processing
+    cross-validation (identify.estimation.friction_choice) where it is left open and the processing
     cross-validated (not for the consistent method: a URDF holds Coulomb + viscous), else as asked."""
     if choice is None:
         return p.friction_form, None
     if p.friction is not None or method == "consistent":
         return p.friction_form, choice.to_dict()
-    from identify.observation.friction_choice import choose_friction
+    from identify.estimation.friction_choice import choose_friction
 
     forms = choose_friction(robot, recordings, base, options)
     record = choice.to_dict()

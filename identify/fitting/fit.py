@@ -10,6 +10,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass, replace
 from pathlib import Path
+from types import SimpleNamespace
 from typing import Any, Sequence
 
 import numpy as np
@@ -19,21 +20,21 @@ from rx90sym.files import write_json
 
 from identify.estimation.bootstrap import BLOCK_S, DRAWS, bootstrap_std, segment_bootstrap_std
 from identify.estimation.consistent_fit import ConsistentResult
-from identify.plausibility import Flag
-from identify.estimation.results import IdentificationResult, json_number
-from identify.fit_file import SCHEMA_VERSION, FitModel, gains_of, read_fit_file, robot_of
+from identify.fitting.plausibility import Flag
+from identify.estimation.results import METHODS, IdentificationResult, json_number
+from identify.fitting.file import SCHEMA_VERSION, FitModel, gains_of, read_fit_file, robot_of
 from identify.io.gains import DriveGains
 from identify.observation.friction_model import friction_base
 from identify.observation.matrix import Observation, coulomb_terms, observation_matrix
 from identify.io.recordings import layout_summary
 from identify.observation.processing import Processing, friction_label, has_policy, has_smooth_friction
-from identify.fit_friction import chosen_friction, defaulted_travels, friction_columns
-from identify.signal.delay import DelayEstimate, estimate_delay
-from identify.validation import Validation, predict
+from identify.fitting.friction import chosen_friction, defaulted_travels, friction_columns
+from identify.estimation.delay import DelayEstimate, estimate_delay
+from identify.fitting.streamed import DEFAULT_BLOCK, BootstrapSpec, ProcessingChoice, fit_streamed
+from identify.fitting.validation import Validation, predict
 
 __all__ = ["METHODS", "Bootstrap", "Fit", "fit", "load_fit"]
 
-METHODS = ("ols", "wls", "consistent")
 #: Segment bootstrap: block length [s] and number of draws (the library's one bootstrap).
 BOOTSTRAP_BLOCK_S = BLOCK_S
 BOOTSTRAP_DRAWS = DRAWS
@@ -82,7 +83,7 @@ class Fit:
     delay_estimate: the lag search (None when not run or loaded); delay_estimate_s [s];
     spring: how the spring entered (JSON entry); bootstrap, essential, validation: None until
     asked (:meth:`bootstrapped`, :meth:`with_essential`, :meth:`validated`); flags: the
-    plausibility warnings of the fit (identify.plausibility, :meth:`with_flags`); recordings: per
+    plausibility warnings of the fit (identify.fitting.plausibility, :meth:`with_flags`); recordings: per
     recording its samples, segments, samples bridged over lost packets and stale rows dropped
     (:func:`identify.io.recordings.layout_summary`); choice: the cross-validated processing's
     candidate table (:meth:`ProcessingChoice.to_dict`), None when the processing was given.
@@ -104,7 +105,7 @@ class Fit:
     recordings: tuple[dict, ...] = ()
     choice: dict | None = None
     block: int | None = None        # logs read block by block with this many samples (None: whole)
-    streamed: Any = None            # the block-wise fit's record (identify.stream_fit.StreamedFit)
+    streamed: Any = None            # the block-wise fit's record (identify.fitting.streamed.StreamedFit)
 
     # ------------------------------------------------------------ what the fit used
     @property
@@ -143,7 +144,7 @@ class Fit:
         Where a joint rests the Coulomb term is 0, or the presliding state with that rest policy
         (every sample is predicted, whatever the rest policy)."""
         if self.block is not None:  # a long log: block by block, as it was fitted
-            from identify.stream_fit import predict_streamed
+            from identify.fitting.validation import predict_streamed
 
             return predict_streamed(self.robot, result or self.result, recording, base=self.base, block=self.block,
                                     convention=self.model.convention, gains=self.gains, **self.filtering())
@@ -274,8 +275,6 @@ def fit(robot: rx90sym.Robot, recordings: Sequence[Any], processing: Processing 
     is cross-validated block by block as on whole recordings (the friction form stays coulomb).
     """
     if block is not None or client is not None:
-        from identify.stream_fit import fit_in_blocks
-
         if processing is not None and has_smooth_friction(processing.friction):
             raise ValueError(f"fit: friction form {processing.friction!r} searches its velocity scales on whole "
                              f"recordings, not block by block: give friction 'coulomb', or no block")
@@ -354,3 +353,49 @@ def _solve(robot: rx90sym.Robot, obs: Observation, base: Any, method: str,
     if consistent_options.get("physical_prior") is not None and "covariance" not in consistent_options:
         consistent_options = {**consistent_options, "covariance": _honest_covariance(obs, result)}
     return consistent_fit(robot, result, base, **consistent_options)
+
+
+def fit_in_blocks(robot: rx90sym.Robot, recordings: Sequence[Any], processing: Any = None, method: str = "wls", *,
+                  base: Any = None, gains: Any = None, convention: str | None = None, spring_source: str | None = None,
+                  block: int | None = None, client: Any = None, bootstrap_seed: int = 0,
+                  **consistent_options: Any) -> Any:
+    """:func:`identify.fit` block by block (``identify.fit(..., block=..., client=...)`` calls this): a
+    :class:`identify.Fit` without an observation matrix, its bootstrap computed on the way."""
+    from identify.observation.spring_fit import BaseWithSpring, spring_summary
+
+    p = processing if processing is not None else Processing()
+    block = DEFAULT_BLOCK if block is None else int(block)
+    base = base if base is not None else rx90sym.base_parameters(robot)
+    recordings = list(recordings) if isinstance(recordings, (list, tuple)) else [recordings]
+    spec = BootstrapSpec(BOOTSTRAP_BLOCK_S, BOOTSTRAP_DRAWS, bootstrap_seed)
+    sf = fit_streamed(robot, recordings, method, base, p.cutoff, p.decimate_to, p.min_velocity, p.rest, p.delay,
+                      p.spring, p.estimate_delay, block, client, spec, convention, gains, p.cross_validates,
+                      **consistent_options)
+    rest = sf.settings.rest  # the policy given, or chosen by the cross-validation
+    model = FitModel.of(robot, convention=convention, gains=gains.to_dict() if gains is not None else None,
+                        rest=rest, min_velocity=p.min_velocity, spring=spring_source or _spring_label(robot, base),
+                        cutoff_hz=sf.cutoff, decimate_to_hz=sf.settings.decimate_to, rate_hz=sf.rate,
+                        delay_s=sf.delay)
+    angles = [SimpleNamespace(q=sf.q_range)]  # what the spring summary reads: the range visited
+    spring = spring_summary(robot, base if isinstance(base, BaseWithSpring) else None, sf.result, angles)[0]
+    boot = Bootstrap(sf.bootstrap_std, sf.bootstrap_block / sf.rate, spec.draws, spec.seed)
+    found = sf.delay_estimate
+    return Fit(robot, sf.result, p, model, base, None, found, found.delay if found is not None else None, spring,
+               boot, block=block, streamed=sf, recordings=sf.recordings, choice=_choice_record(sf.choice, p))
+
+
+#: Why the friction form is not chosen on the block path (its velocity-scale search reads whole recordings).
+FRICTION_NOTE = ("friction form: coulomb (not chosen block by block: the smooth forms' velocity-scale search "
+                 "needs the whole recordings)")
+
+
+def _choice_record(choice: ProcessingChoice | None, p: Any) -> dict | None:
+    """The fit file's ``processing_choice`` of a block-by-block fit: the in-memory fit's record, with a
+    line saying the friction form was left at coulomb where it was open."""
+    if choice is None:
+        return None
+    record = choice.to_dict()
+    if p.friction is None:
+        record.update(friction={"form": "coulomb", "chosen": False, "reason": FRICTION_NOTE},
+                      table=record["table"] + "\n  " + FRICTION_NOTE)
+    return record

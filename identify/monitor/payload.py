@@ -10,7 +10,7 @@ import rx90sym
 from rx90sym.parameters import PAYLOAD_NAMES
 
 from identify.estimation.least_squares import compress, solve_system, stack_systems, weighted_least_squares
-from identify.payload import (PayloadResult, check_joint_count, check_wrist_motion, estimates_in_tip_frame,
+from identify.payloads.methods import (PayloadResult, check_joint_count, check_wrist_motion, estimates_in_tip_frame,
                               payload_estimates, payload_motions, payload_rows, recording_list, result_subset)
 
 __all__ = ["MonitorStep", "PayloadMonitor"]

@@ -1,13 +1,13 @@
 """Identification and prediction on logs of any length: the real-data fit streamed block by block.
 
-:func:`fit_streamed` does what :func:`identify.fit_recordings` does (rest policy, torque-delay
+:func:`fit_streamed` does what :func:`identify.fit` does (rest policy, torque-delay
 estimate, one filtering, (weighted) least squares, optionally the consistent fit) plus the segment
 bootstrap, without ever holding a full-rate array of a whole log: recordings are read in blocks
 (:mod:`identify.io.blocks`), filtered in overlapping blocks (:mod:`identify.signal.blocks`), turned
 into decimated rows block by block (:mod:`identify.observation.stream`) and folded into the
 per-joint triangular factors (:mod:`identify.estimation.incremental_qr`) from which eqs. 9-15 follow.
 Without a cut-off the processing is first chosen by blocked cross-validation, block by block too
-(:mod:`identify.observation.stream_cv`).
+(:mod:`identify.estimation.stream_cv`).
 
 With a Dask ``client`` every block is a task (filtering, regressor, parallel decimation and the
 block's QR run on the workers); the client folds the factors in block order, so the result is the
@@ -16,7 +16,6 @@ serial one (the same operations in the same order).
 from __future__ import annotations
 
 from dataclasses import dataclass, replace
-from types import SimpleNamespace
 from typing import Any, Iterable, Sequence
 
 import numpy as np
@@ -26,18 +25,17 @@ import rx90sym
 from identify.estimation.bootstrap import SegmentBootstrap
 from identify.estimation.incremental_qr import JointFactors, stacked_rows
 from identify.estimation.least_squares import solve_joint_systems
-from identify.estimation.results import IdentificationResult
+from identify.estimation.results import METHODS, IdentificationResult
 from identify.io.blocks import BlockSource, block_source
 from identify.observation.cross_validation import ProcessingChoice
-from identify.observation.matrix import DEFAULT_MIN_VELOCITY, DEFAULT_REST, column_regressor, presliding_base
-from identify.observation.processing import RestPolicy, drops_rest, predicted_rest
+from identify.observation.matrix import DEFAULT_MIN_VELOCITY, DEFAULT_REST, presliding_base
+from identify.observation.processing import RestPolicy, drops_rest
 from identify.observation.stream import (DEFAULT_BLOCK, Piece, Plan, Scan, StreamSettings, in_order, piece,
                                          plan_windows, scan_all, windows_in_order)
-from identify.observation.stream_cv import choose_processing_streamed, scans_for_choice
-from identify.signal.delay import DelayEstimate, delay_grid, joint_log_rms, refined_delay
-from identify.validation import Validation, _relative, _rms, base_vector
+from identify.estimation.stream_cv import choose_processing_streamed, scans_for_choice
+from identify.estimation.delay import DelayEstimate, delay_grid, joint_log_rms, refined_delay
 
-__all__ = ["BootstrapSpec", "StreamedFit", "fit_in_blocks", "fit_streamed", "predict_streamed"]
+__all__ = ["BootstrapSpec", "StreamedFit", "fit_streamed"]
 
 
 @dataclass(frozen=True)
@@ -179,7 +177,7 @@ def fit_streamed(robot: rx90sym.Robot, recordings: Sequence[Any], method: str = 
                  block: int = DEFAULT_BLOCK, client: Any = None, bootstrap: BootstrapSpec | None = None,
                  convention: str | None = None, gains: Any = None, cross_validate: bool | None = None,
                  **consistent_options: Any) -> StreamedFit:
-    """:func:`identify.fit_recordings` on recordings of any length, block by block.
+    """:func:`identify.fit` on recordings of any length, block by block.
 
     recordings: CSV paths (streamed), :class:`~identify.Recording` objects or
     :class:`~identify.io.blocks.BlockSource`; block: raw samples per block core (peak memory grows
@@ -187,13 +185,12 @@ def fit_streamed(robot: rx90sym.Robot, recordings: Sequence[Any], method: str = 
     blocks on (None: here); bootstrap: also the segment-bootstrap σ; convention, gains: how CSV files
     are read; cross_validate: choose the cut-off, decimation and (``rest`` None) the rest policy per
     joint by blocked cross-validation, block by block
-    (:func:`identify.observation.stream_cv.choose_processing_streamed`); None: whenever ``cutoff`` is
+    (:func:`identify.estimation.stream_cv.choose_processing_streamed`); None: whenever ``cutoff`` is
     None, as :class:`identify.Processing`; ``decimate_to`` is then the default candidate's. rest: None
     is open (chosen by the cross-validation, else zero-coulomb). The other arguments are those of
-    :func:`identify.fit_recordings`.
+    :func:`identify.fit`.
     """
     from identify.estimation.consistent_fit import consistent_fit
-    from identify.fitting import METHODS
 
     if method not in METHODS:
         raise ValueError(f"method must be one of {METHODS}, got {method!r}")
@@ -243,82 +240,3 @@ def fit_streamed(robot: rx90sym.Robot, recordings: Sequence[Any], method: str = 
                        np.vstack([np.min([s.q_range[0] for s in scans], axis=0),
                                   np.max([s.q_range[1] for s in scans], axis=0)]),
                        tuple(s.layout() for s in scans), choice)
-
-
-def predict_streamed(robot: rx90sym.Robot, result: IdentificationResult, recording: Any, base: Any = None,
-                     cutoff: float | None = None, decimate_to: float | None = 50.0, spring: bool = True,
-                     min_velocity: float | None = None, delay: float = 0.0, block: int = DEFAULT_BLOCK,
-                     convention: str | None = None, gains: Any = None, rest: RestPolicy = "zero-coulomb") -> Validation:
-    """:func:`identify.predict` on a recording of any length: predicted and measured torques block by block
-    (only the decimated torques are held, n columns at the decimated rate)."""
-    base = presliding_base(robot, base, rest if min_velocity else None)
-    beta = base_vector(result, base, robot)
-    src = block_source(recording, robot, convention, gains)
-    # As identify.predict: every sample predicted (a dropped joint's rest with Coulomb 0).
-    settings = StreamSettings(cutoff, decimate_to or None, min_velocity or None, predicted_rest(rest), float(delay),
-                              spring, int(block))
-    scans, fc = scan_all([src], settings)
-    plans, _ = plan_windows(scans[0], fc, settings)
-    names, regressor = column_regressor(robot, base)
-    parts = []
-    for plan, window, rec, _ in windows_in_order([src], [plans]):
-        m = piece(robot, rec, window, plan, fc, settings, regressor, names, 0).motion
-        rows = m.measured if m.measured is not None else slice(None)  # as identify.predict: measured samples
-        parts.append((m.Y[rows], (m.Phi @ beta)[rows], m.t[rows], m.moving[rows]))
-    Y, pred, t, mov = (np.concatenate(a) for a in zip(*parts))
-    err = Y - pred
-    every = np.ones_like(mov)
-    return Validation(
-        relative_error_pct=_relative(err, Y, every), rms_error=_rms(err, every), measured=Y, predicted=pred, t=t,
-        source=src.source, relative_error_pct_moving=_relative(err, Y, mov), rms_error_moving=_rms(err, mov),
-        moving_fraction=mov.mean(axis=0), moving_threshold=settings.min_velocity, moving=mov, cutoff=fc,
-        rate=plans[0].rate)
-
-
-def fit_in_blocks(robot: rx90sym.Robot, recordings: Sequence[Any], processing: Any = None, method: str = "wls", *,
-                  base: Any = None, gains: Any = None, convention: str | None = None, spring_source: str | None = None,
-                  block: int | None = None, client: Any = None, bootstrap_seed: int = 0,
-                  **consistent_options: Any) -> Any:
-    """:func:`identify.fit` block by block (``identify.fit(..., block=..., client=...)`` calls this): a
-    :class:`identify.Fit` without an observation matrix, its bootstrap computed on the way."""
-    from identify.fitting import BOOTSTRAP_BLOCK_S, BOOTSTRAP_DRAWS, Bootstrap, Fit, _spring_label
-    from identify.fit_file import FitModel
-    from identify.observation.processing import Processing
-    from identify.observation.spring_fit import BaseWithSpring, spring_summary
-
-    p = processing if processing is not None else Processing()
-    block = DEFAULT_BLOCK if block is None else int(block)
-    base = base if base is not None else rx90sym.base_parameters(robot)
-    recordings = list(recordings) if isinstance(recordings, (list, tuple)) else [recordings]
-    spec = BootstrapSpec(BOOTSTRAP_BLOCK_S, BOOTSTRAP_DRAWS, bootstrap_seed)
-    sf = fit_streamed(robot, recordings, method, base, p.cutoff, p.decimate_to, p.min_velocity, p.rest, p.delay,
-                      p.spring, p.estimate_delay, block, client, spec, convention, gains, p.cross_validates,
-                      **consistent_options)
-    rest = sf.settings.rest  # the policy given, or chosen by the cross-validation
-    model = FitModel.of(robot, convention=convention, gains=gains.to_dict() if gains is not None else None,
-                        rest=rest, min_velocity=p.min_velocity, spring=spring_source or _spring_label(robot, base),
-                        cutoff_hz=sf.cutoff, decimate_to_hz=sf.settings.decimate_to, rate_hz=sf.rate,
-                        delay_s=sf.delay)
-    angles = [SimpleNamespace(q=sf.q_range)]  # what the spring summary reads: the range visited
-    spring = spring_summary(robot, base if isinstance(base, BaseWithSpring) else None, sf.result, angles)[0]
-    boot = Bootstrap(sf.bootstrap_std, sf.bootstrap_block / sf.rate, spec.draws, spec.seed)
-    found = sf.delay_estimate
-    return Fit(robot, sf.result, p, model, base, None, found, found.delay if found is not None else None, spring,
-               boot, block=block, streamed=sf, recordings=sf.recordings, choice=_choice_record(sf.choice, p))
-
-
-#: Why the friction form is not chosen on the block path (its velocity-scale search reads whole recordings).
-FRICTION_NOTE = ("friction form: coulomb (not chosen block by block: the smooth forms' velocity-scale search "
-                 "needs the whole recordings)")
-
-
-def _choice_record(choice: ProcessingChoice | None, p: Any) -> dict | None:
-    """The fit file's ``processing_choice`` of a block-by-block fit: the in-memory fit's record, with a
-    line saying the friction form was left at coulomb where it was open."""
-    if choice is None:
-        return None
-    record = choice.to_dict()
-    if p.friction is None:
-        record.update(friction={"form": "coulomb", "chosen": False, "reason": FRICTION_NOTE},
-                      table=record["table"] + "\n  " + FRICTION_NOTE)
-    return record

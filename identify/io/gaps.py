@@ -8,7 +8,7 @@ previous row, the time stamp advancing). Both are facts about the data, not corr
   its time becomes a lost packet like any other;
 * a time step longer than :data:`LOST_STEPS` median steps has lost packets. Up to ``max_gap``
   seconds (:data:`DEFAULT_MAX_GAP`), the gap is bridged when resampling (cubic Hermite with the
-  recorded velocities, :mod:`identify.signal.resampling`) and the bridged samples are marked as
+  recorded velocities, :mod:`identify.io.resampling`) and the bridged samples are marked as
   not measured (``Recording.measured``): they keep the filters continuous but never enter the
   observation matrix; a longer gap starts a new segment (``Recording.segment``), filtered and
   differentiated on its own.
@@ -27,11 +27,14 @@ import numpy as np
 
 from rx90sym.recording import RecordingError
 
-from identify.signal.filtering import EDGE_PERIODS
-
-__all__ = ["DEFAULT_MAX_GAP", "LOST_STEPS", "MIN_SEGMENT_ROWS", "SPLITS_LISTED", "Gap", "LogGaps", "stale_rows", "find_gaps",
+__all__ = ["EDGE_PERIODS", "DEFAULT_MAX_GAP", "LOST_STEPS", "MIN_SEGMENT_ROWS", "SPLITS_LISTED", "Gap", "LogGaps", "stale_rows", "find_gaps",
            "short_segments", "all_segments_short"]
 
+#: Samples dropped at each end by :func:`identify.signal.filtering.derivatives`, in periods of the cut-off frequency.
+#: The impulse response of the order-4 Butterworth filter has decayed to 1e-3 of its peak after
+#: 3 periods of the cut-off (1e-4 after 4), so the start-up transients left by the forward–backward
+#: pass (already reduced by sosfiltfilt's odd-extension padding) are gone after 3 periods.
+EDGE_PERIODS = 3.0
 #: Longest gap (s) bridged by interpolation; a longer one starts a new segment.
 DEFAULT_MAX_GAP = 0.05
 #: A time step longer than this many median steps has lost at least one packet (host-clock jitter

@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from identify.signal.gaps import LOST_STEPS
+from identify.io.gaps import LOST_STEPS
 
 __all__ = ["STEP_RESOLUTION", "StepCounts", "log_steps", "step_figures"]
 

@@ -8,7 +8,7 @@ rest stays 0). Used to put an irregular log on a uniform grid (:func:`identify.r
 second run on the first one's time stamps (:func:`identify.pair_runs`), always before filtering.
 
 Lost packets: a new time stamp inside a step of the recording longer than
-:data:`identify.signal.gaps.LOST_STEPS` median steps, or next to a sample that was not measured,
+:data:`identify.io.gaps.LOST_STEPS` median steps, or next to a sample that was not measured,
 is marked as bridged (``Recording.measured`` False). A recording made of segments is put on one
 grid per segment (``t0 + k/rate`` from each segment's first sample).
 """
@@ -23,7 +23,7 @@ import numpy as np
 from rx90sym.messages import plain
 from rx90sym.recording import Recording
 
-from identify.signal.gaps import LOST_STEPS
+from identify.io.gaps import LOST_STEPS
 
 __all__ = ["concatenate", "interpolate", "resample", "uniform_grid"]
 
