@@ -26,7 +26,7 @@ from ..common import (UsageError, check_output, convention_option, progress, rea
 from .identify_runs import block_option, fit_long, streamed
 
 if TYPE_CHECKING:  # the method is imported when the command runs, not for its --help
-    from identify.fitting.fit import Fit
+    from identify.fitting.record import Fit
 
 
 def _delay(text: str) -> str | float:
@@ -243,20 +243,15 @@ def run(args: argparse.Namespace) -> int:
 
 def physical_prior(args: argparse.Namespace, robot: rx90sym.Robot) -> Any:
     """The prior of a consistent fit (--prior), or None with a line saying the split is arbitrary."""
-    from identify.estimation.consistency.prior import PhysicalPrior
+    from identify.estimation.consistency.prior import nominal_prior
 
     if args.prior == "none":
         progress("no prior (--prior none): the split of what the data cannot see is arbitrary")
         return None
-    values = rx90sym.nominal_parameters(robot, args.prior)
-    if values is None:
-        progress(f"robot {robot.name!r} has no nominal parameters: the split of what the data cannot see is "
-                 f"arbitrary (give --prior FILE)")
-        return None
-    source = (args.prior if args.prior is not None else
-              f"[nominal] of {robot.source}" if robot.urdf is None else f"URDF inertials of {robot.source}")
-    progress(f"prior: {source}")
-    return PhysicalPrior(values, source)
+    prior = nominal_prior(robot, args.prior, progress)  # the library's default prior, said alike
+    if prior is not None:
+        progress(f"prior: {prior.source}")
+    return prior
 
 
 def _fit_flags(f: Fit, method: str, prior: Any = None) -> list:

@@ -53,7 +53,7 @@ def register(sub: Any) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from identify.fitting.fit import load_fit
+    from identify.fitting.record import load_fit
     from identify.io.gains import apply_gains, read_gains
     from identify.io.recordings import read_recording
     from identify.payloads.methods import payload
