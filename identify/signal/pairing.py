@@ -105,6 +105,11 @@ def pair_runs(empty: Recording, loaded: Recording, position_tol: float = POSITIO
     """
     if empty.n_joints != loaded.n_joints:
         raise ValueError(f"{empty.source} has {empty.n_joints} joints and {loaded.source} {loaded.n_joints}")
+    for rec in (empty, loaded):
+        if rec.n_segments > 1:
+            raise ValueError(f"{rec.source}: {rec.n_segments} segments (gaps too long to bridge): paired runs are "
+                             f"compared sample by sample; bridge the gaps (convert --max-gap) or select a window "
+                             f"without them (--rows)")
     from scipy.interpolate import CubicSpline
     from scipy.optimize import minimize_scalar
 
@@ -136,10 +141,11 @@ def pair_runs(empty: Recording, loaded: Recording, position_tol: float = POSITIO
         start = int(np.argmin(np.abs(loaded.t - t_l[first])))
         rows = slice(start, start + e.n_samples)
         l_rec = loaded.select(rows)
-        values = {"q": l_rec.q, "tau": l_rec.tau, "dq": l_rec.dq, "current": l_rec.current, "aux": l_rec.aux}
+        values = {"q": l_rec.q, "tau": l_rec.tau, "dq": l_rec.dq, "current": l_rec.current, "aux": l_rec.aux,
+                  "measured": l_rec.measured}
     else:
         r = interpolate(loaded, np.clip(t_l[first:last + 1], loaded.t[0], loaded.t[-1]))
-        values = {"q": r.q, "tau": r.tau, "dq": r.dq, "current": r.current, "aux": r.aux}
+        values = {"q": r.q, "tau": r.tau, "dq": r.dq, "current": r.current, "aux": r.aux, "measured": r.measured}
     l_new = replace(loaded, t=e.t, meta={**loaded.meta, "paired_with": empty.source, "lag_s": lag},
                     **values)
     diff = np.abs(e.q - l_new.q)
