@@ -154,7 +154,8 @@ def _check_inputs(robot: rx90sym.Robot, empty: Sequence[Recording], loaded: Sequ
         raise ValueError("drive_gains: every gain is fixed; nothing to identify")
     if method == "same-motion" and len(empty) != len(loaded):
         raise ValueError(f"same-motion pairs each loaded run with the same motion run empty: got "
-                         f"{len(empty)} empty and {len(loaded)} loaded recordings")
+                         f"{len(empty)} empty and {len(loaded)} loaded recordings (--method global takes any "
+                         f"number of each)")
 
 
 def drive_gains(robot: rx90sym.Robot, empty: Sequence[Recording], loaded: Sequence[Recording], mass: float,
@@ -230,7 +231,7 @@ def drive_gains(robot: rx90sym.Robot, empty: Sequence[Recording], loaded: Sequen
         raise swapped_runs_error(exc, lambda: drive_gains(
             robot, loaded, empty, mass, method, fix, mass_std, side, offsets, flag_pct, position_tol, base, cutoff,
             decimate_to, min_velocity, spring, iterations, bootstrap_seed, _swap_check=False),
-            [r.source for r in empty], [r.source for r in loaded]) from None
+            [r.source for r in empty], [r.source for r in loaded], robot_fit) from None
     flagged = tuple(j + 1 for j in free if not rel[j] <= flag_pct)
     gains = DriveGains(k, side=side, current_offsets=_current_offsets(i0, k, Rt),
                        std=np.abs(k) * rel / 100, robot=robot.name, source=f"drive_gains:{method}",

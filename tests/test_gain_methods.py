@@ -165,3 +165,19 @@ def test_ur10e_pair_both_methods_agree_within_two_sigma(tmp_path):
     with pytest.raises(PlausibilityError, match="the payload is in") as info:
         drive_gains(robot, [l], [e], b.MASS, method="same-motion")
     assert info.value.flags[0].code == "runs_swapped"
+
+
+@pytest.mark.slow
+def test_global_tells_swapped_runs_from_reversed_currents(rx90, pair, mass):
+    """Both flip every gain; the robot's viscous friction (identified by global) flips only with the
+    runs: currents all logged with their sign reversed are not called a swap."""
+    empty, loaded = pair
+    with pytest.raises(PlausibilityError) as info:
+        drive_gains(rx90, [loaded], [empty], mass, method="global")
+    assert info.value.flags[0].code == "runs_swapped"
+    reversed_ = [replace(r, current=-r.current) for r in (empty, loaded)]
+    with pytest.raises(PlausibilityError) as info:
+        drive_gains(rx90, [reversed_[0]], [reversed_[1]], mass, method="global")
+    flag = info.value.flags[0]
+    assert flag.code == "gains_negative" and "the runs are not swapped" in flag.action
+    assert "viscous friction is positive" in flag.action

@@ -3,7 +3,9 @@
 - **Swapped runs.** With the payload in the runs given as empty, both methods return the gains
   with their sign reversed (the known mass pulls the other way: the payload's identified mass is
   positive only with the runs the right way round). :func:`swapped_runs_error` confirms it by
-  fitting the runs swapped: the loaded runs are those for which most gains come out positive.
+  fitting the runs swapped: the loaded runs are those for which most gains come out positive
+  (with the global method, unless the robot's viscous friction is positive as given: then every
+  current is logged with its sign reversed, which also flips every gain).
 - **Same-motion against global.** The two methods estimate the same gains from the same runs by
   different routes (the robot's own dynamics cancelled or identified). :func:`compare_methods`
   gives, per joint, ``z = |k_a − k_b| / sqrt(σ_a² + σ_b²)`` with each σ the method's own
@@ -22,6 +24,7 @@ from identify.plausibility import Flag, PlausibilityError
 
 if TYPE_CHECKING:  # for annotations only
     from identify.drive_gains import DriveGainsResult
+    from identify.estimation.results import IdentificationResult
 
 __all__ = ["AGREE_SIGMAS", "GainComparison", "compare_methods", "swapped_runs_error"]
 
@@ -86,14 +89,33 @@ def compare_methods(a: "DriveGainsResult", b: "DriveGainsResult", sigmas: float 
     return GainComparison((a.method, b.method), gains, std, z, agree, float(sigmas))
 
 
+def _viscous(robot_fit: "IdentificationResult | None") -> dict[str, float]:
+    """The robot's viscous friction coefficients FVj identified by the global method (N·m·s/rad)."""
+    if robot_fit is None:
+        return {}
+    return {n: float(v) for n, v in zip(robot_fit.names, robot_fit.values) if n.startswith("FV")}
+
+
 def swapped_runs_error(error: PlausibilityError, swapped: Callable[[], "DriveGainsResult"],
-                       empty: Sequence[str], loaded: Sequence[str]) -> PlausibilityError:
+                       empty: Sequence[str], loaded: Sequence[str],
+                       robot_fit: "IdentificationResult | None" = None) -> PlausibilityError:
     """The refusal of gains that came out mostly negative: "runs swapped" when the fit of the runs
     swapped (``swapped()``) gives mostly positive gains, else ``error`` with what the swap gave.
+
+    Swapped runs and currents all logged with their sign reversed both flip every gain; the global
+    method tells them apart by the robot's own parameters (``robot_fit``), whose sign follows the
+    gains' only for swapped runs: with the viscous friction FVj mostly positive as given, the runs
+    are not swapped (the currents are reversed). Same-motion cannot tell (the robot cancels out).
 
     empty, loaded: the sources of the runs as given, named by the message.
     """
     original = next(f for f in error.flags if f.code == "gains_negative")
+    fv = _viscous(robot_fit)
+    if fv and sum(v > 0 for v in fv.values()) > len(fv) / 2:
+        shown = ", ".join(f"{n} {v:.3g}" for n, v in fv.items())
+        return PlausibilityError([replace(original, action=(
+            f"the runs are not swapped: with them as given the robot's viscous friction is positive ({shown}); "
+            f"the currents are logged with the sign opposite to the torques: negate them"))])
     try:
         k = swapped().gains.gains
         shown = f" ({', '.join(f'{v:.4g}' for v in k)} N m/A)"
