@@ -14,6 +14,7 @@ _EXPORTS = {
     "read_recording": "identify.io.recordings",
     "read_motor_recording": "identify.io.recordings",
     "read_log": "identify.io.logs",
+    "read_joint_files": "identify.io.joint_files",
     "write_recording": "identify.io.recordings",
     "split": "identify.io.recordings",
     # signal: filtering, resampling, pairing, delay
