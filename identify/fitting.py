@@ -273,15 +273,18 @@ def fit(robot: rx90sym.Robot, recordings: Sequence[Any], processing: Processing 
     ``dask.distributed.Client`` running the blocks (block by default 60,000 samples); the processing
     is cross-validated block by block as on whole recordings (the friction form stays coulomb).
     """
+    from identify.rank_flags import rank_flags  # the model's rank depends on the threshold: an error flag
+
     if block is not None or client is not None:
         from identify.stream_fit import fit_in_blocks
 
         if processing is not None and has_smooth_friction(processing.friction):
             raise ValueError(f"fit: friction form {processing.friction!r} searches its velocity scales on whole "
                              f"recordings, not block by block: give friction 'coulomb', or no block")
-        return fit_in_blocks(robot, recordings, processing, method, base=base, gains=gains, convention=convention,
+        done = fit_in_blocks(robot, recordings, processing, method, base=base, gains=gains, convention=convention,
                              spring_source=spring_source, block=block, client=client, bootstrap_seed=bootstrap_seed,
                              **consistent_options)
+        return done.with_flags([*done.flags, *rank_flags(done.base)])
     if method not in METHODS:
         raise ValueError(f"fit: method must be one of {METHODS}, got {method!r}")
     p = processing if processing is not None else Processing()
@@ -328,7 +331,7 @@ def fit(robot: rx90sym.Robot, recordings: Sequence[Any], processing: Processing 
     spring = spring_summary(robot, base if isinstance(base, BaseWithSpring) else None, result, recordings)[0]
     return Fit(robot, result, p, model, base, obs, found, found.delay if found is not None else None, spring,
                recordings=tuple(layout_summary(r) for r in recordings if hasattr(r, "measured_mask")),
-               choice=choice)
+               choice=choice, flags=tuple(rank_flags(base)))
 
 
 def _honest_covariance(obs: Observation, result: IdentificationResult) -> np.ndarray:
