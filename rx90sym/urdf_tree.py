@@ -14,7 +14,7 @@ from pathlib import Path
 import numpy as np
 
 from .rigid_body import RigidBody
-from .urdf_snap import SNAP_LENGTH_M, SNAP_RAD, change_line, check_tolerances, snap_origin
+from .urdf_snap import SNAP_LENGTH_M, SNAP_RAD, change_line, check_tolerances, rpy_rotation, snap_origin
 
 MOVABLE = ("revolute", "continuous", "prismatic")
 JOINT_TYPES = MOVABLE + ("fixed", "floating", "planar")
@@ -75,11 +75,7 @@ class UrdfTree:
 def rpy_matrix(r: float, p: float, y: float, snap: float = SNAP) -> np.ndarray:
     """URDF fixed-axis roll-pitch-yaw: R = Rz(y) Ry(p) Rx(r), entries within ``snap`` of 0, +-1
     made exact."""
-    cr, sr, cp, sp, cy, sy = math.cos(r), math.sin(r), math.cos(p), math.sin(p), math.cos(y), math.sin(y)
-    R = np.array([[cy * cp, cy * sp * sr - sy * cr, cy * sp * cr + sy * sr],
-                  [sy * cp, sy * sp * sr + cy * cr, sy * sp * cr - cy * sr],
-                  [-sp, cp * sr, cp * cr]])
-    return snap_rotation(R, snap)
+    return snap_rotation(rpy_rotation((r, p, y)), snap)
 
 
 def snap_rotation(R: np.ndarray, snap: float = SNAP) -> np.ndarray:
