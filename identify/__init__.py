@@ -85,6 +85,7 @@ _EXPORTS.update({
     "consistent_least_squares": "identify.estimation.consistency",
     "Bootstrap": "identify.fitting",
     "FitModel": "identify.fit_file",
+    "Flag": "identify.plausibility",
     "grouping_relations": "identify.payload",
     "DriveGainsResult": "identify.drive_gains",
     "identify": "identify.identification",       # deprecated: fit

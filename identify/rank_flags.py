@@ -10,7 +10,7 @@ from typing import Any
 
 from rx90sym.rank_gap import rank_gap
 
-from identify.plausibility import Flag
+from identify import Flag
 
 #: The flag's code (identify.app.flags.HINTS gives its command-line option).
 CODE = "rank_threshold"

@@ -2,6 +2,7 @@
 threshold flagged, the tolerances on the command line and in the fit file."""
 from __future__ import annotations
 
+import json
 import math
 import subprocess
 import sys
@@ -12,10 +13,15 @@ import numpy as np
 import pinocchio as pin
 import pytest
 
+import identify
 import rx90sym
+from identify.app.report.identify_page import identify_summary
+from identify.io.recordings import recording_from_arrays, write_recording
+from rx90sym.rank_gap import GAP_TOP, rank_gap
 from rx90sym.urdf_export import urdf_export
 from rx90sym.urdf_snap import SNAP_RAD, nearest_axis_aligned, snap_origin
 
+from motions import multisine
 from test_urdf import _max_torque_error, _pin_q, _pinocchio_chain, _rigid
 
 Q = repr(math.pi / 2)  # how a generated URDF writes pi/2
@@ -124,8 +130,6 @@ def test_snap_0_keeps_the_file_as_written_and_its_model_is_near_singular(tmp_pat
     chi = _rigid(raw, raw.parameter_vector(rx90sym.urdf_parameters(raw)))
     # the tilted axes are modelled right: Pinocchio on the file as written
     assert _max_torque_error(raw, chi, _pinocchio_chain(rounded_path, raw), 1) < 1e-9
-    from rx90sym.rank_gap import rank_gap
-
     gap = rank_gap(rx90sym.base_parameters(raw))
     assert rx90sym.base_parameters(raw).nb == 53
     assert gap is not None and gap.columns == ("ZZ2R", "IA2") and gap.joints == (2,)
@@ -134,10 +138,7 @@ def test_snap_0_keeps_the_file_as_written_and_its_model_is_near_singular(tmp_pat
 
 @pytest.mark.parametrize("name", [*rx90sym.bundled_robots()])
 def test_sound_models_have_no_rank_gap(name):
-    from rx90sym.rank_gap import GAP_TOP, rank_gap
-
-    for offsets in (False, True):
-        assert rank_gap(rx90sym.base_parameters(rx90sym.load_robot(name, offsets=offsets))) is None
+    assert rank_gap(rx90sym.base_parameters(rx90sym.load_robot(name, offsets=True))) is None
     assert GAP_TOP <= 1e-2  # measured: the smallest relative singular value of a sound model is 0.13
 
 
@@ -155,9 +156,6 @@ def test_bad_tolerances_are_refused_naming_them(tmp_path):
 # ------------------------------------------------------------------ the fit
 def _pinocchio_recording(path: Path, robot: rx90sym.Robot, seed: int):
     """A motion of the exact URDF's robot, torques by Pinocchio's RNEA on that file plus noise."""
-    from identify.io.recordings import recording_from_arrays
-    from motions import multisine
-
     model = _pinocchio_chain(path, robot)
     data = model.createData()
     t = np.arange(0, 12, 1 / 200)
@@ -168,8 +166,6 @@ def _pinocchio_recording(path: Path, robot: rx90sym.Robot, seed: int):
 
 
 def _fit(robot, rec):
-    import identify
-
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         return identify.fit(robot, [rec], identify.Processing(cutoff=10.0, estimate_delay=False, cross_validate=False,
@@ -177,8 +173,6 @@ def _fit(robot, rec):
 
 
 def test_the_twin_as_written_fits_like_the_exact_file_and_with_snap_0_carries_the_rank_error(tmp_path):
-    from identify.app.report.identify_page import identify_summary
-
     exact_path, rounded_path = _twins(tmp_path)
     exact, _ = _load(exact_path)
     rounded, _ = _load(rounded_path)
@@ -199,29 +193,19 @@ def test_the_twin_as_written_fits_like_the_exact_file_and_with_snap_0_carries_th
     assert summary.headline.startswith("Do not trust")
     text = " ".join(f"{f['message']} {f['action']}" for f in summary.flags)
     assert "rank depends on the rank threshold" in text and "excites some parameters little" not in text
-    import identify
-
     with warnings.catch_warnings(record=True):
         warnings.simplefilter("always")
         back = identify.load_fit(path)  # the robot rebuilt with the tolerances it was fitted with
     assert back.robot.urdf.snap == 0 and back.base.names == fz.base.names
     assert [f.code for f in back.flags] == ["rank_threshold"]
-
-
-def test_a_fit_file_without_snap_tolerances_rebuilds_its_urdf_as_it_was_read(tmp_path):
-    from identify.fit_file import FitModel, LEGACY_SNAP_RAD, robot_of
-
-    _, rounded_path = _twins(tmp_path)
-    raw, _ = _load(rounded_path, snap=0)
-    old = {k: v for k, v in FitModel.of(raw, convention=None, gains=None, rest="drop", min_velocity=None,
-                                         spring="none", cutoff_hz=10.0, decimate_to_hz=None, rate_hz=200.0,
-                                         delay_s=0.0).to_json().items() if not k.startswith("snap")}
-    model = FitModel.from_json(old)
-    assert model.snap_rad is None
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")
-        robot = robot_of(model, str(rounded_path))
-    assert robot.urdf.snap == LEGACY_SNAP_RAD and robot.alpha == raw.alpha  # 1.5708 kept, as then
+    # a file written before the tolerances were recorded: its URDF rebuilt as it was then read
+    old = json.loads(path.read_text())
+    del old["model"]["snap_rad"], old["model"]["snap_length_m"]
+    (tmp_path / "old.json").write_text(json.dumps(old))
+    with warnings.catch_warnings(record=True):
+        warnings.simplefilter("always")
+        legacy = identify.load_fit(tmp_path / "old.json")
+    assert legacy.robot.alpha == raw.alpha != rounded.alpha and legacy.base.names == fz.base.names
 
 
 # ------------------------------------------------------------------ command line
@@ -230,28 +214,62 @@ def _cli(*args: str) -> subprocess.CompletedProcess:
                           timeout=300)
 
 
-def test_bad_snap_values_exit_2_with_the_reason_and_write_nothing(tmp_path):
-    exact_path, rounded_path = _twins(tmp_path)
+def _main(capsys: pytest.CaptureFixture, *args: str) -> tuple[int, str, str]:
+    """rx90 in this process: exit code, stdout, stderr (argparse's refusals exit too)."""
+    from identify.app.cli import main
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("always")  # printed by rx90 as "[rx90] warning: ...", not raised
+        try:
+            code = main(list(args))
+        except SystemExit as exc:
+            code = exc.code
+    out = capsys.readouterr()
+    return code, out.out, out.err
+
+
+def test_bad_snap_values_exit_2_with_the_reason_and_write_nothing(tmp_path, capsys):
+    exact_path, _ = _twins(tmp_path)
     out = tmp_path / "model.json"
     base = ["model", "--robot", str(exact_path), "--tip", "flange", "--json", str(out)]
     for extra, words in ((["--snap", "-0.001"], "outside [0, 0.01] rad"), (["--snap", "0.02"], "outside [0, 0.01]"),
                          (["--snap", "abc"], "expected a number"), (["--snap-length", "-1e-6"], "outside [0, 0.001] m"),
                          (["--snap", "0", "--snap-length", "1e-4"], "--snap 0 turns snapping off")):
-        done = _cli(*base, *extra)
-        assert done.returncode == 2 and words in done.stderr, (extra, done.stderr)
+        code, _, err = _main(capsys, *base, *extra)
+        assert code == 2 and words in err, (extra, err)
         assert not out.exists()
-    done = _cli("model", "--robot", "ur10e", "--snap", "0.001", "--json", str(out))
-    assert done.returncode == 2 and "for a URDF --robot" in done.stderr and not out.exists()
+    code, _, err = _main(capsys, "model", "--robot", "ur10e", "--snap", "0.001", "--json", str(out))
+    assert code == 2 and "for a URDF --robot" in err and not out.exists()
 
 
-def test_the_command_line_prints_the_changes_once_and_snap_0_keeps_the_file(tmp_path):
+def test_the_command_line_prints_the_changes_once_and_snap_0_keeps_the_file(tmp_path, capsys):
     _, rounded_path = _twins(tmp_path)
     base = ["model", "--robot", str(rounded_path), "--tip", "flange", "--acceleration", "5"]
-    done = _cli(*base)
-    assert done.returncode == 0 and done.stderr.count("joint origin(s) snapped") == 1, done.stderr
-    assert "'wrist_3_joint': rpy -1.57 0 0 -> -pi/2 0 0" in done.stderr
-    assert " 90 " in done.stdout.splitlines()[3]  # joint 2's alpha, degrees: exactly 90
-    kept = _cli(*base, "--snap", "0")
-    assert kept.returncode == 0 and "snapping off" in kept.stderr and "90.0002" in kept.stdout
-    loose = _cli(*base, "--snap", "1e-4")  # 1.5708 (3.7e-6 off) snapped, -1.57 (8e-4 off) kept
-    assert loose.returncode == 0 and "'wrist_3_joint'" not in loose.stderr.split("snapped")[1].split("\n")[0]
+    code, out, err = _main(capsys, *base)
+    assert code == 0 and err.count("joint origin(s) snapped") == 1, err
+    assert "'wrist_3_joint': rpy -1.57 0 0 -> -pi/2 0 0" in err
+    assert " 90 " in out.splitlines()[3]  # joint 2's alpha, degrees: exactly 90
+    code, out, err = _main(capsys, *base, "--snap", "0")
+    assert code == 0 and "snapping off" in err and "90.0002" in out
+    code, out, err = _main(capsys, *base, "--snap", "1e-4")  # 1.5708 (3.7e-6 off) snapped, -1.57 (8e-4) kept
+    assert code == 0 and "'shoulder_lift_joint'" in err and "'wrist_3_joint'" not in err
+
+
+@pytest.mark.slow
+def test_rx90_identify_with_snap_0_fits_the_near_singular_model_with_the_error_everywhere(tmp_path):
+    exact_path, rounded_path = _twins(tmp_path)
+    exact, _ = _load(exact_path)
+    write_recording(tmp_path / "run.csv", _pinocchio_recording(exact_path, exact, 3), exact, convention="khalil")
+    fit, report = tmp_path / "fit.json", tmp_path / "report.html"
+    done = _cli("identify", str(tmp_path / "run.csv"), "--robot", str(rounded_path), "--tip", "flange",
+                "--acceleration", "5", "--cutoff", "10", "--snap", "0", "--json", str(fit), "--report", str(report))
+    assert done.returncode == 0, done.stderr
+    assert done.stderr.count("snapping off") == 1
+    assert "[rx90] error: the base-parameter regressor's rank depends on the rank threshold" in done.stderr
+    assert "flag [rank_threshold]" in done.stdout and "columns ZZ2R, IA2 of joint 2" in done.stdout
+    record = json.loads(fit.read_text())
+    assert [f["code"] for f in record["flags"] if f["severity"] == "error"] == ["rank_threshold"]
+    assert record["model"]["snap_rad"] == 0.0 and len(record["parameters"]) == 53
+    page = report.read_text()
+    assert "Do not trust this model yet" in page and "rank depends on the rank threshold" in page
+    assert "excites some parameters little" not in page
