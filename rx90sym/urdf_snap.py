@@ -109,17 +109,9 @@ _AXIS_ALIGNED = _axis_aligned()
 
 def nearest_axis_aligned(R: np.ndarray) -> tuple[np.ndarray, float]:
     """The axis-aligned rotation nearest to R and the angle [rad] of the rotation between them."""
-    traces = [float(np.trace(A.T @ R)) for A in _AXIS_ALIGNED]
-    best = int(np.argmax(traces))
-    return _AXIS_ALIGNED[best], math.acos(max(-1.0, min(1.0, (traces[best] - 1.0) / 2.0)))
-
-
-def _rpy_of(A: np.ndarray) -> tuple[float, float, float]:
-    """URDF rpy of an axis-aligned rotation, each a multiple of pi/2 (yaw 0 at gimbal lock)."""
-    pitch = math.atan2(-A[2, 0], math.hypot(A[0, 0], A[1, 0]))
-    if math.hypot(A[0, 0], A[1, 0]) < 0.5:
-        return math.atan2(-A[1, 2], A[1, 1]), pitch, 0.0
-    return math.atan2(A[2, 1], A[2, 2]), pitch, math.atan2(A[1, 0], A[0, 0])
+    A = max(_AXIS_ALIGNED, key=lambda A: float(np.trace(A.T @ R)))
+    # ||R - A||_F = 2 sqrt(2) sin(angle / 2): accurate for small angles (acos of the trace is not)
+    return A, 2.0 * math.asin(min(1.0, float(np.linalg.norm(R - A)) / (2.0 * math.sqrt(2.0))))
 
 
 def snap_origin(rpy: Sequence[float], xyz: Sequence[float], snap: float = SNAP_RAD,
@@ -134,7 +126,9 @@ def snap_origin(rpy: Sequence[float], xyz: Sequence[float], snap: float = SNAP_R
     if None in turns:  # a gimbal lock's rpy may be a right-angle rotation with other components
         A, angle = nearest_axis_aligned(rpy_rotation(rpy))
         if angle <= snap:
-            R, used_rpy = A, _rpy_of(A)
+            from .model_export import rpy as rpy_of  # URDF rpy of a rotation (yaw 0 at a gimbal lock)
+
+            R, used_rpy = A, rpy_of(A)
     used_xyz = tuple(0.0 if abs(x) <= snap_length else x for x in xyz)
     rotated = float(np.abs(rpy_rotation(rpy) - R).max()) > SILENT_RAD
     moved = max(abs(a - b) for a, b in zip(xyz, used_xyz)) > SILENT_M
@@ -144,7 +138,7 @@ def snap_origin(rpy: Sequence[float], xyz: Sequence[float], snap: float = SNAP_R
 def _angle_text(a: float) -> str:
     k = round(a / _QUARTER)
     if a == k * _QUARTER:
-        return {0: "0", 1: "pi/2", -1: "-pi/2", 2: "pi", -2: "-pi"}.get(k, f"{k}pi/2")
+        return {0: "0", 1: "pi/2", -1: "-pi/2", 2: "pi", -2: "-pi", 3: "3pi/2", -3: "-3pi/2"}.get(k, f"{k / 2:g}pi")
     return f"{a:.10g}"
 
 
