@@ -2,8 +2,8 @@
 
 The base columns' regressor, stacked on random states (the richest motion there is) with each
 column scaled to norm 1, has singular values of order 0.1-1 for a sound model (measured on every
-bundled robot and test URDF: the smallest over the largest is at least 0.05) and exactly 0 for a
-dependency, which the base parameters have grouped away (below
+bundled robot, with and without offsets, and the test URDFs: the smallest over the largest is
+0.13-0.18) and exactly 0 for a dependency, which the base parameters have grouped away (below
 :data:`rx90sym.base_parameters.RANK_TOL`). A singular value in between (:data:`GAP_TOP` and
 below) is a column that is almost, but not exactly, a combination of the others: typically a
 joint origin written 1.5708 for pi/2, which tilts an axis by 3.7e-6 rad and keeps a rotor inertia
