@@ -86,6 +86,7 @@ _EXPORTS.update({
     "consistent_least_squares": "identify.estimation.consistency",
     "Bootstrap": "identify.fitting.record",
     "FitModel": "identify.fitting.file",
+    "Flag": "identify.fitting.plausibility",
     "grouping_relations": "identify.payloads.methods",
     "DriveGainsResult": "identify.gains.drive_gains",
 })

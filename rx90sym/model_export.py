@@ -74,14 +74,6 @@ def joint_origin(robot: Robot, j: int) -> tuple[np.ndarray, np.ndarray]:
     return Rx @ Rz, np.array([robot.d[j], -sa * r, ca_ * r])
 
 
-def rpy(R: np.ndarray) -> tuple[float, float, float]:
-    """URDF roll, pitch, yaw (R = Rz(yaw) Ry(pitch) Rx(roll))."""
-    pitch = math.atan2(-R[2, 0], math.hypot(R[0, 0], R[1, 0]))
-    if math.hypot(R[0, 0], R[1, 0]) < 1e-12:  # gimbal lock: yaw 0
-        return math.atan2(-R[1, 2], R[1, 1]), pitch, 0.0
-    return math.atan2(R[2, 1], R[2, 2]), pitch, math.atan2(R[1, 0], R[0, 0])
-
-
 def quaternion(R: np.ndarray) -> np.ndarray:
     """Unit quaternion (w, x, y, z) of a rotation matrix (MuJoCo's order), w >= 0. Shepperd's
     method: the largest of 1 + trace, 1 + 2 R_ii - trace chosen as pivot, so a half turn about

@@ -26,6 +26,7 @@ from identify.fitting.friction import chosen_friction, friction_columns
 from identify.estimation.delay import estimate_delay
 from identify.fitting.streamed import DEFAULT_BLOCK, BootstrapSpec, ProcessingChoice, fit_streamed
 from identify.fitting.record import BOOTSTRAP_BLOCK_S, BOOTSTRAP_DRAWS, Bootstrap, Fit
+from identify.fitting.rank_flags import rank_flags
 
 __all__ = ["fit"]
 
@@ -69,9 +70,10 @@ def fit(robot: rx90sym.Robot, recordings: Sequence[Any], processing: Processing 
         if processing is not None and has_smooth_friction(processing.friction):
             raise ValueError(f"fit: friction form {processing.friction!r} searches its velocity scales on whole "
                              f"recordings, not block by block: give friction 'coulomb', or no block")
-        return fit_in_blocks(robot, recordings, processing, method, base=base, gains=gains, convention=convention,
+        done = fit_in_blocks(robot, recordings, processing, method, base=base, gains=gains, convention=convention,
                              spring_source=spring_source, block=block, client=client, bootstrap_seed=bootstrap_seed,
                              **consistent_options)
+        return done.with_flags([*done.flags, *rank_flags(done.base)])  # a rank that depends on the threshold
     if method not in METHODS:
         raise ValueError(f"fit: method must be one of {METHODS}, got {method!r}")
     if method == "consistent" and isinstance(consistent_options.get("physical_prior", "default"), str):
@@ -124,7 +126,7 @@ def fit(robot: rx90sym.Robot, recordings: Sequence[Any], processing: Processing 
     spring = spring_summary(robot, base if isinstance(base, BaseWithSpring) else None, result, recordings)[0]
     return Fit(robot, result, p, model, base, obs, found, found.delay if found is not None else None, spring,
                recordings=tuple(layout_summary(r) for r in recordings if hasattr(r, "measured_mask")),
-               choice=choice)
+               choice=choice, flags=tuple(rank_flags(base)))
 
 
 def _honest_covariance(obs: Observation, result: IdentificationResult) -> np.ndarray:
