@@ -18,10 +18,11 @@ from typing import Mapping, Sequence
 import numpy as np
 
 from .description import Robot
-from .model_export import (companion, companion_path, joint_terms, link_bodies, parameter_vector,  # noqa: F401
-                           payload_body, write_model)
+from .model_export import (checked_parameters, companion, companion_path, joint_terms, link_bodies,  # noqa: F401
+                           parameter_vector, payload_body, write_model)
 from .parameters import LINK_PARAMETERS
-from .rigid_body import RigidBody, physical_problem
+from .physical import body_problem
+from .rigid_body import RigidBody
 from .urdf import relative_pose, zero_poses
 from .urdf_generate import dynamics_xml, generated_urdf, gravity_note, inertial_xml
 from .urdf_tree import UrdfError
@@ -58,10 +59,8 @@ def link_inertials(robot: Robot, params: Mapping[str, float] | Sequence[float]) 
 
 
 def _problem(body: RigidBody) -> str | None:
-    """physical_problem, except that a body with all parameters exactly 0 (massless) is allowed."""
-    if body.m == 0 and not np.any(body.h) and not np.any(body.J):
-        return None
-    return physical_problem(body)
+    """rx90sym.physical.body_problem (margin 0: a massless body is allowed)."""
+    return body_problem(body.vector())
 
 
 def write_urdf(robot: Robot, params: Mapping[str, float] | Sequence[float], path: str | Path,
@@ -82,7 +81,10 @@ def write_urdf(robot: Robot, params: Mapping[str, float] | Sequence[float], path
 def urdf_export(robot: Robot, params: Mapping[str, float] | Sequence[float], path: str | Path,
                 payload: Mapping[str, float] | None = None) -> tuple[str, dict]:
     """(URDF text, companion dict) that :func:`write_urdf` writes to ``path``; nothing written."""
-    chi = parameter_vector(robot, params)
+    try:
+        chi = checked_parameters(robot, params)
+    except ValueError as exc:
+        raise UrdfError(str(exc)) from None
     _, FV, FS = joint_terms(robot, chi)
     try:
         body = payload_body(robot, payload) if payload is not None else None
