@@ -24,7 +24,8 @@ from .model_export import (actuation, checked_parameters, companion, export_join
 from .rigid_body import RigidBody
 
 # MuJoCo refuses moving bodies whose mass or principal inertia is below mjMINVAL (1e-15); a
-# body that light is a fit artefact, refused here with its name instead.
+# body that light is a fit artefact, refused here with its name instead. A consistent fit never is:
+# its margin (rx90sym.physical.DEFAULT_MARGIN, 1e-8) gives m >= 1e-8 kg, principal moments >= 2e-8.
 MIN_MASS = 1e-9          # kg
 MIN_INERTIA = 1e-12      # kg m^2, smallest principal moment about the CoG
 
