@@ -298,7 +298,7 @@ def _constrained(fit: IdentificationResult, mass: float | None, mass_tol: float)
     idx = [fit.names.index(n) for n in PAYLOAD_NAMES]
     scale = max(float(np.linalg.norm(system.z)), 1e-12)
     objective = cp.Minimize(cp.sum_squares(system.R @ x - system.z) / scale**2)
-    # The consistent fit's margin (rx90sym.physical): asked for twice, checked below, so that an
+    # The consistent fit's margin (rx90sym.physical): asked for ten times, checked below, so that an
     # export (physical_problem, margin 0) never refuses a constrained payload for solver error.
     cons = [pseudo_inertia(x[idx]) >> SOLVE_FACTOR * DEFAULT_MARGIN * np.eye(4)]
     if mass is not None:

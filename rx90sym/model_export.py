@@ -56,11 +56,16 @@ def checked_parameters(robot: Robot, params: Mapping[str, float] | Sequence[floa
     physical: rx90sym.physical.parameter_problems at margin 0, the consistent fit's own check (it
     checks its margin, so a consistent fit always passes). No exported file then holds a negative
     armature, damping or frictionloss."""
+    from .urdf_export import carried_bodies
+
     chi = parameter_vector(robot, params)
-    labels = None
+    labels, carried = None, carried_bodies(robot)
     if robot.urdf is not None:
         labels = {str(k + 1): f"parameters of link {k + 1} (URDF link {link!r})" for k, link in enumerate(robot.urdf.links)}
-    problems = parameter_problems(robot.parameter_names, chi, labels=labels)
+        for body, (_, links) in carried.items():
+            labels[body] += f" minus the inertials of the links it carries {list(links)}"
+    problems = parameter_problems(robot.parameter_names, chi, labels=labels,
+                                  carried={body: p10 for body, (p10, _) in carried.items()})
     if problems:
         raise ValueError("; ".join(problems) + "; export the physically consistent fit (method consistent)")
     return chi

@@ -12,8 +12,8 @@ spatial directions, kg along its mass, and the unit of each prefixed parameter: 
 N m s/rad), not relative to the link's size, because
 
 - what it must stay above is absolute: the interior-point solver meets the cone constraints to
-  ~1e-9 in these SI units on every bundled robot (measured: worst -8.3e-10 on links of 0.5 to
-  30 kg), and the simulators' refusals are absolute (MuJoCo: mass >= 1e-9 kg, principal moment
+  ~1e-9 in these SI units (measured without a margin: worst -8.3e-10 on links of 0.5 to 30 kg),
+  up to 4e-8 when asked for a margin on a short UR10e twin, and the simulators' refusals are absolute (MuJoCo: mass >= 1e-9 kg, principal moment
   >= 1e-12 kg m^2, rx90sym.mjcf_export.MIN_MASS / MIN_INERTIA; a margin eps gives m >= eps and
   principal moments >= 2 eps);
 - a margin relative to the link would need the link's size before the fit has found it (a prior
@@ -21,8 +21,10 @@ N m s/rad), not relative to the link's size, because
 - it is physically nothing: 1e-8 kg m^2 is a gram spread over 3 mm, 1e-3 of the smallest
   pseudo-inertia eigenvalue of any bundled robot's nominal bodies (Panda link 2: 8.6e-7).
 
-The fit asks the solver for twice the margin (pseudo-inertias >= 2 eps 1, prefixed parameters >= 2 eps)
-and checks the solution against eps, so the solver's own error (~1e-9) never decides a check.
+The fit asks the solver for ten times the margin (pseudo-inertias >= 10 eps 1, prefixed parameters
+>= 10 eps; identify.estimation.consistency.fit.SOLVE_FACTOR) and checks the solution against eps,
+so the solver's own error (up to 4e-8 measured) does not decide the check; when it does, the fit
+re-solves with a larger margin.
 """
 from __future__ import annotations
 
@@ -99,11 +101,14 @@ def body_problem(p10: np.ndarray, margin: float = 0.0) -> str | None:
 
 def parameter_problems(names: Sequence[str], chi: np.ndarray, margin: float = 0.0,
                        nonnegative: Sequence[str] = NONNEGATIVE,
-                       labels: Mapping[str, str] | None = None) -> tuple[str, ...]:
+                       labels: Mapping[str, str] | None = None,
+                       carried: Mapping[str, np.ndarray] | None = None) -> tuple[str, ...]:
     """What keeps ``chi`` (standard parameters named ``names``, SI) from being physical with
     ``margin`` (module docstring): one line per body ("link 3: not a physical rigid body (...)",
     the body named ``labels[body]`` when given, e.g. a URDF link) and per prefixed parameter
-    below the margin; empty when physical."""
+    below the margin; empty when physical. ``carried[body]``: XX..M of what the body carries and
+    an export writes apart (a URDF link's lumped children, rx90sym.urdf_export.carried_bodies):
+    the body minus it is checked."""
     names = tuple(names)
     chi = np.asarray(chi, dtype=float)
     if chi.shape != (len(names),):
@@ -111,7 +116,8 @@ def parameter_problems(names: Sequence[str], chi: np.ndarray, margin: float = 0.
                          f"{len(names)} names")
     out = []
     for body, idx in body_indices(names).items():
-        problem = body_problem(chi[idx], margin)
+        own = chi[idx] - np.asarray((carried or {}).get(body, 0.0), dtype=float)
+        problem = body_problem(own, margin)
         if problem is not None:
             label = (labels or {}).get(body) or ("payload" if body == "c" else f"link {body}")
             out.append(f"{label}: not a physical rigid body ({problem})")

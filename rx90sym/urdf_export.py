@@ -46,15 +46,39 @@ def link_inertials(robot: Robot, params: Mapping[str, float] | Sequence[float]) 
             raise UrdfError(f"parameters of link {k + 1} (URDF link {link!r}): not a physical rigid "
                             f"body ({problem})")
         children = [c for c in chain.lumped[k] if c != link]
-        own = whole
-        for c in children:
-            own = own - chain.tree.inertials[c].expressed_in_parent(*relative_pose(poses[link], poses[c]))
+        own = whole - _children(chain, poses, k)
         problem = _problem(own)
         if problem is not None:
             raise UrdfError(f"URDF link {link!r}: the parameters of link {k + 1} minus the inertials "
                             f"of the links it carries {children} are not a physical rigid body "
                             f"({problem}); those links keep their own inertials")
         out[link] = own
+    return out
+
+
+def _children(chain, poses: dict, k: int) -> RigidBody:
+    """The inertials that moving link k carries besides its own URDF link's, in that link's frame."""
+    link, out = chain.links[k], RigidBody.zero()
+    for c in chain.lumped[k]:
+        if c != link:
+            out = out + chain.tree.inertials[c].expressed_in_parent(*relative_pose(poses[link], poses[c]))
+    return out
+
+
+def carried_bodies(robot: Robot) -> dict[str, tuple[np.ndarray, tuple[str, ...]]]:
+    """What a URDF robot's moving links carry besides their own inertial (a hand, fingers, fixed
+    links): ``{"k": (XX..M in Khalil frame k, the URDF links)}`` for each link k that carries any
+    (empty for a robot file). The exported link k is the fitted body minus this one, which the
+    consistent fit keeps physical too (rx90sym.physical.parameter_problems, ``carried``)."""
+    if robot.urdf is None:
+        return {}
+    chain = robot.urdf
+    poses = zero_poses(chain.tree)
+    out = {}
+    for k, link in enumerate(chain.links):
+        names = tuple(c for c in chain.lumped[k] if c != link)
+        if names:
+            out[str(k + 1)] = (_children(chain, poses, k).expressed_in_child(*chain.link_to_khalil[k]).vector(), names)
     return out
 
 

@@ -142,6 +142,7 @@ def consistency_report(
     names: Sequence[str],
     margin: float = 0.0,
     nonnegative: Sequence[str] = NONNEGATIVE,
+    carried: Mapping[str, np.ndarray] | None = None,
 ) -> ConsistencyReport:
     """Check a standard parameter vector for physical consistency (numpy only): the check of
     every export (rx90sym.physical.parameter_problems, one tolerance), with a margin.
@@ -153,6 +154,9 @@ def consistency_report(
             prefixed parameter when it is ``≥ margin`` (absolute, SI units; 0: physical, what an
             export needs; a consistent fit checks rx90sym.physical.DEFAULT_MARGIN).
         nonnegative: name prefixes that must be ``≥ margin`` (prefix rule, module docstring).
+        carried: ``{body: XX..M}`` a body carries that an export writes apart (a URDF link's
+            lumped hand, rx90sym.urdf_export.carried_bodies): the body minus it is checked and
+            reported.
 
     Returns:
         A frozen :class:`ConsistencyReport`.
@@ -172,10 +176,11 @@ def consistency_report(
         raise ValueError(f"consistency_report: non-finite values for {bad}")
     bodies = []
     for body, idx in body_indices(names).items():
-        p = x[idx]
+        p = x[idx] - np.asarray((carried or {}).get(body, 0.0), dtype=float)
         lam = float(np.linalg.eigvalsh(pseudo_inertia(p))[0])
         mass = float(p[9])
         com = tuple(float(v) for v in p[6:9] / mass) if mass > 0 else (float("nan"),) * 3
         bodies.append(BodyConsistency(body, lam, mass, com, body_problem(p, margin) is None))  # type: ignore[arg-type]
     nonneg = tuple((names[i], float(x[i]), bool(x[i] >= margin)) for i in nonnegative_indices(names, nonnegative))
-    return ConsistencyReport(tuple(bodies), nonneg, float(margin), parameter_problems(names, x, margin, nonnegative))
+    return ConsistencyReport(tuple(bodies), nonneg, float(margin), parameter_problems(names, x, margin, nonnegative,
+                                                                              carried=carried))

@@ -31,7 +31,8 @@ def prior_fit(R: np.ndarray, z: np.ndarray, K: np.ndarray, names: Sequence[str],
               rss_outside: float = 0.0, rows: int | None = None, solver: str = "CLARABEL",
               nonnegative: Sequence[str] = ("IA", "FV", "FS"), epsilon: float = DEFAULT_MARGIN,
               solver_options: Mapping[str, Any] | None = None, covariance: np.ndarray | None = None,
-              budget: float = PRIOR_BUDGET) -> tuple[ConsistentSolution, ConsistentSolution]:
+              budget: float = PRIOR_BUDGET, carried: Mapping[str, np.ndarray] | None = None
+              ) -> tuple[ConsistentSolution, ConsistentSolution]:
     """(stage 1, stage 2) solutions: the consistent least squares under the prior's bounds, and
     the physical chi nearest the prior (scaled norm, :func:`prior_scales`) whose base parameters
     lie within ``budget`` standard deviations of stage 1's:
@@ -45,7 +46,7 @@ def prior_fit(R: np.ndarray, z: np.ndarray, K: np.ndarray, names: Sequence[str],
         raise ValueError("prior_fit: rows (the number of equations) is needed for the residual variance")
     first = consistent_least_squares(R, z, K, names, rss_outside=rss_outside, rows=rows, solver=solver,
                                      nonnegative=nonnegative, epsilon=epsilon, solver_options=solver_options,
-                                     physical_prior=prior)
+                                     physical_prior=prior, carried=carried)
     R, z, K = (np.asarray(a, dtype=float) for a in (R, z, K))
     fit1 = float(np.sum((R @ first.beta - z) ** 2))
     whiten = _whitening(R, covariance, (fit1 + rss_outside) / max(rows - K.shape[0], 1))
@@ -56,14 +57,15 @@ def prior_fit(R: np.ndarray, z: np.ndarray, K: np.ndarray, names: Sequence[str],
     def build(margin: float) -> ConsistentProblem:
         chi = cp.Variable(len(names), name="chi")
         fit = cp.norm((whiten @ K) @ chi - whiten @ first.beta, 2) <= float(budget)
-        constraints = [fit, *_cone_constraints(chi, names, body_indices(names), margin, nonnegative),
+        constraints = [fit, *_cone_constraints(chi, names, body_indices(names), margin, nonnegative, carried),
                        *prior_constraints(chi, names, prior)]
         problem = cp.Problem(cp.Minimize(cp.norm(cp.multiply(1.0 / scales, chi - reference), 2)), constraints)
         return ConsistentProblem(problem, chi, names, noise, noise, float(margin))
 
     options = {**DEFAULT_SOLVER_OPTIONS[solver.upper()], **(solver_options or {})}
     # Stage 2 starts from the margin stage 1 needed (its retry, if any, says the solver needs it).
-    solve = _solve_checked(build, epsilon, solver.upper(), options, names, nonnegative, solve_margin=first.epsilon)
+    solve = _solve_checked(build, epsilon, solver.upper(), options, names, nonnegative, solve_margin=first.epsilon,
+                           carried=carried)
     second = _solution(solve, R, z, K, names, rss_outside, None, 0.0, solver.upper(), rows)
     return first, second
 
