@@ -22,12 +22,13 @@ from typing import Mapping, Sequence
 import numpy as np
 
 from .description import Robot
-from .model_export import (actuation, companion, export_joint_names, flange_pose, fmt, joint_origin,
-                           limits_in_controller_angles, link_bodies, parameter_vector, payload_body, quaternion, write_model)
+from .model_export import (actuation, checked_parameters, companion, export_joint_names, flange_pose, fmt, joint_origin,
+                           limits_in_controller_angles, link_bodies, payload_body, quaternion, write_model)
 from .rigid_body import RigidBody
 
 # MuJoCo refuses moving bodies whose mass or principal inertia is below mjMINVAL (1e-15); a
-# body that light is a fit artefact, refused here with its name instead.
+# body that light is a fit artefact, refused here with its name instead. A consistent fit never is:
+# its margin (rx90sym.physical.DEFAULT_MARGIN, 1e-8) gives m >= 1e-8 kg, principal moments >= 2e-8.
 MIN_MASS = 1e-9          # kg
 MIN_INERTIA = 1e-12      # kg m^2, smallest principal moment about the CoG
 
@@ -124,7 +125,7 @@ def write_mjcf(robot: Robot, params: Mapping[str, float] | Sequence[float], path
 def mjcf_export(robot: Robot, params: Mapping[str, float] | Sequence[float], path: str | Path,
                 payload: Mapping[str, float] | None = None) -> tuple[str, dict]:
     """(MJCF text, companion dict) that :func:`write_mjcf` writes to ``path``; nothing written."""
-    chi = parameter_vector(robot, params)
+    chi = checked_parameters(robot, params)
     body = payload_body(robot, payload) if payload is not None else None
     text = mjcf_text(robot, chi, body)
     return text, companion(robot, chi, path, "mjcf", actuation(robot, chi).notes)

@@ -18,6 +18,7 @@ import numpy as np
 
 from .description import Robot
 from .parameters import LINK_PARAMETERS
+from .physical import body_problem, parameter_problems
 from .rigid_body import RigidBody, physical_problem
 
 _K = len(LINK_PARAMETERS)
@@ -50,6 +51,26 @@ def parameter_vector(robot: Robot, params: Mapping[str, float] | Sequence[float]
     if chi.shape != (len(robot.parameter_names),):
         raise ValueError(f"params: expected {len(robot.parameter_names)} standard parameters of "
                          f"robot {robot.name!r}, got shape {chi.shape}")
+    return chi
+
+
+def checked_parameters(robot: Robot, params: Mapping[str, float] | Sequence[float]) -> np.ndarray:
+    """:func:`parameter_vector`, refused (ValueError naming every link and parameter) unless
+    physical: rx90sym.physical.parameter_problems at margin 0, the consistent fit's own check (it
+    checks its margin, so a consistent fit always passes). No exported file then holds a negative
+    armature, damping or frictionloss."""
+    from .urdf_carried import carried_bodies
+
+    chi = parameter_vector(robot, params)
+    labels, carried = None, carried_bodies(robot)
+    if robot.urdf is not None:
+        labels = {str(k + 1): f"parameters of link {k + 1} (URDF link {link!r})" for k, link in enumerate(robot.urdf.links)}
+        for body, (_, links) in carried.items():
+            labels[body] += f" minus the inertials of the links it carries {list(links)}"
+    problems = parameter_problems(robot.parameter_names, chi, labels=labels,
+                                  carried={body: p10 for body, (p10, _) in carried.items()})
+    if problems:
+        raise ValueError("; ".join(problems) + "; export the physically consistent fit (method consistent)")
     return chi
 
 
@@ -132,8 +153,7 @@ def link_bodies(robot: Robot, chi: np.ndarray) -> list[RigidBody]:
     out = []
     for j in range(robot.n):
         body = RigidBody.from_vector(chi[_K * j:_K * j + 10])
-        massless = body.m == 0 and not np.any(body.h) and not np.any(body.J)
-        problem = None if massless else physical_problem(body)
+        problem = body_problem(chi[_K * j:_K * j + 10])
         if problem:
             raise ValueError(f"link {j + 1}: not a physical rigid body ({problem}); export the "
                              f"physically consistent fit (method consistent)")

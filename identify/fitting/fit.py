@@ -134,8 +134,9 @@ def _honest_covariance(obs: Observation, result: IdentificationResult) -> np.nda
     bootstrap's σ to eq. 13's when above 1 (coloured residuals: eq. 13 is optimistic; white
     ones leave it as it is). The budget of the prior fit is measured in it."""
     std = bootstrap_std(obs.W, obs.Y, obs.joint, obs.samples, result.weights, obs.rate)
-    ratio = np.nanmedian(std / np.where(result.std > 0, result.std, np.nan))
-    return result.covariance * max(1.0, float(ratio) if np.isfinite(ratio) else 1.0) ** 2
+    ratios = std / np.where(result.std > 0, result.std, np.nan)
+    ratios = ratios[np.isfinite(ratios)]  # a recording too short for two blocks has none: eq. 13's
+    return result.covariance * max(1.0, float(np.median(ratios)) if ratios.size else 1.0) ** 2
 
 
 def _solve(robot: rx90sym.Robot, obs: Observation, base: Any, method: str,
