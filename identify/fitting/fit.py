@@ -32,6 +32,7 @@ from identify.fitting.friction import chosen_friction, defaulted_travels, fricti
 from identify.estimation.delay import DelayEstimate, estimate_delay
 from identify.fitting.streamed import DEFAULT_BLOCK, BootstrapSpec, ProcessingChoice, fit_streamed
 from identify.fitting.validation import Validation, predict
+from identify.fitting.baseline import PlainBaseline, plain_baseline
 
 __all__ = ["METHODS", "Bootstrap", "Fit", "fit", "load_fit"]
 
@@ -106,6 +107,7 @@ class Fit:
     choice: dict | None = None
     block: int | None = None        # logs read block by block with this many samples (None: whole)
     streamed: Any = None            # the block-wise fit's record (identify.fitting.streamed.StreamedFit)
+    baseline: Any = None            # the plain OLS baseline (identify.fitting.baseline.PlainBaseline) or None
 
     # ------------------------------------------------------------ what the fit used
     @property
@@ -148,7 +150,8 @@ class Fit:
 
             return predict_streamed(self.robot, result or self.result, recording, base=self.base, block=self.block,
                                     convention=self.model.convention, gains=self.gains, **self.filtering())
-        return predict(self.robot, result or self.result, recording, base=self.base, **self.filtering())
+        return predict(self.robot, result or self.result, recording, base=self.base, baseline=self.baseline,
+                       **self.filtering())
 
     def validate(self, recording: Any) -> Validation:
         """Cross-validation on a recording not used in the fit (with the essential parameters when
@@ -195,7 +198,8 @@ class Fit:
                     "validation": self.validation.to_dict() if self.validation is not None else {},
                     "schema_version": SCHEMA_VERSION, "processing": self.processing.to_json(),
                     "flags": [f.to_json() for f in self.flags], "recordings": list(self.recordings),
-                    "processing_choice": self.choice})
+                    "processing_choice": self.choice,
+                    "baseline": self.baseline.to_json() if self.baseline is not None else None})
         return out
 
     def save(self, path: str | Path) -> Path:
@@ -215,6 +219,7 @@ class Fit:
             essential = IdentificationResult.from_dict(data["essential"]) if data.get("essential") else None
             bootstrap = Bootstrap.from_json(data)
             flags = tuple(Flag.from_json(f) for f in data.get("flags", []))
+            baseline = PlainBaseline.from_json(data.get("baseline"))  # None in older files
         except (KeyError, TypeError, ValueError) as exc:
             raise ValueError(f"{path}: {exc}".replace(f"{path}: {path}: ", f"{path}: ")) from None
         rob = robot if isinstance(robot, rx90sym.Robot) else robot_of(model, robot)
@@ -232,7 +237,8 @@ class Fit:
         return cls(rob, result, processing, model, base,
                    delay_estimate_s=data.get("delay_estimate_s"), spring=data.get("spring"),
                    bootstrap=bootstrap, essential=essential, flags=flags,
-                   recordings=tuple(data.get("recordings", [])), choice=data.get("processing_choice"))
+                   recordings=tuple(data.get("recordings", [])), choice=data.get("processing_choice"),
+                   baseline=baseline)
 
 
 def load_fit(path: str | Path, robot: rx90sym.Robot | str | None = None) -> Fit:
@@ -327,7 +333,7 @@ def fit(robot: rx90sym.Robot, recordings: Sequence[Any], processing: Processing 
     spring = spring_summary(robot, base if isinstance(base, BaseWithSpring) else None, result, recordings)[0]
     return Fit(robot, result, p, model, base, obs, found, found.delay if found is not None else None, spring,
                recordings=tuple(layout_summary(r) for r in recordings if hasattr(r, "measured_mask")),
-               choice=choice)
+               choice=choice, baseline=plain_baseline(robot, recordings if observation is None else [], p.spring))
 
 
 def _honest_covariance(obs: Observation, result: IdentificationResult) -> np.ndarray:
