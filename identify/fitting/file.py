@@ -60,7 +60,9 @@ class FitModel:
     decimate_to_hz (None: no decimation), rate_hz (achieved), delay_s: torque lag compensated;
     tip: the tip link of a URDF robot (None otherwise); friction: the smooth friction form (one, or
     a list of one per joint) and its velocity scales (null on a Coulomb joint;
-    identify.estimation.separable.VelocityScales.to_json), the presliding travels; None: Coulomb.
+    identify.estimation.separable.VelocityScales.to_json), the presliding travels; None: Coulomb;
+    offset_joints: the joints (1-based) the cross-validated choice gave a torque offset OFFj (None:
+    none; an older file reads None).
     """
 
     robot: str
@@ -80,6 +82,7 @@ class FitModel:
     delay_s: float
     tip: str | None = None
     friction: dict | None = None
+    offset_joints: tuple[int, ...] | None = None
 
     @classmethod
     def of(cls, robot: rx90sym.Robot, **fields: Any) -> "FitModel":
@@ -90,7 +93,11 @@ class FitModel:
                    tip=robot.urdf.tip if getattr(robot, "urdf", None) is not None else None, **fields)
 
     def to_json(self) -> dict[str, Any]:
-        return asdict(self)
+        d = asdict(self)
+        for key in ("rest", "offset_joints"):  # tuples written as the lists they read back as
+            if isinstance(d.get(key), tuple):
+                d[key] = list(d[key])
+        return d
 
     to_dict = to_json
 
@@ -104,6 +111,8 @@ class FitModel:
         values = {k: d[k] for k in names if k in d}
         if isinstance(values["rest"], list):  # one policy per joint
             values["rest"] = tuple(values["rest"])
+        if values.get("offset_joints") is not None:
+            values["offset_joints"] = tuple(int(j) for j in values["offset_joints"])
         return cls(**values)
 
     from_dict = from_json

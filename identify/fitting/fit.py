@@ -24,8 +24,10 @@ from identify.fitting.plausibility import Flag
 from identify.estimation.results import METHODS, IdentificationResult, json_number
 from identify.fitting.file import SCHEMA_VERSION, FitModel, gains_of, read_fit_file, robot_of
 from identify.io.gains import DriveGains
-from identify.observation.friction_model import friction_base
-from identify.observation.matrix import Observation, coulomb_terms, observation_matrix
+from identify.observation.friction_model import FrictionBase, friction_base
+from identify.observation.offsets import OffsetBase, offset_base, offset_joints
+from rx90sym.base_parameters import BaseParameters
+from identify.observation.matrix import DECIMATION_PASSBAND, Observation, coulomb_terms, observation_matrix
 from identify.io.recordings import layout_summary
 from identify.observation.processing import Processing, friction_label, has_policy, has_smooth_friction
 from identify.fitting.friction import chosen_friction, defaulted_travels, friction_columns
@@ -227,7 +229,7 @@ class Fit:
         asymmetric = tuple(j for j in range(rob.n) if f"FSP{j + 1}" in result.names)
         if asymmetric != tuple(rob.asymmetric_coulomb):
             rob = rob.with_options(asymmetric_coulomb=asymmetric)
-        base = rx90sym.base_parameters(rob)
+        base = offset_base(rx90sym.base_parameters(rob), [j - 1 for j in model.offset_joints or ()])
         if model.friction is not None:  # the friction columns found: smooth form's scales, presliding travels
             fr = model.friction
             scales = [np.nan if v is None else v for v in fr["velocity_scale"]] if "velocity_scale" in fr else None
@@ -244,6 +246,12 @@ class Fit:
 def load_fit(path: str | Path, robot: rx90sym.Robot | str | None = None) -> Fit:
     """Read a fit file (:meth:`Fit.save`, ``rx90 identify --json``): see :meth:`Fit.load`."""
     return Fit.load(path, robot)
+
+
+def _offset_record(base: Any) -> tuple[int, ...] | None:
+    """The joints (1-based) given a torque offset by the cross-validated choice (None: none)."""
+    inner = base.base if isinstance(base, FrictionBase) else base
+    return tuple(j + 1 for j in inner.joints) if isinstance(inner, OffsetBase) else None
 
 
 def _spring_label(robot: rx90sym.Robot, base: Any) -> str:
@@ -310,15 +318,27 @@ def fit(robot: rx90sym.Robot, recordings: Sequence[Any], processing: Processing 
         # (W and Y filtered alike, it hardly depends on the cut-off; one delay search).
         scored_lag = (estimate_delay(robot, recordings, base=base, **options).delay if p.delay == "auto"
                       else float(p.delay))
+        # Torque offsets are a candidate of the WLS fits on the symbolic base (not of the consistent fit, whose
+        # columns map back to standard parameters, nor beside a robot's own offsets or asymmetric Coulomb).
+        eligible = offset_joints(robot, base) if method != "consistent" and isinstance(base, BaseParameters) else ()
         choice = choose_processing(robot, recordings, base=base, min_velocity=p.min_velocity, rest=p.rest,
-                                   spring=p.spring, default_decimate=p.decimate_to, delay=scored_lag)
+                                   spring=p.spring, default_decimate=p.decimate_to, delay=scored_lag,
+                                   offsets=eligible)
         c = choice.chosen
         options.update(cutoff=c.cutoff, decimate_to=c.decimate_to, rest=c.rest or options["rest"])
+        base = offset_base(base, choice.offsets)
     found = None
     if observation is None and (p.estimate_delay or p.delay == "auto"):
         found = estimate_delay(robot, recordings, base=base, **options)
     lag = found.delay if p.delay == "auto" else float(p.delay)
-    form, choice = chosen_friction(robot, recordings, base, p, method, choice, dict(options, delay=lag))
+    # The forms compared on rows decimated as by default when the processing chosen keeps the full rate (the
+    # same cut-off, within the decimation's pass band): the friction choice then costs what it did before.
+    forms = dict(options, delay=lag)
+    if choice is not None and forms["decimate_to"] is None and p.decimate_to and \
+            options["cutoff"] <= DECIMATION_PASSBAND * p.decimate_to and \
+            all(r.rate >= 2 * p.decimate_to for r in recordings):
+        forms["decimate_to"] = p.decimate_to
+    form, choice = chosen_friction(robot, recordings, base, p, method, choice, forms)
     base, friction = friction_columns(robot, recordings, base, form, observation, dict(options, delay=lag))
     obs = observation if observation is not None else observation_matrix(robot, recordings, delay=lag,
                                                                          base=base, **options)
@@ -327,7 +347,7 @@ def fit(robot: rx90sym.Robot, recordings: Sequence[Any], processing: Processing 
                         rest=options["rest"], min_velocity=options["min_velocity"],
                         spring=spring_source or _spring_label(robot, base),
                         cutoff_hz=obs.cutoffs[0], decimate_to_hz=options["decimate_to"], rate_hz=obs.rate, delay_s=lag,
-                        friction=friction)
+                        friction=friction, offset_joints=_offset_record(base))
     from identify.observation.spring_fit import BaseWithSpring, spring_summary
 
     spring = spring_summary(robot, base if isinstance(base, BaseWithSpring) else None, result, recordings)[0]
