@@ -159,10 +159,12 @@ class PlainBaseline:
 
 
 def fit_baseline(robot: rx90sym.Robot, recordings: Sequence[Any], spring: bool = True) -> PlainBaseline:
-    """The plain OLS baseline (module docstring) on every segment of ``recordings``."""
+    """The plain OLS baseline (module docstring) on every segment of ``recordings``. The rows of each joint
+    are compressed apart ([W_j | y_j] -> R_j, stacked: the same singular values as W), which gives each
+    joint's residual on the fitted samples without a second pass."""
     names = baseline_names(robot)
-    c = len(names)
-    R = np.zeros((0, c + 1))
+    c, n = len(names), robot.n
+    R = [np.zeros((0, c + 1)) for _ in range(n)]
     rows = 0
     for rec in recordings:
         for piece in rec.pieces():
@@ -172,25 +174,17 @@ def fit_baseline(robot: rx90sym.Robot, recordings: Sequence[Any], spring: bool =
                 idx = kept[start:start + _CHUNK]
                 Phi = baseline_regressor(robot, s.q[idx], s.dq[idx], s.ddq[idx])
                 y = s.tau[idx] + s.spring[idx]
-                A = np.column_stack([Phi.reshape(-1, c), y.reshape(-1)])
-                R = np.linalg.qr(np.vstack([R, A]), mode="r")
+                R = [np.linalg.qr(np.vstack([R[j], np.column_stack([Phi[:, j, :], y[:, j]])]), mode="r")
+                     for j in range(n)]
                 rows += idx.size
-    if rows * robot.n <= 0:
+    if rows == 0:
         raise ValueError(f"the plain baseline has no sample to fit (every segment shorter than "
                          f"{2 * BASELINE_TRIM_S:g} s)")
-    values, _, rank, _ = np.linalg.lstsq(R[:, :c], R[:, c], rcond=BASELINE_RCOND)
-    residual = _residual_rms(robot, recordings, values, spring)
+    stacked = np.vstack(R)
+    values, _, rank, _ = np.linalg.lstsq(stacked[:, :c], stacked[:, c], rcond=BASELINE_RCOND)
+    x = np.r_[values, -1.0]
+    residual = np.array([np.linalg.norm(Rj @ x) / np.sqrt(rows) for Rj in R])
     return PlainBaseline(names, values, rows, int(rank), bool(spring), residual)
-
-
-def _residual_rms(robot: rx90sym.Robot, recordings: Sequence[Any], values: np.ndarray, spring: bool) -> np.ndarray:
-    base = PlainBaseline(baseline_names(robot), values, 0, 0, spring, np.array([]))
-    err2, count = np.zeros(robot.n), 0
-    for rec in recordings:
-        p = base.predict(robot, rec)
-        err2 += np.sum((p.measured[p.scored] - p.predicted[p.scored]) ** 2, axis=0)
-        count += int(p.scored.sum())
-    return np.sqrt(err2 / max(count, 1))
 
 
 def baseline_rms(err: np.ndarray, mask: np.ndarray) -> np.ndarray:

@@ -327,19 +327,21 @@ def fit(robot: rx90sym.Robot, recordings: Sequence[Any], processing: Processing 
         c = choice.chosen
         options.update(cutoff=c.cutoff, decimate_to=c.decimate_to, rest=c.rest or options["rest"])
         base = offset_base(base, choice.offsets)
-    found = None
-    if observation is None and (p.estimate_delay or p.delay == "auto"):
-        found = estimate_delay(robot, recordings, base=base, **options)
-    lag = found.delay if p.delay == "auto" else float(p.delay)
-    # The forms compared on rows decimated as by default when the processing chosen keeps the full rate (the
-    # same cut-off, within the decimation's pass band): the friction choice then costs what it did before.
-    forms = dict(options, delay=lag)
-    if choice is not None and forms["decimate_to"] is None and p.decimate_to and \
+    # The delay search, the friction forms and their scales on rows decimated as by default when the processing chosen keeps
+    # the full rate (the same cut-off, within the decimation's pass band): they then cost what they did before
+    # (the search shifts the raw torques: its resolution is the recording's rate either way).
+    light = dict(options)
+    if choice is not None and light["decimate_to"] is None and p.decimate_to and \
             options["cutoff"] <= DECIMATION_PASSBAND * p.decimate_to and \
             all(r.rate >= 2 * p.decimate_to for r in recordings):
-        forms["decimate_to"] = p.decimate_to
+        light["decimate_to"] = p.decimate_to
+    found = None
+    if observation is None and (p.estimate_delay or p.delay == "auto"):
+        found = estimate_delay(robot, recordings, base=base, **light)
+    lag = found.delay if p.delay == "auto" else float(p.delay)
+    forms = dict(light, delay=lag)
     form, choice = chosen_friction(robot, recordings, base, p, method, choice, forms)
-    base, friction = friction_columns(robot, recordings, base, form, observation, dict(options, delay=lag))
+    base, friction = friction_columns(robot, recordings, base, form, observation, forms)
     obs = observation if observation is not None else observation_matrix(robot, recordings, delay=lag,
                                                                          base=base, **options)
     result = _solve(robot, obs, base, method, consistent_options)

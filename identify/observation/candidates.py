@@ -74,8 +74,9 @@ class ProcessingChoice:
             c = self.offset_candidate
             joints = "".join(f"{v:7.2f}" for v in c.per_joint) if c.per_joint else ""
             score = "-" if math.isnan(c.score) else f"{c.score:.3f}"
-            lines.append(f"  {'with offsets':>12}  {'':>16}  {score:>19}{joints}  (the chosen processing, an offset "
-                         f"on every joint allowed one)")
+            what = ("the offsets kept scored together" if c.label == "offsets kept" else
+                    "an offset on every joint allowed one")
+            lines.append(f"  {'with offsets':>12}  {'':>16}  {score:>19}{joints}  (the chosen processing, {what})")
         return "\n".join(lines + ["  " + self.reason()])
 
     def reason(self) -> str:
@@ -98,7 +99,8 @@ class ProcessingChoice:
                                 for j in range(len(self.rest_scores[0][1]))) + " %)")
         if self.offset_candidate is not None:
             out += ("; torque offsets on joints " + (", ".join(str(j + 1) for j in self.offsets) or "none")
-                    + " (where they lower that joint's held-back error by more than the blocks' spread)")
+                    + " (where they lower that joint's held-back error by more than the blocks' spread, and together "
+                      "the mean over joints)")
         return out
 
     def to_dict(self) -> dict[str, Any]:

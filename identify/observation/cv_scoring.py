@@ -6,7 +6,7 @@ the same raw samples for every candidate) or, as before, against the torques fil
 one common rate (:func:`score_common_rate`, what the block-by-block choice still does)."""
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import Any, Sequence
 
 import numpy as np
@@ -19,7 +19,7 @@ from identify.observation.processing import drops_rest
 from identify.signal.filtering import EDGE_PERIODS
 from identify.signal.interpolate import onto
 
-__all__ = ["RawTargets", "raw_targets", "score_raw", "score_common_rate", "time_folds", "time_blocks",
+__all__ = ["RawTargets", "raw_targets", "score_raw", "with_offsets", "CACHE_BYTES", "score_common_rate", "time_folds", "time_blocks",
            "block_factors", "block_scores", "fold_wls"]
 
 
@@ -101,8 +101,17 @@ def score_raw(robot: rx90sym.Robot, recordings: Sequence[Any], cand: Candidate, 
     # A presliding joint gets its magnitude FPj (travel PRESLIDING_TRAVEL), as in the fit.
     names, regressor = column_regressor(robot, base, rest=rest if min_velocity is not None else None)
     delay = options.get("delay", 0.0)
-    motions, _, used = filtered_motions(robot, recordings, cand.cutoff, cand.decimate_to, options["spring"],
-                                        regressor, names, min_velocity, rest, delay)
+    cache = options.get("cache")  # (cut-off, decimation, rest) -> (motions, segments): choose_processing's
+    key = (cand.cutoff, cand.decimate_to, cand.rest)
+    if cache is not None and key in cache:
+        motions, used = cache[key]
+    else:
+        motions, _, used = filtered_motions(robot, recordings, cand.cutoff, cand.decimate_to, options["spring"],
+                                            regressor, names, min_velocity, rest, delay)
+        if cache is not None and sum(m.Phi.nbytes for m in motions) <= CACHE_BYTES:
+            cache[key] = (motions, used)
+    if options.get("offsets"):  # an offset OFFj on these joints: a column of ones in joint j's rows
+        motions = [with_offsets(m, options["offsets"]) for m in motions]
     ids = [np.clip(time_folds(m.t + delay, targets.start, targets.span, blocks), 0, blocks - 1) for m in motions]
     drop = min_velocity is not None and drops_rest(rest)
     n = robot.n
@@ -126,6 +135,19 @@ def score_raw(robot: rx90sym.Robot, recordings: Sequence[Any], cand: Candidate, 
     if not np.any(ref2 > 0):
         raise ValueError("no fold could be fitted and scored (too few rows left after the filters' edges)")
     return block_scores(err2, ref2)
+
+
+#: Bytes of filtered rows (Phi) a choice keeps for reuse (the candidate with offsets reuses the chosen one's).
+CACHE_BYTES = 200_000_000
+
+
+def with_offsets(m: Any, joints: Sequence[int]) -> Any:
+    """A FilteredMotion with a column of ones per joint of ``joints`` (0-based) in that joint's rows:
+    the offset columns (identify.observation.offsets.OffsetBase), constant through any filter."""
+    from identify.observation.offsets import offset_columns
+
+    S, n, _ = m.Phi.shape
+    return replace(m, Phi=np.concatenate([m.Phi, offset_columns(S, n, joints)], axis=2))
 
 
 def score_common_rate(robot: rx90sym.Robot, recordings: Sequence[Any], cand: Candidate, base: Any, reference: float | None,

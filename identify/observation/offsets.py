@@ -16,7 +16,7 @@ import numpy as np
 
 import rx90sym
 
-__all__ = ["OffsetBase", "offset_base", "offset_joints"]
+__all__ = ["OffsetBase", "offset_base", "offset_columns", "offset_joints"]
 
 
 @dataclass(frozen=True, eq=False)
@@ -38,15 +38,20 @@ class OffsetBase:
     def regressor_batch(self, Q: Any, QD: Any, QDD: Any, out: np.ndarray | None = None) -> np.ndarray:
         """[Phi_b | OFF columns]: (N, n, nb)."""
         Phi_b = self.base.regressor_batch(Q, QD, QDD)
-        full = np.zeros(Phi_b.shape[:2] + (self.nb,))
-        c = Phi_b.shape[2]
-        full[:, :, :c] = Phi_b
-        for k, j in enumerate(self.joints):
-            full[:, j, c + k] = 1.0
-        if out is not None:
-            out[...] = full
-            return out
-        return full
+        full = np.concatenate([Phi_b, offset_columns(Phi_b.shape[0], Phi_b.shape[1], self.joints)], axis=2)
+        if out is None:
+            return full
+        out[...] = full
+        return out
+
+
+def offset_columns(samples: int, n: int, joints: Sequence[int]) -> np.ndarray:
+    """(samples, n, len(joints)): per joint of ``joints`` (0-based) a column of ones in that joint's rows
+    (the offsets' columns, the same after any filter of unit gain)."""
+    cols = np.zeros((samples, n, len(joints)))
+    for k, j in enumerate(joints):
+        cols[:, j, k] = 1.0
+    return cols
 
 
 def offset_joints(robot: rx90sym.Robot, base: Any) -> tuple[int, ...]:
