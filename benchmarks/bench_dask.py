@@ -29,7 +29,7 @@ def main() -> None:
     def run(client):
         t0 = time.perf_counter()
         traj = excitation.optimise(robot, 10.0, 3, seed=0, starts=args.starts, chi_nominal=chi, base=bp,
-                                   client=client, progress=False)
+                                   client=client, progress=False, envelope=None)
         return traj, time.perf_counter() - t0
 
     serial, t_serial = run(None)

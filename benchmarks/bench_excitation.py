@@ -41,7 +41,7 @@ def main() -> None:
 
     t0 = time.perf_counter()
     traj = excitation.optimise(robot, 20.0, 5, seed=args.seed, starts=args.starts, chi_nominal=chi,
-                               base=bp, criterion="cond", progress=True)
+                               base=bp, criterion="cond", progress=True, envelope=None)
     t_opt = time.perf_counter() - t0
 
     # independent check: a grid twice as fine as the optimiser's own, no margins

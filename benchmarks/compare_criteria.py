@@ -76,7 +76,7 @@ def compare(seeds: int = 5, starts: int = 1, criteria=CRITERIA, duration: float 
         for name in criteria:
             t0 = time.perf_counter()
             traj = excitation.optimise(robot, duration, harmonics, seed=seed, chi_nominal=chi, base=bp,
-                                       starts=starts, criterion=name, progress=False)
+                                       starts=starts, criterion=name, progress=False, envelope=None)
             elapsed = time.perf_counter() - t0
             try:
                 groups = group_medians(robot, bp, traj, seed, reference)

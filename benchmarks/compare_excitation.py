@@ -27,7 +27,7 @@ def compare(seed: int = 0, duration: float = 20.0, harmonics: int = 5, starts: i
     bp = rx90sym.base_parameters(robot)
     chi = robot.parameter_vector(rx90sym.default_parameters(robot))
     opt = excitation.optimise(robot, duration, harmonics, seed=seed, chi_nominal=chi, base=bp,
-                              starts=starts, criterion=criterion, progress=False)
+                              starts=starts, criterion=criterion, progress=False, envelope=None)
     rnd = excitation.random_trajectory(robot, duration, harmonics, seed=seed + 1, chi_nominal=chi, base=bp)
     out = {}
     for label, traj in (("optimised", opt), ("random", rnd)):

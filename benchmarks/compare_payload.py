@@ -31,7 +31,7 @@ def compare(durations=(5.0, 10.0, 15.0), starts: int = 1, via_points: int = 10, 
     chi = robot.parameter_vector(rx90sym.default_parameters(robot))
     noise = default_noise(robot.limits)
     robot_traj = excitation.optimise(robot, 20.0, 5, seed=0, chi_nominal=chi, base=bp, starts=starts,
-                                     progress=False)
+                                     progress=False, envelope=None)
     rows = [("robot 20 s", 20.0, 0.0, payload_sigma(robot, bp.regressor, robot_traj, noise, robot_traj))]
     for duration in durations:
         t0 = time.perf_counter()
@@ -63,7 +63,7 @@ def twin_check(starts: int = 1) -> None:
     bp = rx90sym.base_parameters(robot)
     chi = robot.parameter_vector(rx90sym.default_parameters(robot))
     trajs = {"robot 20 s": excitation.optimise(robot, 20.0, 5, seed=0, chi_nominal=chi, base=bp,
-                                               starts=starts, progress=False),
+                                               starts=starts, progress=False, envelope=None),
              "payload 10 s": optimise_payload(robot, 10.0, 10, seed=0, chi_nominal=chi, base=bp,
                                               starts=starts, progress=False)}
     print(f"{'motion':13s} seed method " + " ".join(f"{n + ' ± sigma':>18s}" for n in SHOWN))

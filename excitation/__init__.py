@@ -2,7 +2,7 @@
 
 Robot level (rx90sym.Robot)::
 
-    traj = excitation.optimise(robot, duration=20.0, harmonics=5, seed=0, chi_nominal="default")
+    traj = excitation.optimise(robot, duration=20.0, harmonics=5, seed=0)  # envelope, torque limits: as rx90 excite
     traj.cond; t, q, qd, qdd = traj.sample(rate=250.0); traj.save("traj.csv"); traj.save_json("traj.json")
     base = excitation.random_trajectory(robot, 20.0, 5, seed=0)
 

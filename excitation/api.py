@@ -3,6 +3,7 @@ the generic functions (multistart.optimise_model, random_trajectory.random_feasi
 from __future__ import annotations
 
 import dataclasses
+import sys
 from typing import Any, Sequence, TextIO
 
 import numpy as np
@@ -23,6 +24,59 @@ from .trajectory import Trajectory
 from .via_points import ViaPointSpline
 
 NOISE_FRACTION = 0.01  # default expected torque noise: 1 % of each joint's torque limit
+#: The value of an argument that takes ``rx90 excite``'s default (resolved for the robot at hand).
+DEFAULT = "default"
+#: Multi-start starts, as ``rx90 excite --starts`` (tests/test_defaults.py checks they agree).
+DEFAULT_STARTS = 2
+#: What no envelope leaves unchecked (said whenever a motion is planned without one).
+NO_ENVELOPE = ("warning: no safety envelope (envelope=None): the motion is NOT checked for height above the "
+               "mounting plane, Cartesian speed or narrowed joint ranges, and self-collision only if a collision "
+               "model is given; only the joint limits{floor} are")
+
+
+def nominal_warning(robot: rx90sym.Robot) -> str:
+    """What planning without nominal parameters leaves unchecked (the library and ``rx90 excite`` say it alike)."""
+    return (f"warning: robot {robot.name!r} has no nominal parameters: the trajectory is NOT "
+            f"checked against the torque limits (pass --params FILE, or chi_nominal=)")
+
+
+def resolve_nominal(robot: rx90sym.Robot, chi_nominal: Any, stream: TextIO = sys.stderr) -> np.ndarray | None:
+    """The standard parameters the torque limits use: ``"default"`` -> the robot's nominal ones
+    (None, said on ``stream``, when it has none); None -> None, said; an array -> itself."""
+    if isinstance(chi_nominal, str):
+        if chi_nominal != DEFAULT:
+            raise ValueError(f"chi_nominal: expected {DEFAULT!r}, None or a parameter vector, got {chi_nominal!r}")
+        params = rx90sym.nominal_parameters(robot)
+        chi_nominal = None if params is None else robot.parameter_vector(params)
+    if chi_nominal is None:
+        print(nominal_warning(robot), file=stream)
+        return None
+    return np.asarray(chi_nominal, dtype=float)
+
+
+def urdf_default_acceleration(robot: rx90sym.Robot) -> bool:
+    """True when the robot's acceleration limits are the URDF loader's generic default (a URDF
+    gives none): the envelope then replaces them by its conservative assumption."""
+    if getattr(robot, "urdf", None) is None:
+        return False
+    from rx90sym.urdf import DEFAULT_ACCELERATION
+
+    kinds = ["prismatic" if s else "revolute" for s in robot.sigma]
+    return bool(np.array_equal(robot.limits.qdd_max, [DEFAULT_ACCELERATION[k] for k in kinds]))
+
+
+def resolve_envelope(robot: rx90sym.Robot, envelope: Envelope | str | None, stream: TextIO = sys.stderr,
+                     z_min: float | None = None) -> Envelope | None:
+    """The envelope to apply: ``"default"`` -> ``Envelope()`` with the URDF acceleration default
+    when the robot comes from a URDF (as ``rx90 excite`` without options); None -> None, said on
+    ``stream``."""
+    if isinstance(envelope, str):
+        if envelope != DEFAULT:
+            raise ValueError(f"envelope: expected {DEFAULT!r}, None or an Envelope, got {envelope!r}")
+        return Envelope(urdf_acceleration=urdf_default_acceleration(robot))
+    if envelope is None:
+        print(NO_ENVELOPE.format(floor="" if z_min is None else " and the floor z_min"), file=stream)
+    return envelope
 
 
 def default_noise(limits: Any) -> np.ndarray:
@@ -56,25 +110,29 @@ def make_objective(model: ExcitationModel, criterion: str = "cond", *, nominal_b
 
 
 def optimise(robot: rx90sym.Robot, duration: float = 20.0, harmonics: int = 5, seed: int = 0, *,
-             chi_nominal: Any = None, starts: int = 4, time_budget: float | None = None,
+             chi_nominal: Any = DEFAULT, starts: int = DEFAULT_STARTS, time_budget: float | None = None,
              z_min: float | None = None, tool_point: Sequence[float] = (0.0, 0.0, 0.0),
              via_points: int | None = None, base: Any = None,
              options: OptimiserOptions | None = None, criterion: str | None = None,
              noise_std: Any = None, select: Sequence[str] | None = None,
              complement: Sequence[tuple[np.ndarray, ...]] = (), client: Any = None,
-             collision: CollisionModel | None = None, envelope: Envelope | None = None,
+             collision: CollisionModel | None = None, envelope: Envelope | str | None = DEFAULT,
              progress: bool | TextIO = True) -> Trajectory:
-    """Optimal excitation trajectory for ``robot``.
+    """Optimal excitation trajectory for ``robot``, safe by default: the defaults are ``rx90 excite``'s.
 
     envelope: the safety envelope (envelope.Envelope(): heights above the mounting plane,
-    experiment limits, Cartesian speeds, the robot's own capsules, a centre pose inside it); with
-    it ``collision`` defaults to :func:`collision_model` and ``z_min`` is the envelope's floor. The
-    command line always passes one; the trajectory's ``envelope`` describes what was applied.
+    experiment limits, Cartesian speeds, the robot's own capsules, a centre pose inside it);
+    "default": ``Envelope()`` as ``rx90 excite`` builds it without options; None: no envelope,
+    said on stderr (only joint limits and ``z_min`` are then checked). With an envelope
+    ``collision`` defaults to :func:`collision_model` and ``z_min`` is the envelope's floor; the
+    trajectory's ``envelope`` describes what was applied.
 
     duration [s], harmonics: Fourier series with base frequency 2 pi / duration. via_points: if
     given, optimise that many equally spaced via points (quintic spline) instead.
     chi_nominal: standard parameters for the torque limits (and the reference magnitudes of the
-    criteria), "default" for the robot's bundled nominal set, None to skip torque limits.
+    criteria); "default": the robot's nominal parameters (``rx90sym.nominal_parameters``: URDF
+    inertials, else the robot file's [nominal] table; none known: no torque limits, said on
+    stderr); None: no torque limits, said on stderr.
     z_min [m]: floor height for the wrist centre and ``tool_point`` [m, last frame] (None: no
     Cartesian limit). starts, seed: multi-start settings (same seed, same result); time_budget
     [s]: optional wall-clock budget. base: precomputed ``rx90sym.base_parameters(robot)``.
@@ -86,6 +144,9 @@ def optimise(robot: rx90sym.Robot, duration: float = 20.0, harmonics: int = 5, s
     """
     base = base if base is not None else rx90sym.base_parameters(robot)
     options = options or OptimiserOptions()
+    stream = progress if hasattr(progress, "write") else sys.stderr
+    chi_nominal = resolve_nominal(robot, chi_nominal, stream)
+    envelope = resolve_envelope(robot, envelope, stream, z_min)
     described = None
     if envelope is not None:
         model, described = safe_model(robot, chi_nominal, base, envelope, collision, options.margins)
@@ -96,9 +157,7 @@ def optimise(robot: rx90sym.Robot, duration: float = 20.0, harmonics: int = 5, s
         criterion = DEFAULT_CRITERION if chi_nominal is not None else FALLBACK_CRITERION
     nominal = None
     if chi_nominal is not None:
-        chi = (robot.parameter_vector(rx90sym.default_parameters(robot))
-               if isinstance(chi_nominal, str) else chi_nominal)
-        nominal = base.beta(chi)
+        nominal = base.beta(chi_nominal)
     objective = make_objective(model, criterion, nominal_base=nominal, noise_std=noise_std,
                                select=select, rate=options.cond_rate)
     if complement:

@@ -14,6 +14,7 @@ _EXPORTS = {
     "read_recording": "identify.io.recordings",
     "read_motor_recording": "identify.io.recordings",
     "read_log": "identify.io.logs",
+    "read_joint_files": "identify.io.joint_files",
     "write_recording": "identify.io.recordings",
     "split": "identify.io.recordings",
     # signal: filtering, resampling, pairing, delay
@@ -39,8 +40,8 @@ _EXPORTS = {
     "pseudo_inertia": "identify.estimation.consistency",
     # the fit and its file; prediction and validation
     "fit": "identify.fitting.fit",
-    "Fit": "identify.fitting.fit",
-    "load_fit": "identify.fitting.fit",
+    "Fit": "identify.fitting.record",
+    "load_fit": "identify.fitting.record",
     "fit_fleet": "identify.fitting.fleet",
     "FleetFit": "identify.fitting.fleet",
     "predict": "identify.fitting.validation",
@@ -83,8 +84,9 @@ _EXPORTS.update({
     "ConsistentSolution": "identify.estimation.consistency",
     "consistency_margin": "identify.estimation.consistency",
     "consistent_least_squares": "identify.estimation.consistency",
-    "Bootstrap": "identify.fitting.fit",
+    "Bootstrap": "identify.fitting.record",
     "FitModel": "identify.fitting.file",
+    "Flag": "identify.fitting.plausibility",
     "grouping_relations": "identify.payloads.methods",
     "DriveGainsResult": "identify.gains.drive_gains",
 })

@@ -310,7 +310,7 @@ def test_impossible_torque_limits_raise():
 def test_robot_level_api_on_duck_typed_robot():
     robot = toy_robot()
     traj = excitation.optimise(robot, duration=4.0, harmonics=3, seed=1, starts=1, chi_nominal=BETA,
-                               base=TOY_BASE, options=FAST, progress=False)
+                               base=TOY_BASE, options=FAST, progress=False, envelope=None)
     assert traj.usage.feasible and traj.harmonics == 3
     assert traj.base_frequency == pytest.approx(2 * np.pi / 4.0)
     assert np.all(np.isfinite(traj.usage.torque))
@@ -408,7 +408,7 @@ def test_rx90_optimised_trajectory_acceptance(tmp_path):
     bp = rx90sym.base_parameters(robot)
     chi = robot.parameter_vector(rx90sym.default_parameters(robot))
     traj = excitation.optimise(robot, 20.0, 5, seed=0, starts=1, chi_nominal=chi, base=bp,
-                               criterion="cond", progress=False)
+                               criterion="cond", progress=False, envelope=None)
     assert bp.nb == 54
     t, q, qd, qdd = traj.sample(250.0)
     assert t.size == 5000

@@ -88,7 +88,7 @@ def test_optimised_trajectory_keeps_out_of_an_obstacle_it_would_hit(robot):
     tool = ends[:, -1, np.argmax(ends[0, -1, :])]          # where the start's tool reaches furthest
     box = Box(tuple(tool - 0.1), tuple(tool + 0.1))
     assert np.min(_brute_clearance(caps, q, [box])) < -0.05  # the start goes through the box
-    traj = excitation.optimise(robot, 6.0, 2, seed=0, chi_nominal=chi, base=bp, starts=1, progress=False,
+    traj = excitation.optimise(robot, 6.0, 2, seed=0, chi_nominal=chi, base=bp, starts=1, progress=False, envelope=None,
                                collision=excitation.collision_model(robot, [box]))
     t2, q2, _, _ = traj.sample(2000.0, closed=True)         # finer than the optimiser's 1 kHz check
     assert np.min(_brute_clearance(caps, q2[::4], [box])) > -2e-3
@@ -98,7 +98,7 @@ def test_optimised_trajectory_keeps_out_of_an_obstacle_it_would_hit(robot):
 def test_capsules_touching_at_the_centre_of_the_ranges_are_refused(robot):
     box = Box((-0.2, -0.2, -0.2), (0.2, 0.2, 0.2))  # around the shoulder
     with pytest.raises(ValueError, match="capsules touch .* at the centre of the joint ranges \\(clearance -"):
-        excitation.optimise(robot, 6.0, 2, starts=1, progress=False,
+        excitation.optimise(robot, 6.0, 2, starts=1, progress=False, envelope=None,
                             collision=excitation.collision_model(robot, [box]))
 
 

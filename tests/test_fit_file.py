@@ -146,7 +146,7 @@ def test_a_bootstrap_sigma_the_draws_could_not_estimate_is_null_in_the_file_and_
     """A spring coefficient's bootstrap σ can be NaN (rank-deficient draws): the file stays JSON."""
     import json as _json
 
-    from identify.fitting.fit import Bootstrap
+    from identify.fitting.record import Bootstrap
     b = Bootstrap(np.array([0.5, np.nan, 2.0]), 0.5, 200, 0)
     text = _json.dumps(b.to_json(), allow_nan=False)      # raised "Out of range float values" before
     back = Bootstrap.from_json(_json.loads(text))

@@ -229,8 +229,11 @@ def test_currents_without_gains_are_refused_at_identify_time_with_the_hint(tmp_p
 def test_options_of_the_other_form_are_usage_errors(tmp_path, capsys):
     path, _ = regular_log(tmp_path)
     out = str(tmp_path / "rec.csv")
-    code, _, err = convert([str(path), "--columns", COLUMNS, "--period", "0.01", "--out", out], capsys)
-    assert code == 2 and "--period belongs to the motor form, not to a LOG.csv" in err
+    code, _, err = convert([str(path), "--robot", str(ur10e_toml(tmp_path)), "--columns", COLUMNS, "--no-header",
+                            "--period", "0.01", "--out", out], capsys)
+    assert code == 2 and "a log read with a sampling period (--period" in err and "map the column as _" in err
+    code, _, err = convert([str(path), "--columns", COLUMNS, "--motor-torques", "t.csv", "--out", out], capsys)
+    assert code == 2 and "--motor-torques belongs to the motor form, not to a LOG.csv" in err
     code, _, err = convert(["--motor-positions", "p.csv", "--motor-torques", "t.csv", "--period", "0.01",
                             "--resample", "100", "--out", out], capsys)
     assert code == 2 and "--resample belongs to the log form" in err

@@ -39,7 +39,8 @@ def twin_fit(rx90):
     recs = [rx90sym.twin.simulate(rx90, multisine(rx90, s), duration=20.0, noise="quantised", seed=s)
             for s in (0, 1)]
     wls = fit(rx90, recs, Processing(min_velocity=None, estimate_delay=False))
-    without = fit(rx90, recs, method="consistent", base=wls.base, observation=wls.observation).result
+    without = fit(rx90, recs, method="consistent", base=wls.base, observation=wls.observation,
+                  physical_prior=None).result
     # The covariance fit() computes for the prior's budget, once for the three priors.
     return recs, wls, without, _honest_covariance(wls.observation, wls.result)
 

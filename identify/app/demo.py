@@ -82,8 +82,10 @@ def _excitation(robot: Any, bp: Any, chi: np.ndarray, duration: float, out: Path
     import excitation
 
     _say(f"[2/6] optimising a {duration:g} s excitation trajectory (IPOPT, exact derivatives)...")
+    # The demo's motion runs on the simulated twin only: no envelope (excitation.optimise says what
+    # that leaves unchecked); rx90 excite plans for a real arm with the envelope on.
     traj = excitation.optimise(robot, duration=duration, harmonics=5, seed=0, starts=2,
-                               chi_nominal=chi, base=bp, progress=sys.stderr)
+                               chi_nominal=chi, base=bp, envelope=None, progress=sys.stderr)
     traj.save(out / "trajectory.csv")
     traj.save_json(out / "trajectory.json")
     return traj, excitation.random_trajectory(robot, duration, 5, seed=7, chi_nominal=chi, base=bp)

@@ -18,6 +18,7 @@ import numpy as np
 from rx90sym.files import file_sha256, read_json
 import rx90sym
 
+from identify.fitting.embedded import EmbeddedRobot, robot_differences
 from identify.io.gains import DriveGains
 
 __all__ = ["SCHEMA_VERSION", "FitModel", "read_fit_file", "robot_file_hash", "toolkit_version",
@@ -28,10 +29,15 @@ __all__ = ["SCHEMA_VERSION", "FitModel", "read_fit_file", "robot_file_hash", "to
 #: processing's ``rest`` and ``cross_validate`` may be null (open, automatic); the friction form
 #: (``processing.friction``, ``model.friction.form``) may be one per joint (a list; a file whose
 #: form is the same on every joint keeps the one name, so earlier version-3 files read the same).
-#: Version 2 files are still read (their fields mean the same in 3).
-SCHEMA_VERSION = 3
+#: Version 2 files are still read (their fields mean the same in 3). 4: ``model.description`` embeds
+#: the robot description (:class:`~identify.fitting.embedded.EmbeddedRobot`) and ``model.robot_file``
+#: is absolute; versions 2 and 3 are still read (their robot from the recorded path or the name).
+#: Also in 4: ``baseline`` (the plain OLS baseline's parameters and figures, identify.fitting.baseline),
+#: ``model.offset_joints`` (torque offsets chosen per joint) and the processing choice's ``offsets``,
+#: ``offset_candidate`` and ``scored_against``; a file without them reads None.
+SCHEMA_VERSION = 4
 #: Older layouts read as they are.
-READABLE_VERSIONS = (2, SCHEMA_VERSION)
+READABLE_VERSIONS = (2, 3, SCHEMA_VERSION)
 
 
 def robot_file_hash(robot: rx90sym.Robot) -> str | None:
@@ -58,11 +64,14 @@ class FitModel:
     offsets: torque offsets OFFj identified; spring: "default" | "none" | "identify" |
     "identify-k" | a table file; cutoff_hz (the one used, also when chosen on the data),
     decimate_to_hz (None: no decimation), rate_hz (achieved), delay_s: torque lag compensated;
-    tip: the tip link of a URDF robot (None otherwise); friction: the smooth friction form (one, or
+    tip: the tip link of a URDF robot (None otherwise); snap_rad [rad], snap_length_m [m]: the
+    tolerances its joint origins were snapped with (rx90sym.urdf_snap; reused when the robot is
+    rebuilt); friction: the smooth friction form (one, or
     a list of one per joint) and its velocity scales (null on a Coulomb joint;
     identify.estimation.separable.VelocityScales.to_json), the presliding travels; None: Coulomb;
-    offset_joints: the joints (1-based) the cross-validated choice gave a torque offset OFFj (None:
-    none; an older file reads None).
+    description: the robot description itself (EmbeddedRobot.to_json; None: a robot built in memory,
+    or a file of schema version 3 or older); offset_joints: the joints (1-based) the cross-validated
+    choice gave a torque offset OFFj (None: none; an older file reads None).
     """
 
     robot: str
@@ -82,15 +91,21 @@ class FitModel:
     delay_s: float
     tip: str | None = None
     friction: dict | None = None
+    description: dict | None = None
+    snap_rad: float | None = None       # a URDF's joint origin tolerances (rx90sym.urdf_snap); None: not a
+    snap_length_m: float | None = None  # URDF, or a file written before snapping (read as 1e-9 rad, 0 m)
     offset_joints: tuple[int, ...] | None = None
 
     @classmethod
     def of(cls, robot: rx90sym.Robot, **fields: Any) -> "FitModel":
-        return cls(robot=robot.name, robot_file=robot.source or None,
+        emb = EmbeddedRobot.of(robot)
+        fields.setdefault("description", None if emb is None else emb.to_json())
+        return cls(robot=robot.name, robot_file=str(Path(robot.source).resolve()) if robot.source else None,
                    robot_file_sha256=robot_file_hash(robot), toolkit_version=toolkit_version(),
                    coulomb_sign=robot.coupling.coulomb_sign if robot.coupling is not None else None,
                    offsets=bool(robot.offsets),
-                   tip=robot.urdf.tip if getattr(robot, "urdf", None) is not None else None, **fields)
+                   tip=robot.urdf.tip if getattr(robot, "urdf", None) is not None else None,
+                   **_snap_of(robot), **fields)
 
     def to_json(self) -> dict[str, Any]:
         d = asdict(self)
@@ -123,8 +138,20 @@ class FitModel:
                 "min_velocity": self.min_velocity, "delay": self.delay_s,
                 "spring": self.spring != "none", "rest": self.rest}
 
+    def embedded(self) -> EmbeddedRobot | None:
+        """The embedded robot description (None in files of schema version 3 or older)."""
+        return None if self.description is None else EmbeddedRobot.from_json(self.description)
+
     def check_robot(self, robot: rx90sym.Robot) -> str:
         """A warning ('' if none) when ``robot`` is not the description the fit used."""
+        emb = self.embedded()
+        if emb is not None:
+            if file_sha256(robot.source) == emb.robot_sha256 if robot.source else False:
+                return emb.differs_from(self.robot_file)
+            listed = robot_differences(robot_of(self), robot)
+            return (f"robot {robot.name!r} ({robot.source or 'built in memory'}) is used instead of the "
+                    f"description embedded in the fit" + (": " + "; ".join(listed) if listed else
+                                                           " (same geometry and limits)"))
         if robot.name != self.robot:
             return f"the identification is of robot {self.robot!r}, not {robot.name!r}"
         digest = robot_file_hash(robot)
@@ -151,15 +178,43 @@ def read_fit_file(path: str | Path) -> dict[str, Any]:
     return data
 
 
+#: How a fit file without snap tolerances (written before them) had its URDF read: rotation
+#: entries within 1e-9 of 0 or +-1 made exact, lengths as written.
+LEGACY_SNAP_RAD = 1e-9
+
+
+def _snap_of(robot: rx90sym.Robot) -> dict[str, float | None]:
+    urdf = getattr(robot, "urdf", None)
+    return {"snap_rad": urdf.snap, "snap_length_m": urdf.snap_length} if urdf is not None else {}
+
+
 def robot_of(model: FitModel, spec: str | None = None) -> rx90sym.Robot:
-    """The robot the identification used (``spec``, a name or file, overrides its file), with its
-    friction form, offsets and spring."""
+    """The robot the identification used, with its friction form, offsets and spring: rebuilt from
+    the description embedded in the fit file (schema 4), else from its recorded file or name.
+    ``spec`` (a name or file) overrides it; ValueError when it cannot be the same arm (another
+    joint count or other parameters; the lesser differences: :meth:`FitModel.check_robot`)."""
+    emb = model.embedded()
+    if spec is not None and emb is not None:
+        given = robot_of(model, None)
+        robot = _rebuilt(model, spec, None)
+        robot_differences(given, robot)  # raises when they cannot be the same arm
+        return robot
+    if emb is not None:
+        return _rebuilt(model, str(emb.path()), emb.acceleration)
+    return _rebuilt(model, spec, None)
+
+
+def _rebuilt(model: FitModel, spec: str | None, acceleration: Any) -> rx90sym.Robot:
     source = spec or (model.robot_file if model.robot_file and Path(model.robot_file).is_file() else model.robot)
     if model.spring in ("identify", "identify-k"):
         raise ValueError(f"the identification identified its spring ({model.spring}): the robot cannot "
                          "be rebuilt with it yet; validate within the identification instead")
-    tip = model.tip if str(source).lower().endswith(".urdf") else None
-    robot = rx90sym.load_robot(source, offsets=model.offsets, tip=tip)
+    urdf = str(source).lower().endswith(".urdf")
+    snap = ({"snap": model.snap_rad, "snap_length": model.snap_length_m} if model.snap_rad is not None
+            else {"snap": LEGACY_SNAP_RAD, "snap_length": 0.0}) if urdf else {}
+    if acceleration is not None and urdf:
+        snap["acceleration"] = list(acceleration)
+    robot = rx90sym.load_robot(source, offsets=model.offsets, tip=model.tip if urdf else None, **snap)
     if model.coulomb_sign is not None and robot.coupling is not None:
         robot = robot.with_options(coupling=rx90sym.Coupling(robot.coupling.joints, model.coulomb_sign))
     if model.spring == "none":

@@ -11,7 +11,8 @@ from typing import Any, Mapping, Sequence
 
 import rx90sym
 
-from identify.fitting.fit import Fit, fit
+from identify.fitting.fit import fit
+from identify.fitting.record import Fit
 from identify.observation.processing import Processing
 from identify.observation.stream import DEFAULT_BLOCK
 

@@ -37,7 +37,8 @@ from identify.estimation.least_squares import triangular_cond, weighted_least_sq
 from identify.observation.matrix import FilteredMotion, column_regressor, filtered_motion, stack_rows
 from identify.signal.pairing import POSITION_TOLERANCE, PairedRuns, pair_runs
 from identify.estimation.results import IdentificationResult, json_number
-from identify.fitting.plausibility import gain_flags, raise_errors
+from identify.fitting.plausibility import PlausibilityError, gain_flags, raise_errors
+from identify.gains.methods import swapped_runs_error
 
 __all__ = ["DriveGainsResult", "drive_gains", "GAIN_METHODS", "DEFAULT_METHOD", "FLAG_PCT"]
 
@@ -153,7 +154,8 @@ def _check_inputs(robot: rx90sym.Robot, empty: Sequence[Recording], loaded: Sequ
         raise ValueError("drive_gains: every gain is fixed; nothing to identify")
     if method == "same-motion" and len(empty) != len(loaded):
         raise ValueError(f"same-motion pairs each loaded run with the same motion run empty: got "
-                         f"{len(empty)} empty and {len(loaded)} loaded recordings")
+                         f"{len(empty)} empty and {len(loaded)} loaded recordings (--method global takes any "
+                         f"number of each)")
 
 
 def drive_gains(robot: rx90sym.Robot, empty: Sequence[Recording], loaded: Sequence[Recording], mass: float,
@@ -162,7 +164,7 @@ def drive_gains(robot: rx90sym.Robot, empty: Sequence[Recording], loaded: Sequen
                 position_tol: float = POSITION_TOLERANCE, base: rx90sym.BaseParameters | None = None,
                 cutoff: float | None = None, decimate_to: float | None = 50.0,
                 min_velocity: float | None = None, spring: bool = True,
-                iterations: int = IV_ITERATIONS, bootstrap_seed: int = 0) -> DriveGainsResult:
+                iterations: int = IV_ITERATIONS, bootstrap_seed: int = 0, _swap_check: bool = True) -> DriveGainsResult:
     """Identify the drive gains from current recordings and a payload of known mass.
 
     Args:
@@ -188,7 +190,8 @@ def drive_gains(robot: rx90sym.Robot, empty: Sequence[Recording], loaded: Sequen
 
     Raises:
         ValueError: bad arguments, recordings without currents, runs that do not pair.
-        PlausibilityError: most gains negative (empty and loaded swapped), or a gain of the wrong
+        PlausibilityError: most gains negative: ``runs_swapped`` when the runs swapped give mostly
+            positive gains (the payload is in the runs given as empty), or a gain of the wrong
             sign with a sigma larger than itself (not identified: never returned).
         IdentificationError: the system is rank deficient (names the unexcited unknowns).
     """
@@ -220,7 +223,15 @@ def drive_gains(robot: rx90sym.Robot, empty: Sequence[Recording], loaded: Sequen
     rel_ls, rel_boot = 100 * std_ls / np.abs(k), 100 * std_boot / np.abs(k)
     # The larger of eq. 13's and the bootstrap's sigma; every estimate scales with the mass.
     rel = np.hypot(np.fmax(rel_ls, rel_boot), 100 * mass_std / mass)
-    raise_errors(gain_flags(k, np.abs(k) * rel / 100, tuple(sorted(fix))))
+    try:
+        raise_errors(gain_flags(k, np.abs(k) * rel / 100, tuple(sorted(fix))))
+    except PlausibilityError as exc:  # mostly negative: runs swapped? (confirmed by fitting them swapped)
+        if not _swap_check or not any(f.code == "gains_negative" for f in exc.flags):
+            raise
+        raise swapped_runs_error(exc, lambda: drive_gains(
+            robot, loaded, empty, mass, method, fix, mass_std, side, offsets, flag_pct, position_tol, base, cutoff,
+            decimate_to, min_velocity, spring, iterations, bootstrap_seed, _swap_check=False),
+            [r.source for r in empty], [r.source for r in loaded], robot_fit) from None
     flagged = tuple(j + 1 for j in free if not rel[j] <= flag_pct)
     gains = DriveGains(k, side=side, current_offsets=_current_offsets(i0, k, Rt),
                        std=np.abs(k) * rel / 100, robot=robot.name, source=f"drive_gains:{method}",
@@ -331,7 +342,7 @@ def _joint_sigma(r: np.ndarray, joint: np.ndarray, nj: int, c: int) -> np.ndarra
 
 def _same_motion(empty, loaded, position_tol, *, robot, Rt, mass, free, k_fixed, cutoff, decimate_to,
                  min_velocity, spring, iterations, rate, seed):
-    pairs = [pair_runs(e, l, position_tol) for e, l in zip(empty, loaded)]
+    pairs = [pair_runs(e, l, position_tol, instead="--method global") for e, l in zip(empty, loaded)]
     # One cut-off for both runs of a pair, so that the same samples are kept and compared.
     cutoff = cutoff or max(choose_cutoff(np.asarray(p.loaded.q), p.loaded.rate) for p in pairs)
     cols = list(rx90sym.payload_regressor_columns(robot))

@@ -21,12 +21,14 @@ files in :mod:`identify.io.motor_files`; the arrays of every reader end in :func
 from __future__ import annotations
 
 import math
+import numbers
 import warnings
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Sequence
 
 import numpy as np
 
+from rx90sym.messages import plain
 from rx90sym.recording import RecordingError
 
 if TYPE_CHECKING:  # for annotations only
@@ -194,6 +196,12 @@ def _validate(
     for a, b in zip(bounds[:-1], bounds[1:]):
         if b - a > 1:
             _check_jumps(q[a:b], float(np.median(np.diff(t[a:b]))), robot, labels.q, offset=a)
+
+
+def check_period(period: float) -> None:
+    """A sampling period (s) is a positive finite number (ValueError naming ``--period`` otherwise)."""
+    if not (isinstance(period, numbers.Real) and math.isfinite(period) and period > 0):
+        raise ValueError(f"--period (period= in Python) must be a positive sampling period in s, got {plain(period)}")
 
 
 def _check_robot_name(declared: str | None, robot: rx90sym.Robot, source: str) -> None:

@@ -33,7 +33,7 @@ class ColumnMap:
 
     Attributes:
         names: the expanded name of every column, in file order (``_`` for ignored ones).
-        t: column of the time stamps.
+        t: column of the time stamps (-1 for a map parsed with ``time=False``: the log has none).
         q, qd, tau, i: columns of joint j's position, velocity, torque, current (empty tuple
             when the log has none of that kind).
         aux: auxiliary name -> column.
@@ -63,8 +63,9 @@ def _expand(token: str) -> list[str]:
     return [f"{prefix}{k}" for k in range(a, b + 1)]
 
 
-def parse_columns(spec: str | Sequence[str], robot: rx90sym.Robot) -> ColumnMap:
-    """Parse a column map (module docstring) for ``robot``.
+def parse_columns(spec: str | Sequence[str], robot: rx90sym.Robot, time: bool = True) -> ColumnMap:
+    """Parse a column map (module docstring) for ``robot``; ``time=False``: the log has no time
+    column (its clock comes from a sampling period) and the map must not name one.
 
     Raises:
         ValueError: an unknown or repeated name, a joint the robot does not have (``q7`` on a
@@ -86,6 +87,9 @@ def parse_columns(spec: str | Sequence[str], robot: rx90sym.Robot) -> ColumnMap:
         if name == "_":
             continue
         if name == "t":
+            if not time:
+                raise ValueError(f"{where}: a log read with a sampling period (--period, period= in Python) has "
+                                 f"no time column; map the column as _ or give no period")
             if t_col is not None:
                 raise ValueError(f"{where}: 't' appears twice (columns {t_col + 1} and {col + 1})")
             t_col = col
@@ -108,8 +112,9 @@ def parse_columns(spec: str | Sequence[str], robot: rx90sym.Robot) -> ColumnMap:
         if joint in groups[group]:
             raise ValueError(f"{where} appears twice")
         groups[group][joint] = col
-    if t_col is None:
-        raise ValueError("column map: no time column 't'")
+    if t_col is None and time:
+        raise ValueError("column map: no time column 't' (a log without one: give its sampling period with "
+                         "--period S, period= in Python)")
     for group, found in groups.items():
         if found and len(found) != n:
             missing = next(j for j in range(1, n + 1) if j not in found)
@@ -123,7 +128,7 @@ def parse_columns(spec: str | Sequence[str], robot: rx90sym.Robot) -> ColumnMap:
     def cols(group: str) -> tuple[int, ...]:
         return tuple(groups[group][j] for j in range(1, n + 1)) if groups[group] else ()
 
-    return ColumnMap(names=tuple(names), t=t_col, q=cols("q"), qd=cols("qd"), tau=cols("tau"),
+    return ColumnMap(names=tuple(names), t=-1 if t_col is None else t_col, q=cols("q"), qd=cols("qd"), tau=cols("tau"),
                      i=cols("i"), aux=tuple(aux.items()))
 
 

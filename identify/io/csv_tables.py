@@ -14,6 +14,8 @@ import numpy as np
 
 from rx90sym.recording import RecordingError
 
+from identify.io.log_rows import _is_number
+
 
 @dataclass(frozen=True)
 class _Table:
@@ -31,14 +33,16 @@ def _semicolon_hint(line: str) -> str:
     return "; the file seems to use ';' as separator (expected ',')" if ";" in line and "," not in line else ""
 
 
-def _parse_cells(rows: list[list[str]], columns: Sequence[str], source: str, first_line: int) -> np.ndarray:
-    """Convert cell text to floats; on failure name the first bad cell."""
+def _parse_cells(rows: list[list[str]], columns: Sequence[str], source: str, first_line: int,
+                 width_from: str = "the header") -> np.ndarray:
+    """Convert cell text to floats; on failure name the first bad cell (``width_from``: what set
+    the expected cell count, for the message)."""
     n_cols = len(columns)
     for i, cells in enumerate(rows):
         if len(cells) != n_cols:
             raise RecordingError(
                 f"{source}: row {i + 1} (line {first_line + i}) has {len(cells)} cells, "
-                f"the header has {n_cols} columns{_semicolon_hint(','.join(cells))}"
+                f"{width_from} has {n_cols} columns{_semicolon_hint(','.join(cells))}"
             )
     if not rows:
         return np.empty((0, n_cols))
@@ -58,8 +62,13 @@ def _parse_cells(rows: list[list[str]], columns: Sequence[str], source: str, fir
     raise RecordingError(f"{source}: unreadable numbers")  # unreachable in practice
 
 
-def _read_table(path: Path) -> _Table:
-    """Read comments ``# key: value``, the header and the numbers of a CSV file."""
+def _read_table(path: Path, header: bool | None = True, names: Sequence[str] = ()) -> _Table:
+    """Read comments ``# key: value``, the header and the numbers of a CSV file.
+
+    ``header``: True, the first line after the comments names the columns; None, it does when one
+    of its cells is not a number (files exported with or without a header); a file without one
+    takes ``names`` (or ``column 1``, ``column 2``, ...) as its column names.
+    """
     source = path.name
     try:
         text = path.read_text(encoding="utf-8-sig")  # -sig: tolerate the BOM spreadsheets write
@@ -75,18 +84,36 @@ def _read_table(path: Path) -> _Table:
             meta[key.strip().lower()] = value.strip()
         i += 1
     if i == len(lines):
-        raise RecordingError(f"{source}: no header line (expected column names)")
-    columns = tuple(c.strip() for c in lines[i].split(","))
-    header_line = i + 1
-    if len(columns) == 1 and _semicolon_hint(lines[i]):
-        raise RecordingError(f"{source}: line {header_line}: the header is one column "
-                             f"'{columns[0][:40]}'{_semicolon_hint(lines[i])}")
-    data = lines[i + 1:]
+        raise RecordingError(f"{source}: no header line (expected column names)" if header else f"{source}: no data rows")
+    cells = lines[i].split(",")
+    if header is None:
+        header = not all(_is_number(c) for c in cells)
+    if header:
+        columns = tuple(c.strip() for c in cells)
+        header_line = i + 1
+        if len(columns) == 1 and _semicolon_hint(lines[i]):
+            raise RecordingError(f"{source}: line {header_line}: the header is one column "
+                                 f"'{columns[0][:40]}'{_semicolon_hint(lines[i])}")
+    else:
+        columns = tuple(names) if len(names) == len(cells) else tuple(f"column {k + 1}" for k in range(len(cells)))
+        header_line = i
+    data = lines[header_line:]
     while data and not data[-1].strip():  # tolerate trailing blank lines only
         data.pop()
     rows = [line.split(",") for line in data]
-    values = _parse_cells(rows, columns, source, header_line + 1)
+    values = _parse_cells(rows, columns, source, header_line + 1, "the header" if header else "the first row")
     return _Table(source=source, meta=meta, columns=columns, values=values, first_data_line=header_line + 1)
+
+
+def _check_same_rows(tables: Sequence[_Table]) -> None:
+    """Files read side by side (one sample per row in each) have the same number of rows: the
+    message names the shorter file, its first missing row and every file's row count."""
+    counts = [t.values.shape[0] for t in tables]
+    if len(set(counts)) > 1:
+        short = tables[int(np.argmin(counts))]
+        listed = ", ".join(f"{t.source} has {c} rows" for t, c in zip(tables, counts))
+        raise RecordingError(f"{short.source}: column '{short.columns[0]}', row {min(counts) + 1}: missing "
+                             f"({listed}; mismatched lengths)")
 
 
 def _column_index(table: _Table, expected: Sequence[str],

@@ -20,6 +20,7 @@ Only ``gains`` is required; ``side`` defaults to ``"joint"``, offsets to 0.
 """
 from __future__ import annotations
 
+import warnings
 from dataclasses import dataclass, field, replace
 from pathlib import Path
 
@@ -29,7 +30,9 @@ from rx90sym.files import read_json
 import rx90sym
 from rx90sym.recording import Recording, RecordingError, frozen_array
 
-__all__ = ["DriveGains", "read_gains", "apply_gains"]
+from identify.io.checks import RecordingWarning
+
+__all__ = ["DriveGains", "read_gains", "apply_gains", "warn_negative"]
 
 _SIDES = ("joint", "motor")
 
@@ -119,7 +122,23 @@ def read_gains(spec: str | Path, robot: rx90sym.Robot) -> DriveGains:
         gains = DriveGains(np.asarray(values), side="joint", robot=robot.name, source="--gains")
     if gains.gains.size != robot.n:
         raise ValueError(f"{gains.source}: {gains.gains.size} gains for robot '{robot.name}' with {robot.n} joints")
+    warn_negative(gains)
     return gains
+
+
+def warn_negative(gains: DriveGains) -> None:
+    """A warning naming each negative gain: its torques have the opposite sign of its currents, right
+    only when that motor's current is logged with its sign reversed (a sign error otherwise turns
+    the joint's friction and inertia negative in every fit made with these gains)."""
+    negative = np.flatnonzero(gains.gains < 0)
+    if not negative.size:
+        return
+    what = "motor" if gains.side == "motor" else "joint"
+    listed = ", ".join(f"{what} {j + 1}: {gains.gains[j]:g} N·m/A" for j in negative)
+    warnings.warn(f"{gains.source}: negative drive gain ({listed}): torques of opposite sign to the currents, "
+                  f"right only if the controller logs that current with its sign reversed; otherwise fix the "
+                  f"sign (a fit would show negative friction and inertia on that joint)",
+                  RecordingWarning, stacklevel=3)
 
 
 def apply_gains(rec: Recording, gains: DriveGains, robot: rx90sym.Robot) -> Recording:

@@ -60,7 +60,8 @@ from rx90sym.recording import Recording, RecordingError
 from identify.io.columns import ColumnMap, parse_columns, rtde_columns, rtde_refusal
 from identify.io.log_rows import ABSURD, WINDOW_ADVICE, bad_rows, data_lines, header_cells, parse_rows, row_window
 from identify.io.units import check_units
-from identify.io.gains import DriveGains, apply_gains, read_gains
+from identify.io.checks import check_period
+from identify.io.gains import DriveGains, apply_gains, read_gains, warn_negative
 from identify.io.gaps import DEFAULT_MAX_GAP, LOST_STEPS, LogGaps, find_gaps, short_segments, stale_rows
 from identify.io.steps import StepCounts, log_steps, step_figures
 from identify.io.resampling import resample as resample_recording
@@ -222,6 +223,7 @@ def read_log(
     header: bool = False, rows: tuple[int, int] | None = None, t_from: float | None = None,
     t_to: float | None = None, resample: float | None = None, gains: DriveGains | str | None = None,
     convention: str | None = None, max_gap: float = DEFAULT_MAX_GAP, segments: bool = True,
+    period: float | None = None,
 ) -> Recording:
     """Read a controller log (a CSV whose columns ``columns`` names) as a recording.
 
@@ -243,6 +245,10 @@ def read_log(
         max_gap: longest gap (s) of lost packets bridged by interpolation (default 50 ms,
             :mod:`identify.io.gaps`); a longer one starts a new segment.
         segments: False refuses a gap longer than ``max_gap`` instead of splitting the log.
+        period: sampling period, s, of a log without time column (the column map names no ``t``):
+            sample k of the rows read is at ``t = k * period`` (t = 0 at the first row read, the
+            first of ``rows``); every row is a sample, a row equal to the previous one included
+            (no stale rows: the clock is the period's).
 
     Returns:
         A recording in model angles, with ``measured`` (bridged samples False) and ``segment``
@@ -261,6 +267,11 @@ def read_log(
     p = Path(path)
     if rows is not None and (t_from is not None or t_to is not None):
         raise ValueError("give rows or t_from/t_to (--rows or --from/--to), not both")
+    if period is not None:
+        check_period(period)
+        if t_from is not None or t_to is not None:
+            raise ValueError("t_from/t_to (--from/--to) select by the log's clock; a log read with a sampling period "
+                             "(--period) has none: select lines with rows= (--rows FIRST:LAST)")
     blanks = False
     if columns is None:
         cells, blanks = header_cells(p)
@@ -271,27 +282,37 @@ def read_log(
         refusal = rtde_refusal(cells, robot)
         if refusal:
             raise ValueError(f"{p.name}: {refusal}")
-    cmap = parse_columns(columns, robot)
+    cmap = parse_columns(columns, robot, time=period is None)
     conv = _normalise_convention(convention, p.name) or "controller"
     lines = data_lines(p, header, len(cmap.names), blanks)
     a, b = row_window(lines, rows, t_from, t_to, cmap.t)
     values = parse_rows(lines, a, b, cmap)
+    if period is not None:  # the clock of the period, appended last: column numbers stay the file's
+        values = np.column_stack([values, np.arange(values.shape[0]) * float(period)])
+        cmap = parse_columns([*cmap.names, "t"], robot)
     rec = rows_to_recording(p.name, values, lines.numbers[a:b], cmap, robot, conv, gains=gains,
-                            max_gap=max_gap, segments=segments, resample=resample)
-    rec.meta["log"]["columns"] = ",".join(cmap.names)
+                            max_gap=max_gap, segments=segments, resample=resample, stale=period is None)
+    rec.meta["log"]["columns"] = ",".join(cmap.names[:-1] if period is not None else cmap.names)
+    if period is not None:
+        rec.meta["log"]["period_s"] = float(period)
     return rec
 
 
 def rows_to_recording(source: str, values: np.ndarray, numbers: Sequence[int], cmap: ColumnMap,
                       robot: rx90sym.Robot, convention: str, gains: DriveGains | str | None = None,
                       max_gap: float = DEFAULT_MAX_GAP, segments: bool = True,
-                      resample: float | None = None, window: bool = True) -> Recording:
+                      resample: float | None = None, window: bool = True, stale: bool = True) -> Recording:
     """The rows of a log (``values`` (N, columns) as ``cmap`` names them, ``numbers`` their line or
     message numbers) as a recording, by the rules of :func:`read_log`: stale rows dropped, time,
     gaps, positions and velocities checked, resampled, currents through the gains. ``window``: the
-    input form can select a window of lines, advised by the refusals (False for a bag)."""
+    input form can select a window of lines, advised by the refusals (False for a bag); ``stale``:
+    drop rows equal to the previous one (False when the clock is a sampling period: every row is a
+    sample)."""
     drive = _drive(cmap, gains, robot)
-    stale = stale_rows(values, cmap.t, [c for c, name in enumerate(cmap.names) if name != "_"])
+    if stale:
+        stale = stale_rows(values, cmap.t, [c for c, name in enumerate(cmap.names) if name != "_"])
+    else:
+        stale = np.zeros(values.shape[0], dtype=bool)
     report = {"lines": [numbers[0], numbers[-1]], "rows": int(len(numbers)), "stale_rows": int(stale.sum()),
               "stale_lines": [int(numbers[k]) for k in np.flatnonzero(stale)[:LISTED_ROWS]]}
     values, numbers = values[~stale], [n for n, s in zip(numbers, stale) if not s]
@@ -381,4 +402,8 @@ def _drive(cmap: ColumnMap, gains: DriveGains | str | None, robot: rx90sym.Robot
     if gains is not None and cmap.tau:
         raise ValueError("drive gains given, but the log already holds joint torques (tau1..): "
                          "the gains would replace them; map the torques as x:NAME to keep both")
-    return read_gains(gains, robot) if isinstance(gains, (str, os.PathLike)) else gains
+    if isinstance(gains, (str, os.PathLike)):
+        return read_gains(gains, robot)  # warns of negative gains
+    if gains is not None:
+        warn_negative(gains)
+    return gains

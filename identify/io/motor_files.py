@@ -15,7 +15,7 @@ import numpy as np
 from rx90sym.messages import plain
 from rx90sym.recording import Recording, RecordingError
 
-from identify.io.csv_tables import _column_index, _read_table
+from identify.io.csv_tables import _check_same_rows, _column_index, _read_table
 from identify.io.arrays import _build, _normalise_convention
 from identify.io.checks import _check_finite, _check_robot_name, _Labels
 
@@ -56,13 +56,7 @@ def read_motor_recording(
         _check_robot_name(table.meta.get("robot"), robot, table.source)
         tables.append((table, table.values[:, [index[c] for c in names]]))
     (pos_table, q_motor), (tau_table, tau_motor) = tables
-    if q_motor.shape[0] != tau_motor.shape[0]:
-        short, long_ = sorted(tables, key=lambda tv: tv[1].shape[0])
-        raise RecordingError(
-            f"{short[0].source}: column '{names[0]}', row {short[1].shape[0] + 1}: missing "
-            f"({short[0].source} has {short[1].shape[0]} rows, {long_[0].source} has {long_[1].shape[0]}; "
-            f"mismatched lengths)"
-        )
+    _check_same_rows([pos_table, tau_table])
     # Check the raw motor data first: a NaN would otherwise spread over coupled joints.
     _check_finite(q_motor, [(pos_table.source, c) for c in names])
     _check_finite(tau_motor, [(tau_table.source, c) for c in names])

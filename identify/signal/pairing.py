@@ -8,6 +8,7 @@ the largest position gap; beyond ``position_tol`` the runs are refused (not the 
 """
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, replace
 
 import numpy as np
@@ -16,7 +17,7 @@ from rx90sym.recording import Recording
 
 from identify.io.resampling import interpolate
 
-__all__ = ["PairedRuns", "pair_runs", "POSITION_TOLERANCE"]
+__all__ = ["PairedRuns", "pair_runs", "POSITION_TOLERANCE", "accepting_tolerance"]
 
 # The paper measured < 1e-3 rad between the empty and loaded runs with 7 kg on the CS8. The
 # twin's 10 Hz servo loop without payload feed-forward drifts up to ~0.012 rad with 7 kg; past
@@ -86,14 +87,21 @@ def _coarse_lag(empty: Recording, loaded: Recording, step: float) -> float:
 _NO_OVERLAP = 1e6
 
 
+def accepting_tolerance(gap: float) -> float:
+    """A round position tolerance (2 significant digits, rad) that accepts a gap of ``gap`` rad."""
+    scale = 10.0 ** (math.floor(math.log10(gap)) - 1)
+    return math.ceil(gap / scale * (1 + 1e-12)) * scale
+
+
 def pair_runs(empty: Recording, loaded: Recording, position_tol: float = POSITION_TOLERANCE,
-              max_lag: float | None = None) -> PairedRuns:
+              max_lag: float | None = None, instead: str = "--method 4") -> PairedRuns:
     """Put a loaded run on the empty run's time grid (eq. 28 needs both at the same instants).
 
     Args:
         empty, loaded: two runs of the same trajectory, uniform time steps, any clocks and lengths.
         position_tol: largest position gap accepted over the common part, rad.
         max_lag: refuse a lag larger than this, s (None: any).
+        instead: the method that needs no pairing, named by the refusal of a position gap.
 
     Returns:
         :class:`PairedRuns`; the loaded run's samples are interpolated at t_empty + lag (not at all
@@ -105,6 +113,11 @@ def pair_runs(empty: Recording, loaded: Recording, position_tol: float = POSITIO
     """
     if empty.n_joints != loaded.n_joints:
         raise ValueError(f"{empty.source} has {empty.n_joints} joints and {loaded.source} {loaded.n_joints}")
+    for rec in (empty, loaded):
+        if rec.n_segments > 1:
+            raise ValueError(f"{rec.source}: {rec.n_segments} segments (gaps too long to bridge): paired runs are "
+                             f"compared sample by sample; bridge the gaps (convert --max-gap) or select a window "
+                             f"without them (--rows)")
     from scipy.interpolate import CubicSpline
     from scipy.optimize import minimize_scalar
 
@@ -136,10 +149,11 @@ def pair_runs(empty: Recording, loaded: Recording, position_tol: float = POSITIO
         start = int(np.argmin(np.abs(loaded.t - t_l[first])))
         rows = slice(start, start + e.n_samples)
         l_rec = loaded.select(rows)
-        values = {"q": l_rec.q, "tau": l_rec.tau, "dq": l_rec.dq, "current": l_rec.current, "aux": l_rec.aux}
+        values = {"q": l_rec.q, "tau": l_rec.tau, "dq": l_rec.dq, "current": l_rec.current, "aux": l_rec.aux,
+                  "measured": l_rec.measured}
     else:
         r = interpolate(loaded, np.clip(t_l[first:last + 1], loaded.t[0], loaded.t[-1]))
-        values = {"q": r.q, "tau": r.tau, "dq": r.dq, "current": r.current, "aux": r.aux}
+        values = {"q": r.q, "tau": r.tau, "dq": r.dq, "current": r.current, "aux": r.aux, "measured": r.measured}
     l_new = replace(loaded, t=e.t, meta={**loaded.meta, "paired_with": empty.source, "lag_s": lag},
                     **values)
     diff = np.abs(e.q - l_new.q)
@@ -147,6 +161,8 @@ def pair_runs(empty: Recording, loaded: Recording, position_tol: float = POSITIO
     gap_joint = int(np.unravel_index(np.argmax(diff), diff.shape)[1]) + 1
     if gap > position_tol:
         raise ValueError(f"{empty.source} and {loaded.source}: after the lag {lag:.6g} s the positions still "
-                         f"differ by up to {gap:.3g} rad on joint {gap_joint} (> --position-tol "
-                         f"{position_tol:g} rad): not the same motion; use method 4")
+                         f"differ by up to {gap:.3g} rad on joint {gap_joint}, more than --position-tol "
+                         f"{position_tol:g} rad: not the same motion, or one run drifted; --position-tol "
+                         f"{accepting_tolerance(gap):g} accepts this pair (position_tol= in Python), {instead} "
+                         f"needs no pairing")
     return PairedRuns(e, l_new, lag, gap, gap_joint, (first, empty.n_samples - 1 - last))

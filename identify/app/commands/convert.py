@@ -11,9 +11,18 @@ ROS bag form (joint_states; ROS 1, ROS 2 sqlite3 or MCAP; needs the ``ros`` extr
     rx90 convert BAG --topic /joint_states --robot R [--effort torque|current] [--gains ...]
                  [--resample HZ] [--max-gap S] [--no-segments] --out REC.csv
 
+Joint files form (one file per signal, one column per joint, header or none, no time column;
+identify.io.joint_files)::
+
+    rx90 convert --positions Q.csv --torques T.csv [--velocities V.csv] [--currents I.csv --gains G]
+                 --period S --robot R [--resample HZ] [--convention C] --out REC.csv
+
 Motor form (Stäubli CS8 / TX40 files)::
 
     rx90 convert --robot tx40 --motor-positions P.csv --motor-torques T.csv --period S --out REC.csv
+
+``--period S`` also reads a LOG.csv without time column (its column map names no ``t``): sample k
+at ``t = k * S``, t = 0 at the first row read.
 """
 from __future__ import annotations
 
@@ -27,14 +36,15 @@ from ..common import UsageError, check_output, convention_option, load_robot, pr
 from .identify_runs import block_option
 
 _LOG_OPTIONS = ("columns", "no_header", "rows", "t_from", "t_to", "resample", "gains", "max_gap", "no_segments")
-_MOTOR_OPTIONS = ("motor_positions", "motor_torques", "period")
+_MOTOR_OPTIONS = ("motor_positions", "motor_torques")
+_FILE_OPTIONS = ("positions", "velocities", "torques", "currents")
 _BAG_OPTIONS = ("topic", "effort")
 _CSV_ONLY = ("columns", "no_header", "rows", "t_from", "t_to")
 
 
 def register(sub: Any) -> None:
-    text = ("convert a controller log (named columns) or motor-side recordings (TX40 files) to a "
-            "recording file")
+    text = ("convert a controller log (named columns), one file per signal (positions, torques, ...) or "
+            "motor-side recordings (TX40 files) to a recording file")
     sp = sub.add_parser("convert", help=text, description=text + "; see docs/real-logs.md")
     sp.set_defaults(func=run)
     robot_option(sp, None, "")
@@ -65,9 +75,17 @@ def register(sub: Any) -> None:
                     help="drive gains turning currents into joint torques: K1,...,Kn (N m/A, joint "
                          "side) or the JSON of rx90 gains; without them the file keeps currents")
     convention_option(sp)
+    sp.add_argument("--positions", metavar="Q.csv",
+                    help="joint files form: joint positions [rad], one column per joint, header or none")
+    sp.add_argument("--torques", metavar="T.csv", help="joint files form: joint torques [N m], joint side")
+    sp.add_argument("--velocities", metavar="V.csv", help="joint files form: recorded joint velocities [rad/s]")
+    sp.add_argument("--currents", metavar="I.csv",
+                    help="joint files form: motor currents [A] (--gains turns them into joint torques)")
     sp.add_argument("--motor-positions", help="motor form: CSV of motor positions [rad]")
     sp.add_argument("--motor-torques", help="motor form: CSV of motor torques [N m]")
-    sp.add_argument("--period", type=float, help="motor form: sampling period [s]")
+    sp.add_argument("--period", type=float, metavar="S",
+                    help="sampling period [s] of files without a time column: the joint files and motor forms, "
+                         "or a LOG.csv whose --columns names no t (sample k at t = k S, t = 0 at the first sample)")
     sp.add_argument("--out", required=True, help="recording file (.csv or .npz)")
     sp.add_argument("--block", metavar="LINES",  # checked by run: refused for a bag in one line, not by argparse
                     help=f"LOG.csv form: lines per block: a longer log is converted block by block, memory bounded "
@@ -118,11 +136,16 @@ def run(args: argparse.Namespace) -> int:
     from identify.io.gaps import DEFAULT_MAX_GAP
 
     if args.log is None:
+        if _given(args, _FILE_OPTIONS):
+            return _run_files(args)
         return _run_motor(args)
     bag = is_bag(args.log) or args.topic is not None
-    mixed = _given(args, _MOTOR_OPTIONS)
+    mixed = _given(args, _MOTOR_OPTIONS + (("period",) if bag else ()))
     if mixed:
         raise UsageError(f"{_belong(mixed)} to the motor form, not to {'a bag' if bag else 'a LOG.csv'}")
+    files = _given(args, _FILE_OPTIONS)
+    if files:
+        raise UsageError(f"{_belong(files)} to the joint files form (no LOG.csv), not to {'a bag' if bag else 'a LOG.csv'}")
     if args.max_gap is not None and not args.max_gap > 0:
         raise UsageError(f"--max-gap must be a positive time in s, got {args.max_gap:g}")
     if bag:
@@ -135,13 +158,18 @@ def run(args: argparse.Namespace) -> int:
         raise UsageError("a LOG.csv without header needs --columns SPEC (e.g. t,q1..q6,qd1..qd6,i1..i6)")
     robot = _robot(args)
     check_output(args.out)
+    if args.period is not None and not args.period > 0:
+        raise UsageError(f"--period must be a positive sampling period in s, got {args.period:g}")
     if count_rows(args.log) > block:
+        if args.period is not None:
+            raise UsageError(f"--period: a log longer than --block ({block} lines) is converted block by block, "
+                             f"which needs a time column; raise --block to the log's line count to read it whole")
         return _run_long(args, robot, block)
     progress(f"reading the log {args.log}")
     rec = read_log(args.log, robot, args.columns, header=not args.no_header, rows=_rows(args.rows),
                    t_from=args.t_from, t_to=args.t_to, resample=args.resample, gains=args.gains,
                    convention=args.convention, max_gap=args.max_gap or DEFAULT_MAX_GAP,
-                   segments=not args.no_segments)
+                   segments=not args.no_segments, period=args.period)
     write_recording(args.out, rec, robot, convention="controller")
     print(_print_log(args.log, rec.meta["log"], "torques as logged" if rec.current is None else
                      "no gains: the file keeps currents (give --gains to identify with it)"))
@@ -254,6 +282,43 @@ def _gap_lines(gaps: dict) -> list[str]:
 _GAPS_SHOWN = 10
 
 
+def _run_files(args: argparse.Namespace) -> int:
+    """The joint files form: one file per signal (identify.io.joint_files)."""
+    from identify.io.joint_files import read_joint_files
+    from identify.io.recordings import write_recording
+
+    extra = _given(args, tuple(o for o in _LOG_OPTIONS if o not in ("resample", "gains")) + _BAG_OPTIONS
+                   + _MOTOR_OPTIONS + ("block",))
+    if extra:
+        raise UsageError(f"{_belong(extra)} to the log form (give LOG.csv) or the motor form, not to the joint "
+                         f"files form (--positions ...)")
+    missing = [f for f, v in (("--positions Q.csv", args.positions), ("--period S", args.period)) if v is None]
+    if args.torques is None and args.currents is None:
+        missing.append("--torques T.csv (or --currents I.csv with --gains)")
+    if missing:
+        raise UsageError(f"the joint files form needs {', '.join(missing)}")
+    if not args.period > 0:
+        raise UsageError(f"--period must be a positive sampling period in s, got {args.period:g}")
+    if args.gains is not None and args.currents is None:
+        raise UsageError("--gains turns the motor currents of --currents I.csv into joint torques; no --currents given")
+    if args.gains is not None and args.torques is not None:
+        raise UsageError("--gains with both --torques and --currents: the gains' torques would replace those of "
+                         f"{args.torques}; give one of them")
+    robot = _robot(args)
+    check_output(args.out)
+    files = {k: getattr(args, k) for k in _FILE_OPTIONS if getattr(args, k) is not None}
+    progress(f"reading {', '.join(files.values())}")
+    rec = read_joint_files(robot, files, args.period, gains=args.gains, convention=args.convention,
+                           resample=args.resample)
+    write_recording(args.out, rec, robot, convention="controller")
+    print(_print_log(args.positions, rec.meta["log"], "torques as read" if rec.current is None else
+                     "torques as read, currents kept" if args.torques else
+                     "no gains: the file keeps currents (give --gains to identify with it)"))
+    print(f"converted {rec.n_samples} samples ({' + '.join(rec.meta['log']['files'].values())}, period "
+          f"{args.period:g} s, t = 0 at the first sample) -> {args.out}")
+    return 0
+
+
 def _run_motor(args: argparse.Namespace) -> int:
     from identify.io.recordings import read_motor_recording, write_recording
 
@@ -263,7 +328,8 @@ def _run_motor(args: argparse.Namespace) -> int:
     missing = [f for f, v in (("--motor-positions", args.motor_positions), ("--motor-torques", args.motor_torques),
                               ("--period", args.period)) if v is None]
     if missing:
-        raise UsageError(f"give LOG.csv --columns SPEC, or the motor form ({', '.join(missing)} missing)")
+        raise UsageError(f"give LOG.csv --columns SPEC, the joint files form (--positions Q.csv --torques T.csv "
+                         f"--period S), or the motor form ({', '.join(missing)} missing)")
     robot = _robot(args)
     check_output(args.out)
     progress("reading the motor-side files")

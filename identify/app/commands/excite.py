@@ -123,9 +123,7 @@ def run(args: argparse.Namespace) -> int:
     robot = _load_robot(args)
     params = rx90sym.nominal_parameters(robot, args.params)
     chi = None if params is None else robot.parameter_vector(params)
-    if chi is None:
-        progress(f"warning: robot {robot.name!r} has no nominal parameters: the trajectory is NOT "
-                 f"checked against the torque limits (pass --params FILE)")
+    # Without nominal parameters excitation.optimise says the torque limits are unchecked (once).
     criterion = args.criterion
     if criterion is None:
         criterion = excitation.DEFAULT_CRITERION if chi is not None else excitation.FALLBACK_CRITERION
@@ -147,6 +145,10 @@ def run(args: argparse.Namespace) -> int:
     for line in excitation.envelope_lines(described):
         progress(line)
     if args.target == "payload":
+        if chi is None:
+            from excitation.api import nominal_warning
+
+            progress(nominal_warning(robot))
         return _payload(args, robot, base, chi, noise, collision, start_pose, envelope, (model, described))
     complement = [_motion(path, robot) for path in args.complement or ()]
     with _client(args) as client:

@@ -36,6 +36,9 @@ def register(sub: Any) -> None:
                     help="gains on the motor side (tau = Rt diag(k) i) or the joint side "
                          "(default: motor for a coupled wrist, else joint)")
     sp.add_argument("--no-offsets", action="store_true", help="global: no current offsets (default: identified)")
+    sp.add_argument("--no-compare", action="store_true",
+                    help="do not run the other method too (default: both methods run when the runs allow it, "
+                         "with a per-joint verdict: agree within 2 σ or not)")
     sp.add_argument("--flag-pct", type=float, default=FLAG_PCT,
                     help=f"flag a gain whose relative σ exceeds this [%%] (default {FLAG_PCT:g})")
     sp.add_argument("--position-tol", type=float, default=POSITION_TOLERANCE,
@@ -70,10 +73,12 @@ def run(args: argparse.Namespace) -> int:
     from identify.io.gains import read_gains
     from identify.io.recordings import read_recording
 
-    if args.method == "same-motion" and args.no_offsets:
-        raise UsageError("conflicting options: --no-offsets is for --method global (offsets cancel in same-motion)")
-    if args.method == "global" and args.position_tol != POSITION_TOLERANCE:
-        raise UsageError("conflicting options: --position-tol is for --method same-motion (global pairs no runs)")
+    if args.method == "same-motion" and args.no_offsets and args.no_compare:
+        raise UsageError("conflicting options: --no-offsets is for --method global (offsets cancel in same-motion; "
+                         "without --no-compare it applies to the global run of the comparison)")
+    if args.method == "global" and args.position_tol != POSITION_TOLERANCE and args.no_compare:
+        raise UsageError("conflicting options: --position-tol is for --method same-motion (global pairs no runs; "
+                         "without --no-compare it applies to the same-motion run of the comparison)")
     check_output(args.json)
     check_output(args.report)
     robot = load_robot(args, recordings=args.empty + args.loaded)
@@ -83,18 +88,22 @@ def run(args: argparse.Namespace) -> int:
     empty = [checked(read_recording(p, robot, convention=args.convention), robot) for p in args.empty]
     loaded = [checked(read_recording(p, robot, convention=args.convention), robot) for p in args.loaded]
     progress(f"identifying the drive gains ({args.method})")
+    options = dict(fix=fix, mass_std=args.mass_std, side=args.side, offsets=not args.no_offsets,
+                   flag_pct=args.flag_pct, position_tol=args.position_tol, cutoff=args.cutoff,
+                   decimate_to=args.decimate_to)
     try:
-        res = drive_gains(robot, empty, loaded, args.mass, method=args.method, fix=fix, mass_std=args.mass_std,
-                          side=args.side, offsets=not args.no_offsets, flag_pct=args.flag_pct,
-                          position_tol=args.position_tol, cutoff=args.cutoff, decimate_to=args.decimate_to)
+        res = drive_gains(robot, empty, loaded, args.mass, method=args.method, **options)
     except PlausibilityError as exc:
         settle(exc.flags)  # the same errors, with the options that address them
         raise
+    comparison = None if args.no_compare else _compare(res, robot, empty, loaded, args.mass, options)
     flags = settle(_torque_scale(res.gains, robot, empty + loaded)
                    + gain_flags(res.gains.gains, res.gains.std, res.fixed, res.rel_std_pct, res.flag_pct))
     print(res.table())
     if flags:
         print(flag_lines(flags))
+    print(comparison.table() if hasattr(comparison, "table") else
+          "methods not compared (--no-compare)" if comparison is None else comparison["line"])
     if reference is not None:
         print(_comparison(res.gains.gains, reference, res.gains.side))
     # The runs the gains were fitted on: a payload identified on the same runs with these gains
@@ -102,7 +111,10 @@ def run(args: argparse.Namespace) -> int:
     fitted_on = [{"role": role, "source": r.source, "sha256": file_sha256(r.source) if r.source else None}
                  for role, runs in (("empty", empty), ("loaded", loaded)) for r in runs]
     if args.json:
-        write_json(args.json, {**res.to_dict(), "fitted_on": fitted_on, "flags": [f.to_json() for f in flags]})
+        compared = (comparison.to_dict() if hasattr(comparison, "to_dict") else
+                    None if comparison is None else {k: v for k, v in comparison.items() if k != "line"})
+        write_json(args.json, {**res.to_dict(), "fitted_on": fitted_on, "flags": [f.to_json() for f in flags],
+                               "comparison": compared})
     if args.report:
         from ..report.writers import write_gains_report
 
@@ -110,6 +122,23 @@ def run(args: argparse.Namespace) -> int:
                                          "data": {"empty": [r.source for r in empty],
                                                   "loaded": [r.source for r in loaded]}})
     return 0
+
+
+def _compare(res: Any, robot: Any, empty: list, loaded: list, mass: float, options: dict) -> Any:
+    """The other method on the same runs and the per-joint verdict (identify.gains.methods), or,
+    when the runs do not allow it, a dict naming the method and why (its ``line`` printed)."""
+    from identify.gains.drive_gains import drive_gains
+    from identify.gains.methods import compare_methods
+
+    other = "global" if res.method == "same-motion" else "same-motion"
+    progress(f"identifying the drive gains ({other}) to compare the methods (--no-compare to skip)")
+    try:
+        res_other = drive_gains(robot, empty, loaded, mass, method=other, **options)
+    except ValueError as exc:  # the runs do not allow it (another motion, a gain not identified): say why
+        reason = str(exc).splitlines()[0]
+        return {"methods": [res.method, other], "not_compared": reason,
+                "line": f"methods not compared: {other} refused the runs: {reason}"}
+    return compare_methods(res, res_other)
 
 
 def _torque_scale(gains: Any, robot: Any, recs: list) -> list[Flag]:

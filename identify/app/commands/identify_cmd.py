@@ -19,14 +19,14 @@ from identify.observation.processing import (DEFAULT_MIN_VELOCITY, DEFAULT_REST,
 from identify.io.blocks import DEFAULT_BLOCK
 from identify.fitting.plausibility import estimate_flags, prior_flags, residual_flags, static_gravity_flags, torque_scale_flags
 
-from ..flags import flag_lines, given_gain_flags, settle
+from ..flags import flag_lines, given_gain_flags, settle, with_hint
 from ..common import (UsageError, check_output, convention_option, progress, read_recordings, robot_option,
                       robot_with_spring, spring_options)
 
 from .identify_runs import block_option, fit_long, streamed
 
 if TYPE_CHECKING:  # the method is imported when the command runs, not for its --help
-    from identify.fitting.fit import Fit
+    from identify.fitting.record import Fit
 
 
 def _delay(text: str) -> str | float:
@@ -224,7 +224,9 @@ def run(args: argparse.Namespace) -> int:
         result = fit(robot, recs, processing_of(args, sb is None), args.method, base=sb, gains=gains,
                      convention=args.convention, spring_source=args.spring, **options)
     result = result.bootstrapped(args.bootstrap_seed)
-    result = result.with_flags([*flags, *_fit_flags(result, args.method, prior)])
+    for f in result.flags:  # the fit's own errors (a rank that depends on the threshold): fitted, never silent
+        progress(f"error: {with_hint(f)}")
+    result = result.with_flags([*result.flags, *flags, *_fit_flags(result, args.method, prior)])
     if args.essential:
         result = result.with_essential()
     if val_rec is not None:
@@ -243,20 +245,15 @@ def run(args: argparse.Namespace) -> int:
 
 def physical_prior(args: argparse.Namespace, robot: rx90sym.Robot) -> Any:
     """The prior of a consistent fit (--prior), or None with a line saying the split is arbitrary."""
-    from identify.estimation.consistency.prior import PhysicalPrior
+    from identify.estimation.consistency.prior import nominal_prior
 
     if args.prior == "none":
         progress("no prior (--prior none): the split of what the data cannot see is arbitrary")
         return None
-    values = rx90sym.nominal_parameters(robot, args.prior)
-    if values is None:
-        progress(f"robot {robot.name!r} has no nominal parameters: the split of what the data cannot see is "
-                 f"arbitrary (give --prior FILE)")
-        return None
-    source = (args.prior if args.prior is not None else
-              f"[nominal] of {robot.source}" if robot.urdf is None else f"URDF inertials of {robot.source}")
-    progress(f"prior: {source}")
-    return PhysicalPrior(values, source)
+    prior = nominal_prior(robot, args.prior, progress)  # the library's default prior, said alike
+    if prior is not None:
+        progress(f"prior: {prior.source}")
+    return prior
 
 
 def _fit_flags(f: Fit, method: str, prior: Any = None) -> list:

@@ -14,7 +14,7 @@ import rx90sym
 from identify.io.blocks import count_rows
 
 if TYPE_CHECKING:  # for annotations only: the method is imported when a fit runs
-    from identify.fitting.fit import Fit
+    from identify.fitting.record import Fit
     from identify.observation.processing import Processing
 
 from ..common import progress

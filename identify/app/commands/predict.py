@@ -45,7 +45,7 @@ def write_prediction(path: str, val: Any) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from identify.fitting.fit import load_fit
+    from identify.fitting.record import load_fit
 
     for out in (args.out, args.json):
         check_output(out)

@@ -5,6 +5,7 @@ from pathlib import Path
 from typing import Any, Mapping, Sequence
 
 from identify.observation.processing import rest_label
+from identify.fitting.rank_flags import has_rank_flag
 
 from .cells import fixed, fmt, number
 from .page import Column, Figure, Page, Section, Summary, Table, Text
@@ -50,7 +51,8 @@ def _flags(record: Mapping[str, Any], data: Mapping[str, Any] | None) -> list[di
                           "end of this one cut off with rx90 convert --rows)"))
     params = record.get("parameters") or []
     flags += parameter_flags([p["name"] for p in params], [p.get("rel_std_pct") for p in params],
-                             record.get("bootstrap_std"), [p.get("std") for p in params], record.get("cond"))
+                             record.get("bootstrap_std"), [p.get("std") for p in params], record.get("cond"),
+                             model_cause=has_rank_flag(record.get("flags") or ()))
     flags += split_flags(data)
     if record.get("method") == "consistent" and not record.get("prior"):
         flags.append(flag("arbitrary-split", "warning", "no prior: how the links share what the data cannot see is "

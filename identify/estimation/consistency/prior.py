@@ -41,7 +41,7 @@ from rx90sym.rigid_body import RigidBody
 
 from identify.estimation.consistency.lmi import body_indices, nonnegative_indices, pseudo_inertia
 
-__all__ = ["Ellipsoid", "PhysicalPrior", "bodies_table", "prior_constraints", "prior_scales"]
+__all__ = ["Ellipsoid", "PhysicalPrior", "bodies_table", "nominal_prior", "prior_constraints", "prior_scales"]
 
 MIN_MASS = 1e-3  # kg: MuJoCo and every simulator refuse near-massless moving bodies
 # Relative uncertainty of the prior per kind (the scales s_i): makers publish masses and centres
@@ -101,6 +101,26 @@ class PhysicalPrior:
     def links(self, names: Sequence[str]) -> list[str]:
         """The link bodies of ``names`` that the prior describes with a positive mass."""
         return [b for b in body_indices(names) if b.isdigit() and self.values.get(f"M{b}", 0.0) > 0]
+
+
+def nominal_prior(robot, source=None, say=None) -> "PhysicalPrior | None":
+    """The prior of a consistent fit by default (``rx90 identify --method consistent`` and
+    ``identify.fit(..., method="consistent")`` alike): ``source`` (a JSON parameter file or a
+    mapping) or the robot's nominal parameters (its URDF inertials, else its robot file's
+    [nominal] table); None, said through ``say`` (default: stderr), when the robot has none."""
+    import sys
+
+    import rx90sym
+
+    say = say or (lambda line: print(line, file=sys.stderr))
+    values = rx90sym.nominal_parameters(robot, source)
+    if values is None:
+        say(f"robot {robot.name!r} has no nominal parameters: the split of what the data cannot see is "
+            f"arbitrary (give --prior FILE, or physical_prior=)")
+        return None
+    label = (source if isinstance(source, str) else "given parameters" if source is not None else
+             f"[nominal] of {robot.source}" if robot.urdf is None else f"URDF inertials of {robot.source}")
+    return PhysicalPrior(values, str(label))
 
 
 def prior_scales(names: Sequence[str], prior: PhysicalPrior) -> np.ndarray:

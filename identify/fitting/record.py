@@ -1,0 +1,240 @@
+"""A fit and its file: :class:`Fit` predicts and validates with its own processing, bootstraps
+its σ and saves itself; :func:`load_fit` reads the file back with its robot, gains and processing
+(:func:`identify.fit` makes one)."""
+from __future__ import annotations
+
+from dataclasses import dataclass, replace
+from pathlib import Path
+from typing import Any, Sequence
+
+import numpy as np
+
+import rx90sym
+from rx90sym.files import write_json
+
+from identify.estimation.bootstrap import BLOCK_S, DRAWS, segment_bootstrap_std
+from identify.estimation.consistent_fit import ConsistentResult
+from identify.fitting.plausibility import Flag
+from identify.estimation.results import IdentificationResult, json_number
+from identify.fitting.file import SCHEMA_VERSION, FitModel, gains_of, read_fit_file, robot_of
+from identify.io.gains import DriveGains
+from identify.observation.friction_model import friction_base
+from identify.observation.matrix import Observation, coulomb_terms
+from identify.observation.processing import Processing
+from identify.fitting.friction import defaulted_travels
+from identify.estimation.delay import DelayEstimate
+from identify.fitting.validation import Validation, predict
+from identify.fitting.baseline import PlainBaseline
+from identify.observation.offsets import offset_base
+
+
+__all__ = ["BOOTSTRAP_BLOCK_S", "BOOTSTRAP_DRAWS", "Bootstrap", "Fit", "load_fit"]
+
+#: Segment bootstrap: block length [s] and number of draws (the library's one bootstrap).
+BOOTSTRAP_BLOCK_S = BLOCK_S
+BOOTSTRAP_DRAWS = DRAWS
+
+
+@dataclass(frozen=True, eq=False)
+class Bootstrap:
+    """Segment-bootstrap σ of each estimate: std (per parameter, its unit), block_s [s], draws, seed."""
+
+    std: np.ndarray
+    block_s: float
+    draws: int
+    seed: int
+
+    def to_json(self) -> dict[str, Any]:
+        # A column the draws could not estimate (NaN) is null in the file, NaN again when read.
+        return {"bootstrap_std": [json_number(v) for v in self.std],
+                "bootstrap": {"block_s": self.block_s, "draws": self.draws, "seed": self.seed}}
+
+    @classmethod
+    def from_json(cls, d: dict[str, Any]) -> "Bootstrap | None":
+        if d.get("bootstrap_std") is None:
+            return None
+        b = d["bootstrap"]
+        std = np.array([np.nan if v is None else v for v in d["bootstrap_std"]], dtype=float)
+        return cls(std, float(b["block_s"]), int(b["draws"]),
+                   int(b["seed"]))
+
+    def table(self, res: IdentificationResult) -> str:
+        """σ of eq. 13 (white residuals) beside the segment-bootstrap σ, per parameter."""
+        width = max([len("Parameter")] + [len(n) for n in res.names])
+        lines = [f"{'Parameter':<{width}}  {'σ eq. 13':>10}  {'σ bootstrap':>11}  ratio"]
+        for n, s, b in zip(res.names, res.std, self.std):
+            ratio = b / s if s > 0 else float("nan")
+            lines.append(f"{n:<{width}}  {s:10.3g}  {b:11.3g}  {ratio:5.2f}")
+        return "\n".join(lines)
+
+
+@dataclass(frozen=True, eq=False)
+class Fit:
+    """One identification with what it was run with.
+
+    robot: the description fitted; result: the estimates; processing: as asked (cut-off None:
+    automatic); model: the robot record and the achieved processing (cut-off used, rate, delay);
+    base: the base parameters (columns) used; observation: W, Y and notes (None when loaded);
+    delay_estimate: the lag search (None when not run or loaded); delay_estimate_s [s];
+    spring: how the spring entered (JSON entry); bootstrap, essential, validation: None until
+    asked (:meth:`bootstrapped`, :meth:`with_essential`, :meth:`validated`); flags: the
+    plausibility warnings of the fit (identify.fitting.plausibility, :meth:`with_flags`); recordings: per
+    recording its samples, segments, samples bridged over lost packets and stale rows dropped
+    (:func:`identify.io.recordings.layout_summary`); choice: the cross-validated processing's
+    candidate table (:meth:`ProcessingChoice.to_dict`), None when the processing was given.
+    """
+
+    robot: rx90sym.Robot
+    result: IdentificationResult
+    processing: Processing
+    model: FitModel
+    base: Any
+    observation: Observation | None = None
+    delay_estimate: DelayEstimate | None = None
+    delay_estimate_s: float | None = None
+    spring: dict | None = None
+    bootstrap: Bootstrap | None = None
+    essential: IdentificationResult | None = None
+    validation: Validation | None = None
+    flags: tuple[Flag, ...] = ()
+    recordings: tuple[dict, ...] = ()
+    choice: dict | None = None
+    block: int | None = None        # logs read block by block with this many samples (None: whole)
+    streamed: Any = None            # the block-wise fit's record (identify.fitting.streamed.StreamedFit)
+    baseline: Any = None            # the plain OLS baseline (identify.fitting.baseline.PlainBaseline) or None
+
+    # ------------------------------------------------------------ what the fit used
+    @property
+    def delay(self) -> float:
+        return self.model.delay_s
+
+    @property
+    def cutoff(self) -> float:
+        return self.model.cutoff_hz
+
+    @property
+    def decimate_to(self) -> float | None:
+        return self.model.decimate_to_hz
+
+    @property
+    def min_velocity(self) -> float | None:
+        return self.model.min_velocity
+
+    @property
+    def rest(self) -> str | tuple[str, ...]:
+        return self.model.rest
+
+    @property
+    def gains(self) -> DriveGains | None:
+        return gains_of(self.model)
+
+    def filtering(self, spring: bool | None = None) -> dict[str, Any]:
+        """Keyword arguments of :func:`identify.predict` that reuse this fit's processing."""
+        return {"cutoff": self.cutoff, "decimate_to": self.decimate_to, "min_velocity": self.min_velocity,
+                "delay": self.delay, "spring": self.processing.spring if spring is None else spring,
+                "rest": self.rest}
+
+    # ------------------------------------------------------------ using it
+    def predict(self, recording: Any, result: IdentificationResult | None = None) -> Validation:
+        """Torques of ``recording`` predicted with this fit's parameters (or ``result``) and processing.
+        Where a joint rests the Coulomb term is 0, or the presliding state with that rest policy
+        (every sample is predicted, whatever the rest policy)."""
+        if self.block is not None:  # a long log: block by block, as it was fitted
+            from identify.fitting.validation import predict_streamed
+
+            return predict_streamed(self.robot, result or self.result, recording, base=self.base, block=self.block,
+                                    convention=self.model.convention, gains=self.gains, **self.filtering())
+        return predict(self.robot, result or self.result, recording, base=self.base, baseline=self.baseline,
+                       **self.filtering())
+
+    def validate(self, recording: Any) -> Validation:
+        """Cross-validation on a recording not used in the fit (with the essential parameters when
+        they were computed)."""
+        return self.predict(recording, self.essential)
+
+    def validated(self, recording: Any) -> "Fit":
+        """This fit with its validation on ``recording`` recorded (saved in the file)."""
+        return replace(self, validation=self.validate(recording))
+
+    def with_flags(self, flags: Sequence[Flag]) -> "Fit":
+        """This fit with its plausibility flags recorded (saved in the file's ``flags``)."""
+        return replace(self, flags=tuple(flags))
+
+    def with_essential(self) -> "Fit":
+        """This fit with its essential parameters (eqs. 16-17) computed."""
+        from identify.estimation.essential import essential_parameters
+
+        return replace(self, essential=essential_parameters(self.result))
+
+    def bootstrapped(self, seed: int = 0, draws: int = BOOTSTRAP_DRAWS, block_s: float = BOOTSTRAP_BLOCK_S) -> "Fit":
+        """This fit with the segment-bootstrap σ of each estimate (blocks of ``block_s`` s)."""
+        obs = self.observation
+        done = self.bootstrap
+        if self.streamed is not None and done is not None and (done.seed, done.draws) == (seed, draws):
+            return self  # computed while the blocks streamed by (fit(..., block=...))
+        if obs is None:
+            raise ValueError("bootstrap needs the fit's observation matrix (not a fit loaded from a file; "
+                             "a fit in blocks computes it while it reads them: fit(..., bootstrap_seed=...))")
+        block = max(1, int(round(block_s * obs.rate)))
+        std = segment_bootstrap_std(obs.W, obs.Y, obs.joint, obs.samples, self.result.weights, block, draws, seed)
+        return replace(self, bootstrap=Bootstrap(std, block / obs.rate, draws, seed))
+
+    # ------------------------------------------------------------ the file
+    def to_json(self) -> dict[str, Any]:
+        """The fit file's content (keys of the former identification JSON kept, new ones added)."""
+        out = {"robot": self.model.robot, "method": self.result.method, **self.result.to_dict(),
+               "spring": self.spring}
+        if self.bootstrap is not None:
+            out.update(self.bootstrap.to_json())
+        out.update({"cutoff_hz": self.model.cutoff_hz, "decimate_to_hz": self.model.decimate_to_hz,
+                    "delay_estimate_s": self.delay_estimate_s, "model": self.model.to_json(),
+                    "essential": self.essential.to_dict() if self.essential is not None else {},
+                    "validation": self.validation.to_dict() if self.validation is not None else {},
+                    "schema_version": SCHEMA_VERSION, "processing": self.processing.to_json(),
+                    "flags": [f.to_json() for f in self.flags], "recordings": list(self.recordings),
+                    "processing_choice": self.choice,
+                    "baseline": self.baseline.to_json() if self.baseline is not None else None})
+        return out
+
+    def save(self, path: str | Path) -> Path:
+        """Write the fit file atomically (nothing written on error). Returns the path."""
+        return write_json(path, self.to_json())
+
+    @classmethod
+    def load(cls, path: str | Path, robot: rx90sym.Robot | str | None = None) -> "Fit":
+        """The fit saved in ``path``, with its robot (rebuilt from its file, or ``robot``: a
+        description, name or file), gains and processing. It predicts; it cannot be refitted."""
+        data = read_fit_file(path)
+        try:
+            model = FitModel.from_json(data["model"], str(path))
+            processing = Processing.from_json(data.get("processing", {}), f"{path}: processing")
+            consistent = data.get("method") == "consistent" and isinstance(data.get("standard"), dict)
+            result = (ConsistentResult if consistent else IdentificationResult).from_dict(data)
+            essential = IdentificationResult.from_dict(data["essential"]) if data.get("essential") else None
+            bootstrap = Bootstrap.from_json(data)
+            flags = tuple(Flag.from_json(f) for f in data.get("flags", []))
+            baseline = PlainBaseline.from_json(data.get("baseline"))  # None in older files
+        except (KeyError, TypeError, ValueError) as exc:
+            raise ValueError(f"{path}: {exc}".replace(f"{path}: {path}: ", f"{path}: ")) from None
+        rob = robot if isinstance(robot, rx90sym.Robot) else robot_of(model, robot)
+        # FS+ / FS- columns in the result: the fit used asymmetric Coulomb friction on those joints.
+        asymmetric = tuple(j for j in range(rob.n) if f"FSP{j + 1}" in result.names)
+        if asymmetric != tuple(rob.asymmetric_coulomb):
+            rob = rob.with_options(asymmetric_coulomb=asymmetric)
+        base = offset_base(rx90sym.base_parameters(rob), [j - 1 for j in model.offset_joints or ()])
+        if model.friction is not None:  # the friction columns found: smooth form's scales, presliding travels
+            fr = model.friction
+            scales = [np.nan if v is None else v for v in fr["velocity_scale"]] if "velocity_scale" in fr else None
+            travels = defaulted_travels(fr["presliding_travel"]) if "presliding_travel" in fr else None
+            base = friction_base(base, coulomb_terms(rob, base.names), fr["form"], scales,
+                                 presliding=travels is not None, travels=travels)
+        return cls(rob, result, processing, model, base,
+                   delay_estimate_s=data.get("delay_estimate_s"), spring=data.get("spring"),
+                   bootstrap=bootstrap, essential=essential, flags=flags,
+                   recordings=tuple(data.get("recordings", [])), choice=data.get("processing_choice"),
+                   baseline=baseline)
+
+
+def load_fit(path: str | Path, robot: rx90sym.Robot | str | None = None) -> Fit:
+    """Read a fit file (:meth:`Fit.save`, ``rx90 identify --json``): see :meth:`Fit.load`."""
+    return Fit.load(path, robot)
