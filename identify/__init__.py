@@ -50,6 +50,10 @@ _EXPORTS = {
     "payload": "identify.payload",
     "PayloadMonitor": "identify.payload_monitor",
     "PayloadResult": "identify.payload_result",
+    # the model at work: external torques and contacts
+    "ContactMonitor": "identify.monitor.contact",
+    "ContactEvent": "identify.monitor.contact",
+    "monitor_log": "identify.monitor.log",
     "drive_gains": "identify.drive_gains",
     # models out: URDF and MJCF with actuator terms
     "export_urdf": "identify.export",
