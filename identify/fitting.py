@@ -105,6 +105,7 @@ class Fit:
     choice: dict | None = None
     block: int | None = None        # logs read block by block with this many samples (None: whole)
     streamed: Any = None            # the block-wise fit's record (identify.stream_fit.StreamedFit)
+    contact_thresholds: np.ndarray | None = None  # contact monitor's per joint [N·m] (identify.monitor)
 
     # ------------------------------------------------------------ what the fit used
     @property
@@ -194,7 +195,9 @@ class Fit:
                     "validation": self.validation.to_dict() if self.validation is not None else {},
                     "schema_version": SCHEMA_VERSION, "processing": self.processing.to_json(),
                     "flags": [f.to_json() for f in self.flags], "recordings": list(self.recordings),
-                    "processing_choice": self.choice})
+                    "processing_choice": self.choice,
+                    "contact_thresholds_nm": (None if self.contact_thresholds is None
+                                              else [float(v) for v in self.contact_thresholds])})
         return out
 
     def save(self, path: str | Path) -> Path:
@@ -231,7 +234,9 @@ class Fit:
         return cls(rob, result, processing, model, base,
                    delay_estimate_s=data.get("delay_estimate_s"), spring=data.get("spring"),
                    bootstrap=bootstrap, essential=essential, flags=flags,
-                   recordings=tuple(data.get("recordings", [])), choice=data.get("processing_choice"))
+                   recordings=tuple(data.get("recordings", [])), choice=data.get("processing_choice"),
+                   contact_thresholds=(None if data.get("contact_thresholds_nm") is None
+                                       else np.asarray(data["contact_thresholds_nm"], dtype=float)))
 
 
 def load_fit(path: str | Path, robot: rx90sym.Robot | str | None = None) -> Fit:

@@ -165,7 +165,7 @@ class ContactMonitor:
         self.gain = gain_vector(gain, n)
         self.rate_hz = float(rate_hz)
         self.delay_samples = int(round(max(fit.delay, 0.0) * rate_hz))
-        self._params = np.concatenate([self.gain, self.thresholds, [RELEASE]])
+        self._params = self.model.params(self.gain, self.thresholds, RELEASE)
         self._run, self._iw, self._w = self.model.runner()
         self._state = self.model.initial_state()
         self._out = np.zeros((1, self.model.state_size))

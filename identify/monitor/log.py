@@ -124,7 +124,7 @@ def monitor_log(fit: Any, recording: Any, thresholds: float | Sequence[float] | 
                                     "--threshold")
     T, K = threshold_vector(thresholds, n), gain_vector(gain, n)
     model = model if model is not None else observer_model(fit, "torque")
-    params = np.concatenate([K, T, [RELEASE]])
+    params = model.params(K, T, RELEASE)
     tracker = EventTracker(n)
     state = model.initial_state()
     m = 0

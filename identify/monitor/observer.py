@@ -34,7 +34,7 @@ import numpy as np
 
 import rx90sym
 from rx90sym.compiled import _c_compiler, shared_library
-from rx90sym.momentum import momentum_terms
+from rx90sym.momentum import base_momentum_regressors
 
 from identify.observation.processing import DEFAULT_MIN_VELOCITY
 
@@ -83,14 +83,20 @@ def _kind(name: str) -> str:
 @dataclass(frozen=True, eq=False)
 class ObserverModel:
     """The observer's step on one fit: ``step`` (q, qd, effort, state, dt, params) -> next state,
-    params = [K_O (n) rad/s, thresholds (n) N·m, release ratio]. ``effort``: "torque" [N·m] or
-    "current" [A] (through the fit's drive gains). delay_samples: not here (the caller's)."""
+    params = [K_O (n) rad/s, thresholds (n) N·m, release ratio, base values, friction values,
+    (current effort) gain matrix and current offsets] (:meth:`params`): the compiled code depends
+    on the robot and the model's structure only. ``effort``: "torque" [N·m] or "current" [A]."""
 
     robot: rx90sym.Robot
     step: ca.Function
     effort: str
-    fs: np.ndarray          # (n,) Coulomb level per joint at rest [N·m] (the largest FS-like value)
+    fs: np.ndarray          # (n,) the most the friction slack reaches per joint [N·m]
     name: str
+    values: np.ndarray      # the fit's values after [K_O, T, release] in params
+
+    def params(self, gain: np.ndarray, thresholds: np.ndarray, release: float) -> np.ndarray:
+        """The step's parameter vector: [K_O (n), T (n), release, the fit's values]."""
+        return np.concatenate([gain, thresholds, [release], self.values])
 
     @property
     def n(self) -> int:
@@ -150,53 +156,52 @@ def _rigid_values(fit: Any, base: Any) -> np.ndarray:
     return np.array([values.get(nm, 0.0) for nm in base.names])
 
 
-def _friction(fit: Any, q: ca.SX, qd: ca.SX) -> tuple[ca.SX, ca.SX, np.ndarray]:
-    """The fit's actuation torque at q̈ = 0 (friction, offsets) as SX, Coulomb 0 at rest; the
-    uncertain Coulomb level per joint (SX, N·m: the terms whose driver is below the slack band);
-    and the most the slack reaches per joint [N·m] (SLACK_FACTOR × the sum of the magnitudes of FS,
-    FSP/FSN, FSM, FST on the joint's row)."""
+def _friction(fit: Any, q: ca.SX, qd: ca.SX) -> tuple[ca.SX, ca.SX, ca.SX, ca.SX, list[str]]:
+    """The fit's actuation torque at q̈ = 0 (friction, offsets), Coulomb 0 at rest, as SX of (q, q̇)
+    and of the symbols ``fv`` of its friction values (so that one compiled step serves every fit
+    of the same robot and model); the uncertain Coulomb level per joint (the terms whose driver is
+    below the slack band); the most the slack reaches per joint (SLACK_FACTOR × the sum of the
+    magnitudes of FS, FSP/FSN, FSM, FST on the joint's row); returns (f, slack, fv, most, names)."""
     from identify.observation.friction import friction_function
     from identify.observation.friction_model import FrictionBase, coulomb_terms
 
     robot, base = fit.robot, fit.base
     inner = base.base if isinstance(base, FrictionBase) else base
-    values = dict(zip(fit.result.names, fit.result.values))
     phi = inner.regressor(q, qd, ca.SX.zeros(robot.n, 1))
     names = list(inner.names)
-    coulomb = {t.column: t for t in coulomb_terms(robot, names)}
+    used = [nm for nm in names if _kind(nm) in FRICTION_KINDS] + [
+        nm for nm in fit.result.names if _kind(nm) == "FST"]
+    fv = ca.SX.sym("fv", len(used))
+    sym = {nm: fv[k] for k, nm in enumerate(used)}
+    terms = coulomb_terms(robot, names)
+    coulomb = {t.column for t in terms}
     rows = [ca.SX(0) for _ in range(robot.n)]
     slack = [ca.SX(0) for _ in range(robot.n)]
-    fs = np.zeros(robot.n)
+    most = [ca.SX(0) for _ in range(robot.n)]
     policies = fit.rest if isinstance(fit.rest, tuple) else (fit.rest,) * robot.n
     vmin = fit.min_velocity
     band = SLACK_BAND * (vmin if vmin else DEFAULT_MIN_VELOCITY)
     for c, nm in enumerate(names):
-        if _kind(nm) not in FRICTION_KINDS or values.get(nm, 0.0) == 0.0:
+        if nm not in sym or c in coulomb:
             continue
-        val = float(values[nm])
-        if c not in coulomb:
-            rows = [rows[j] + phi[j, c] * val for j in range(robot.n)]
-            continue
-        for t in (x for x in coulomb_terms(robot, names) if x.column == c):
-            v = ca.mtimes(ca.DM(t.driver).T, qd)
-            form = base.form_of(t.row) if isinstance(base, FrictionBase) and sum(
-                abs(d) for d in t.driver) == 1 and t.driver[t.row] == 1 else "coulomb"
-            if form == "coulomb":
-                cols = [phi[t.row, c]]
-            else:
-                cols = ca.vertsplit(friction_function(form)(v, base.scales[t.row])[0])
-            term = cols[0] * val
-            level = abs(val)
-            if form == "stribeck":
-                fst = float(values.get(f"FST{t.row + 1}", 0.0))
-                term = term + cols[1] * fst
-                level = max(level, abs(fst))
-            fs[t.row] += SLACK_FACTOR * level
-            slack[t.row] = slack[t.row] + ca.if_else(ca.fabs(v) < band, SLACK_FACTOR * level, 0)
-            if vmin is not None and policies[t.row] != "none":
-                term = ca.if_else(ca.fabs(v) >= vmin, term, 0)
-            rows[t.row] = rows[t.row] + term
-    return ca.vertcat(*rows), ca.vertcat(*slack), fs
+        rows = [rows[j] + phi[j, c] * sym[nm] for j in range(robot.n)]
+    for t in terms:
+        v = ca.mtimes(ca.DM(t.driver).T, qd)
+        own = sum(abs(d) for d in t.driver) == 1 and t.driver[t.row] == 1
+        form = base.form_of(t.row) if isinstance(base, FrictionBase) and own else "coulomb"
+        cols = [phi[t.row, t.column]] if form == "coulomb" else ca.vertsplit(
+            friction_function(form)(v, base.scales[t.row])[0])
+        term = cols[0] * sym[t.name]
+        level = ca.fabs(sym[t.name])
+        if form == "stribeck" and f"FST{t.row + 1}" in sym:
+            term = term + cols[1] * sym[f"FST{t.row + 1}"]
+            level = ca.fmax(level, ca.fabs(sym[f"FST{t.row + 1}"]))
+        most[t.row] = most[t.row] + SLACK_FACTOR * level
+        slack[t.row] = slack[t.row] + ca.if_else(ca.fabs(v) < band, SLACK_FACTOR * level, 0)
+        if vmin is not None and policies[t.row] != "none":
+            term = ca.if_else(ca.fabs(v) >= vmin, term, 0)
+        rows[t.row] = rows[t.row] + term
+    return ca.vertcat(*rows), ca.vertcat(*slack), fv, ca.vertcat(*most), used
 
 
 def supported(fit: Any) -> str:
@@ -231,19 +236,28 @@ def observer_model(fit: Any, effort: str | None = None) -> ObserverModel:
     n = robot.n
     base = fit.base.base if isinstance(fit.base, FrictionBase) else fit.base
     q, qd, e = (ca.SX.sym(s, n) for s in ("q", "qd", "effort"))
-    state, dt, params = ca.SX.sym("state", 5 * n + 1), ca.SX.sym("dt"), ca.SX.sym("params", 2 * n + 1)
-    p, beta = momentum_terms(base, _rigid_values(fit, base))(q, qd)
+    theta = ca.SX.sym("theta", base.nb)
+    phi_p, phi_beta = base_momentum_regressors(base)(q, qd)
+    p, beta = ca.mtimes(phi_p, theta), ca.mtimes(phi_beta, theta)
+    friction, unknown, fv, most, used = _friction(fit, q, qd)
+    values = dict(zip(fit.result.names, fit.result.values))
+    tail = [_rigid_values(fit, base), np.array([values.get(nm, 0.0) for nm in used], dtype=float)]
+    symbols = [theta, fv]
     if effort == "current":
+        Gs, i0 = ca.SX.sym("G", n, n), ca.SX.sym("i0", n)
         G = np.diag(gains.gains) if gains.side == "joint" else np.asarray(robot.Rt) @ np.diag(gains.gains)
-        tau = ca.mtimes(ca.DM(G), e - ca.DM(gains.current_offsets))
+        tau = ca.mtimes(Gs, e - i0)
+        symbols += [ca.vec(Gs), i0]
+        tail += [G.ravel(order="F"), np.asarray(gains.current_offsets, dtype=float)]
     else:
         tau = e
-    friction, unknown, fs = _friction(fit, q, qd)
     spring = robot.spring_torque(q) if fit.filtering()["spring"] and robot.spring is not None else 0
     u = tau + spring - friction - beta
+    state, dt = ca.SX.sym("state", 5 * n + 1), ca.SX.sym("dt")
+    K, T, release = ca.SX.sym("K", n), ca.SX.sym("T", n), ca.SX.sym("release")
+    params = ca.vertcat(K, T, release, *symbols)
     p_prev, u_prev, r_prev = state[:n], state[n:2 * n], state[2 * n:3 * n]
     active_prev, slack_prev, elapsed_prev = state[3 * n:4 * n], state[4 * n:5 * n], state[5 * n]
-    K, T, release = params[:n], params[n:2 * n], params[2 * n]
     h = ca.fmax(dt, 1e-12)
     a = ca.exp(-K * h)
     w = (p - p_prev) / h - (u + u_prev) / 2
@@ -257,4 +271,5 @@ def observer_model(fit: Any, effort: str | None = None) -> ObserverModel:
     name = f"{robot.name}_momentum_observer_{effort}".replace("-", "_")
     step = ca.Function(name, [q, qd, e, state, dt, params], [nxt], ["q", "qd", "effort", "state", "dt", "params"],
                        ["next"])
-    return ObserverModel(robot, step, effort, fs, name)
+    fs = np.asarray(ca.Function("most", [fv], [most])(tail[1]).full()).ravel()
+    return ObserverModel(robot, step, effort, fs, name, np.concatenate(tail))
