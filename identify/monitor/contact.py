@@ -26,7 +26,7 @@ RELEASE = 0.5
 MIN_DURATION_S = 0.01
 #: Thresholds from contact-free data: this quantile of |r_j| times the margin (docs/contact-monitor.md).
 CALIBRATION_QUANTILE = 0.999
-CALIBRATION_MARGIN = 1.5
+CALIBRATION_MARGIN = 2.5
 #: The detection budget the detectable size refers to [s].
 DETECTION_WINDOW_S = 0.05
 
