@@ -102,3 +102,41 @@ def test_reset_restarts_the_observer():
     mon.reset()
     again = [mon.update(t, q, v, e)[0] for t, q, v, e in list(zip(rec.t, rec.q, qd, rec.tau))[:300]]
     assert np.array_equal(np.array(first), np.array(again))
+
+
+@pytest.mark.parametrize("form", ["coulomb", "tanh", "stribeck"])
+def test_observer_uses_the_fits_own_model(form):
+    """With the effort the fit's own model predicts at q̈ = 0 (its base regressor, friction form, spring:
+    Φ_b(q, q̇, 0) β − spring = C q̇ + g + f), the observer's u = τ + spring − f − β must be (C + Cᵀ) q̇ =
+    Ṁ q̇, the derivative of its own p along q̇ (central differences); moving samples (no rest mask)."""
+    from dataclasses import replace
+
+    from identify.estimation.results import IdentificationResult
+    from identify.monitor.observer import observer_model
+    from identify.observation.friction_model import coulomb_terms, friction_base
+
+    F = twin_fit("rx90")
+    robot = F.robot
+    base = F.base
+    if form != "coulomb":
+        base = friction_base(base, coulomb_terms(robot, base.names), form, [0.05 * (j + 1) for j in range(robot.n)])
+    rng = np.random.default_rng(0)
+    values = dict(zip(F.result.names, F.result.values))
+    vals = np.array([values.get(nm, rng.uniform(1.0, 5.0)) for nm in base.names])  # FSTj: random levels
+    c = len(base.names)
+    result = IdentificationResult(tuple(base.names), vals, np.ones(c), np.ones(c), 1.0, 1.0, 1.0, np.ones(robot.n),
+                                  np.ones(robot.n), 100, "wls")
+    Fm = replace(F, base=base, result=result)
+    model = observer_model(Fm, "torque")
+    Q = rng.uniform(-1.5, 1.5, (20, robot.n))
+    QD = rng.uniform(0.3, 1.5, (20, robot.n)) * rng.choice([-1, 1], (20, robot.n))
+    model_tau = np.einsum("snc,c->sn", base.regressor_batch(Q, QD, np.zeros_like(Q)), vals)
+    model_tau -= robot.spring_torque_batch(Q)[:, :, 0]
+    params = model.params(np.full(robot.n, 25.0), np.full(robot.n, 1.0), 0.5)
+    n, h = robot.n, 1e-6
+    for q, v, tau in zip(Q, QD, model_tau):
+        out = np.asarray(model.step(q, v, tau, model.initial_state(), 0.0, params).full()).ravel()
+        p_plus = np.asarray(model.step(q + h * v, v, tau, model.initial_state(), 0.0, params).full()).ravel()[:n]
+        p_minus = np.asarray(model.step(q - h * v, v, tau, model.initial_state(), 0.0, params).full()).ravel()[:n]
+        mdot_qd = (p_plus - p_minus) / (2 * h)
+        assert np.abs(out[n:2 * n] - mdot_qd).max() < 1e-5 * max(1.0, np.abs(tau).max())

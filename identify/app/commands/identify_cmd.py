@@ -235,7 +235,9 @@ def run(args: argparse.Namespace) -> int:
     if args.json:
         from identify.monitor.thresholds import with_contact_thresholds
 
-        result = with_contact_thresholds(result, [val_rec] if val_rec is not None else (recs or args.recordings))
+        result, why = with_contact_thresholds(result, [val_rec] if val_rec is not None else (recs or args.recordings))
+        if why:
+            progress(f"contact thresholds not stored ({why}): rx90 monitor will need --calibrate")
         result.save(args.json)
     if args.report:
         _write_report(args.report, result, recs) if recs else _write_long_report(args, result)
