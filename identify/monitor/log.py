@@ -23,8 +23,9 @@ __all__ = ["DEFAULT_MONITOR_BLOCK", "MonitorLog", "MonitorInputError", "calibrat
 
 #: Samples per block of the log mode (60 s at 1 kHz).
 DEFAULT_MONITOR_BLOCK = 60_000
-#: Residual envelope kept for the report: max |r| and the signed extremes per this many samples.
-ENVELOPE_SAMPLES = 64
+#: Residual envelope kept for the report: the signed extremes per this span [s] (memory: 1 h at
+#: 1 kHz, 7 joints, about 12 MB).
+ENVELOPE_S = 0.05
 
 
 class MonitorInputError(ValueError):
@@ -36,7 +37,8 @@ class MonitorLog:
     """What the monitor found on one recording: events; thresholds_nm, gain (K_O, rad/s) per joint;
     n_samples, duration_s; t, residual (S, n) [N·m] and contact (S,) when kept (``keep=True``);
     envelope: (t (B,), lo (B, n), hi (B, n), threshold (B, n), contact (B,)) per
-    :data:`ENVELOPE_SAMPLES` samples (for the report), the threshold with the friction slack, when kept; slack (S, n): the friction slack d_j [N·m], when kept;
+    :data:`ENVELOPE_S` (for the report), the threshold with the friction slack;
+    slack (S, n): the friction slack d_j [N·m], when kept;
     detectable_moving_nm, detectable_rest_nm: per joint (:func:`detectable_sizes`)."""
 
     source: str
@@ -180,7 +182,7 @@ def monitor_log(fit: Any, recording: Any, thresholds: float | Sequence[float] | 
             if keep:
                 kept.append((ts, r.copy(), contact, out[:, 4 * n:5 * n].copy()))
             if envelope:
-                env.append(_envelope(ts, r, level, contact))
+                env.append(_envelope(ts, r, level, contact, max(1, int(round(ENVELOPE_S * rec.rate)))))
             done, t_prev = stop, float(tb[-1])
         tracker.finish()
         if fh is not None:
@@ -201,8 +203,7 @@ def monitor_log(fit: Any, recording: Any, thresholds: float | Sequence[float] | 
                       np.concatenate([k[3] for k in kept]) if keep else None)
 
 
-def _envelope(ts: np.ndarray, r: np.ndarray, level: np.ndarray, contact: np.ndarray) -> tuple[np.ndarray, ...]:
-    k = ENVELOPE_SAMPLES
+def _envelope(ts: np.ndarray, r: np.ndarray, level: np.ndarray, contact: np.ndarray, k: int) -> tuple[np.ndarray, ...]:
     starts = np.arange(0, ts.shape[0], k)
     return (ts[starts], np.minimum.reduceat(r, starts, axis=0), np.maximum.reduceat(r, starts, axis=0),
             np.maximum.reduceat(level, starts, axis=0), np.maximum.reduceat(contact.astype(np.int8), starts))
