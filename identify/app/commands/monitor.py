@@ -75,6 +75,9 @@ def run(args: argparse.Namespace) -> int:
     elif thresholds is None:
         thresholds = getattr(f, "contact_thresholds", None)
         source = "the identification file"
+        if gain is not None:
+            progress("warning: the identification's thresholds were computed at the default gain (25 rad/s); "
+                     "with --gain, --calibrate gives thresholds for that gain")
         if thresholds is None:
             raise MonitorInputError(f"{args.identification}: no contact thresholds (contact_thresholds_nm; a file "
                                     f"written before they were stored): give --calibrate CONTACT_FREE.csv or --threshold")
