@@ -8,7 +8,7 @@ import pytest
 
 import rx90sym
 from identify import ContactMonitor
-from identify.monitor.log import calibrate, monitor_log
+from identify.monitor.log import monitor_log
 from monitor_twin import ideal_response, pulses, twin_fit, twin_run, with_external
 
 

@@ -50,7 +50,7 @@ def run(args: argparse.Namespace) -> int:
 
     from rx90sym.files import write_json
 
-    from identify.fitting import load_fit
+    from identify import load_fit
     from identify.monitor.log import DEFAULT_MONITOR_BLOCK, MonitorInputError, calibrate, check_fit, monitor_log
 
     from ..common import UsageError, check_output, progress
