@@ -102,6 +102,7 @@ class Fit:
     block: int | None = None        # logs read block by block with this many samples (None: whole)
     streamed: Any = None            # the block-wise fit's record (identify.fitting.streamed.StreamedFit)
     baseline: Any = None            # the plain OLS baseline (identify.fitting.baseline.PlainBaseline) or None
+    contact_thresholds: np.ndarray | None = None  # contact monitor's per joint [N·m] (identify.monitor)
 
     # ------------------------------------------------------------ what the fit used
     @property
@@ -193,7 +194,9 @@ class Fit:
                     "schema_version": SCHEMA_VERSION, "processing": self.processing.to_json(),
                     "flags": [f.to_json() for f in self.flags], "recordings": list(self.recordings),
                     "processing_choice": self.choice,
-                    "baseline": self.baseline.to_json() if self.baseline is not None else None})
+                    "baseline": self.baseline.to_json() if self.baseline is not None else None,
+                    "contact_thresholds_nm": (None if self.contact_thresholds is None
+                                              else [float(v) for v in self.contact_thresholds])})
         return out
 
     def save(self, path: str | Path) -> Path:
@@ -232,7 +235,9 @@ class Fit:
                    delay_estimate_s=data.get("delay_estimate_s"), spring=data.get("spring"),
                    bootstrap=bootstrap, essential=essential, flags=flags,
                    recordings=tuple(data.get("recordings", [])), choice=data.get("processing_choice"),
-                   baseline=baseline)
+                   baseline=baseline,
+                   contact_thresholds=(None if data.get("contact_thresholds_nm") is None
+                                       else np.asarray(data["contact_thresholds_nm"], dtype=float)))
 
 
 def load_fit(path: str | Path, robot: rx90sym.Robot | str | None = None) -> Fit:

@@ -235,6 +235,11 @@ def run(args: argparse.Namespace) -> int:
             progress(f"warning: {result.validation.still_message()}")
     _print_fit(result, recs, args.delay == "auto", prior)
     if args.json:
+        from identify.monitor.thresholds import with_contact_thresholds
+
+        result, why = with_contact_thresholds(result, [val_rec] if val_rec is not None else (recs or args.recordings))
+        if why:
+            progress(f"contact thresholds not stored ({why}): rx90 monitor will need --calibrate")
         result.save(args.json)
     if args.report:
         _write_report(args.report, result, recs) if recs else _write_long_report(args, result)
