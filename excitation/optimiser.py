@@ -25,9 +25,10 @@ import casadi as ca
 import numpy as np
 
 from .constraints import (Margins, check_limits, kinematic_constraints, position_bounds, range_centre,
-                          torque_constraints, violation_times)
+                          torque_rows, violation_times)
 from .envelope_rows import sample_rows, through_samples
 from .criterion import symbols_like, gram_expression, regressor_samples, smooth_friction_regressor
+from .criterion_callback import criterion_callbacks, evaluable_on_sx
 from .objective import numeric_information
 from .model import ExcitationModel
 from .options import MAX_COND, OptimiserOptions, check_request
@@ -86,13 +87,12 @@ class _Problem:
             return tuple(ca.mtimes(ca.DM(b @ self.rest), z).T for b in form.basis(times))
 
         self.grid = sample_times(form.duration, options.grid_rate)
-        objective = options.criterion
-        regressor = _row_weighted(smooth_friction_regressor(model.regressor, model.names, options.sign_eps),
-                                  objective.row_weights(model.n))
-        info = objective.information(gram_expression(regressor, *samples(self.grid)), form.duration)
+        objectives = self._criterion(x)
         g_kin, lo_kin, hi_kin = kinematic_constraints(model, *samples(self.kinematic_times), options.margins)
-        g_env, lo_env, hi_env = self._envelope(x)
-        g_dyn, lo_dyn, hi_dyn = torque_constraints(model, *samples(self.torque_times), options.margins)
+        m = options.margins
+        g_env, lo_env, hi_env = self._rows(x, sample_rows(model, m.velocity, m.height, m.clearance),
+                                           self.kinematic_times, 2)
+        g_dyn, lo_dyn, hi_dyn = self._rows(x, torque_rows(model, m), self.torque_times, 3)
         g = ca.vertcat(g_kin, g_env, g_dyn)
         self.lbg = np.concatenate([lo_kin, lo_env, lo_dyn])
         self.ubg = np.concatenate([hi_kin, hi_env, hi_dyn])
@@ -103,23 +103,40 @@ class _Problem:
                  "ipopt.print_level": 0, "ipopt.sb": "yes", "print_time": False,
                  "error_on_fail": False, "iteration_callback": self.deadline}
         ipopt.update({f"ipopt.{key}": value for key, value in options.ipopt})
-        objectives = [objective.expression(info, p) for _, p in options.stages]
         self.stage_values = ca.Function("stages", [x], objectives)
         self.solvers = [ca.nlpsol(f"excitation_{c.replace('-', '_')}{p}", "ipopt", {"x": x, "f": f, "g": g}, ipopt)
                         for (c, p), f in zip(options.stages, objectives)]
 
-    def _envelope(self, x: ca.MX) -> tuple[ca.MX, np.ndarray, np.ndarray]:
-        """The envelope's rows on the constraint grid (heights, clearances, Cartesian speeds:
-        imposed from the start, since a repair from a point in collision rarely recovers), with
-        the chain-rule Jacobian of envelope_rows.py."""
-        m = self.options.margins
-        rows = sample_rows(self.model, m.velocity, m.height, m.clearance)
-        if rows is None or self.kinematic_times.size == 0:
+    def _criterion(self, x: ca.MX) -> list[ca.MX]:
+        """The criterion of each stage at x: compiled samples and a BLAS Gram matrix
+        (criterion_callback.py), or with ``compiled=False`` (or a regressor CasADi cannot
+        evaluate on SX) one CasADi graph."""
+        model, form, options = self.model, self.form, self.options
+        objective = options.criterion
+        regressor = _row_weighted(smooth_friction_regressor(model.regressor, model.names, options.sign_eps),
+                                  objective.row_weights(model.n))
+        stages = [p for _, p in options.stages]
+        if options.compiled and evaluable_on_sx(regressor):
+            bases = [b @ self.rest for b in form.basis(self.grid)]
+            self._callbacks = criterion_callbacks(regressor, objective, stages, bases, model.n, form.duration,
+                                                  model.name)
+            return [cb(x) for cb in self._callbacks]
+        z = ca.reshape(x, self.n_free, model.n)
+        q, qd, qdd = (ca.mtimes(ca.DM(b @ self.rest), z).T for b in form.basis(self.grid))
+        info = objective.information(gram_expression(regressor, q, qd, qdd), form.duration)
+        return [objective.expression(info, p) for p in stages]
+
+    def _rows(self, x: ca.MX, rows: tuple[ca.Function, np.ndarray, np.ndarray] | None, times: np.ndarray,
+              inputs: int) -> tuple[ca.MX, np.ndarray, np.ndarray]:
+        """Nonlinear rows f(q, qd[, qdd]) (the envelope's: heights, clearances, Cartesian speeds,
+        imposed from the start since a repair from a point in collision rarely recovers; the
+        motor torques, lazily) at ``times``, with the chain-rule Jacobian of envelope_rows.py."""
+        if rows is None or times.size == 0:
             return ca.MX(0, 1), np.zeros(0), np.zeros(0)
         f, lo, hi = rows
-        bq, bd, _ = self.form.basis(self.kinematic_times)
-        g = through_samples(f, bq @ self.rest, bd @ self.rest, self.model.n)(x)
-        return g, np.tile(lo, self.kinematic_times.size), np.tile(hi, self.kinematic_times.size)
+        bases = [b @ self.rest for b in self.form.basis(times)[:inputs]]
+        g = through_samples(f, bases, self.model.n, self.options.compiled)(x)
+        return g, np.tile(lo, times.size), np.tile(hi, times.size)
 
     def with_extra_times(self, times: np.ndarray) -> "_Problem":
         """The same problem with every limit also imposed at ``times`` [s]; the first time round,
