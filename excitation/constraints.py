@@ -18,7 +18,7 @@ from typing import Any
 import casadi as ca
 import numpy as np
 
-from .criterion import symbols_like
+from .kernels import evaluate_samples, symbols_like
 from .model import ExcitationModel
 
 _KINDS = ("position", "velocity", "acceleration", "torque")
@@ -192,21 +192,21 @@ def evaluate_torque(model: ExcitationModel, q: np.ndarray, qd: np.ndarray, qdd: 
     """Motor torques (N, n) [N m] on samples (N, n); zeros when the model has none."""
     if model.torque is None:
         return np.zeros_like(q)
-    return np.asarray(model.torque.map(q.shape[0], "serial")(q.T, qd.T, qdd.T)).T
+    return evaluate_samples(model.torque, q, qd, qdd)[:, :, 0]
 
 
 def evaluate_speeds(model: ExcitationModel, q: np.ndarray, qd: np.ndarray) -> np.ndarray | None:
     """Cartesian speeds (N, k) [m/s] of the envelope's points on samples (N, n), or None."""
     if model.speeds is None:
         return None
-    return np.sqrt(np.maximum(np.asarray(model.speeds.map(q.shape[0], "serial")(q.T, qd.T)).T, 0.0))
+    return np.sqrt(np.maximum(evaluate_samples(model.speeds, q, qd)[:, :, 0], 0.0))
 
 
 def evaluate_heights(model: ExcitationModel, q: np.ndarray) -> np.ndarray | None:
     """Heights (N, k) [m] of the points that must stay above the floor, or None."""
     if model.heights is None:
         return None
-    return np.asarray(model.heights.map(q.shape[0], "serial")(q.T)).T
+    return evaluate_samples(model.heights, q)[:, :, 0]
 
 
 def check_limits(model: ExcitationModel, q: np.ndarray, qd: np.ndarray, qdd: np.ndarray,

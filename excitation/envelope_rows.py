@@ -26,8 +26,7 @@ from typing import Sequence
 import casadi as ca
 import numpy as np
 
-from .criterion import symbols_like
-from .kernels import compiled_kernel
+from .kernels import compiled_kernel, symbols_like
 from .model import ExcitationModel
 
 HEIGHT_SOFTNESS = 0.002  # [m]: the lowest point's soft minimum is at most 2 mm x log(count) low
