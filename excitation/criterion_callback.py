@@ -94,7 +94,10 @@ class _Gradient(ca.Callback):
     def eval(self, arg: Any) -> list[np.ndarray]:
         x = np.array(arg[0].nonzeros())  # dense: faster than np.asarray(DM)
         _, gram = self.stage.samples.at(x)
-        gbar = np.asarray(self.stage.derivative(gram))
+        try:
+            gbar = np.asarray(self.stage.derivative(gram))
+        except RuntimeError:  # G singular: an evaluation error for IPOPT, as in the one graph
+            return [np.full(self.stage.nx, np.nan)]
         return [self.stage.samples.pullback(x, gbar)]
 
 
@@ -123,7 +126,10 @@ class CriterionCallback(ca.Callback):
 
     def eval(self, arg: Any) -> list[Any]:
         _, gram = self.samples.at(np.array(arg[0].nonzeros()))
-        return [self.value(gram)]
+        try:
+            return [self.value(gram)]
+        except RuntimeError:  # G singular (a motionless trial point): IPOPT cuts its step back
+            return [np.nan]
 
     def has_reverse(self, nadj: int) -> bool:
         return nadj == 1

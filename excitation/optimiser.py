@@ -150,6 +150,21 @@ class _Problem:
         return _Problem(self.model, self.form, self.options, np.union1d(self.kinematic_times, times),
                         np.union1d(torque, times))
 
+    def pulled_inside(self, x: np.ndarray, factor: float = 0.9, tries: int = 20) -> np.ndarray:
+        """x pulled towards the motionless centre pose (factor per try) until it holds every
+        row of this NLP (margins included), or x itself when no try does: a repair then starts
+        feasible. From the violating iterate IPOPT spent 60 of 199 iterations of an RX90 repair in
+        its restoration phase and 100 more climbing back to the criterion it had."""
+        g = self.solvers[-1].get_function("nlp_g")
+        centre = self.form.constant(range_centre(self.model)).flatten(order="F")
+        trial = x
+        for _ in range(tries):
+            values = np.asarray(g(trial, [])).ravel()
+            if np.all(values >= self.lbg) and np.all(values <= self.ubg):
+                return trial
+            trial = centre + factor * (trial - centre)
+        return x
+
     def solve(self, x0: np.ndarray, stage: int, deadline: float) -> tuple[np.ndarray, int, str]:
         """One IPOPT stage from x0 (stopped at the epoch time ``deadline``); returns (x,
         iterations, status)."""
@@ -290,7 +305,7 @@ def _solve_start(problem: _Problem, x0: np.ndarray, deadline: float
         repairs += 1
         t_fine, q, qd, qdd = _fine_samples(form, problem.coefficients(x), options.verify_rate)
         problem = problem.with_extra_times(violation_times(model, t_fine, q, qd, qdd))
-        x_new, it, status = problem.solve(x, len(problem.solvers) - 1, deadline)
+        x_new, it, status = problem.solve(problem.pulled_inside(x), len(problem.solvers) - 1, deadline)
         iterations += it
         if status not in _GOOD_STATUS or not np.all(np.isfinite(x_new)):
             # A failed repair is not a result (IPOPT's restoration can end on a shrunken motion that

@@ -111,3 +111,14 @@ def test_compiled_start_holds_every_limit_on_the_fine_check():
     report = excitation.check_limits(model, q, qd, qdd, 2000.0)
     assert report.feasible, report.violations
     assert np.isfinite(traj.cond) and traj.usage.feasible
+
+
+def test_a_motionless_point_is_an_evaluation_error_for_ipopt_not_an_exception():
+    """G is singular for a constant pose: the one graph fails to evaluate; the callback gives NaN
+    (IPOPT cuts its step back either way) instead of raising through CasADi."""
+    problem = _problem(True, "sigma")
+    x = FORM.constant(np.array([0.3, 0.2])).flatten(order="F")
+    f, g = (np.asarray(v).ravel() for v in problem.solvers[0].get_function("nlp_grad_f").call([x, []]))
+    assert np.isnan(f).all() and np.isnan(g).all()
+    with pytest.raises(RuntimeError, match="Evaluation failed"):
+        _problem(False, "sigma").solvers[0].get_function("nlp_f").call([x, []])
