@@ -24,7 +24,7 @@ from typing import Any, Sequence
 import casadi as ca
 import numpy as np
 
-from .kernels import SampleKernel
+from .kernels import SampleKernel, gram
 
 
 class _Samples:
@@ -56,8 +56,7 @@ class _Samples:
             z = x.reshape(self.m, self.n, order="F")
             self._samples = [b @ z for b in self.bases]  # (N, n) each
             self._phi = self.phi(*self._samples)  # (N, n, nb), overwritten at the next x
-            flat = self._phi.reshape(-1, self.nb)
-            self._gram = (flat.T @ flat) / self._phi.shape[0]
+            self._gram = gram(self._phi.reshape(-1, self.nb)) / self._phi.shape[0]
             self._x = key
         return self._phi, self._gram
 
@@ -71,45 +70,12 @@ class _Samples:
         return zbar.flatten(order="F")
 
 
-class _Gradient(ca.Callback):
-    """x -> df/dx (m n,) of one stage."""
+class _OfX(ca.Callback):
+    """A callback of the dense decision vector x (nx,) with one dense output (rows,)."""
 
-    def __init__(self, name: str, stage: "CriterionCallback") -> None:
+    def __init__(self, name: str, nx: int, rows: int) -> None:
         ca.Callback.__init__(self)
-        self.stage = stage
-        self.construct(name, {})
-
-    def get_n_in(self) -> int:
-        return 1
-
-    def get_n_out(self) -> int:
-        return 1
-
-    def get_sparsity_in(self, i: int) -> ca.Sparsity:
-        return ca.Sparsity.dense(self.stage.nx, 1)
-
-    def get_sparsity_out(self, i: int) -> ca.Sparsity:
-        return ca.Sparsity.dense(self.stage.nx, 1)
-
-    def eval(self, arg: Any) -> list[np.ndarray]:
-        x = np.array(arg[0].nonzeros())  # dense: faster than np.asarray(DM)
-        _, gram = self.stage.samples.at(x)
-        try:
-            gbar = np.asarray(self.stage.derivative(gram))
-        except RuntimeError:  # G singular: an evaluation error for IPOPT, as in the one graph
-            return [np.full(self.stage.nx, np.nan)]
-        return [self.stage.samples.pullback(x, gbar)]
-
-
-class CriterionCallback(ca.Callback):
-    """x -> criterion of one stage (scalar), with an exact reverse derivative."""
-
-    def __init__(self, name: str, samples: _Samples, value: ca.Function, derivative: ca.Function) -> None:
-        ca.Callback.__init__(self)
-        self.samples, self.value, self.derivative = samples, value, derivative
-        self.nx = samples.m * samples.n
-        self._gradient: _Gradient | None = None
-        self._reverse: ca.Function | None = None
+        self.nx, self.rows = nx, rows
         self.construct(name, {})
 
     def get_n_in(self) -> int:
@@ -122,12 +88,39 @@ class CriterionCallback(ca.Callback):
         return ca.Sparsity.dense(self.nx, 1)
 
     def get_sparsity_out(self, i: int) -> ca.Sparsity:
-        return ca.Sparsity.dense(1, 1)
+        return ca.Sparsity.dense(self.rows, 1)
+
+
+class _Gradient(_OfX):
+    """x -> df/dx (m n,) of one stage."""
+
+    def __init__(self, name: str, stage: "CriterionCallback") -> None:
+        self.stage = stage
+        super().__init__(name, stage.nx, stage.nx)
+
+    def eval(self, arg: Any) -> list[np.ndarray]:
+        x = np.array(arg[0].nonzeros())  # dense: faster than np.asarray(DM)
+        _, g_mean = self.stage.samples.at(x)
+        try:
+            gbar = np.asarray(self.stage.derivative(g_mean))
+        except RuntimeError:  # G singular: an evaluation error for IPOPT, as in the one graph
+            return [np.full(self.stage.nx, np.nan)]
+        return [self.stage.samples.pullback(x, gbar)]
+
+
+class CriterionCallback(_OfX):
+    """x -> criterion of one stage (scalar), with an exact reverse derivative."""
+
+    def __init__(self, name: str, samples: _Samples, value: ca.Function, derivative: ca.Function) -> None:
+        self.samples, self.value, self.derivative = samples, value, derivative
+        self._gradient: _Gradient | None = None
+        self._reverse: ca.Function | None = None
+        super().__init__(name, samples.m * samples.n, 1)
 
     def eval(self, arg: Any) -> list[Any]:
-        _, gram = self.samples.at(np.array(arg[0].nonzeros()))
+        _, g_mean = self.samples.at(np.array(arg[0].nonzeros()))
         try:
-            return [self.value(gram)]
+            return [self.value(g_mean)]
         except RuntimeError:  # G singular (a motionless trial point): IPOPT cuts its step back
             return [np.nan]
 

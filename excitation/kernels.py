@@ -67,6 +67,25 @@ def evaluate_samples(f: ca.Function, *inputs: np.ndarray) -> np.ndarray:
     return SampleKernel(dense(f), n_samples, compile=False)(*inputs).transpose(0, 2, 1)
 
 
+#: OpenBLAS runs a product on several threads when m n k >= 4 x 65536 (GEMM_MULTITHREAD_THRESHOLD x
+#: SMP_THRESHOLD_MIN); for the information matrix those threads cost 35x the CPU time and 20x the
+#: wall time of one thread on a loaded 2-core machine (spin-waits: 13 ms against 0.38 ms CPU for a
+#: 2400 x 52 block), so :func:`gram` stays below it.
+_ONE_THREAD = 4 * 65536
+
+
+def gram(rows: np.ndarray) -> np.ndarray:
+    """rows^T rows (k, k) for rows (N, k), summed in blocks small enough for BLAS to use one
+    thread (an optimisation runs on one core; Dask spreads the starts)."""
+    k = rows.shape[1]
+    block = max(1, _ONE_THREAD // max(k * k, 1) - 1)
+    out = np.zeros((k, k))
+    for i in range(0, rows.shape[0], block):
+        part = rows[i:i + block]
+        out += part.T @ part
+    return out
+
+
 class SampleKernel:
     """A one-output function on N samples held in numpy arrays, without copies
     (casadi.Function.buffer): inputs (N, size_k) -> output (N, cols, rows) (sample k's output

@@ -5,14 +5,17 @@ via points), so rest at both ends holds by construction. Stages, each an IPOPT s
 from the previous one: the cond surrogate f_p for each p of ``OptimiserOptions.p_schedule``
 (p = 0: the scale-free log-determinant; see criterion.py). IPOPT uses a limited-memory (L-BFGS) Hessian:
 exact second derivatives of the criterion through the mapped regressor would cost far more per
-iteration than they save in iterations for ~50 variables.
+iteration than they save in iterations for ~50 variables. The per-sample functions (regressor and
+its adjoint, envelope rows, torques and their Jacobians) run as compiled C (kernels.py,
+criterion_callback.py; ``OptimiserOptions(compiled=False)``: one CasADi graph in its VM).
 
 Constraints: the kinematic limits (linear in Z) and the safety envelope's rows (heights, capsule
 clearances, Cartesian speeds: envelope_rows.py, whose Jacobian goes through the joint samples) on a
 grid fine enough for the margins to cover what happens between samples; the torque limits (nonlinear, with the most expensive
 Jacobian, and rarely active on the RX90) lazily, cutting-plane style: every start is verified on the fine grid
 (true limits, no margin), and if a limit is exceeded the worst times of each violated stretch join
-the constraint set and the last stage is re-solved (``repairs`` rounds). Only verified starts
+the constraint set and the last stage is re-solved (``repairs`` rounds) from the iterate pulled
+towards the centre pose until it holds the enlarged set (:meth:`_Problem.pulled_inside`). Only verified starts
 compete; if none is feasible the request is an error.
 """
 from __future__ import annotations
