@@ -15,7 +15,6 @@ from excitation.envelope_rows import through_samples
 from excitation.fourier import FourierSeries
 from excitation.kernels import SampleKernel, evaluate_samples
 from excitation.optimiser import _Problem, initial_free, start_rng
-from excitation.options import OptimiserOptions
 from excitation.trajectory import sample_times
 from test_excitation import BETA, FAST, toy_model, toy_regressor
 
