@@ -34,6 +34,8 @@ from typing import TYPE_CHECKING, Any, Sequence
 import casadi as ca
 import numpy as np
 
+from .kernels import evaluate_samples
+
 if TYPE_CHECKING:  # for annotations only
     import rx90sym
 
@@ -231,7 +233,7 @@ def capsule_clearances(capsules: CapsuleSet, q: np.ndarray, boxes: Sequence[Box]
     minus both radii, and over capsules and boxes of the box distance (segment sampled at
     ``box_samples`` points) minus the radius. Negative: the capsules touch."""
     q = np.atleast_2d(np.asarray(q, dtype=float))
-    ends = np.asarray(capsules.segments.map(q.shape[0], "serial")(q.T)).reshape(3, -1, q.shape[0], order="F")
+    ends = evaluate_samples(capsules.segments, q).transpose(1, 2, 0)  # (3, 2k, N)
     a, b = ends[:, 0::2, :], ends[:, 1::2, :]  # (3, k, N)
     out = np.full(q.shape[0], np.inf)
     if self_collision:

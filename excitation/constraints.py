@@ -3,7 +3,7 @@
 Joint positions, velocities and accelerations are linear in the coefficients, so on the
 optimisation grid they are linear constraints (:func:`kinematic_constraints`).
 Motor torques come from the inverse dynamic model with the nominal parameters minus the spring
-torque (:func:`torque_constraints`), Cartesian heights, speeds and clearances from the forward
+torque (:func:`torque_rows`), Cartesian heights, speeds and clearances from the forward
 geometric model (envelope_rows.py): nonlinear. On the optimisation grid every limit is tightened
 by a margin (the trajectory also moves between grid points, see :func:`kinematic_grid_rate`);
 :func:`check_limits` then verifies the true
@@ -18,6 +18,7 @@ from typing import Any
 import casadi as ca
 import numpy as np
 
+from .kernels import evaluate_samples, symbols_like
 from .model import ExcitationModel
 
 _KINDS = ("position", "velocity", "acceleration", "torque")
@@ -171,16 +172,19 @@ def kinematic_constraints(model: ExcitationModel, q: ca.MX, qd: ca.MX, qdd: ca.M
     return rows.result()
 
 
-def torque_constraints(model: ExcitationModel, q: ca.MX, qd: ca.MX, qdd: ca.MX,
-                       margins: Margins) -> tuple[ca.MX, np.ndarray, np.ndarray]:
-    """(g, lbg, ubg) on MX samples (n x N): motor torque limits with margin (inverse dynamics
-    with the nominal parameters, minus the spring), imposed lazily."""
+def torque_rows(model: ExcitationModel, margins: Margins) -> tuple[ca.Function, np.ndarray, np.ndarray] | None:
+    """(f, lo, hi): the motor torque limits with margin at one sample, f(q, qd, qdd) -> the
+    torques (inverse dynamics with the nominal parameters, minus the spring) of the joints with a
+    finite limit, and their bounds; imposed lazily, through envelope_rows.through_samples. None
+    when the model has no torques or no finite torque limit."""
     lim = model.limits
-    rows = _Rows()
-    if model.torque is not None and np.any(np.isfinite(lim.tau_max)) and q.shape[1] > 0:
-        tau = model.torque.map(q.shape[1], "serial")(q, qd, qdd)
-        rows.add(tau, -(1.0 - margins.torque) * lim.tau_max, (1.0 - margins.torque) * lim.tau_max)
-    return rows.result()
+    keep = np.flatnonzero(np.isfinite(lim.tau_max))
+    if model.torque is None or keep.size == 0:
+        return None
+    sym = symbols_like(model.torque)
+    tau = model.torque(*sym)[keep.tolist()]
+    bound = (1.0 - margins.torque) * lim.tau_max[keep]
+    return ca.Function("motor_torque_rows", sym, [tau], ["q", "qd", "qdd"], ["tau"]), -bound, bound
 
 
 # --------------------------------------------------------------------------- numeric (verification)
@@ -188,21 +192,21 @@ def evaluate_torque(model: ExcitationModel, q: np.ndarray, qd: np.ndarray, qdd: 
     """Motor torques (N, n) [N m] on samples (N, n); zeros when the model has none."""
     if model.torque is None:
         return np.zeros_like(q)
-    return np.asarray(model.torque.map(q.shape[0], "serial")(q.T, qd.T, qdd.T)).T
+    return evaluate_samples(model.torque, q, qd, qdd)[:, :, 0]
 
 
 def evaluate_speeds(model: ExcitationModel, q: np.ndarray, qd: np.ndarray) -> np.ndarray | None:
     """Cartesian speeds (N, k) [m/s] of the envelope's points on samples (N, n), or None."""
     if model.speeds is None:
         return None
-    return np.sqrt(np.maximum(np.asarray(model.speeds.map(q.shape[0], "serial")(q.T, qd.T)).T, 0.0))
+    return np.sqrt(np.maximum(evaluate_samples(model.speeds, q, qd)[:, :, 0], 0.0))
 
 
 def evaluate_heights(model: ExcitationModel, q: np.ndarray) -> np.ndarray | None:
     """Heights (N, k) [m] of the points that must stay above the floor, or None."""
     if model.heights is None:
         return None
-    return np.asarray(model.heights.map(q.shape[0], "serial")(q.T)).T
+    return evaluate_samples(model.heights, q)[:, :, 0]
 
 
 def check_limits(model: ExcitationModel, q: np.ndarray, qd: np.ndarray, qdd: np.ndarray,

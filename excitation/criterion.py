@@ -38,7 +38,7 @@ from typing import Any, Sequence
 import casadi as ca
 import numpy as np
 
-from rx90sym.compiled import map_samples
+from .kernels import evaluate_samples, symbols_like
 
 # --------------------------------------------------------------------------- numeric (reporting)
 def stacked_regressor(base_regressor: Any, q: Any, qd: Any, qdd: Any) -> np.ndarray:
@@ -69,7 +69,7 @@ def observation_matrix(base_regressor: Any, q: Any, qd: Any, qdd: Any) -> np.nda
 def regressor_samples(base_regressor: Any, q: np.ndarray, qd: np.ndarray, qdd: np.ndarray) -> np.ndarray:
     """Phi_b at every sample: (N, n, nb)."""
     if isinstance(base_regressor, ca.Function):
-        return map_samples(base_regressor, q, qd, qdd)
+        return evaluate_samples(base_regressor, q, qd, qdd)
     return np.asarray(base_regressor(q, qd, qdd), dtype=float)
 
 
@@ -127,14 +127,6 @@ def smooth_friction_regressor(regressor: ca.Function, names: Sequence[str] | Non
     for fs, fv in good:
         phi[:, fs] = ca.tanh(phi[:, fv] / eps)
     return ca.Function(f"{regressor.name()}_smooth", list(sym), [phi], ["q", "qd", "qdd"], ["Phi"])
-
-
-def symbols_like(f: ca.Function) -> list[Any]:
-    """SX input symbols when f can be evaluated on SX (fast virtual machine), else MX."""
-    try:
-        return f.sx_in()
-    except Exception:  # MX-only functions (e.g. with callbacks)
-        return f.mx_in()
 
 
 # --------------------------------------------------------------------------- symbolic criteria

@@ -31,6 +31,7 @@ import numpy as np
 from .collision import CollisionModel, _segment_distance
 from .constraints import Margins, position_bounds
 from .model import ExcitationModel, JointLimits
+from .kernels import evaluate_samples
 
 if TYPE_CHECKING:
     import rx90sym
@@ -333,7 +334,7 @@ def _inside(model: ExcitationModel, q: np.ndarray, qd: np.ndarray, margins: Marg
     if v is not None and np.max(v) > (1.0 - margins.velocity) * model.speed_max:
         return False
     if model.collision is not None and model.collision.clearance is not None:
-        c = np.asarray(model.collision.clearance.map(q.shape[0], "serial")(q.T))
+        c = evaluate_samples(model.collision.clearance, q)
         if np.min(c) < margins.clearance:
             return False
     return True

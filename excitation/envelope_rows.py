@@ -12,16 +12,21 @@ of every row (each row depends on every coefficient); by the chain rule it is
 
 n directional derivatives per sample and a product with the constant S_k, S'_k: m times fewer
 (m = 9 for 5 harmonics). :func:`through_samples` gives CasADi that Jacobian (exact, its own AD
-per sample) as the function's custom Jacobian; nothing else changes in what IPOPT sees.
+per sample) as the function's custom Jacobian; nothing else changes in what IPOPT sees. The
+motor torques' rows (constraints.torque_rows, functions of q_k, qd_k and qdd_k) go the same way.
+The per-sample functions and their Jacobians run as compiled C (kernels.py).
 
 Soft extremes are conservative: the soft minimum is never above the true minimum and the soft
 maximum never below the true maximum (at most temperature x log(count) away).
 """
 from __future__ import annotations
 
+from typing import Sequence
+
 import casadi as ca
 import numpy as np
 
+from .kernels import compiled_kernel, symbols_like
 from .model import ExcitationModel
 
 HEIGHT_SOFTNESS = 0.002  # [m]: the lowest point's soft minimum is at most 2 mm x log(count) low
@@ -76,30 +81,35 @@ def sample_rows(model: ExcitationModel, velocity_margin: float, height_margin: f
     return f, np.concatenate(lo).astype(float), np.concatenate(hi).astype(float)
 
 
-def through_samples(f: ca.Function, sq: np.ndarray, sqd: np.ndarray, n: int) -> ca.Function:
-    """x -> rows (r N,): f(q_k, qd_k) at every sample, sample-major (sample k's r rows together),
-    for x = Z.flatten(order="F"), Z (m, n), q_k = sq[k] @ Z, qd_k = sqd[k] @ Z (sq, sqd: (N, m)).
-    Its Jacobian is the chain rule of the module docstring (f's own exact AD per sample)."""
-    sq, sqd = np.asarray(sq, float), np.asarray(sqd, float)
-    n_samples, m = sq.shape
+def through_samples(f: ca.Function, bases: Sequence[np.ndarray], n: int, compile: bool = False) -> ca.Function:
+    """x -> rows (r N,): f at every sample, sample-major (sample k's r rows together), for x =
+    Z.flatten(order="F"), Z (m, n), input i of f at sample k = bases[i][k] @ Z (bases: one (N, m)
+    matrix per input of f, e.g. q and qd, or q, qd and qdd for the torques). Its Jacobian is the
+    chain rule of the module docstring (f's own exact AD per sample). compile: f and its
+    per-sample Jacobian as compiled C (kernels.py; the same numbers to rounding)."""
+    bases = [np.asarray(b, float) for b in bases]
+    if len(bases) != f.n_in():
+        raise ValueError(f"{f.name()}: {len(bases)} sample bases for {f.n_in()} inputs")
+    n_samples, m = bases[0].shape
     r = f.size1_out(0)
     x = ca.MX.sym("x", m * n)
     z = ca.reshape(x, m, n)
-    q, qd = ca.mtimes(ca.DM(sq), z).T, ca.mtimes(ca.DM(sqd), z).T  # (n, N)
-    g = ca.vec(f.map(n_samples, "serial")(q, qd))
-    qs, qds = ca.SX.sym("q", n), ca.SX.sym("qd", n)
-    out = f(qs, qds)
+    inputs = [ca.mtimes(ca.DM(b), z).T for b in bases]  # (n, N) each
+    sym = symbols_like(f)
+    out = f(*sym)
     # cse: the common subexpressions of the ball distances' derivatives (12 % fewer instructions)
-    df = ca.Function("envelope_sample_jac", [qs, qds], [ca.jacobian(out, qs), ca.jacobian(out, qds)],
-                     {"cse": True})
-    jq, jqd = df.map(n_samples, "serial")(q, qd)  # (r, n N) each: sample k's block in columns k n ...
-    rep_q, rep_qd = ca.DM(np.repeat(sq, r, axis=0)), ca.DM(np.repeat(sqd, r, axis=0))  # (r N, m)
+    rows = compiled_kernel(ca.Function(f"{f.name()}_rows", sym, [out], {"cse": True}), compile)
+    df = compiled_kernel(ca.Function(f"{f.name()}_jac", sym, [ca.jacobian(out, s) for s in sym],
+                                     {"cse": True}), compile)
+    g = ca.vec(rows.map(n_samples, "serial")(*inputs))
+    jacs = df.map(n_samples, "serial")(*inputs)  # (r, n N) each: sample k's block in columns k n ...
+    reps = [ca.DM(np.repeat(b, r, axis=0)) for b in bases]  # (r N, m)
     blocks = []
     for j in range(n):
-        a = ca.vec(jq[:, j::n])  # d rows / d q_j, sample-major (r N, 1)
-        b = ca.vec(jqd[:, j::n])
-        blocks.append(ca.repmat(a, 1, m) * rep_q + ca.repmat(b, 1, m) * rep_qd)
-    jac = ca.Function("jac_envelope_rows", [x, ca.MX.sym("out_rows", g.shape[0])], [ca.horzcat(*blocks)],
+        block = [ca.repmat(ca.vec(jac[:, j::n]), 1, m) * rep for jac, rep in zip(jacs, reps)]  # d rows / d z_j
+        blocks.append(block[0] if len(block) == 1 else sum(block[1:], block[0]))
+    name = f"{f.name()}_samples"
+    jac = ca.Function(f"jac_{name}", [x, ca.MX.sym("out_rows", g.shape[0])], [ca.horzcat(*blocks)],
                       ["x", "out_rows"], ["jac_rows_x"])
-    return ca.Function("envelope_rows", [x], [g], ["x"], ["rows"],
+    return ca.Function(name, [x], [g], ["x"], ["rows"],
                        {"custom_jacobian": jac, "jac_penalty": 0})

@@ -51,6 +51,9 @@ class OptimiserOptions:
     start_fraction: random starts use this fraction (uniform in the interval) of each joint's
         kinematic room.
     ipopt: extra IPOPT options as (name, value) pairs, e.g. (("linear_solver", "ma27"),).
+    compiled: evaluate the per-sample functions of the NLP (regressor, envelope rows, torques,
+        their derivatives) as compiled C, cached on disk (kernels.py, criterion_callback.py);
+        False: all in CasADi's VM, one graph (the same numbers to rounding, several times slower).
     """
 
     criterion: str | Objective = "cond"
@@ -70,6 +73,7 @@ class OptimiserOptions:
     repairs: int = 4
     start_fraction: tuple[float, float] = (0.4, 0.9)
     ipopt: tuple[tuple[str, Any], ...] = ()
+    compiled: bool = True
 
     def __post_init__(self) -> None:
         if isinstance(self.criterion, str):

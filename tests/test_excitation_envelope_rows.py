@@ -43,7 +43,7 @@ def test_chain_rule_jacobian_equals_casadi_ad_and_finite_differences(ur5_model, 
     bq, bd, _ = form.basis(t)
     sq, sqd = bq @ form.rest_basis(), bd @ form.rest_basis()
     f, lo, hi = sample_rows(ur5_model, 0.02, 0.01, 0.01)
-    rows = through_samples(f, sq, sqd, ur5_model.n)
+    rows = through_samples(f, (sq, sqd), ur5_model.n)
     x = ca.MX.sym("x", rows.size1_in(0))
     chained = ca.Function("chained", [x], [rows(x), ca.jacobian(rows(x), x)])
     z = form.constant(ur5_model.centre) + 0.3 * form.random_free(rng, ur5_model.n)
