@@ -4,7 +4,10 @@ UR (URScript manual, "servoj" and "movej"): the program moves with ``movej`` at 
 (MOVEJ_SPEED, MOVEJ_ACCELERATION) to the start pose (if given) and to the trajectory's first
 sample, then sends one ``servoj(q, 0, 0, t, lookahead_time, gain)`` per sample, t = the
 controller's period (e-Series 500 Hz: 0.002 s; CB3 125 Hz: 0.008 s), and returns with ``movej``.
-servoj blocks for t, so the samples play at the controller's rate. lookahead_time (0.03-0.2 s)
+servoj blocks for t, so the samples play at the controller's rate. Without a start pose the
+program first reads the arm's joint positions and stops (``popup``, ``halt``) unless every joint
+is within START_TOLERANCE of the trajectory's first sample: the first ``movej`` then never
+travels from an unchecked pose. lookahead_time (0.03-0.2 s)
 smooths the target with a look-ahead filter (larger: smoother, more lag); gain (100-2000) is the
 proportional gain (larger: tighter tracking, more overshoot); UR_LOOKAHEAD 0.1 s and UR_GAIN 300
 are the URScript defaults' middle ground, documented in docs/excitation.md. Angles are the
@@ -29,6 +32,8 @@ UR_LOOKAHEAD = 0.1   # [s]
 UR_GAIN = 300.0
 MOVEJ_SPEED = 0.25   # [rad/s] approach and return moves
 MOVEJ_ACCELERATION = 0.5  # [rad/s^2]
+#: Without a start pose, the arm must already be this close to the first sample, every joint [rad].
+START_TOLERANCE = 0.05
 
 # Franka Emika, "Robot and interface specifications" (libfranka documentation), per joint.
 FRANKA_VELOCITY = (2.1750, 2.1750, 2.1750, 2.1750, 2.6100, 2.6100, 2.6100)      # rad/s
@@ -56,6 +61,18 @@ def urscript(q: np.ndarray, rate: float, start_pose: Sequence[float] | None = No
              f"gain {gain:g}; controller joint angles [rad]"]
     if start_pose is not None:
         lines.append(f"  movej({_vector(start_pose)}, {move})")
+    else:  # the approach from wherever the arm is was not checked: it must already be at the start
+        lines += [f"  start = {_vector(q[0])}",
+                  "  now = get_actual_joint_positions()",
+                  "  i = 0",
+                  f"  while i < {q.shape[1]}:",
+                  f"    if norm(now[i] - start[i]) > {START_TOLERANCE:g}:",
+                  f'      popup("the arm is not within {START_TOLERANCE:g} rad of the trajectory\'s start on every '
+                  'joint: move it there first (or plan with --start-pose)", title="excitation", error=True)',
+                  "      halt",
+                  "    end",
+                  "    i = i + 1",
+                  "  end"]
     lines.append(f"  movej({_vector(q[0])}, {move})")
     lines += [f"  servoj({_vector(row)}, 0, 0, {period:g}, {lookahead:g}, {gain:g})" for row in q]
     lines.append("  stopj(2.0)")
