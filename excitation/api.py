@@ -16,7 +16,8 @@ from .complement import prior_information
 from .fourier import FourierSeries
 from .model import ExcitationModel, model_from_robot
 from .multistart import optimise_model
-from .objective import DEFAULT_CRITERION, FALLBACK_CRITERION, Objective, reference_magnitudes
+from .defaults import DEFAULT_CRITERION, FALLBACK_CRITERION
+from .objective import Objective, reference_magnitudes
 from .options import OptimiserOptions
 from .payload_design import payload_model, payload_objective
 from .random_trajectory import random_feasible

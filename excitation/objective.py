@@ -29,11 +29,9 @@ import casadi as ca
 import numpy as np
 
 from .criterion import gram_expression, log_am_gm, log_cond_surrogate
+from .defaults import OBJECTIVES
 from .kernels import gram
 
-OBJECTIVES = ("cond", "cond-nominal", "cond-columns", "logdet", "sigma")
-DEFAULT_CRITERION = "sigma"         # chosen with benchmarks/compare_criteria.py (docs/excitation.md)
-FALLBACK_CRITERION = "cond-columns"  # the default when no nominal parameters are known
 GROUPS = ("inertial, links 1-3", "inertial, wrist 4-6", "friction FV/FS", "coupling FVM6/FSM6")
 
 

@@ -23,7 +23,7 @@ MAX_COND = 1e6  # above this W is numerically rank deficient: the trajectory ide
 class OptimiserOptions:
     """Settings of :func:`optimise_model` (defaults chosen for the RX90, 20 s, 5 harmonics).
 
-    criterion: a name of objective.OBJECTIVES or an :class:`Objective` (with the noise, reference
+    criterion: a name of defaults.OBJECTIVES or an :class:`Objective` (with the noise, reference
         magnitudes, selection and prior information it needs); "cond" is the raw cond(W).
     grid_rate [Hz]: optimisation grid for the criterion (must exceed twice the highest harmonic).
         The smooth terms need little (the trapezoid rule is spectrally accurate on a periodic

@@ -26,7 +26,7 @@ _EXPORTS = {
     "Processing": "identify.observation.processing",
     "Observation": "identify.observation.matrix",
     "observation_matrix": "identify.observation.matrix",
-    "FRICTION_FORMS": "identify.observation.friction",
+    "FRICTION_FORMS": "identify.observation.defaults",
     "velocity_scales": "identify.estimation.separable",
     "presliding_travels": "identify.estimation.separable",
     # estimation: (weighted) least squares (eqs. 9-15), essential parameters, bootstrap, consistency

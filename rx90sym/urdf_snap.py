@@ -25,16 +25,9 @@ from typing import Sequence
 
 import numpy as np
 
-#: Default angle tolerance [rad]. Catches every multiple of pi/2 up to 2 pi written with two
-#: decimals or more (1.57: 8.0e-4 off; 3.14: 1.6e-3; 4.71: 2.4e-3; 6.28: 3.2e-3; 1.571: 2.0e-4;
-#: 1.5708: 3.7e-6); an axis snapped wrongly moves by at most 4 mrad (0.23 deg). docs/urdf.md.
-SNAP_RAD = 4e-3
-#: Default length tolerance [m]: residues such as 1e-6 m are zeros; 10 um is below any drawn offset.
-SNAP_LENGTH_M = 1e-5
-#: Largest accepted angle tolerance [rad] (beyond it a deliberate angle could be snapped).
-MAX_SNAP_RAD = 0.01
-#: Largest accepted length tolerance [m] (beyond it a drawn offset could be zeroed).
-MAX_SNAP_LENGTH_M = 1e-3
+from .defaults import MAX_SNAP_LENGTH_M, MAX_SNAP_RAD, SNAP_LENGTH_M, SNAP_RAD
+
+# The tolerances (SNAP_RAD, SNAP_LENGTH_M and their largest values) are described in rx90sym.defaults.
 #: Changes up to these are round-off of files writing 10+ digits (1.57079632679): not listed.
 SILENT_RAD = 1e-9
 SILENT_M = 1e-9

@@ -11,8 +11,7 @@ import sys
 import warnings
 from typing import Sequence
 
-import rx90sym
-from identify.estimation.consistency.errors import SolverError
+import rx90sym  # its __init__ holds the version and a table of lazy names: the model is not imported
 
 from .commands import COMMANDS
 from .common import PROG
@@ -51,6 +50,7 @@ def join_negative_values(argv: Sequence[str]) -> list[str]:
 def main(argv: Sequence[str] | None = None) -> int:
     parser = build_parser()
     args = parser.parse_args(join_negative_values(sys.argv[1:] if argv is None else argv))
+    from identify.estimation.consistency.errors import SolverError  # after --help and --version have exited
 
     def show_warning(message, category, filename, lineno, file=None, line=None) -> None:
         print(f"[{PROG}] warning: {message}", file=sys.stderr, flush=True)

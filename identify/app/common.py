@@ -1,17 +1,22 @@
-"""What every ``rx90`` command shares: errors, progress lines, output checks, robot loading."""
+"""What every ``rx90`` command shares: errors, progress lines, output checks, robot loading.
+
+Standard library only at module level (``rx90 --help`` imports every command module): the model
+and the method are imported inside the functions that use them.
+"""
 from __future__ import annotations
 
 import argparse
 import json
 import sys
 from pathlib import Path
-from typing import Any, Sequence
+from typing import TYPE_CHECKING, Any, Sequence
 
-import numpy as np
+from rx90sym.defaults import MAX_SNAP_LENGTH_M, MAX_SNAP_RAD, SNAP_LENGTH_M, SNAP_RAD
 
-import rx90sym
-from identify.io.recordings import declared_robot
-from rx90sym.urdf_snap import MAX_SNAP_LENGTH_M, MAX_SNAP_RAD, SNAP_LENGTH_M, SNAP_RAD
+if TYPE_CHECKING:  # annotations only
+    import numpy as np
+
+    import rx90sym
 
 PROG = "rx90"
 
@@ -33,6 +38,8 @@ def check_output(path: str | None) -> None:
 
 def floats(text: str, what: str, count: int | None = None) -> np.ndarray:
     """Comma-separated finite numbers of option ``what`` (``count`` of them when given)."""
+    import numpy as np
+
     try:
         values = np.array([float(v) for v in text.split(",")])
     except ValueError:
@@ -47,6 +54,9 @@ def floats(text: str, what: str, count: int | None = None) -> np.ndarray:
 def load_robot(args: argparse.Namespace, offsets: bool = False, recordings: Sequence[str] = ()) -> rx90sym.Robot:
     """The robot of ``--robot``, else the one the recordings' headers name (all the same), else a
     UsageError: no command that reads recordings guesses a robot. Prints the robot it uses."""
+    import rx90sym
+    from identify.io.recordings import declared_robot
+
     acceleration = getattr(args, "acceleration", None)
     spec = args.robot if args.robot is not None else getattr(args, "default_robot", None)
     if spec is None:
@@ -100,6 +110,7 @@ def spring_notice(robot: rx90sym.Robot) -> None:
 def robot_with_spring(args: argparse.Namespace, recordings: Sequence[str] = ()) -> tuple[rx90sym.Robot, Any]:
     """The robot with the spring the options ask for, and the spring model to identify (a
     SpringBasis / SpringStiffness) or None. Conflicting options are a UsageError."""
+    import rx90sym
     from rx90sym.spring import SpringBasis, SpringStiffness, read_spring_table
 
     robot = load_robot(args, offsets=args.offsets, recordings=recordings)

@@ -2,11 +2,12 @@
 are printed with the option that addresses them and kept for the JSON and the report."""
 from __future__ import annotations
 
-from typing import Sequence
-
-from identify.fitting.plausibility import Flag, raise_errors
+from typing import TYPE_CHECKING, Sequence
 
 from .common import progress
+
+if TYPE_CHECKING:  # annotations only: the method is imported when a command runs
+    from identify.fitting.plausibility import Flag
 
 #: The option that addresses each flag (the library's messages quote no options).
 HINTS = {
@@ -51,6 +52,8 @@ def with_hint(flag: Flag) -> str:
 
 def settle(flags: Sequence[Flag]) -> list[Flag]:
     """Raise on an error flag (exit 2; its message carries the option hint); print each warning."""
+    from identify.fitting.plausibility import raise_errors
+
     errors = [f for f in flags if f.severity == "error"]
     if errors:
         raise ValueError("; ".join(with_hint(f) for f in errors))

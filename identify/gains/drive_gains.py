@@ -30,6 +30,7 @@ import rx90sym
 from rx90sym.parameters import PAYLOAD_NAMES
 from rx90sym.recording import Recording, RecordingError
 
+from identify.gains.defaults import DEFAULT_METHOD, FLAG_PCT, GAIN_METHODS
 from identify.signal.filtering import choose_cutoff
 from identify.io.gains import DriveGains, apply_gains
 from identify.estimation.bootstrap import bootstrap_std
@@ -42,15 +43,6 @@ from identify.gains.methods import swapped_runs_error
 
 __all__ = ["DriveGainsResult", "drive_gains", "GAIN_METHODS", "DEFAULT_METHOD", "FLAG_PCT"]
 
-GAIN_METHODS = ("same-motion", "global")
-#: The default method, chosen on the UR10e pair (docs/drive-gains.md, benchmarks/ur10e_windows.py).
-DEFAULT_METHOD = "same-motion"
-# A gain scales every parameter identified on its joint. Where the payload acts on a joint through
-# its (known) mass, the gain's relative sigma (the larger of eq. 13's and the segment bootstrap's)
-# is 0.1-0.8 % on the twin and 1.4-3 % on half of the UR10e pair (benchmarks/ur10e_windows.py); a
-# gain worse than 5 % is seen only through the payload's unknown inertia (joint 1 of the UR10e:
-# 11-13 % on half the pair): flag it.
-FLAG_PCT = 5.0
 # Instrumental-variable iterations (IDIM-IV, see _fit): at most this many, until no unknown moves
 # by more than IV_TOLERANCE of its sigma (the twin's weak motor 6 needs ~8; the others 2).
 IV_ITERATIONS = 30

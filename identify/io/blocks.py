@@ -27,6 +27,7 @@ from rx90sym.recording import Recording, RecordingError
 
 from identify.io.arrays import _check_layout, _resolve_convention, _to_model
 from identify.io.checks import _check_robot_name, _default_labels, _validate, _warn_no_robot
+from identify.io.defaults import DEFAULT_BLOCK, DEFAULT_LOG_BLOCK
 from identify.io.csv_tables import _column_index, _semicolon_hint, _Table
 from identify.io.gains import DriveGains, apply_gains
 from identify.io.log_fields import read_fields
@@ -34,12 +35,6 @@ from identify.io.log_fields import read_fields
 __all__ = ["BlockSource", "CsvSource", "MemorySource", "block_source", "count_rows", "CSV_BATCH_BYTES",
            "DEFAULT_BLOCK", "DEFAULT_LOG_BLOCK"]
 
-#: Default block: raw samples per block core of the block-wise fit (60 s at 1 kHz). Peak memory of
-#: ``rx90 identify`` on a 7-joint arm with 69 parameters is then about 0.9-1.1 GB (docs/long-logs.md),
-#: whatever the log's length.
-DEFAULT_BLOCK = 60_000
-#: Lines per block of :func:`identify.io.log_blocks.convert_log` (≈ 30 MB of text for a 15-column log).
-DEFAULT_LOG_BLOCK = 200_000
 #: Bytes of CSV text pyarrow parses per record batch (≈ 45,000 rows of a 7-joint recording).
 CSV_BATCH_BYTES = 8 << 20
 

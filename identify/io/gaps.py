@@ -27,6 +27,8 @@ import numpy as np
 
 from rx90sym.recording import RecordingError
 
+from identify.io.defaults import DEFAULT_MAX_GAP
+
 __all__ = ["EDGE_PERIODS", "DEFAULT_MAX_GAP", "LOST_STEPS", "MIN_SEGMENT_ROWS", "SPLITS_LISTED", "Gap", "LogGaps", "stale_rows", "find_gaps",
            "short_segments", "all_segments_short"]
 
@@ -35,8 +37,6 @@ __all__ = ["EDGE_PERIODS", "DEFAULT_MAX_GAP", "LOST_STEPS", "MIN_SEGMENT_ROWS", 
 #: 3 periods of the cut-off (1e-4 after 4), so the start-up transients left by the forward–backward
 #: pass (already reduced by sosfiltfilt's odd-extension padding) are gone after 3 periods.
 EDGE_PERIODS = 3.0
-#: Longest gap (s) bridged by interpolation; a longer one starts a new segment.
-DEFAULT_MAX_GAP = 0.05
 #: A time step longer than this many median steps has lost at least one packet (host-clock jitter
 #: of a fraction of a period stays below it; one lost packet makes a step of 2 periods).
 LOST_STEPS = 1.5

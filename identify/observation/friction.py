@@ -21,6 +21,8 @@ from typing import Any
 import numpy as np
 from scipy.ndimage import maximum_filter1d, minimum_filter1d
 
+from identify.observation.defaults import DEFAULT_FRICTION, FRICTION_FORMS
+
 __all__ = ["DEFAULT_FRICTION", "FRICTION_FORMS", "PRESLIDING_TRAVEL", "crossing_passes", "friction_columns", "friction_function",
            "presliding_state"]
 
@@ -41,12 +43,7 @@ def presliding_state(q: np.ndarray, travel: float = PRESLIDING_TRAVEL) -> np.nda
 
 
 # ---------------------------------------------------------------- friction while moving
-#: Friction forms of the moving rows (docs/real-logs.md): "coulomb" FS·sign(q̇); "tanh" the smooth
-#: Coulomb FS·tanh(q̇/vs); "stribeck" (FS + (FST − FS)·exp(−(q̇/vs)²))·sign(q̇). The last two are
-#: linear in FS (FST) for a given velocity scale vs [rad/s], found by separable least squares
-#: (identify.estimation.separable). The cross-validation grid iterates this tuple.
-FRICTION_FORMS = ("coulomb", "tanh", "stribeck")
-DEFAULT_FRICTION = "coulomb"
+# The friction forms (FRICTION_FORMS, DEFAULT_FRICTION) are described in identify.observation.defaults.
 
 
 def _form_expression(form: str) -> tuple[Any, Any, Any]:  # CasADi SX

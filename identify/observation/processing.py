@@ -10,29 +10,18 @@ import math
 from dataclasses import asdict, dataclass, fields
 from typing import Any
 
-from identify.observation.friction import DEFAULT_FRICTION, FRICTION_FORMS
+from identify.observation.defaults import (DEFAULT_DECIMATE_TO, DEFAULT_FRICTION, DEFAULT_MIN_VELOCITY, DEFAULT_REST,
+                                           FRICTION_FORMS, REST_POLICIES)
 
 __all__ = ["Processing", "FRICTION_FORMS", "REST_POLICIES", "CROSSING_SECONDS", "CROSSING_TRAVEL",
            "DEFAULT_MIN_VELOCITY", "DEFAULT_REST", "DEFAULT_DECIMATE_TO", "RestPolicy", "rest_per_joint",
            "drops_rest", "has_policy", "predicted_rest", "rest_label", "FrictionForm", "friction_label",
            "has_smooth_friction", "uniform"]
 
-#: Rest threshold [rad/s]: a joint slower than this is at rest (its Coulomb sign is unknown).
-DEFAULT_MIN_VELOCITY = 0.05
-#: What rest samples do: their rows are dropped, kept with a Coulomb term of 0, kept with the
-#: presliding state of the position history (identify.observation.friction), kept as they are
-#: ("none": the Coulomb entry keeps the sign of the filtered speed, as without a rest threshold),
-#: or "crossing": as they are through a pass below the threshold shorter than
-#: :data:`CROSSING_SECONDS` or travelling :data:`CROSSING_TRAVEL` or more (a reversal or a slow
-#: motion: the friction follows it), with Coulomb 0 over a longer, still rest (where the sign of
-#: the speed is the sign of noise).
-REST_POLICIES = ("drop", "zero-coulomb", "presliding", "none", "crossing")
 #: Longest pass below the rest threshold [s] that "crossing" treats as a motion (docs/real-logs.md).
 CROSSING_SECONDS = 0.5
 #: Position range [rad] over which a longer pass below the threshold is a slow motion, not a rest.
 CROSSING_TRAVEL = 5e-4
-#: The policy where none is given and none is chosen by cross-validation.
-DEFAULT_REST = "zero-coulomb"
 #: One policy for every joint, or one per joint (joint 1 first).
 RestPolicy = str | tuple[str, ...]
 
@@ -106,10 +95,6 @@ def _check_friction(friction: Any, where: str) -> FrictionForm | None:
             and all(isinstance(f, str) and f in FRICTION_FORMS for f in friction)):
         return uniform(tuple(friction))
     raise ValueError(f"{where}: friction must be one of {FRICTION_FORMS} or one of them per joint, got {friction!r}")
-
-
-#: Rate after parallel filtering [Hz].
-DEFAULT_DECIMATE_TO = 50.0
 
 
 @dataclass(frozen=True)

@@ -16,14 +16,10 @@ import numpy as np
 from rx90sym.recording import Recording
 
 from identify.io.resampling import interpolate
+from identify.signal.defaults import POSITION_TOLERANCE
 
 __all__ = ["PairedRuns", "pair_runs", "POSITION_TOLERANCE", "accepting_tolerance"]
 
-# The paper measured < 1e-3 rad between the empty and loaded runs with 7 kg on the CS8. The
-# twin's 10 Hz servo loop without payload feed-forward drifts up to ~0.012 rad with 7 kg; past
-# 0.02 rad the path difference alone changes the RX90's gravity torques by a few N m, the size
-# of a light payload's effect.
-POSITION_TOLERANCE = 0.02  # rad
 # A lag below this fraction of a sample is taken as none: the samples are used as they are.
 _NO_SHIFT = 1e-3
 

@@ -29,8 +29,7 @@ from __future__ import annotations
 import argparse
 from typing import Any
 
-
-from identify.io.blocks import DEFAULT_LOG_BLOCK, count_rows
+from identify.io.defaults import DEFAULT_LOG_BLOCK, DEFAULT_MAX_GAP
 
 from ..common import UsageError, check_output, convention_option, load_robot, progress, robot_option
 from .identify_runs import block_option
@@ -67,8 +66,8 @@ def register(sub: Any) -> None:
     sp.add_argument("--resample", type=float, metavar="HZ",
                     help="put every signal on a uniform grid at HZ (needed for irregular time stamps)")
     sp.add_argument("--max-gap", type=float, metavar="S",
-                    help="longest gap of lost packets bridged by --resample, s (default 0.05, "
-                         "identify.io.gaps.DEFAULT_MAX_GAP); a longer gap starts a new segment")
+                    help=f"longest gap of lost packets bridged by --resample, s (default {DEFAULT_MAX_GAP:g}); "
+                         f"a longer gap starts a new segment")
     sp.add_argument("--no-segments", action="store_true",
                     help="refuse a gap longer than --max-gap instead of splitting the log into segments")
     sp.add_argument("--gains", metavar="LIST|FILE",
@@ -131,9 +130,9 @@ def _robot(args: argparse.Namespace):
 
 def run(args: argparse.Namespace) -> int:
     from identify.io.bags import is_bag
+    from identify.io.blocks import count_rows
     from identify.io.logs import read_log
     from identify.io.recordings import write_recording
-    from identify.io.gaps import DEFAULT_MAX_GAP
 
     if args.log is None:
         if _given(args, _FILE_OPTIONS):
@@ -187,7 +186,6 @@ def _run_long(args: argparse.Namespace, robot: Any, block: int) -> int:
                          f"needs --columns")
     from identify.io.columns import parse_columns
     from identify.io.log_blocks import convert_log
-    from identify.io.gaps import DEFAULT_MAX_GAP
 
     progress(f"converting the log {args.log} block by block ({block} lines per block)")
     log = convert_log(args.log, robot, args.columns, args.out, header=not args.no_header, rows=_rows(args.rows),
@@ -204,7 +202,6 @@ def _run_long(args: argparse.Namespace, robot: Any, block: int) -> int:
 def _run_bag(args: argparse.Namespace) -> int:
     from identify.io.bags import MissingExtra, read_bag
     from identify.io.recordings import write_recording
-    from identify.io.gaps import DEFAULT_MAX_GAP
 
     wrong = _given(args, _CSV_ONLY + ("block",))
     if wrong:

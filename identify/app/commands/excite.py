@@ -7,14 +7,17 @@ import dataclasses
 import sys
 import warnings
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
-import numpy as np
-
-import rx90sym
+from excitation.defaults import DEFAULT_CRITERION, OBJECTIVES
 
 from ..common import UsageError, check_output, floats, load_robot, progress, robot_option
 from .excite_poses import check_start_pose, name_frames
+
+if TYPE_CHECKING:  # annotations only: the model is imported when the command runs
+    import numpy as np
+
+    import rx90sym
 
 
 def register(sub: Any) -> None:
@@ -40,15 +43,13 @@ def register(sub: Any) -> None:
 
 def _add_search_options(sp: Any) -> None:
     """Multi-start, criterion and where the starts run."""
-    import excitation
-
     sp.add_argument("--seed", type=int, default=0, help="seed of the multi-start, >= 0 (default 0)")
     sp.add_argument("--starts", type=int, default=2, help="number of starts (default 2)")
     sp.add_argument("--time-budget", type=float, default=None,
                     help="optional wall-clock budget [s] over all starts (default: none; with a "
                          "budget the result depends on the machine's speed)")
-    sp.add_argument("--criterion", choices=excitation.OBJECTIVES, default=None,
-                    help=f"what to optimise (default {excitation.DEFAULT_CRITERION}; see docs/excitation.md)")
+    sp.add_argument("--criterion", choices=OBJECTIVES, default=None,
+                    help=f"what to optimise (default {DEFAULT_CRITERION}; see docs/excitation.md)")
     sp.add_argument("--select", default=None,
                     help="comma-separated base parameter names the 'sigma' criterion judges (default all)")
     sp.add_argument("--noise-std", default=None,
@@ -115,7 +116,10 @@ def _add_limit_options(sp: Any) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
+    import numpy as np
+
     import excitation
+    import rx90sym
 
     for path in (args.out, args.json, args.program, args.report):
         check_output(path)
@@ -204,6 +208,8 @@ def _check_controller_robot(args: argparse.Namespace) -> None:
     """A controller program is written for the robot the user names, and for a robot of that make."""
     if args.controller is None:
         return
+    import rx90sym
+
     if args.program is not None and args.robot is None:
         raise UsageError(f"--program writes a {args.controller} controller's program: name its robot with "
                          f"--robot (the default robot {args.default_robot} is not used for one)")
@@ -306,6 +312,8 @@ def _save(args: argparse.Namespace, traj: Any, robot: rx90sym.Robot, start_pose:
     if args.controller is None:
         traj.save(args.out)
         return
+    import numpy as np
+
     from excitation import controller_export as ce, controller_programs as cp
     from excitation.constraints import evaluate_torque
     from excitation.envelope import path_violations
@@ -338,6 +346,8 @@ def _payload(args: argparse.Namespace, robot: rx90sym.Robot, base: Any, chi: Any
     """--for payload: optimise, save, report the predicted sigma by methods 3 and 4 (safe: the
     envelope's model and description)."""
     model, described = safe
+    import numpy as np
+
     from excitation.api import default_noise, optimise_payload
     from excitation.payload_design import payload_sigma
     from rx90sym.files import write_json

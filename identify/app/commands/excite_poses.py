@@ -3,18 +3,19 @@ messages and description: excitation/envelope.py), and the envelope's refusals i
 from __future__ import annotations
 
 import re
-from typing import Any
-
-import numpy as np
-
-import rx90sym
+from typing import TYPE_CHECKING, Any
 
 from ..common import UsageError
+
+if TYPE_CHECKING:  # annotations only: the model is imported when the command runs
+    import rx90sym
 
 
 def check_start_pose(robot: rx90sym.Robot, model: Any, start_pose: Any) -> None:
     """A --start-pose must lie in the robot's ranges and (model given) inside the envelope,
     naming the point that leaves it."""
+    import numpy as np
+
     from excitation.envelope import pose_violations, range_violations
 
     if start_pose is None:

@@ -14,12 +14,6 @@ import json
 from pathlib import Path
 from typing import Any
 
-from rx90sym.files import atomic_write, read_json
-from rx90sym.flange_payload import FlangePayload, controller_family, franka_load, ur_script
-from rx90sym.mjcf_export import mjcf_export
-from rx90sym.model_export import write_model
-from rx90sym.urdf_export import urdf_export
-
 from ..common import UsageError, check_output, progress
 
 
@@ -41,6 +35,8 @@ def register(sub: Any) -> None:
 
 
 def _read(path: str) -> dict:
+    from rx90sym.files import read_json
+
     data = read_json(path)
     if not isinstance(data, dict):
         raise ValueError(f"{path}: expected a JSON object")
@@ -69,6 +65,9 @@ def run(args: argparse.Namespace) -> int:
 
 
 def _payload(args: argparse.Namespace, data: dict) -> int:
+    from rx90sym.files import atomic_write
+    from rx90sym.flange_payload import FlangePayload, controller_family, franka_load, ur_script
+
     if args.urdf or args.mjcf or args.payload or args.robot:
         raise UsageError(f"{args.input} is a payload JSON: it exports --ur and --franka only "
                          f"(--urdf/--mjcf take a consistent fit, with --payload {args.input})")
@@ -94,6 +93,9 @@ def _payload(args: argparse.Namespace, data: dict) -> int:
 
 
 def _model(args: argparse.Namespace, data: dict) -> int:
+    from rx90sym.mjcf_export import mjcf_export
+    from rx90sym.model_export import write_model
+    from rx90sym.urdf_export import urdf_export
     from identify import load_fit
     from identify.export.models import fit_standard
 

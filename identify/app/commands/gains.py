@@ -3,18 +3,19 @@ from __future__ import annotations
 
 import argparse
 import dataclasses
-from typing import Any
+import math
+from typing import TYPE_CHECKING, Any
 
-import numpy as np
-
-from rx90sym.files import file_sha256, write_json
-from identify.gains.drive_gains import DEFAULT_METHOD, FLAG_PCT, GAIN_METHODS
-from identify.signal.pairing import POSITION_TOLERANCE
-
-from identify.fitting.plausibility import Flag, PlausibilityError, gain_flags, torque_scale_flags
+from identify.gains.defaults import DEFAULT_METHOD, FLAG_PCT, GAIN_METHODS
+from identify.signal.defaults import POSITION_TOLERANCE
 
 from ..flags import checked, flag_lines, settle
 from ..common import UsageError, check_output, convention_option, load_robot, progress, robot_option
+
+if TYPE_CHECKING:  # annotations only: the method is imported when the command runs
+    import numpy as np
+
+    from identify.fitting.plausibility import Flag
 
 
 def register(sub: Any) -> None:
@@ -60,7 +61,7 @@ def parse_fix(items: list[str], n: int) -> dict[int, float]:
             j, v = int(joint), float(value)
         except ValueError:
             raise UsageError(f"--fix: expected J=VALUE (e.g. 1=10.0), got {item!r}") from None
-        if not sep or not (1 <= j <= n) or not np.isfinite(v) or v == 0:
+        if not sep or not (1 <= j <= n) or not math.isfinite(v) or v == 0:
             raise UsageError(f"--fix {item}: joint must be 1..{n} and the gain a finite non-zero number")
         if j in out:
             raise UsageError(f"--fix: joint {j} given twice")
@@ -69,6 +70,8 @@ def parse_fix(items: list[str], n: int) -> dict[int, float]:
 
 
 def run(args: argparse.Namespace) -> int:
+    from rx90sym.files import file_sha256, write_json
+    from identify.fitting.plausibility import PlausibilityError, gain_flags
     from identify.gains.drive_gains import drive_gains
     from identify.io.gains import read_gains
     from identify.io.recordings import read_recording
@@ -144,6 +147,8 @@ def _compare(res: Any, robot: Any, empty: list, loaded: list, mass: float, optio
 def _torque_scale(gains: Any, robot: Any, recs: list) -> list[Flag]:
     """The torque-scale check identify and payload apply, on the torques the fitted gains make of
     the recordings' currents: gains scale with --mass, so a mass in g gives torques 1000x too large."""
+    from identify.fitting.plausibility import torque_scale_flags
+
     torques = [gains.torques(robot, r.current) for r in recs if r.current is not None]
     return [dataclasses.replace(f, code="gains_scale", action="is --mass in g instead of kg? (the fitted gains "
                                 "scale with it)")

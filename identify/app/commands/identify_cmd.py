@@ -8,25 +8,22 @@ from __future__ import annotations
 
 import argparse
 import math
-from types import SimpleNamespace
 from typing import TYPE_CHECKING, Any
 
-import numpy as np
+from identify.io.defaults import DEFAULT_BLOCK
+from identify.observation.defaults import (DEFAULT_DECIMATE_TO, DEFAULT_MIN_VELOCITY, DEFAULT_REST, FRICTION_FORMS,
+                                           REST_POLICIES)
 
-import rx90sym
-from identify.observation.processing import (DEFAULT_MIN_VELOCITY, DEFAULT_REST, FRICTION_FORMS, REST_POLICIES,
-                                             Processing, rest_label)
-from identify.io.blocks import DEFAULT_BLOCK
-from identify.fitting.plausibility import estimate_flags, prior_flags, residual_flags, static_gravity_flags, torque_scale_flags
-
-from ..flags import flag_lines, given_gain_flags, settle, with_hint
+from ..flags import given_gain_flags, settle, with_hint
 from ..common import (UsageError, check_output, convention_option, progress, read_recordings, robot_option,
                       robot_with_spring, spring_options)
 
 from .identify_runs import block_option, fit_long, streamed
 
-if TYPE_CHECKING:  # the method is imported when the command runs, not for its --help
+if TYPE_CHECKING:  # the model and the method are imported when the command runs, not for its --help
+    import rx90sym
     from identify.fitting.record import Fit
+    from identify.observation.processing import Processing
 
 
 def _delay(text: str) -> str | float:
@@ -75,8 +72,8 @@ def register(sub: Any) -> None:
                          "the torques by blocked cross-validation (a small grid around the position knee, capped "
                          "by the rows processed, never the clock; the candidate table is printed and saved). Default: on without --cutoff; "
                          "--no-cross-validate: the position-spectrum cut-off and --decimate-to")
-    sp.add_argument("--decimate-to", type=float, default=50.0,
-                    help="rate after parallel filtering [Hz] (default 50; 0: no decimation)")
+    sp.add_argument("--decimate-to", type=float, default=DEFAULT_DECIMATE_TO,
+                    help=f"rate after parallel filtering [Hz] (default {DEFAULT_DECIMATE_TO:g}; 0: no decimation)")
     sp.add_argument("--no-decimate", action="store_true", help="no decimation (same as --decimate-to 0)")
     sp.add_argument("--min-velocity", type=float, default=DEFAULT_MIN_VELOCITY,
                     help=f"rest threshold: a joint slower than this is at rest [rad/s] "
@@ -110,6 +107,8 @@ def register(sub: Any) -> None:
 
 
 def _robot(args: argparse.Namespace) -> tuple[rx90sym.Robot, Any]:
+    import rx90sym
+
     robot, spring_model = robot_with_spring(args, args.recordings)
     if args.coulomb_sign is not None:
         if robot.coupling is None:
@@ -143,7 +142,7 @@ def _check(args: argparse.Namespace) -> None:
     if args.essential and args.method == "consistent":
         raise UsageError("conflicting options: --essential works on the ols/wls estimate, "
                          "not with --method consistent")
-    if args.no_decimate and args.decimate_to not in (50.0, 0.0):
+    if args.no_decimate and args.decimate_to not in (DEFAULT_DECIMATE_TO, 0.0):
         raise UsageError("conflicting options: --no-decimate and --decimate-to "
                          f"{args.decimate_to:g}")
     if args.cross_validate and args.cutoff is not None:
@@ -182,6 +181,8 @@ _friction_option = _per_joint_option("friction form", FRICTION_FORMS)
 
 def processing_of(args: argparse.Namespace, spring: bool) -> Processing:
     """The Processing the options ask for (the library's defaults where they say nothing)."""
+    from identify.observation.processing import Processing
+
     return Processing(cutoff=args.cutoff, decimate_to=None if args.no_decimate else args.decimate_to,
                       min_velocity=args.min_velocity, rest=args.rest, delay=args.delay,
                       estimate_delay=True, spring=spring, cross_validate=args.cross_validate,
@@ -189,10 +190,13 @@ def processing_of(args: argparse.Namespace, spring: bool) -> Processing:
 
 
 def run(args: argparse.Namespace) -> int:
+    import rx90sym
     from identify.fitting.fit import fit
+    from identify.fitting.plausibility import static_gravity_flags, torque_scale_flags
     from identify.io.gains import read_gains
 
     from ..spring_output import attach_spring
+    from .identify_output import print_fit, write_long_report, write_report
 
     _check(args)
     robot, spring_model = _robot(args)
@@ -233,7 +237,7 @@ def run(args: argparse.Namespace) -> int:
         result = result.validated(val_rec)
         if result.validation.still_message():
             progress(f"warning: {result.validation.still_message()}")
-    _print_fit(result, recs, args.delay == "auto", prior)
+    print_fit(result, recs, args.delay == "auto", prior)
     if args.json:
         from identify.monitor.thresholds import with_contact_thresholds
 
@@ -242,7 +246,7 @@ def run(args: argparse.Namespace) -> int:
             progress(f"contact thresholds not stored ({why}): rx90 monitor will need --calibrate")
         result.save(args.json)
     if args.report:
-        _write_report(args.report, result, recs) if recs else _write_long_report(args, result)
+        write_report(args.report, result, recs) if recs else write_long_report(args, result)
     if args.urdf_out:  # last: a refused (non-physical) link must not cost the fit's JSON and report
         _write_urdf(args, result)
     return 0
@@ -265,6 +269,10 @@ def _fit_flags(f: Fit, method: str, prior: Any = None) -> list:
     """A joint the model does not explain stops the run; non-physical WLS estimates are flagged
     (judged with the larger of eq. 13's and the bootstrap's sigma); a consistent fit with a prior
     (a PhysicalPrior) is judged against it (link masses, cost over WLS)."""
+    import numpy as np
+
+    from identify.fitting.plausibility import estimate_flags, prior_flags, residual_flags
+
     obs, res = f.observation, f.result
     if obs is None:  # fitted in blocks: ‖Y_j‖² is the joint system's residual at x = 0
         torque_rms = np.array([np.sqrt(s.rss(np.zeros(s.columns)) / s.rows) for s in res.joint_systems])
@@ -277,122 +285,6 @@ def _fit_flags(f: Fit, method: str, prior: Any = None) -> list:
     elif prior is not None:
         flags += settle(prior_flags(res.standard, prior.values, res.cost_increase_pct, f.robot.name))
     return flags
-
-
-def _splits(lay: dict) -> str:
-    """Where a recording's log was split into segments (``lay``: its layout_summary), or nothing."""
-    splits, total = lay.get("split_gaps") or [], lay.get("split_gaps_total")
-    where = ", ".join(f"lines {g['lines'][0]}-{g['lines'][1]} ({g['duration_s']:g} s)" for g in splits)
-    more = f" and {total - len(splits)} more" if splits and total > len(splits) else ""
-    return f" (split by the gap{'s' if total > 1 else ''} at {where}{more})" if splits else ""
-
-
-def _print_fit(f: Fit, recs: list, auto_delay: bool, prior: Any = None) -> None:
-    obs, res = f.observation or f.streamed, f.result
-    progress(f.delay_estimate.summary() + ("" if auto_delay else " (not compensated: --delay auto does)"))
-    progress(obs.summary().replace("\n", "\n  "))
-    for lay in f.recordings:
-        if lay["bridged_samples"] or lay["segments"] > 1 or lay["stale_rows"]:
-            print(f"{lay['source']}: {lay['segments']} segment(s){_splits(lay)}, {lay['bridged_samples']} samples "
-                  f"bridged over lost packets (not fitted), {lay['stale_rows'] or 0} stale rows dropped when read")
-    if f.choice is not None:
-        print(f.choice["table"])
-    else:
-        p = f.processing
-        why = f"--cutoff {p.cutoff:g} given" if p.cutoff is not None else "--no-cross-validate"
-        print(f"processing not cross-validated ({why}): rest policy {rest_label(f.rest)}")
-    if f.model.friction is not None and "velocity_scale" in f.model.friction:
-        from identify.estimation.separable import VelocityScales
-
-        print(VelocityScales.from_json(f.model.friction).summary())
-    if f.model.friction is not None and "presliding_travel" in f.model.friction:
-        print("presliding travel [mrad] per joint, chosen on the fit's cost: "
-              + " ".join("-" if d is None else f"{1e3 * d:g}" for d in f.model.friction["presliding_travel"]))
-    print(f"filtering: cut-off {f.cutoff:.4g} Hz, rate {f.model.rate_hz:.6g} Hz"
-          + (f" (decimated to {f.decimate_to:g} Hz)" if f.decimate_to else " (no decimation)")
-          + f", torque delay {1e3 * f.delay:.3g} ms compensated")
-    for note in obs.notes:
-        if note:
-            print(f"note: {note}")
-    print(res.table())
-    if res.method == "consistent":
-        print("segment bootstrap of the unconstrained WLS estimate (the data's spread, not the consistent one's):")
-    print(f.bootstrap.table(res))
-    if res.method == "consistent":
-        from identify.estimation.consistency.prior import bodies_table
-
-        print(f"\nsplit of the standard parameters: {res.split}")
-        print(f"weighted RSS {res.cost:.6g} vs WLS {res.wls_cost:.6g} ({res.cost_increase_pct:+.3f} %)")
-        print(bodies_table(f.robot.n, res.standard, prior))
-    if f.flags:
-        print(flag_lines(f.flags))
-    print(f"\n{_spring_text(f, recs)}")
-    if f.essential is not None:
-        print()
-        print(f.essential.table())
-    if f.validation is not None:
-        print()
-        print(f.validation.table())
-
-
-def _spring_text(f: Fit, recs: list) -> str:
-    from identify.observation.spring_fit import BaseWithSpring, spring_summary
-
-    visited = recs or [SimpleNamespace(q=f.streamed.q_range)]  # a long log: its range, from the scan
-    return spring_summary(f.robot, f.base if isinstance(f.base, BaseWithSpring) else None, f.result, visited)[1]
-
-
-def _write_report(path: str, f: Fit, recs: list) -> None:
-    """The HTML report from the fit file's content (what --json writes) plus the recordings' extent."""
-    from ..report.writers import write_identify_report
-
-    record = {**f.to_json(), "data": data_record(recs, f.observation, f.validation)}
-    write_identify_report(path, f.robot, record, f.result, recs[0], f.validation, f.predict(recs[0]),
-                          _spring_text(f, recs))
-
-
-#: Points of a long log's figures: its positions and torques are thinned to at most this many.
-REPORT_POINTS = 20_000
-
-
-def _write_long_report(args: argparse.Namespace, f: Fit) -> None:
-    """The HTML report of a fit made block by block: the figures from the recordings read again block by
-    block and thinned to REPORT_POINTS samples (positions) and decimated samples (torques)."""
-    from dataclasses import replace
-
-    from identify.io.blocks import block_source
-
-    from ..report.writers import write_identify_report
-
-    progress(f"report: reading {args.recordings[0]} again block by block for the figures")
-    samples = [lay["samples"] for lay in f.recordings]
-    thin = [block_source(path, f.robot, args.convention, f.gains).thinned(args.block, -(-n // REPORT_POINTS))
-            for path, n in zip(args.recordings, samples)]
-
-    def shown(v: Any) -> Any:  # the torques of the figures: every k-th decimated sample
-        every = slice(None, None, -(-v.t.size // REPORT_POINTS))
-        return replace(v, t=v.t[every], measured=v.measured[every], predicted=v.predicted[every],
-                       moving=v.moving[every])
-
-    record = {**f.to_json(), "data": data_record(thin, f.streamed, f.validation, samples)}
-    held = shown(f.validation) if f.validation is not None else None
-    write_identify_report(args.report, f.robot, record, f.result, thin[0], held, shown(f.predict(args.recordings[0])),
-                          _spring_text(f, []))
-
-
-def data_record(recs: list, obs: Any, validation: Any = None, samples: list[int] | None = None) -> dict:
-    """What was fitted: per recording its source, samples, first and last time [s], duration [s] and
-    recorded rate [Hz] (1 / mean period); the share of samples where each joint moves (after
-    filtering); the held-out samples' first and last time [s]. ``samples``: the recordings' sample
-    counts when ``recs`` are thinned (a long log)."""
-    counts = samples if samples is not None else [len(r.t) for r in recs]
-    rows = [{"source": src, "samples": int(k), "t_first_s": float(r.t[0]), "t_last_s": float(r.t[-1]),
-             "duration_s": float(r.t[-1] - r.t[0]), "rate_hz": float((k - 1) / (r.t[-1] - r.t[0]))}
-            for r, src, k in zip(recs, obs.sources, counts)]
-    share = None if obs.moving_fraction is None else [float(v) for v in obs.moving_fraction]
-    held = None if validation is None else {"source": validation.source, "t_first_s": float(validation.t[0]),
-                                            "t_last_s": float(validation.t[-1])}
-    return {"recordings": rows, "moving_fraction": share, "heldout": held}
 
 
 def _write_urdf(args: argparse.Namespace, f: Fit) -> None:

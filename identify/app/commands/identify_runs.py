@@ -10,10 +10,8 @@ import argparse
 import os
 from typing import TYPE_CHECKING, Any
 
-import rx90sym
-from identify.io.blocks import count_rows
-
 if TYPE_CHECKING:  # for annotations only: the method is imported when a fit runs
+    import rx90sym
     from identify.fitting.record import Fit
     from identify.observation.processing import Processing
 
@@ -24,6 +22,8 @@ def streamed(paths: list[str], block: int, scheduler: str | None) -> bool:
     """Whether the recordings go block by block: one CSV has more than ``block`` lines, or Dask is asked."""
     if scheduler is not None:
         return True
+    from identify.io.blocks import count_rows
+
     return any(p.lower().endswith(".csv") and count_rows(p) > block for p in paths)
 
 

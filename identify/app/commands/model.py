@@ -4,11 +4,6 @@ from __future__ import annotations
 import argparse
 from typing import Any
 
-import numpy as np
-
-import rx90sym
-from rx90sym.files import write_json
-
 from ..common import check_output, load_robot, robot_option
 
 
@@ -22,6 +17,11 @@ def register(sub: Any) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
+    import numpy as np
+
+    import rx90sym
+    from rx90sym.files import write_json
+
     robot = load_robot(args)
     check_output(args.json)
     lines = [f"robot {robot.name}: {robot.n} joints, {len(robot.parameter_names)} standard parameters",

@@ -3,19 +3,16 @@ from __future__ import annotations
 
 import argparse
 import dataclasses
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
-import numpy as np
-
-from rx90sym.files import write_json
-from rx90sym.flange_payload import flange_payload
-from identify.signal.pairing import POSITION_TOLERANCE
-
-from identify.fitting.plausibility import mass_bound_flags, payload_flags, torque_scale_flags
+from identify.signal.defaults import POSITION_TOLERANCE
 
 from ..flags import checked, flag_lines, given_gain_flags, settle
 from ..common import (UsageError, check_output, convention_option, load_robot, progress, robot_option,
                       robot_params, spring_notice)
+
+if TYPE_CHECKING:  # annotations only: the method is imported when the command runs
+    import numpy as np
 
 
 METHOD_NEEDS = """what each method needs:
@@ -53,7 +50,10 @@ def register(sub: Any) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
+    from rx90sym.files import write_json
+    from rx90sym.flange_payload import flange_payload
     from identify.fitting.record import load_fit
+    from identify.fitting.plausibility import mass_bound_flags, payload_flags, torque_scale_flags
     from identify.io.gains import apply_gains, read_gains
     from identify.io.recordings import read_recording
     from identify.payloads.methods import payload
@@ -114,6 +114,8 @@ def run(args: argparse.Namespace) -> int:
 def _unconstrained_mass_flags(res: Any, std: np.ndarray) -> list:
     """With --constrained, the sign of the unconstrained mass (the constraints would hide swapped
     runs behind a small positive mass): its negative-mass error, named as such."""
+    from identify.fitting.plausibility import payload_flags
+
     if not res.constrained or res.fit is None:
         return []
     free = res.fit.values[[res.fit.names.index(n) for n in res.names]]

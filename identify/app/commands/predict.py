@@ -9,11 +9,7 @@ from __future__ import annotations
 import argparse
 from typing import Any
 
-import numpy as np
-
-from rx90sym.files import atomic_write, write_json
-
-from identify.io.blocks import DEFAULT_BLOCK
+from identify.io.defaults import DEFAULT_BLOCK
 
 from ..common import announce_robot, check_output, progress, read_recordings
 from .identify_runs import block_option, streamed
@@ -36,6 +32,10 @@ def register(sub: Any) -> None:
 
 
 def write_prediction(path: str, val: Any) -> None:
+    import numpy as np
+
+    from rx90sym.files import atomic_write
+
     n = val.measured.shape[1]
     header = ",".join(["t"] + [f"tau{j}" for j in range(1, n + 1)] + [f"pred{j}" for j in range(1, n + 1)]
                       + [f"moving{j}" for j in range(1, n + 1)])
@@ -45,6 +45,7 @@ def write_prediction(path: str, val: Any) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
+    from rx90sym.files import write_json
     from identify.fitting.record import load_fit
 
     for out in (args.out, args.json):

@@ -4,8 +4,6 @@ from __future__ import annotations
 import argparse
 from typing import Any
 
-import rx90sym
-
 from ..common import UsageError, check_output, load_robot, progress, robot_option, spring_notice
 
 
@@ -25,6 +23,7 @@ def register(sub: Any) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
+    import rx90sym
     from excitation import read_trajectory
     from identify.io.recordings import write_recording
 
