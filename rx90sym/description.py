@@ -91,6 +91,8 @@ class Robot(PickledFields):
         are its URDF joint names, :meth:`ros_joint_names`), or () when the file gives none.
     nominal: the robot file's [nominal] table (rx90sym.nominal_table.NominalTable), else None.
     flange: 4x4 pose of the maker's tool flange frame in frame n (robot file's [flange]), else None.
+    controller_rate: the controller's set-point stream rate [Hz] (robot file's [controller]
+        rate_hz; a UR e-Series 500, a CB3 125), else None.
     """
 
     name: str
@@ -117,6 +119,7 @@ class Robot(PickledFields):
     joint_names: tuple[str, ...] = ()
     nominal: Any = None
     flange: np.ndarray | None = None
+    controller_rate: float | None = None  # [Hz] the controller's set-point rate ([controller] rate_hz)
 
     @property
     def gravity_vector(self) -> np.ndarray:

@@ -25,7 +25,7 @@ JOINT_FIELDS = ("sigma", "alpha", "d", "theta", "r")
 
 # Every section and its keys. "" is the top level; "joints" is the array of [[joints]] tables.
 # [staubli] is the old name of [controller] (still accepted).
-_OFFSETS = ("offsets", "offsets_deg")
+_OFFSETS = ("offsets", "offsets_deg", "rate_hz")  # rate_hz: the set-point stream rate [Hz]
 SCHEMA: dict[str, tuple[str, ...]] = {
     "": ("name", "description", "n", "joint_names"),
     "joints": ("sigma", "alpha", "alpha_deg", "d", "theta", "theta_deg", "r", "d_label", "r_label"),
@@ -263,6 +263,9 @@ def parse_robot(data: dict, source: str, lines: Lines | None = None) -> Robot:
     section = "controller" if "controller" in data else "staubli"
     offsets = _vector_either(data.get(section, {}), "offsets", n,
                              lambda key: where(section, key), np.zeros(n))
+    rate = data.get(section, {}).get("rate_hz")
+    if rate is not None and (isinstance(rate, bool) or not isinstance(rate, (int, float)) or not rate > 0):
+        raise RobotFileError(f"{where(section, 'rate_hz')}: rate_hz must be a number > 0 (Hz), got {rate!r}")
     limits = _parse_limits(data.get("limits", {}), n, offsets, lambda key: where("limits", key))
     gear, Rq, Rt = _parse_transmission(data.get("transmission", {}), n, lambda key: where("transmission", key))
     coupling = _parse_coupling(data["coupling"], n, where) if "coupling" in data else None
@@ -284,7 +287,8 @@ def parse_robot(data: dict, source: str, lines: Lines | None = None) -> Robot:
                  limits=limits, d_labels=tuple(d_labels), r_labels=tuple(r_labels),
                  controller_offsets=offsets, gear_ratios=gear, Rq=Rq, Rt=Rt, spring=spring,
                  coupling=coupling, asymmetric_coulomb=asym, description=str(data.get("description", "")),
-                 source=source, nominal=nominal, flange=flange, joint_names=tuple(names))
+                 source=source, nominal=nominal, flange=flange, joint_names=tuple(names),
+                 controller_rate=None if rate is None else float(rate))
 
 
 def _parse_joints(joints: list, where: Any) -> tuple[list, list[str], list[str]]:

@@ -26,7 +26,7 @@ def ur5_run(tmp_path_factory):
     """The issue's example with the defaults (one start instead of two, for time): 12 s,
     --controller ur, URScript, CSV and the HTML report."""
     out = tmp_path_factory.mktemp("ur5")
-    proc = run(*UR5_ARGS, "--duration", "12", "--starts", "1", "--controller", "ur",
+    proc = run(*UR5_ARGS, "--duration", "12", "--starts", "1", "--controller", "ur", "--controller-rate", "500",
                "--program", str(out / "T.script"), "--out", str(out / "T.csv"), "--json", str(out / "T.json"),
                "--report", str(out / "T.html"))
     assert proc.returncode == 0, proc.stderr
@@ -82,7 +82,7 @@ def test_ur5_default_excitation_holds_the_envelope_by_pinocchio_at_the_controlle
 def test_a_floor_with_a_start_pose_above_it_succeeds_and_is_held(tmp_path):
     home = "0,-1.5708,0,-1.5708,0,0"  # UR's upright home pose, far above z = 0.1 m
     proc = run(*UR5_ARGS, "--acceleration", "6", "--duration", "6", "--harmonics", "2", "--starts", "1",
-               "--floor", "0.1", "--controller", "ur", "--start-pose", home, "--out", str(tmp_path / "t.csv"),
+               "--floor", "0.1", "--controller", "ur", "--controller-rate", "500", "--start-pose", home, "--out", str(tmp_path / "t.csv"),
                "--json", str(tmp_path / "t.json"))
     assert proc.returncode == 0, proc.stderr
     usage = json.loads((tmp_path / "t.json").read_text())["limits_usage"]

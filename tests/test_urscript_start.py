@@ -32,3 +32,21 @@ def test_with_a_start_pose_the_approach_is_the_planned_one_and_no_check_is_neede
     text = urscript(q, 125.0, start_pose=[0, -1.5708, 0, -1.5708, 0, 0])
     check, move = _check_then_move(text)
     assert check == -1 and text.count("movej(") == 3
+
+
+def test_the_ur_rate_comes_from_the_robot_file_and_a_urdf_without_one_is_refused(tmp_path, capsys):
+    import argparse
+    from pathlib import Path
+
+    import rx90sym
+    from identify.app.cli import main
+    from identify.app.commands.excite import controller_rate
+
+    assert controller_rate(argparse.Namespace(controller_rate=None), rx90sym.load_robot("ur10e")) == 500.0
+    assert controller_rate(argparse.Namespace(controller_rate=125.0), rx90sym.load_robot("ur10e")) == 125.0
+    ur5 = str(Path(__file__).parent / "data" / "urdf" / "ur5.urdf")
+    code = main(["excite", "--robot", ur5, "--tip", "tool0", "--acceleration", "6", "--duration", "6",
+                 "--harmonics", "2", "--starts", "1", "--controller", "ur", "--out", str(tmp_path / "t.csv")])
+    err = capsys.readouterr().err
+    assert code == 2 and "500 Hz for e-series, 125 Hz for cb3" in err and "--controller-rate" in err, err
+    assert not (tmp_path / "t.csv").exists()

@@ -146,6 +146,8 @@ def run(args: argparse.Namespace) -> int:
     except ValueError as exc:  # a centre pose or a floor the arm cannot hold, naming the point
         raise UsageError(name_frames(robot, str(exc))) from None
     check_start_pose(robot, model, start_pose)
+    if args.controller == "ur":
+        controller_rate(args, robot)  # refused now, before any optimisation, when no rate is known
     for line in excitation.envelope_lines(described):
         progress(line)
     if args.target == "payload":
@@ -323,7 +325,7 @@ def _save(args: argparse.Namespace, traj: Any, robot: rx90sym.Robot, start_pose:
                               what="approach and return path from --start-pose")
         if bad:
             raise ValueError(f"{bad[0]}: choose another --start-pose")
-    rate = (args.controller_rate or cp.UR_RATES["e-series"]) if args.controller == "ur" else cp.FRANKA_RATE
+    rate = controller_rate(args, robot) if args.controller == "ur" else cp.FRANKA_RATE
     controller = dataclasses.replace(ce.CONTROLLERS[args.controller], rate=rate)
     t, q, qd, qdd = ce.controller_samples(traj, controller, model.limits, start_pose)
     if args.controller == "franka":
@@ -396,3 +398,17 @@ def _client(args: argparse.Namespace) -> Any:
 
     with dask_client(workers=args.workers, scheduler=args.scheduler) as client:
         yield client
+
+
+def controller_rate(args: argparse.Namespace, robot: rx90sym.Robot) -> float:
+    """The UR stream rate [Hz]: --controller-rate, else the robot file's [controller] rate_hz; a
+    robot of unknown controller (a URDF) exits 2 naming the two UR rates (never a guess)."""
+    from excitation import controller_programs as cp
+
+    if args.controller_rate is not None:
+        return float(args.controller_rate)
+    if robot.controller_rate is not None:
+        return float(robot.controller_rate)
+    rates = ", ".join(f"{r:g} Hz for {name}" for name, r in cp.UR_RATES.items())
+    raise UsageError(f"--controller ur: robot {robot.name!r} does not say its controller's rate ({rates}): "
+                     f"give --controller-rate")
