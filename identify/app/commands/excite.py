@@ -81,7 +81,7 @@ def _add_envelope_options(sp: Any) -> None:
                     help="write --out at this controller's rate and form (UR e-Series 500 Hz, see "
                          "--controller-rate; Franka 1 kHz, jerk checked); default 250 Hz")
     sp.add_argument("--controller-rate", type=float, default=None,
-                    help="with --controller ur: servoj rate [Hz] (500 e-Series, the default; 125 CB3)")
+                    help="with --controller ur: servoj rate [Hz] (500 e-Series, 125 CB3; default: the robot file's [controller] rate_hz)")
     sp.add_argument("--program", default=None,
                     help="with --controller: the program the controller runs (ur: URScript with movej "
                          "and one servoj per sample; franka: 1 kHz joint positions for libfranka)")
