@@ -12,6 +12,7 @@ from typing import TYPE_CHECKING, Any
 from excitation.defaults import DEFAULT_CRITERION, OBJECTIVES
 
 from ..common import UsageError, check_output, floats, load_robot, progress, robot_option
+from .excite_output import controller_rate, save_trajectory
 from .excite_poses import check_start_pose, name_frames
 
 if TYPE_CHECKING:  # annotations only: the model is imported when the command runs
@@ -144,7 +145,17 @@ def run(args: argparse.Namespace) -> int:
     try:
         model, described = excitation.safe_model(robot, chi, base, envelope, collision)
     except ValueError as exc:  # a centre pose or a floor the arm cannot hold, naming the point
-        raise UsageError(name_frames(robot, str(exc))) from None
+        if start_pose is None or envelope.centre is not None:
+            raise UsageError(name_frames(robot, str(exc))) from None
+        # No pose near the centre of the ranges holds the envelope: the search starts from the
+        # start pose the user gave (the arm is there; check_start_pose below still checks it).
+        envelope = dataclasses.replace(envelope, centre=tuple(float(v) for v in start_pose))
+        try:
+            model, described = excitation.safe_model(robot, chi, base, envelope, collision)
+        except ValueError:
+            raise UsageError(name_frames(robot, str(exc))) from None
+        progress("envelope: no pose near the centre of the ranges holds it; the motion is planned about "
+                 "--start-pose")
     check_start_pose(robot, model, start_pose)
     if args.controller == "ur":
         controller_rate(args, robot)  # refused now, before any optimisation, when no rate is known
@@ -166,7 +177,7 @@ def run(args: argparse.Namespace) -> int:
             select=None if args.select is None else [s.strip() for s in args.select.split(",")],
             complement=complement, client=client, collision=collision, envelope=envelope,
             progress=sys.stderr)
-    _save(args, traj, robot, start_pose, model)
+    save_trajectory(args, traj, robot, start_pose, model)
     if args.json:
         traj.save_json(args.json)
     _report(args, robot, model, traj, described)
@@ -308,41 +319,6 @@ def _envelope(args: argparse.Namespace, robot: rx90sym.Robot) -> Any:
     return envelope
 
 
-def _save(args: argparse.Namespace, traj: Any, robot: rx90sym.Robot, start_pose: Any, model: Any) -> None:
-    """--out at 250 Hz, or at the controller's rate with its approach move and --program; every
-    check (approach and return paths, the controller's limits) passes before anything is written."""
-    if args.controller is None:
-        traj.save(args.out)
-        return
-    import numpy as np
-
-    from excitation import controller_export as ce, controller_programs as cp
-    from excitation.constraints import evaluate_torque
-    from excitation.envelope import path_violations
-
-    if start_pose is not None:  # the approach's path; the return (movej) retraces it
-        bad = path_violations(model, np.asarray(start_pose) - robot.controller_offsets, traj.start_position(),
-                              what="approach and return path from --start-pose")
-        if bad:
-            raise ValueError(f"{bad[0]}: choose another --start-pose")
-    rate = controller_rate(args, robot) if args.controller == "ur" else cp.FRANKA_RATE
-    controller = dataclasses.replace(ce.CONTROLLERS[args.controller], rate=rate)
-    t, q, qd, qdd = ce.controller_samples(traj, controller, model.limits, start_pose)
-    if args.controller == "franka":
-        tau = evaluate_torque(model, q - robot.controller_offsets, qd, qdd) if model.torque is not None else None
-        problems = cp.franka_check(q, tau, rate, qd)
-        if problems:
-            raise ValueError(f"Franka export refused: {problems[0]}")
-    if args.program is not None:
-        if args.controller == "ur":  # the approach and the return: done by movej
-            n_traj = len(traj.sample(rate, closed=True)[0])
-            n_lead = (len(q) - n_traj) // 2
-            cp.write_urscript(args.program, q[n_lead:n_lead + n_traj], rate, start_pose)
-        else:
-            cp.write_franka(args.program, q)
-    ce.write_samples(args.out, t, q, qd, qdd)
-
-
 def _payload(args: argparse.Namespace, robot: rx90sym.Robot, base: Any, chi: Any, noise: Any,
              collision: Any, start_pose: Any, envelope: Any, safe: tuple[Any, dict]) -> int:
     """--for payload: optimise, save, report the predicted sigma by methods 3 and 4 (safe: the
@@ -368,7 +344,7 @@ def _payload(args: argparse.Namespace, robot: rx90sym.Robot, base: Any, chi: Any
     if noise is None:
         noise = default_noise(robot.limits)
     sigma = payload_sigma(robot, base.regressor, traj, noise)
-    _save(args, traj, robot, start_pose, model)
+    save_trajectory(args, traj, robot, start_pose, model)
     _report(args, robot, model, traj, described)
     if args.json:
         write_json(args.json, {**traj.summary(), "payload_reference": str(payload),
@@ -398,17 +374,3 @@ def _client(args: argparse.Namespace) -> Any:
 
     with dask_client(workers=args.workers, scheduler=args.scheduler) as client:
         yield client
-
-
-def controller_rate(args: argparse.Namespace, robot: rx90sym.Robot) -> float:
-    """The UR stream rate [Hz]: --controller-rate, else the robot file's [controller] rate_hz; a
-    robot of unknown controller (a URDF) exits 2 naming the two UR rates (never a guess)."""
-    from excitation import controller_programs as cp
-
-    if args.controller_rate is not None:
-        return float(args.controller_rate)
-    if robot.controller_rate is not None:
-        return float(robot.controller_rate)
-    rates = ", ".join(f"{r:g} Hz for {name}" for name, r in cp.UR_RATES.items())
-    raise UsageError(f"--controller ur: robot {robot.name!r} does not say its controller's rate ({rates}): "
-                     f"give --controller-rate")
