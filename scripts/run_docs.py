@@ -121,8 +121,8 @@ def run_shell(block: Block, folder: Path, env: dict[str, str]) -> tuple[bool, st
     except subprocess.TimeoutExpired:
         return False, "", f"timed out after {BLOCK_TIMEOUT_S:.0f} s"
     if done.returncode != 0:
-        tail = "\n".join((done.stdout + done.stderr).strip().splitlines()[-15:])
-        return False, done.stdout, f"exit status {done.returncode}:\n{tail}"
+        tail = done.stdout.strip().splitlines()[-5:] + done.stderr.strip().splitlines()[-10:]
+        return False, done.stdout, f"exit status {done.returncode}:\n" + "\n".join(tail)
     return True, done.stdout, ""
 
 
