@@ -141,6 +141,8 @@ def run_page(page: Path, blocks: list[Block], folder: Path, env: dict[str, str],
     folder.mkdir(parents=True)
     session: PythonSession | None = None
     outputs: list[tuple[Block, list[str]]] = []
+    text_read = page.read_text(encoding="utf-8")
+    blocks = read_blocks(page, text_read)  # as the page is now (it may have been edited since it was checked)
     name = page.relative_to(REPO) if page.is_relative_to(REPO) else page
     try:
         for block in blocks:
@@ -183,8 +185,11 @@ def run_page(page: Path, blocks: list[Block], folder: Path, env: dict[str, str],
                 if block.excerpt is not None:
                     output = block.excerpt.apply(output)
                 outputs.append((block, output))
-        if outputs:
-            lines = page.read_text(encoding="utf-8").split("\n")
+        if outputs and page.read_text(encoding="utf-8") != text_read:
+            failures.append(f"{name}: the page changed while its blocks ran: output not written back (run again)")
+            print(f"  FAIL  {failures[-1]}")
+        elif outputs:
+            lines = text_read.split("\n")
             for block, output in reversed(outputs):  # from the end: earlier blocks' lines stay where they were
                 lines = with_output(lines, block, output)
             page.write_text("\n".join(lines), encoding="utf-8")
