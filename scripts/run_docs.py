@@ -20,6 +20,7 @@ from __future__ import annotations
 import argparse
 import json
 import os
+import select
 import shutil
 import subprocess
 import sys
@@ -94,8 +95,15 @@ class PythonSession:
 
     def run(self, block: Block) -> tuple[bool, str]:
         code = "\n" * block.start + "\n" + block.body  # tracebacks name the page's own line numbers
-        self.process.stdin.write(json.dumps({"code": code, "file": str(block.page)}) + "\n")
-        self.process.stdin.flush()
+        try:
+            self.process.stdin.write(json.dumps({"code": code, "file": str(block.page)}) + "\n")
+            self.process.stdin.flush()
+        except (BrokenPipeError, ValueError):
+            return False, "the page's Python session had ended (an earlier block crashed or timed out)"
+        ready, _, _ = select.select([self.results], [], [], BLOCK_TIMEOUT_S)
+        if not ready:
+            self.process.kill()
+            return False, f"timed out after {BLOCK_TIMEOUT_S:.0f} s (the page's Python session was ended)"
         line = self.results.readline()
         if not line:
             return False, "the Python session ended (crashed or was killed)"
@@ -104,7 +112,10 @@ class PythonSession:
 
     def close(self) -> None:
         if self.process.poll() is None:
-            self.process.stdin.close()
+            try:
+                self.process.stdin.close()
+            except BrokenPipeError:
+                pass
             try:
                 self.process.wait(timeout=30)
             except subprocess.TimeoutExpired:
