@@ -170,7 +170,7 @@ def run_page(page: Path, blocks: list[Block], folder: Path, env: dict[str, str],
                 print(f"  slow  {label}: left to make docs")
                 continue
             if "../shared" in block.body and not (folder.parent / "shared").exists():
-                reason = f"shared data absent ({SHARED} not found)"
+                reason = "shared data absent (../shared not found)"
                 tally["skipped"] += 1
                 skips[reason] += 1
                 print(f"  skip  {label}: {reason}")
@@ -215,6 +215,7 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("pages", nargs="*", type=Path, help="markdown pages (default: README.md docs/*.md)")
     parser.add_argument("--all", action="store_true", help="also the blocks marked slow (make docs)")
     parser.add_argument("--update", action="store_true", help="write console blocks' output back (with --all)")
+    parser.add_argument("--shared", type=Path, default=SHARED, help="the shared data (default: ../shared of the checkout)")
     parser.add_argument("--keep", type=Path, help="run in this new folder and keep it (default: a temporary one)")
     args = parser.parse_args(argv)
     if args.update and not args.all:
@@ -227,8 +228,8 @@ def main(argv: list[str] | None = None) -> int:
         return 2
     root = Path(tempfile.mkdtemp(prefix="docs-")) if args.keep is None else args.keep
     root.mkdir(parents=True, exist_ok=True)
-    if SHARED.exists():
-        (root / "shared").symlink_to(SHARED)
+    if args.shared.exists():
+        (root / "shared").symlink_to(args.shared.resolve())
     env = environment(command_bin(root))
     tally: Counter = Counter()
     skips: Counter = Counter()

@@ -108,3 +108,17 @@ def test_console_output_written_back_with_its_excerpt(tmp_path):
     assert done.returncode == 0, done.stdout + done.stderr
     assert page.read_text() == ("before\n\n<!-- docs: excerpt ^b@2 ^e -->\n```console\n"
                                 "$ printf 'a\\nb\\nc\\nd\\ne\\nf\\n'\n...\nb\nc\n...\ne\n...\n```\n\nafter\n")
+
+
+def test_blocks_on_the_shared_data_skip_when_it_is_absent(tmp_path):
+    shared = tmp_path / "shared"
+    (shared / "data").mkdir(parents=True)
+    (shared / "data" / "log.csv").write_text("t,q1\n0,0.5\n")
+    page = tmp_path / "real.md"
+    page.write_text("```sh\nhead -1 ../shared/data/log.csv | grep -q t,q1\n```\n")
+    done = run_docs(str(page), "--shared", str(shared))
+    assert done.returncode == 0 and counts(done.stdout)["ran"] == 1, done.stdout + done.stderr
+    done = run_docs(str(page), "--shared", str(tmp_path / "absent"))
+    assert done.returncode == 0, done.stdout + done.stderr
+    assert counts(done.stdout) == {"ran": 0, "slow": 0, "skipped": 1, "failed": 0}
+    assert "shared data absent" in done.stdout
