@@ -51,6 +51,10 @@ _EXPORTS = {
     "payload": "identify.payloads.methods",
     "PayloadMonitor": "identify.monitor.payload",
     "PayloadResult": "identify.payloads.result",
+    # the model at work: external torques and contacts
+    "ContactMonitor": "identify.monitor.contact",
+    "ContactEvent": "identify.monitor.contact",
+    "monitor_log": "identify.monitor.log",
     "drive_gains": "identify.gains.drive_gains",
     # models out: URDF and MJCF with actuator terms
     "export_urdf": "identify.export.models",
@@ -86,6 +90,7 @@ _EXPORTS.update({
     "consistent_least_squares": "identify.estimation.consistency",
     "Bootstrap": "identify.fitting.record",
     "FitModel": "identify.fitting.file",
+    "Flag": "identify.fitting.plausibility",
     "grouping_relations": "identify.payloads.methods",
     "DriveGainsResult": "identify.gains.drive_gains",
 })

@@ -34,6 +34,8 @@ _EXPORTS = {
     "load_payload": "rx90sym.payloads",
     "payload_regressor_columns": "rx90sym.payloads",
     "default_parameters": "rx90sym.twin",
+    "momentum_regressors": "rx90sym.momentum",
+    "base_momentum_regressors": "rx90sym.momentum",
 }
 _SUBMODULES = ('datasets', 'twin')
 
@@ -44,7 +46,7 @@ __all__ = [
     "RobotFileError", "bundled_robots", "load_robot", "Spring", "bundled_payloads",
     "load_payload", "twin", "datasets", "add_payload", "payload_regressor_columns", "default_parameters",
     "pinocchio_model", "nominal_parameters", "UrdfChain", "UrdfError", "load_urdf", "urdf_parameters",
-    "write_urdf", "write_mjcf",
+    "write_urdf", "write_mjcf", "momentum_regressors", "base_momentum_regressors",
 ]
 
 lazy_package(__name__, _EXPORTS, _SUBMODULES)

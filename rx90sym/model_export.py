@@ -18,6 +18,7 @@ import numpy as np
 
 from .description import Robot
 from .parameters import LINK_PARAMETERS
+from .physical import body_problem, parameter_problems
 from .rigid_body import RigidBody, physical_problem
 
 _K = len(LINK_PARAMETERS)
@@ -25,9 +26,12 @@ COMPANION_FORMAT = "rx90sym-actuation/1"
 
 
 def companion_path(path: str | Path) -> Path:
-    """Where an exported model's companion goes: ``NAME.urdf`` / ``NAME.xml`` -> ``NAME.actuation.json``."""
+    """Where an exported model's companion goes, named per format so that the URDF and the MJCF
+    of one fit may share a name: ``NAME.urdf`` -> ``NAME.actuation.json``, any other (MJCF,
+    ``NAME.xml``) -> ``NAME.mjcf.actuation.json``."""
     path = Path(path)
-    return path.with_name(path.stem + ".actuation.json")
+    kind = "" if path.suffix.lower() == ".urdf" else ".mjcf"
+    return path.with_name(path.stem + kind + ".actuation.json")
 
 
 def write_model(path: str | Path, text: str, side: dict) -> list[Path]:
@@ -47,6 +51,26 @@ def parameter_vector(robot: Robot, params: Mapping[str, float] | Sequence[float]
     if chi.shape != (len(robot.parameter_names),):
         raise ValueError(f"params: expected {len(robot.parameter_names)} standard parameters of "
                          f"robot {robot.name!r}, got shape {chi.shape}")
+    return chi
+
+
+def checked_parameters(robot: Robot, params: Mapping[str, float] | Sequence[float]) -> np.ndarray:
+    """:func:`parameter_vector`, refused (ValueError naming every link and parameter) unless
+    physical: rx90sym.physical.parameter_problems at margin 0, the consistent fit's own check (it
+    checks its margin, so a consistent fit always passes). No exported file then holds a negative
+    armature, damping or frictionloss."""
+    from .urdf_carried import carried_bodies
+
+    chi = parameter_vector(robot, params)
+    labels, carried = None, carried_bodies(robot)
+    if robot.urdf is not None:
+        labels = {str(k + 1): f"parameters of link {k + 1} (URDF link {link!r})" for k, link in enumerate(robot.urdf.links)}
+        for body, (_, links) in carried.items():
+            labels[body] += f" minus the inertials of the links it carries {list(links)}"
+    problems = parameter_problems(robot.parameter_names, chi, labels=labels,
+                                  carried={body: p10 for body, (p10, _) in carried.items()})
+    if problems:
+        raise ValueError("; ".join(problems) + "; export the physically consistent fit (method consistent)")
     return chi
 
 
@@ -71,21 +95,24 @@ def joint_origin(robot: Robot, j: int) -> tuple[np.ndarray, np.ndarray]:
     return Rx @ Rz, np.array([robot.d[j], -sa * r, ca_ * r])
 
 
-def rpy(R: np.ndarray) -> tuple[float, float, float]:
-    """URDF roll, pitch, yaw (R = Rz(yaw) Ry(pitch) Rx(roll))."""
-    pitch = math.atan2(-R[2, 0], math.hypot(R[0, 0], R[1, 0]))
-    if math.hypot(R[0, 0], R[1, 0]) < 1e-12:  # gimbal lock: yaw 0
-        return math.atan2(-R[1, 2], R[1, 1]), pitch, 0.0
-    return math.atan2(R[2, 1], R[2, 2]), pitch, math.atan2(R[1, 0], R[0, 0])
-
-
 def quaternion(R: np.ndarray) -> np.ndarray:
-    """Unit quaternion (w, x, y, z) of a rotation matrix (MuJoCo's order)."""
-    w = math.sqrt(max(0.0, 1.0 + R[0, 0] + R[1, 1] + R[2, 2])) / 2
-    x = math.copysign(math.sqrt(max(0.0, 1.0 + R[0, 0] - R[1, 1] - R[2, 2])) / 2, R[2, 1] - R[1, 2])
-    y = math.copysign(math.sqrt(max(0.0, 1.0 - R[0, 0] + R[1, 1] - R[2, 2])) / 2, R[0, 2] - R[2, 0])
-    z = math.copysign(math.sqrt(max(0.0, 1.0 - R[0, 0] - R[1, 1] + R[2, 2])) / 2, R[1, 0] - R[0, 1])
-    q = np.array([w, x, y, z])
+    """Unit quaternion (w, x, y, z) of a rotation matrix (MuJoCo's order), w >= 0. Shepperd's
+    method: the largest of 1 + trace, 1 + 2 R_ii - trace chosen as pivot, so a half turn about
+    any axis (w = 0) keeps its axis's signs."""
+    R = np.asarray(R, dtype=float)
+    t = np.trace(R)
+    pivots = [1.0 + t, 1.0 + 2 * R[0, 0] - t, 1.0 + 2 * R[1, 1] - t, 1.0 + 2 * R[2, 2] - t]
+    k = int(np.argmax(pivots))
+    s = 2.0 * math.sqrt(max(pivots[k], 1e-300))
+    if k == 0:
+        q = np.array([s / 4, (R[2, 1] - R[1, 2]) / s, (R[0, 2] - R[2, 0]) / s, (R[1, 0] - R[0, 1]) / s])
+    elif k == 1:
+        q = np.array([(R[2, 1] - R[1, 2]) / s, s / 4, (R[0, 1] + R[1, 0]) / s, (R[0, 2] + R[2, 0]) / s])
+    elif k == 2:
+        q = np.array([(R[0, 2] - R[2, 0]) / s, (R[0, 1] + R[1, 0]) / s, s / 4, (R[1, 2] + R[2, 1]) / s])
+    else:
+        q = np.array([(R[1, 0] - R[0, 1]) / s, (R[0, 2] + R[2, 0]) / s, (R[1, 2] + R[2, 1]) / s, s / 4])
+    q = q if q[0] >= 0 else -q
     return q / np.linalg.norm(q)
 
 
@@ -126,8 +153,7 @@ def link_bodies(robot: Robot, chi: np.ndarray) -> list[RigidBody]:
     out = []
     for j in range(robot.n):
         body = RigidBody.from_vector(chi[_K * j:_K * j + 10])
-        massless = body.m == 0 and not np.any(body.h) and not np.any(body.J)
-        problem = None if massless else physical_problem(body)
+        problem = body_problem(chi[_K * j:_K * j + 10])
         if problem:
             raise ValueError(f"link {j + 1}: not a physical rigid body ({problem}); export the "
                              f"physically consistent fit (method consistent)")

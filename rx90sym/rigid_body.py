@@ -77,22 +77,44 @@ def _skew(v: np.ndarray) -> np.ndarray:
     return np.array([[0.0, -z, y], [z, 0.0, -x], [-y, x, 0.0]])
 
 
-def physical_problem(body: RigidBody, rel_tol: float = 1e-9) -> str | None:
-    """Why the body is not a physical rigid body (None if it is): mass > 0, principal moments
-    about the centre of mass >= 0 and satisfying the triangle inequalities (equivalently the
-    4x4 pseudo-inertia is positive semidefinite)."""
+#: The one tolerance of every physical check (physical_problem: a consistent fit after its solve,
+#: every export, a URDF's or a robot file's bodies): rounding only, relative to the body's size
+#: (1e-12 of its pseudo-inertia's largest eigenvalue, ~1e4 times the rounding of a frame change).
+#: A consistent fit's margin (rx90sym.physical.DEFAULT_MARGIN) is what keeps solver error out.
+PHYSICAL_RTOL = 1e-12
+
+
+def pseudo_inertia(body: RigidBody) -> np.ndarray:
+    """4x4 pseudo-inertia [[S, h], [h^T, m]], S = tr(J)/2 1 - J = the integral of x x^T dm
+    (Wensing, Kim & Slotine 2017, eq. 11): positive semidefinite iff the body is physical."""
+    out = np.empty((4, 4))
+    out[:3, :3] = 0.5 * np.trace(body.J) * np.eye(3) - body.J
+    out[:3, 3] = out[3, :3] = body.h
+    out[3, 3] = body.m
+    return out
+
+
+def physical_problem(body: RigidBody, margin: float = 0.0) -> str | None:
+    """Why the body is not a physical rigid body with ``margin`` (None if it is).
+
+    Physical with margin eps: the pseudo-inertia's smallest eigenvalue is >= eps (kg m^2 along the
+    spatial directions, kg along the mass: m >= eps, the second moment of the mass about the centre
+    of mass >= eps in every direction, so every principal moment of inertia and every triangle
+    slack I_a + I_b - I_c >= 2 eps), within PHYSICAL_RTOL. margin 0: mass > 0, principal moments
+    >= 0 obeying the triangle inequalities. The reason is given in those classical words."""
     if not (np.isfinite(body.m) and np.all(np.isfinite(body.h)) and np.all(np.isfinite(body.J))):
         return "non-finite inertial parameters"
+    lam = np.linalg.eigvalsh(pseudo_inertia(body))
+    if lam[0] >= margin - PHYSICAL_RTOL * max(abs(lam[0]), abs(lam[-1])) and body.m > 0:
+        return None
+    detail = f"pseudo-inertia eigenvalue {lam[0]:.3g}" + (f" < margin {margin:.3g}" if margin else "")
     if body.m <= 0:
         return f"mass {body.m:g} kg is not > 0"
     _, I = body.com_inertia()
-    moments = np.linalg.eigvalsh(I)
-    tol = rel_tol * max(float(np.abs(moments).max()), 1e-12)
-    if moments[0] < -tol:
-        return f"a principal moment of inertia about the centre of mass is negative ({moments[0]:g} kg m^2)"
-    a, b, c = moments
-    if a + b < c - tol:
+    a, b, c = np.linalg.eigvalsh(I)
+    if a < 0:
+        return f"a principal moment of inertia about the centre of mass is negative ({a:g} kg m^2; {detail})"
+    if a + b < c:
         return (f"principal moments {a:g}, {b:g}, {c:g} kg m^2 break the triangle inequality "
-                f"(no mass distribution has them)")
-    return None
-
+                f"(no mass distribution has them; {detail})")
+    return f"{detail} (mass {body.m:g} kg, principal moments {a:g}, {b:g}, {c:g} kg m^2)"

@@ -18,6 +18,7 @@ from .description import Coupling, Limits, Robot
 from .nominal_table import FLANGE_KEYS, NOMINAL_KEYS, NominalError, parse_flange, parse_nominal
 from .spring import SPRING_CONSTANTS, Spring, read_spring_table
 from .toml_lines import Lines, scan
+from .urdf_snap import SNAP_LENGTH_M, SNAP_RAD
 
 ROBOTS_DIR = Path(__file__).parent / "robots"
 JOINT_FIELDS = ("sigma", "alpha", "d", "theta", "r")
@@ -56,7 +57,8 @@ def bundled_robots() -> list[str]:
 
 def load_robot(name_or_path: str | Path = "rx90", offsets: bool = False,
                coulomb_sign: str | None = None, tip: str | None = None,
-               asymmetric_coulomb: Any = None, acceleration: Any = None) -> Robot:
+               asymmetric_coulomb: Any = None, acceleration: Any = None, snap: float = SNAP_RAD,
+               snap_length: float = SNAP_LENGTH_M) -> Robot:
     """Load a bundled robot by name ("rx90", "tx40", "ur10e", "panda": :func:`bundled_robots`), a robot
     file or a URDF (``*.urdf``) by path. A bundled name always means the bundled robot, even when
     the working directory holds a file of that name (give such a file as ``./rx90``).
@@ -68,6 +70,10 @@ def load_robot(name_or_path: str | Path = "rx90", offsets: bool = False,
         ``[friction] asymmetric_coulomb``); () for none.
     acceleration: for a URDF, the joint acceleration limits [rad/s^2 or m/s^2], one number or one
         per joint (a URDF has none; rx90sym.urdf.load_urdf).
+    snap [rad], snap_length [m]: for a URDF, joint origin angles this close to a multiple of pi/2
+        and lengths this close to 0 are made exact, every change listed in a warning; snap=0
+        turns both off (rx90sym.urdf_snap, docs/urdf.md). A robot file's angles are exact already:
+        other values than these defaults are refused for it.
     """
     path = Path(name_or_path)
     if path.suffix.lower() == ".urdf":
@@ -75,7 +81,10 @@ def load_robot(name_or_path: str | Path = "rx90", offsets: bool = False,
 
         if coulomb_sign is not None:
             raise RobotFileError(f"{path}: coulomb_sign given but a URDF robot has no coupling")
-        robot = load_urdf(path, tip=tip, acceleration=acceleration)
+        if snap == 0 and snap_length not in (0, SNAP_LENGTH_M):
+            raise RobotFileError(f"{path}: snap=0 turns snapping off, lengths included: snap_length="
+                                 f"{snap_length!r} would be ignored (give snap > 0 or no snap_length)")
+        robot = load_urdf(path, tip=tip, acceleration=acceleration, snap=snap, snap_length=snap_length)
         changes: dict[str, Any] = {"offsets": True} if offsets else {}
         if asymmetric_coulomb is not None:
             changes["asymmetric_coulomb"] = _joint_numbers(asymmetric_coulomb, robot.n,
@@ -83,6 +92,9 @@ def load_robot(name_or_path: str | Path = "rx90", offsets: bool = False,
         return robot.with_options(**changes) if changes else robot
     if tip is not None:
         raise RobotFileError(f"{path}: tip={tip!r} is for a URDF (*.urdf), not a robot file")
+    if (snap, snap_length) != (SNAP_RAD, SNAP_LENGTH_M):
+        raise RobotFileError(f"{path}: snap={snap!r}, snap_length={snap_length!r} are for a URDF (*.urdf): "
+                             f"a robot file's angles and lengths are exact already")
     if acceleration is not None:
         raise RobotFileError(f"{path}: acceleration limits given, but a robot file has its own "
                              f"([limits] acceleration_deg_s2); the option is for a URDF (*.urdf)")

@@ -26,7 +26,8 @@ import numpy as np
 from .description import GRAVITY, Limits, Robot, robot_from_table
 from .parameters import LINK_PARAMETERS
 from .rigid_body import RigidBody, physical_problem
-from .urdf_tree import MOVABLE, SNAP, UrdfError, UrdfTree, read_urdf
+from .urdf_snap import SNAP_LENGTH_M, SNAP_RAD
+from .urdf_tree import MOVABLE, UrdfError, UrdfTree, read_urdf
 
 # A URDF has no acceleration limits: these are used, with a warning, unless given.
 DEFAULT_ACCELERATION = {"revolute": 10.0, "prismatic": 2.0}  # rad/s^2, m/s^2
@@ -60,6 +61,16 @@ class UrdfChain:
     @property
     def path(self) -> str:
         return self.tree.path
+
+    @property
+    def snap(self) -> float:
+        """Angle tolerance [rad] the joint origins were snapped with (0: as written)."""
+        return self.tree.snap
+
+    @property
+    def snap_length(self) -> float:
+        """Length tolerance [m] the joint origins were snapped with (0: as written)."""
+        return self.tree.snap_length
 
 
 def zero_poses(tree: UrdfTree) -> dict[str, Pose]:
@@ -123,10 +134,12 @@ def khalil_frames(points: Sequence[np.ndarray], axes: Sequence[np.ndarray],
                 O = p1 + ((b * e - dd) / den) * u1
                 f = p2 + ((e - b * dd) / den) * u2
             v = f - O
-            if np.linalg.norm(v) > _EPS:
+            if np.linalg.norm(cross) >= 1e-9:
+                # skew or intersecting axes: the common normal is along u1 x u2, pointing to z_j+1
+                # (f - O is a difference of nearly equal points when the axes almost meet)
+                x = _unit(cross) if v @ cross >= 0 or np.linalg.norm(v) <= _EPS else -_unit(cross)
+            elif np.linalg.norm(v) > _EPS:
                 x = _unit(v)
-            elif np.linalg.norm(cross) >= 1e-9:
-                x = _unit(cross)  # intersecting axes
             else:
                 x = _perpendicular(z[j], xs[-1] if xs else None)  # coincident axes
             foot = f
@@ -183,15 +196,18 @@ def _check_table(path: str, rows: list, frames: Sequence[Pose], names: list[str]
 
 
 def load_urdf(path: str | Path, tip: str | None = None,
-              acceleration: float | Sequence[float] | None = None, snap: float = SNAP) -> Robot:
+              acceleration: float | Sequence[float] | None = None, snap: float = SNAP_RAD,
+              snap_length: float = SNAP_LENGTH_M) -> Robot:
     """Robot of the chain from the URDF root to link ``tip`` (default: the only leaf, if one).
 
     acceleration: joint acceleration limits [rad/s^2 or m/s^2] (a URDF has none); by default
-    DEFAULT_ACCELERATION with a warning. snap [rad]: joint origin angles this close to a right
-    angle are made exact (default 1e-9; 1e-5 for files writing 1.5708; the model then differs
-    from the file by that much). Raises UrdfError naming the file and the element.
+    DEFAULT_ACCELERATION with a warning. snap [rad], snap_length [m]: joint origin angles within
+    snap of a multiple of pi/2 and lengths within snap_length of 0 are made exact, each change
+    listed in one warning (rx90sym.urdf_snap, docs/urdf.md; 1.5708 written for pi/2 otherwise
+    leaves a near-singular model); snap=0 turns both off. Raises UrdfError naming the file and
+    the element, ValueError for a tolerance out of range.
     """
-    tree = read_urdf(path, snap)
+    tree = read_urdf(path, snap, snap_length)
     tip = _check_tip(tree, tip)
     chain = tree.path_from_root(tip)
     for j in chain:

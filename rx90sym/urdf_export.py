@@ -18,11 +18,13 @@ from typing import Mapping, Sequence
 import numpy as np
 
 from .description import Robot
-from .model_export import (companion, companion_path, joint_terms, link_bodies, parameter_vector,  # noqa: F401
-                           payload_body, write_model)
+from .model_export import (checked_parameters, companion, companion_path, joint_terms, link_bodies,  # noqa: F401
+                           parameter_vector, payload_body, write_model)
 from .parameters import LINK_PARAMETERS
-from .rigid_body import RigidBody, physical_problem
-from .urdf import relative_pose, zero_poses
+from .physical import body_problem
+from .rigid_body import RigidBody
+from .urdf import zero_poses
+from .urdf_carried import _children, carried_bodies  # noqa: F401  (carried_bodies: public here too)
 from .urdf_generate import dynamics_xml, generated_urdf, gravity_note, inertial_xml
 from .urdf_tree import UrdfError
 
@@ -45,9 +47,7 @@ def link_inertials(robot: Robot, params: Mapping[str, float] | Sequence[float]) 
             raise UrdfError(f"parameters of link {k + 1} (URDF link {link!r}): not a physical rigid "
                             f"body ({problem})")
         children = [c for c in chain.lumped[k] if c != link]
-        own = whole
-        for c in children:
-            own = own - chain.tree.inertials[c].expressed_in_parent(*relative_pose(poses[link], poses[c]))
+        own = whole - _children(chain, poses, k)
         problem = _problem(own)
         if problem is not None:
             raise UrdfError(f"URDF link {link!r}: the parameters of link {k + 1} minus the inertials "
@@ -58,10 +58,8 @@ def link_inertials(robot: Robot, params: Mapping[str, float] | Sequence[float]) 
 
 
 def _problem(body: RigidBody) -> str | None:
-    """physical_problem, except that a body with all parameters exactly 0 (massless) is allowed."""
-    if body.m == 0 and not np.any(body.h) and not np.any(body.J):
-        return None
-    return physical_problem(body)
+    """rx90sym.physical.body_problem (margin 0: a massless body is allowed)."""
+    return body_problem(body.vector())
 
 
 def write_urdf(robot: Robot, params: Mapping[str, float] | Sequence[float], path: str | Path,
@@ -82,7 +80,10 @@ def write_urdf(robot: Robot, params: Mapping[str, float] | Sequence[float], path
 def urdf_export(robot: Robot, params: Mapping[str, float] | Sequence[float], path: str | Path,
                 payload: Mapping[str, float] | None = None) -> tuple[str, dict]:
     """(URDF text, companion dict) that :func:`write_urdf` writes to ``path``; nothing written."""
-    chi = parameter_vector(robot, params)
+    try:
+        chi = checked_parameters(robot, params)
+    except ValueError as exc:
+        raise UrdfError(str(exc)) from None
     _, FV, FS = joint_terms(robot, chi)
     try:
         body = payload_body(robot, payload) if payload is not None else None

@@ -16,7 +16,8 @@ import math
 import numpy as np
 
 from .description import GRAVITY, Robot
-from .model_export import export_joint_names, fmt, joint_origin, limits_in_controller_angles, rpy
+from .model_export import export_joint_names, fmt, joint_origin, limits_in_controller_angles
+from .urdf_snap import matrix_rpy as rpy
 from .rigid_body import RigidBody
 
 # URDF requires effort and velocity on a revolute/prismatic <limit>: an unknown one is this.

@@ -14,14 +14,13 @@ from pathlib import Path
 import numpy as np
 
 from .rigid_body import RigidBody
+from .urdf_snap import SNAP_LENGTH_M, SNAP_RAD, change_line, check_tolerances, rpy_rotation, snap_origin
 
 MOVABLE = ("revolute", "continuous", "prismatic")
 JOINT_TYPES = MOVABLE + ("fixed", "floating", "planar")
-# URDF files write pi/2 with 10-12 digits (1.57079632679): rotation entries this close to 0 or
-# +-1 are made exact, so perpendicular and parallel axes are seen structurally. Files that write
-# 1.5708 (3.7e-6 off) need load_urdf(..., snap=1e-5): a warning says so.
+# Rotation entries this close to 0 or +-1 are made exact by rpy_matrix (the collision geometry's
+# frames). Joint origins are snapped by rx90sym.urdf_snap (tolerances snap, snap_length).
 SNAP = 1e-9
-NEAR_RIGHT_ANGLE = 1e-4
 
 
 class UrdfError(ValueError):
@@ -56,6 +55,9 @@ class UrdfTree:
     joints: dict[str, UrdfJoint]
     parent_joint: dict[str, str]        # child link -> joint
     root: str
+    snap: float = SNAP_RAD              # joint origin tolerances used [rad], [m] (rx90sym.urdf_snap)
+    snap_length: float = SNAP_LENGTH_M
+    snapped: tuple[str, ...] = ()       # the joint origins changed: 'joint NAME: written -> used'
 
     def children(self, link: str) -> list[UrdfJoint]:
         return [j for j in self.joints.values() if j.parent == link]
@@ -73,11 +75,7 @@ class UrdfTree:
 def rpy_matrix(r: float, p: float, y: float, snap: float = SNAP) -> np.ndarray:
     """URDF fixed-axis roll-pitch-yaw: R = Rz(y) Ry(p) Rx(r), entries within ``snap`` of 0, +-1
     made exact."""
-    cr, sr, cp, sp, cy, sy = math.cos(r), math.sin(r), math.cos(p), math.sin(p), math.cos(y), math.sin(y)
-    R = np.array([[cy * cp, cy * sp * sr - sy * cr, cy * sp * cr + sy * sr],
-                  [sy * cp, sy * sp * sr + cy * cr, sy * sp * cr - cy * sr],
-                  [-sp, cp * sr, cp * cr]])
-    return snap_rotation(R, snap)
+    return snap_rotation(rpy_rotation((r, p, y)), snap)
 
 
 def snap_rotation(R: np.ndarray, snap: float = SNAP) -> np.ndarray:
@@ -115,11 +113,6 @@ def _origin(elem: ET.Element, where: str, snap: float = SNAP) -> tuple[np.ndarra
     return rpy_matrix(*rpy, snap=snap), np.array(xyz)
 
 
-def _near_right_angle(R: np.ndarray) -> bool:
-    """Some entry close to, but not exactly, 0 or +-1 (an angle like 1.5708 for pi/2)."""
-    return any(np.any((np.abs(R - v) > 0) & (np.abs(R - v) < NEAR_RIGHT_ANGLE)) for v in (0.0, 1.0, -1.0))
-
-
 def _inertial(link: ET.Element, where: str) -> RigidBody | None:
     el = link.find("inertial")
     if el is None:
@@ -137,31 +130,40 @@ def _inertial(link: ET.Element, where: str) -> RigidBody | None:
     return RigidBody.from_com(m, c, R, I)
 
 
-def read_urdf(path: str | Path, snap: float = SNAP) -> UrdfTree:
+def read_urdf(path: str | Path, snap: float = SNAP_RAD, snap_length: float = SNAP_LENGTH_M) -> UrdfTree:
     """Parse and check a URDF: one root, a tree (no link with two parents, no loop), known links.
 
-    snap: joint origin rotation entries within it of 0, +-1 are made exact (see SNAP)."""
+    snap [rad], snap_length [m]: joint origin angles this close to a multiple of pi/2 and lengths
+    this close to 0 are made exact (rx90sym.urdf_snap; snap 0 turns both off); one warning lists
+    every change (joint, written, used)."""
+    check_tolerances(snap, snap_length)
+    if snap == 0:
+        snap_length = 0.0
     path = Path(path)
     text, root_el = _robot_element(path)
     links, inertials = _links(root_el, path)
     joints: dict[str, UrdfJoint] = {}
     parent_joint: dict[str, str] = {}
-    near: list[str] = []
+    changes: list[str] = []
+    would: list[str] = []  # snap 0: what the default tolerances would change
     for el in root_el.findall("joint"):
-        joint = _joint(el, path, links, joints, parent_joint, snap)
+        joint, change = _joint(el, path, links, joints, parent_joint, snap, snap_length)
         joints[joint.name] = joint
         parent_joint[joint.child] = joint.name
-        if _near_right_angle(joint.R):
-            near.append(joint.name)
+        (would if snap == 0 else changes).extend([change] if change else [])
     if not links:
         raise UrdfError(f"{path}: no <link>")
-    if near:
-        warnings.warn(f"{path}: the origin of joint(s) {near[:4]} is within {NEAR_RIGHT_ANGLE:g} rad of "
-                      f"a right angle but not at it (e.g. 1.5708 for pi/2): kept as written; pass "
-                      f"snap=1e-5 (or larger) to make such angles exact", stacklevel=3)
+    if changes:
+        warnings.warn(f"{path}: {len(changes)} joint origin(s) snapped to right angles (within {snap:g} rad) "
+                      f"and zero lengths (within {snap_length:g} m), written -> used: " + "; ".join(changes)
+                      + " (snap=0 in Python, --snap 0 on the command line, keeps them as written)", stacklevel=3)
+    if would:
+        warnings.warn(f"{path}: snapping off (snap=0): joint origins kept as written, {len(would)} of them "
+                      f"within {SNAP_RAD:g} rad of a right angle or {SNAP_LENGTH_M:g} m of zero: "
+                      + "; ".join(w.split(":")[0] for w in would), stacklevel=3)
     root = _single_root(path, links, joints, parent_joint)
     return UrdfTree(str(path), root_el.attrib.get("name", path.stem), text, tuple(links),
-                    inertials, joints, parent_joint, root)
+                    inertials, joints, parent_joint, root, snap, snap_length, tuple(changes))
 
 
 def _robot_element(path: Path) -> tuple[str, ET.Element]:
@@ -197,8 +199,9 @@ def _links(root_el: ET.Element, path: Path) -> tuple[list[str], dict[str, RigidB
 
 
 def _joint(el: ET.Element, path: Path, links: list[str], joints: dict[str, UrdfJoint],
-           parent_joint: dict[str, str], snap: float) -> UrdfJoint:
-    """One <joint>, checked against the links and the joints read before it."""
+           parent_joint: dict[str, str], snap: float, snap_length: float) -> tuple[UrdfJoint, str]:
+    """One <joint>, checked against the links and the joints read before it, and its origin's
+    change ('' if none; snap 0: what the default tolerances would change)."""
     name = el.attrib.get("name")
     where = f"{path}: joint {name!r}"
     if not name:
@@ -220,18 +223,22 @@ def _joint(el: ET.Element, path: Path, links: list[str], joints: dict[str, UrdfJ
     if child in parent_joint:
         raise UrdfError(f"{where}: link {child!r} is already the child of joint "
                         f"{parent_joint[child]!r}: the URDF has a loop (a URDF must be a tree)")
-    R, p = _origin(el, where, snap)
+    o = el.find("origin")
+    rpy, xyz = _floats(o, "rpy", 3, where, [0.0, 0.0, 0.0]), _floats(o, "xyz", 3, where, [0.0, 0.0, 0.0])
+    origin = snap_origin(rpy, xyz, snap, snap_length)
+    probe = origin if snap else snap_origin(rpy, xyz)
+    change = change_line(name, rpy, xyz, probe) if probe.changed else ""
     axis = np.array(_floats(el.find("axis"), "xyz", 3, where, [1.0, 0.0, 0.0]))
     norm = float(np.linalg.norm(axis))
     if jtype in MOVABLE and norm < 1e-12:
         raise UrdfError(f"{where}: <axis> has zero length")
     axis = axis / norm if norm > 0 else axis
     limit, dyn = el.find("limit"), el.find("dynamics")
-    return UrdfJoint(name, jtype, ends["parent"], child, R, p, axis,
+    return UrdfJoint(name, jtype, ends["parent"], child, origin.R, origin.p, axis,
                      _number(limit, "lower", where), _number(limit, "upper", where),
                      _number(limit, "effort", where), _number(limit, "velocity", where),
                      _number(dyn, "damping", where) or 0.0, _number(dyn, "friction", where) or 0.0,
-                     el.find("mimic") is not None)
+                     el.find("mimic") is not None), change
 
 
 def _single_root(path: Path, links: list[str], joints: dict[str, UrdfJoint], parent_joint: dict[str, str]) -> str:

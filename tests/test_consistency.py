@@ -382,7 +382,7 @@ def test_consistency_margin_answers_was_ols_consistent(arm: Arm) -> None:
     t_true, witness = consistency_margin(arm.beta, arm.K, arm.names)
     assert t_true > 0 and consistency_report(witness, arm.names).ok
     np.testing.assert_allclose(arm.K @ witness, arm.beta, atol=1e-8 * np.abs(arm.beta).max())
-    assert consistency_report(witness, arm.names, tol=-t_true / 2 * 0.99).ok  # margin t*/2 kept
+    assert consistency_report(witness, arm.names, margin=t_true / 2 * 0.99).ok  # margin t*/2 kept
 
     _, _, r, z, rss = arm.data(samples=400, noise=0.1, seed=0)
     assert consistency_margin(np.linalg.solve(r, z), arm.K, arm.names)[0] > 0
@@ -457,8 +457,9 @@ def test_external_check_failure_is_resolved_with_a_margin(arm: Arm, monkeypatch:
     _, _, r, z, rss = arm.data(samples=15, noise=5.0, seed=0)
     margins = _flaky_solve(monkeypatch, arm.names.index("IA3"), bad_calls=1)
     sol = consistent_least_squares(r, z, arm.K, arm.names, rss_outside=rss)
-    assert margins[0] == 0.0 and margins[1] == pytest.approx(10 * (1e-7 + 1e-9))
-    assert sol.retried and sol.epsilon == margins[1] and sol.report.ok
+    # Solved at ten times the default margin 1e-8, checked at 1e-8: IA3 = -1e-7 falls short by 1.1e-7.
+    assert margins[0] == pytest.approx(1e-7) and margins[1] == pytest.approx(1e-7 + 10 * (1e-7 + 1e-8))
+    assert sol.retried and sol.epsilon == margins[1] and sol.report.ok and sol.report.margin == 1e-8
     assert sol.standard["IA3"] >= margins[1] * (1 - 1e-6)
 
 

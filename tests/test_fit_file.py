@@ -43,9 +43,12 @@ def cli_fit(runs):
 
 @pytest.fixture(scope="module")
 def lib_fit(runs, rx90):
-    """``identify.fit`` with every default on the same file, bootstrapped as the command does."""
+    """``identify.fit`` with every default on the same file, bootstrapped and with its contact thresholds
+    (identify.monitor.thresholds) as the command does."""
+    from identify.monitor.thresholds import with_contact_thresholds
+
     rec = identify.read_recording(runs / "fit.csv", rx90)
-    return identify.fit(rx90, [rec]).bootstrapped(seed=0)
+    return with_contact_thresholds(identify.fit(rx90, [rec]).bootstrapped(seed=0), [rec])[0]
 
 
 def _without(d: dict, keys) -> dict:
@@ -55,6 +58,8 @@ def _without(d: dict, keys) -> dict:
         choice = {k: v for k, v in out["processing_choice"].items() if k != "seconds"}
         choice["candidates"] = [{k: v for k, v in c.items() if k != "seconds"} for c in choice["candidates"]]
         choice["chosen"] = {k: v for k, v in choice["chosen"].items() if k != "seconds"}
+        if choice.get("offset_candidate"):  # the chosen processing scored with torque offsets
+            choice["offset_candidate"] = {k: v for k, v in choice["offset_candidate"].items() if k != "seconds"}
         if "friction" in choice:  # the friction form's choice (identify.estimation.friction_choice)
             forms = {k: v for k, v in choice["friction"].items() if k != "seconds"}
             forms["candidates"] = [{k: v for k, v in c.items() if k != "seconds"} for c in forms["candidates"]]

@@ -401,13 +401,14 @@ def test_write_urdf_adds_an_inertial_to_a_link_that_had_none(tmp_path):
     assert _max_torque_error(robot, _rigid(robot, chi), _pinocchio_chain(tmp_path / "out.urdf", robot), 11) <= 1e-9
 
 
-def test_right_angles_written_with_five_digits_warn_and_snap_on_request(tmp_path):
+def test_right_angles_written_with_five_digits_are_snapped_by_default_and_kept_with_snap_0(tmp_path):
     text = (DATA / "ur10_robot.urdf").read_text().replace("1.57079632679", "1.5708")
     path = tmp_path / "short.urdf"
     path.write_text(text)
-    with pytest.warns(UserWarning, match="shoulder_lift_joint.*snap"):
-        raw = load_urdf(path, "tool0", acceleration=5.0)
-    snapped = _load(path, "tool0", snap=1e-5)
+    with pytest.warns(UserWarning, match="snapping off.*shoulder_lift_joint"):
+        raw = load_urdf(path, "tool0", acceleration=5.0, snap=0)
+    with pytest.warns(UserWarning, match="snapped.*'shoulder_lift_joint': rpy 0 1.5708 0 -> 0 pi/2 0"):
+        snapped = load_urdf(path, "tool0", acceleration=5.0)
     exact = _load(DATA / "ur10_robot.urdf", "tool0")
     gap = max(abs(math.remainder(a - b, 2 * math.pi)) for f in ("alpha", "d", "theta", "r")
               for a, b in zip(getattr(raw, f), getattr(exact, f)))

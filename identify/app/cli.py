@@ -28,14 +28,16 @@ def build_parser() -> argparse.ArgumentParser:
     return p
 
 
-# A value list that starts with a minus sign ("-1.5,0,..." or "-2:2,...") after an option.
-_NEGATIVE_LIST = re.compile(r"^-\.?\d.*[,:]")
+# A value list that starts with a minus sign ("-1.5,0,..." or "-2:2,...") after an option, or a
+# negative number in exponent form ("-1e-6": argparse reads it as an option).
+_NEGATIVE_LIST = re.compile(r"^-\.?\d(.*[,:]|[\d.]*[eE][-+]?\d+$)")
 
 
 def join_negative_values(argv: Sequence[str]) -> list[str]:
     """``--start-pose -1.5,0,...`` as ``--start-pose=-1.5,0,...``: argparse takes a plain negative
-    number as a value but reads a comma or colon list starting with '-' as an unknown option
-    ("expected one argument"), which refused every pose or range whose first value is negative."""
+    number as a value but reads a comma or colon list starting with '-' (or ``-1e-6``) as an
+    unknown option ("expected one argument"), which refused every pose or range whose first value
+    is negative, and hid the reason of a refused negative tolerance."""
     out: list[str] = []
     for arg in argv:
         before = out[-1] if out else ""

@@ -11,6 +11,7 @@ import numpy as np
 
 import rx90sym
 from identify.io.recordings import declared_robot
+from rx90sym.urdf_snap import MAX_SNAP_LENGTH_M, MAX_SNAP_RAD, SNAP_LENGTH_M, SNAP_RAD
 
 PROG = "rx90"
 
@@ -62,7 +63,8 @@ def load_robot(args: argparse.Namespace, offsets: bool = False, recordings: Sequ
             raise UsageError(f"the recordings name robot {spec!r}, which is not a bundled robot: give its "
                              f"file with --robot FILE.toml|FILE.urdf")
     robot = rx90sym.load_robot(spec, offsets=offsets, tip=getattr(args, "tip", None),
-                               acceleration=None if acceleration is None else floats(acceleration, "--acceleration"))
+                               acceleration=None if acceleration is None else floats(acceleration, "--acceleration"),
+                               **snap_options(args, spec))
     announce_robot(robot, "from --robot" if args.robot is not None else
                    "default" if getattr(args, "default_robot", None) is not None else "named by the recordings")
     return robot
@@ -181,6 +183,42 @@ def robot_option(sp: argparse.ArgumentParser, default: str | None = "rx90", sour
     sp.add_argument("--acceleration", metavar="A|A1,..,An",
                     help="with a URDF --robot: joint acceleration limits [rad/s^2; m/s^2 prismatic], one "
                          f"number or one per joint (a URDF has none; default {acceleration_default})")
+    sp.add_argument("--snap", type=snap_value("--snap", MAX_SNAP_RAD), metavar="RAD",
+                    help=f"with a URDF --robot: joint origin angles within RAD of a multiple of pi/2 are made "
+                         f"exact, each change printed (default {SNAP_RAD:g}: 1.57, 1.571, 1.5708 written for "
+                         f"pi/2; at most {MAX_SNAP_RAD:g}); 0 keeps the origins as written, lengths included")
+    sp.add_argument("--snap-length", type=snap_value("--snap-length", MAX_SNAP_LENGTH_M), metavar="M",
+                    help=f"with a URDF --robot: joint origin lengths within M of 0 are made 0 (default "
+                         f"{SNAP_LENGTH_M:g} m, at most {MAX_SNAP_LENGTH_M:g})")
+
+
+def snap_value(option: str, top: float) -> Any:
+    """argparse type of --snap / --snap-length: a number in [0, top] (exit 2 with the reason otherwise)."""
+    def parse(text: str) -> float:
+        try:
+            value = float(text)
+        except ValueError:
+            raise argparse.ArgumentTypeError(f"expected a number, got {text!r}") from None
+        if not 0 <= value <= top:  # also refuses nan
+            raise argparse.ArgumentTypeError(f"{text} is outside [0, {top:g}]"
+                                             + (" rad (0 turns snapping off)" if option == "--snap" else " m"))
+        return value
+    parse.__name__ = option  # argparse names the type in its messages
+    return parse
+
+
+def snap_options(args: argparse.Namespace, robot_spec: str) -> dict[str, float]:
+    """load_robot's snap= and snap_length= from --snap / --snap-length ({} when neither is given)."""
+    snap, length = getattr(args, "snap", None), getattr(args, "snap_length", None)
+    if snap is None and length is None:
+        return {}
+    if not str(robot_spec).lower().endswith(".urdf"):
+        raise UsageError(f"--snap and --snap-length are for a URDF --robot, not {robot_spec!r} (a robot "
+                         f"file's angles and lengths are exact)")
+    if snap == 0 and length is not None and length != 0:
+        raise UsageError("--snap 0 turns snapping off, lengths included: drop --snap-length or give --snap > 0")
+    out = {} if snap is None else {"snap": snap}
+    return out if length is None or snap == 0 else {**out, "snap_length": length}
 
 
 def read_recordings(paths: list[str], robot: rx90sym.Robot, convention: str | None, gains: Any) -> list:

@@ -22,6 +22,7 @@ HINTS = {
     "payload_mass_on_bound": "--mass, --mass-tol",
     "bodies_far_from_prior": "--robot, --gains",
     "consistent_cost_high": "--robot, --gains",
+    "rank_threshold": "--snap RAD for a URDF --robot",
 }
 
 

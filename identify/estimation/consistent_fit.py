@@ -99,6 +99,10 @@ def consistent_fit(robot: rx90sym.Robot, wls: IdentificationResult, base: Any, p
     if tuple(wls.names) != tuple(base.names):
         raise ValueError("consistent fit needs a result on the full base parameter set")
     prior_record = None
+    # A URDF link's lumped hand is written apart on export: the link minus it stays physical too.
+    from rx90sym.urdf_carried import carried_bodies
+
+    options.setdefault("carried", {body: p10 for body, (p10, _) in carried_bodies(robot).items()} or None)
     if physical_prior is not None:
         from identify.estimation.consistency.prior_fit import PRIOR_BUDGET, prior_fit
 

@@ -32,6 +32,9 @@ __all__ = ["SCHEMA_VERSION", "FitModel", "read_fit_file", "robot_file_hash", "to
 #: Version 2 files are still read (their fields mean the same in 3). 4: ``model.description`` embeds
 #: the robot description (:class:`~identify.fitting.embedded.EmbeddedRobot`) and ``model.robot_file``
 #: is absolute; versions 2 and 3 are still read (their robot from the recorded path or the name).
+#: Also in 4: ``baseline`` (the plain OLS baseline's parameters and figures, identify.fitting.baseline),
+#: ``model.offset_joints`` (torque offsets chosen per joint) and the processing choice's ``offsets``,
+#: ``offset_candidate`` and ``scored_against``; a file without them reads None.
 SCHEMA_VERSION = 4
 #: Older layouts read as they are.
 READABLE_VERSIONS = (2, 3, SCHEMA_VERSION)
@@ -61,11 +64,14 @@ class FitModel:
     offsets: torque offsets OFFj identified; spring: "default" | "none" | "identify" |
     "identify-k" | a table file; cutoff_hz (the one used, also when chosen on the data),
     decimate_to_hz (None: no decimation), rate_hz (achieved), delay_s: torque lag compensated;
-    tip: the tip link of a URDF robot (None otherwise); friction: the smooth friction form (one, or
+    tip: the tip link of a URDF robot (None otherwise); snap_rad [rad], snap_length_m [m]: the
+    tolerances its joint origins were snapped with (rx90sym.urdf_snap; reused when the robot is
+    rebuilt); friction: the smooth friction form (one, or
     a list of one per joint) and its velocity scales (null on a Coulomb joint;
     identify.estimation.separable.VelocityScales.to_json), the presliding travels; None: Coulomb;
     description: the robot description itself (EmbeddedRobot.to_json; None: a robot built in memory,
-    or a file of schema version 3 or older).
+    or a file of schema version 3 or older); offset_joints: the joints (1-based) the cross-validated
+    choice gave a torque offset OFFj (None: none; an older file reads None).
     """
 
     robot: str
@@ -86,6 +92,9 @@ class FitModel:
     tip: str | None = None
     friction: dict | None = None
     description: dict | None = None
+    snap_rad: float | None = None       # a URDF's joint origin tolerances (rx90sym.urdf_snap); None: not a
+    snap_length_m: float | None = None  # URDF, or a file written before snapping (read as 1e-9 rad, 0 m)
+    offset_joints: tuple[int, ...] | None = None
 
     @classmethod
     def of(cls, robot: rx90sym.Robot, **fields: Any) -> "FitModel":
@@ -95,10 +104,15 @@ class FitModel:
                    robot_file_sha256=robot_file_hash(robot), toolkit_version=toolkit_version(),
                    coulomb_sign=robot.coupling.coulomb_sign if robot.coupling is not None else None,
                    offsets=bool(robot.offsets),
-                   tip=robot.urdf.tip if getattr(robot, "urdf", None) is not None else None, **fields)
+                   tip=robot.urdf.tip if getattr(robot, "urdf", None) is not None else None,
+                   **_snap_of(robot), **fields)
 
     def to_json(self) -> dict[str, Any]:
-        return asdict(self)
+        d = asdict(self)
+        for key in ("rest", "offset_joints"):  # tuples written as the lists they read back as
+            if isinstance(d.get(key), tuple):
+                d[key] = list(d[key])
+        return d
 
     to_dict = to_json
 
@@ -112,6 +126,8 @@ class FitModel:
         values = {k: d[k] for k in names if k in d}
         if isinstance(values["rest"], list):  # one policy per joint
             values["rest"] = tuple(values["rest"])
+        if values.get("offset_joints") is not None:
+            values["offset_joints"] = tuple(int(j) for j in values["offset_joints"])
         return cls(**values)
 
     from_dict = from_json
@@ -162,6 +178,16 @@ def read_fit_file(path: str | Path) -> dict[str, Any]:
     return data
 
 
+#: How a fit file without snap tolerances (written before them) had its URDF read: rotation
+#: entries within 1e-9 of 0 or +-1 made exact, lengths as written.
+LEGACY_SNAP_RAD = 1e-9
+
+
+def _snap_of(robot: rx90sym.Robot) -> dict[str, float | None]:
+    urdf = getattr(robot, "urdf", None)
+    return {"snap_rad": urdf.snap, "snap_length_m": urdf.snap_length} if urdf is not None else {}
+
+
 def robot_of(model: FitModel, spec: str | None = None) -> rx90sym.Robot:
     """The robot the identification used, with its friction form, offsets and spring: rebuilt from
     the description embedded in the fit file (schema 4), else from its recorded file or name.
@@ -183,9 +209,12 @@ def _rebuilt(model: FitModel, spec: str | None, acceleration: Any) -> rx90sym.Ro
     if model.spring in ("identify", "identify-k"):
         raise ValueError(f"the identification identified its spring ({model.spring}): the robot cannot "
                          "be rebuilt with it yet; validate within the identification instead")
-    tip = model.tip if str(source).lower().endswith(".urdf") else None
-    robot = rx90sym.load_robot(source, offsets=model.offsets, tip=tip,
-                               **({"acceleration": list(acceleration)} if acceleration is not None and tip else {}))
+    urdf = str(source).lower().endswith(".urdf")
+    snap = ({"snap": model.snap_rad, "snap_length": model.snap_length_m} if model.snap_rad is not None
+            else {"snap": LEGACY_SNAP_RAD, "snap_length": 0.0}) if urdf else {}
+    if acceleration is not None and urdf:
+        snap["acceleration"] = list(acceleration)
+    robot = rx90sym.load_robot(source, offsets=model.offsets, tip=model.tip if urdf else None, **snap)
     if model.coulomb_sign is not None and robot.coupling is not None:
         robot = robot.with_options(coupling=rx90sym.Coupling(robot.coupling.joints, model.coulomb_sign))
     if model.spring == "none":

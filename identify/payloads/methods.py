@@ -24,8 +24,11 @@ import numpy as np
 
 import rx90sym
 from rx90sym.parameters import PAYLOAD_NAMES
+from rx90sym.physical import DEFAULT_MARGIN
+from rx90sym.rigid_body import RigidBody, physical_problem
 
 from identify.estimation.consistency import ConsistencyError, pseudo_inertia
+from identify.estimation.consistency.fit import SOLVE_FACTOR
 from identify.estimation.bootstrap import bootstrap_estimates, bootstrap_std
 from identify.estimation.least_squares import compress, solve_system, weighted_least_squares
 from identify.observation.processing import Processing
@@ -295,7 +298,9 @@ def _constrained(fit: IdentificationResult, mass: float | None, mass_tol: float)
     idx = [fit.names.index(n) for n in PAYLOAD_NAMES]
     scale = max(float(np.linalg.norm(system.z)), 1e-12)
     objective = cp.Minimize(cp.sum_squares(system.R @ x - system.z) / scale**2)
-    cons = [pseudo_inertia(x[idx]) >> 0]
+    # The consistent fit's margin (rx90sym.physical): asked for ten times, checked below, so that an
+    # export (physical_problem, margin 0) never refuses a constrained payload for solver error.
+    cons = [pseudo_inertia(x[idx]) >> SOLVE_FACTOR * DEFAULT_MARGIN * np.eye(4)]
     if mass is not None:
         if mass <= 0 or mass_tol < 0:
             raise ValueError(f"constrained payload: mass must be > 0 and mass_tol >= 0, got {mass}, {mass_tol}")
@@ -310,8 +315,8 @@ def _constrained(fit: IdentificationResult, mass: float | None, mass_tol: float)
         raise ConsistencyError(f"constrained payload: solver status {prob.status}", status=str(prob.status),
                                solver="CLARABEL")
     values = np.asarray(x.value)[idx]
-    # The cone is met to the solver's accuracy; project the tiny negative eigenvalue, if any, away.
-    if np.linalg.eigvalsh(pseudo_inertia(values)).min() < -1e-9:
-        raise ConsistencyError("constrained payload: solution fails the external PSD check",
+    problem = physical_problem(RigidBody.from_vector(values), DEFAULT_MARGIN)
+    if problem is not None:
+        raise ConsistencyError(f"constrained payload: solution fails the external check ({problem})",
                                status="inaccurate", solver="CLARABEL")
     return values

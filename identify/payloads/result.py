@@ -35,6 +35,21 @@ class PayloadResult:
     pairs: tuple[PairedRuns, ...] = field(default=(), repr=False)
     bootstrap_std: np.ndarray | None = None
 
+    @property
+    def std_headline(self) -> np.ndarray:
+        """The σ to quote: the larger of eq. 13's and the segment bootstrap's, per parameter (eq.
+        13 alone assumes white residuals; the bootstrap sees their colour)."""
+        return self.std if self.bootstrap_std is None else np.fmax(self.std, self.bootstrap_std)
+
+    def headline(self) -> str:
+        """The mass with ±1σ of :attr:`std_headline`, labelled (which σ it is)."""
+        i = self.names.index("Mc")
+        if self.constrained:
+            return f"Mc = {self.values[i]:.4g} kg (constrained: no σ of its own)"
+        which = ("eq. 13" if self.bootstrap_std is None or not self.bootstrap_std[i] > self.std[i]
+                 else "segment bootstrap")
+        return f"Mc = {self.values[i]:.4g} ± {self.std_headline[i]:.2g} kg (±1σ, the larger of eq. 13's and the bootstrap's: {which})"
+
     def __getitem__(self, name: str) -> float:
         return float(self.values[self.names.index(name)])
 
@@ -44,9 +59,10 @@ class PayloadResult:
     def to_dict(self) -> dict[str, Any]:
         return {"method": self.method, "constrained": self.constrained,
                 "payload": [{"name": n, "value": json_number(v), "std": json_number(s), "rel_std_pct": json_number(p),
-                             "bootstrap_std": None if self.bootstrap_std is None else json_number(b)}
-                            for n, v, s, p, b in zip(self.names, self.values, self.std, self.rel_std_pct,
-                                                     self._boot())],
+                             "bootstrap_std": None if self.bootstrap_std is None else json_number(b),
+                             "std_headline": json_number(h)}
+                            for n, v, s, p, b, h in zip(self.names, self.values, self.std, self.rel_std_pct,
+                                                        self._boot(), self.std_headline)],
                 "a_priori": self.a_priori,
                 # The robot's base parameters identified with the payload (methods 2 and 4).
                 "robot": None if self.robot is None else self.robot.to_dict(),

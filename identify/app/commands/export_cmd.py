@@ -11,12 +11,13 @@ from __future__ import annotations
 
 import argparse
 import json
+from pathlib import Path
 from typing import Any
 
 from rx90sym.files import atomic_write, read_json
 from rx90sym.flange_payload import FlangePayload, controller_family, franka_load, ur_script
 from rx90sym.mjcf_export import mjcf_export
-from rx90sym.model_export import companion_path, write_model
+from rx90sym.model_export import write_model
 from rx90sym.urdf_export import urdf_export
 
 from ..common import UsageError, check_output, progress
@@ -32,7 +33,7 @@ def register(sub: Any) -> None:
     sp.add_argument("--robot", help="with ID.json: the robot (default: the one the fit records; another "
                                     "robot is refused)")
     sp.add_argument("--urdf", metavar="OUT.urdf", help="URDF (and OUT.actuation.json beside it)")
-    sp.add_argument("--mjcf", metavar="OUT.xml", help="MJCF for MuJoCo (and OUT.actuation.json beside it)")
+    sp.add_argument("--mjcf", metavar="OUT.xml", help="MJCF for MuJoCo (and OUT.mjcf.actuation.json beside it)")
     sp.add_argument("--payload", metavar="PAYLOAD.json", help="with --urdf/--mjcf: add this payload (rx90 "
                                                               "payload --json) as a body on the flange")
     sp.add_argument("--ur", metavar="OUT.script", help="from PAYLOAD.json: URScript set_target_payload line")
@@ -57,9 +58,8 @@ def run(args: argparse.Namespace) -> int:
         raise UsageError("nothing to export: give --urdf, --mjcf (from a fit) or --ur, --franka (from a payload)")
     for out in outputs:
         check_output(out)
-    if args.urdf and args.mjcf and companion_path(args.urdf) == companion_path(args.mjcf):
-        raise UsageError(f"--urdf {args.urdf} and --mjcf {args.mjcf} would share the companion "
-                         f"{companion_path(args.urdf)}: give them different names")
+    if args.urdf and args.mjcf and Path(args.urdf).resolve() == Path(args.mjcf).resolve():
+        raise UsageError(f"--urdf and --mjcf name the same file {args.urdf}: give them different names")
     data = _read(args.input)
     if is_payload_file(data):
         return _payload(args, data)

@@ -19,7 +19,7 @@ from identify.observation.processing import (DEFAULT_MIN_VELOCITY, DEFAULT_REST,
 from identify.io.blocks import DEFAULT_BLOCK
 from identify.fitting.plausibility import estimate_flags, prior_flags, residual_flags, static_gravity_flags, torque_scale_flags
 
-from ..flags import flag_lines, given_gain_flags, settle
+from ..flags import flag_lines, given_gain_flags, settle, with_hint
 from ..common import (UsageError, check_output, convention_option, progress, read_recordings, robot_option,
                       robot_with_spring, spring_options)
 
@@ -224,7 +224,9 @@ def run(args: argparse.Namespace) -> int:
         result = fit(robot, recs, processing_of(args, sb is None), args.method, base=sb, gains=gains,
                      convention=args.convention, spring_source=args.spring, **options)
     result = result.bootstrapped(args.bootstrap_seed)
-    result = result.with_flags([*flags, *_fit_flags(result, args.method, prior)])
+    for f in result.flags:  # the fit's own errors (a rank that depends on the threshold): fitted, never silent
+        progress(f"error: {with_hint(f)}")
+    result = result.with_flags([*result.flags, *flags, *_fit_flags(result, args.method, prior)])
     if args.essential:
         result = result.with_essential()
     if val_rec is not None:
@@ -233,6 +235,11 @@ def run(args: argparse.Namespace) -> int:
             progress(f"warning: {result.validation.still_message()}")
     _print_fit(result, recs, args.delay == "auto", prior)
     if args.json:
+        from identify.monitor.thresholds import with_contact_thresholds
+
+        result, why = with_contact_thresholds(result, [val_rec] if val_rec is not None else (recs or args.recordings))
+        if why:
+            progress(f"contact thresholds not stored ({why}): rx90 monitor will need --calibrate")
         result.save(args.json)
     if args.report:
         _write_report(args.report, result, recs) if recs else _write_long_report(args, result)

@@ -87,11 +87,13 @@ def run(args: argparse.Namespace) -> int:
                   a_priori=args.a_priori, constrained=args.constrained, mass=args.mass,
                   mass_tol=args.mass_tol if args.mass_tol is not None else 0.05,
                   position_tol=args.position_tol if args.position_tol is not None else POSITION_TOLERANCE)
-    std = res.std if res.bootstrap_std is None else np.fmax(res.std, res.bootstrap_std)
+    std = res.std_headline
     flags += settle(_unconstrained_mass_flags(res, std) + payload_flags(res.names, res.values, std))
     if args.constrained and args.mass is not None:
         flags += settle(mass_bound_flags(res["Mc"], args.mass, args.mass_tol if args.mass_tol is not None else 0.05))
     print(res.table())
+    if "Mc" in res.names:
+        print(res.headline())
     if flags:
         print(flag_lines(flags))
     spring = robot.spring.describe() if robot.spring is not None else None

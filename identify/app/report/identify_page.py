@@ -5,6 +5,7 @@ from pathlib import Path
 from typing import Any, Mapping, Sequence
 
 from identify.observation.processing import rest_label
+from identify.fitting.rank_flags import has_rank_flag
 
 from .cells import fixed, fmt, number
 from .page import Column, Figure, Page, Section, Summary, Table, Text
@@ -50,7 +51,8 @@ def _flags(record: Mapping[str, Any], data: Mapping[str, Any] | None) -> list[di
                           "end of this one cut off with rx90 convert --rows)"))
     params = record.get("parameters") or []
     flags += parameter_flags([p["name"] for p in params], [p.get("rel_std_pct") for p in params],
-                             record.get("bootstrap_std"), [p.get("std") for p in params], record.get("cond"))
+                             record.get("bootstrap_std"), [p.get("std") for p in params], record.get("cond"),
+                             model_cause=has_rank_flag(record.get("flags") or ()))
     flags += split_flags(data)
     if record.get("method") == "consistent" and not record.get("prior"):
         flags.append(flag("arbitrary-split", "warning", "no prior: how the links share what the data cannot see is "
@@ -229,7 +231,9 @@ def processing_table(record: Mapping[str, Any]) -> Any:
              ("Angle convention of the files", "", m.get("convention") or "the file's own (default: controller)"),
              ("Friction: coupled Coulomb form", "", m.get("coulomb_sign") or "not coupled"),
              ("Friction form per joint", "", _friction_text(m.get("friction"))),
-             ("Torque offsets", "", bool(m.get("offsets"))),
+             ("Torque offsets", "", "every joint (robot option)" if m.get("offsets") else
+              "joints " + ", ".join(map(str, m["offset_joints"])) + " (cross-validated)" if m.get("offset_joints")
+              else "none"),
              ("Spring", "", m.get("spring") or "none"),
              ("Rest threshold", "rad/s", m.get("min_velocity") if m.get("min_velocity") is not None else "off"),
              ("Rest samples", "", rest_label(m["rest"]) if m.get("rest") else "–"),

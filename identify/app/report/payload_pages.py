@@ -47,11 +47,15 @@ def payload_page(record: Mapping[str, Any], figures: Sequence[Figure] = ()) -> P
     if record.get("constrained"):
         # A constrained estimate has no σ of its own: eq. 13's and the bootstrap's belong to the
         # unconstrained fit, so the page shows none (as the command line does).
-        payload = [dict(p, std=None, rel_std_pct=None, bootstrap_std=None) for p in payload]
+        payload = [dict(p, std=None, rel_std_pct=None, bootstrap_std=None, std_headline=None) for p in payload]
     params = {p["name"]: p for p in payload}
     a_priori = record.get("a_priori") or None
     mass = number(params.get("Mc", {}).get("value"))
-    std = number(params.get("Mc", {}).get("std"))
+    mc = params.get("Mc", {})
+    # ±1σ of the larger of eq. 13's and the bootstrap's (files before std_headline: eq. 13's)
+    std = number(mc.get("std_headline", mc.get("std")))
+    label = ("" if std is None else " (±1σ, bootstrap)" if number(mc.get("bootstrap_std")) is not None
+             and number(mc.get("bootstrap_std")) >= number(mc.get("std") or 0) else " (±1σ, eq. 13)")
     prior = number(record.get("mass")) or (number(a_priori.get("Mc")) if a_priori else None)
     flags = _payload_flags(record, mass, std, prior)
     com = [None if not mass else (number(params.get(f"M{a}c", {}).get("value")) or 0) / mass for a in "XYZ"]
@@ -62,7 +66,7 @@ def payload_page(record: Mapping[str, Any], figures: Sequence[Figure] = ()) -> P
                   (Column("quantity", text=True), Column("unit", text=True), Column("a priori"),
                    Column("identified"), Column("σ", digits=3)), tuple(rows))
     spread = f" ± {fmt(std, 2)}" if std is not None else ""
-    headline = (f"Payload mass {fmt(mass)}{spread} kg" + (" (constrained: no σ of its own)" if record.get("constrained")
+    headline = (f"Payload mass {fmt(mass)}{spread} kg{label}" + (" (constrained: no σ of its own)" if record.get("constrained")
                                                           else "") + (f" (a priori {fmt(prior)} kg)" if prior else "")
                 + ("; see the flags." if any(f["severity"] in ("error", "warning") for f in flags) else "."))
     facts = [("Robot", str(record.get("robot_name", ""))),

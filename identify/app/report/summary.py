@@ -101,15 +101,19 @@ def heldout_flags(validation: Mapping[str, Any]) -> list[dict]:
 
 
 def parameter_flags(names: Sequence[str], rel_std_pct: Sequence[Any], boot: Sequence[Any] | None,
-                    std: Sequence[Any], cond: Any) -> list[dict]:
-    """Weakly identified parameters, coloured residuals (bootstrap σ ≫ eq. 13), a poor cond(W)."""
+                    std: Sequence[Any], cond: Any, model_cause: bool = False) -> list[dict]:
+    """Weakly identified parameters, coloured residuals (bootstrap σ ≫ eq. 13), a poor cond(W).
+    model_cause: the fit's rank depends on the rank threshold (its error flag): weak parameters
+    and a poor cond(W) come from the model's geometry, and the motion is not blamed."""
     out = []
     weak = [n for n, p in zip(names, rel_std_pct) if number(p) is None or number(p) > WEAK_REL_STD_PCT]
     if weak:
         out.append(flag("weak-parameters", "info", f"{len(weak)} of {len(names)} parameters have σr > "
                         f"{WEAK_REL_STD_PCT:g} % (weakly identified): {', '.join(weak[:8])}"
                         + (" …" if len(weak) > 8 else ""),
-                        "use --essential for a model without them, or excite them more (rx90 excite)"))
+                        "use --essential for a model without them" + (
+                            ", and make the model's geometry exact (see the rank error)" if model_cause
+                            else ", or excite them more (rx90 excite)")))
     if boot:
         ratios = sorted(b / s for b, s in zip(map(number, boot), map(number, std)) if b and s)
         if ratios and ratios[len(ratios) // 2] > COLOURED_RATIO:
@@ -119,5 +123,7 @@ def parameter_flags(names: Sequence[str], rel_std_pct: Sequence[Any], boot: Sequ
     c = number(cond)
     if c is not None and c > COND_CHECK:
         out.append(flag("cond", "warning", f"cond(W) = {c:.3g} (above {COND_CHECK:.0e})",
+                        "the model's geometry makes some columns almost dependent (see the rank error): no "
+                        "motion fixes it" if model_cause else
                         "the motion excites some parameters little: optimise one (rx90 excite)"))
     return out

@@ -1,6 +1,7 @@
 """Physically consistent least squares (paper eqs. 9-10 under the pseudo-inertia LMIs): build,
-solve, check the solution outside the solver, and re-solve with a margin when the solver stopped
-a hair outside the cone. The problem itself is :mod:`.problem`.
+solve with ten times the margin, check the solution outside the solver against the margin (the check
+of every export, rx90sym.physical), and re-solve with a larger margin when the solver's error ate
+it. The problem itself is :mod:`.problem`.
 """
 from __future__ import annotations
 
@@ -9,6 +10,8 @@ from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
+
+from rx90sym.physical import DEFAULT_MARGIN
 
 from identify.estimation.consistency.lmi import ConsistencyReport, consistency_report
 from identify.estimation.consistency.problem import (DEFAULT_SOLVER_OPTIONS, NULL_SPACE_WEIGHT, SOLVERS, ComBoxes, ConsistencyError,
@@ -20,9 +23,14 @@ if TYPE_CHECKING:  # prior.py imports this package's lmi: only for the annotatio
 
 __all__ = ["ConsistentSolution", "consistent_least_squares"]
 
-# Relative size of the automatic PSD/non-negativity margin used when a first solve comes back
-# a hair outside the cone (interior-point feasibility tolerance is ~1e-8 relative).
+# The solver is asked for SOLVE_FACTOR times the margin it is checked against (rx90sym.physical):
+# room for its feasibility error (measured up to 4e-8 in SI units on 4 s twins; the default margin
+# is 1e-8). With 2: every short UR10e twin re-solved once (solve time x2); with 10: none.
+SOLVE_FACTOR = 10.0
+# When the check still fails, the solve's margin grows by 10x, then 100x the shortfall (at least
+# the solver's error, 1e-9): the next solve lands at least that far inside.
 _RETRY_MARGIN_FACTOR = 10.0
+_SOLVER_ERROR = 1e-9
 _RETRY_ATTEMPTS = 3  # solves in all: the requested one and at most two tightened ones
 
 
@@ -42,11 +50,12 @@ class ConsistentSolution:
         status: cvxpy status (always ``"optimal"``: anything else raises).
         solve_time: wall time of the solve, cvxpy canonicalisation included (s).
         iterations: solver iterations (last solve).
-        epsilon: margin imposed in the returned solve (≥ the requested ``epsilon``; larger when
-            the automatic retry was needed, see :func:`consistent_least_squares`).
+        epsilon: margin imposed in the returned solve (``SOLVE_FACTOR`` × the checked margin,
+            more when the automatic retry was needed, see :func:`consistent_least_squares`).
         retried: whether the automatic margin retry was used.
         rows: number of equations behind (R, z), when given.
-        report: :func:`consistency_report` of ``chi`` (always ``ok``).
+        report: :func:`consistency_report` of ``chi`` at the requested margin (always ``ok``:
+            every pseudo-inertia eigenvalue and prefixed parameter ≥ ``report.margin``).
     """
 
     names: tuple[str, ...]
@@ -82,18 +91,18 @@ def consistent_least_squares(
     mass_bounds: MassBounds | None = None,
     total_mass: Interval | None = None,
     com_boxes: ComBoxes | None = None,
-    epsilon: float = 0.0,
+    epsilon: float = DEFAULT_MARGIN,
     solver: str = "CLARABEL",
     nonnegative: Sequence[str] = ("IA", "FV", "FS"),
     solver_options: Mapping[str, Any] | None = None,
-    tol: float = 1e-9,
     null_space_weight: float = NULL_SPACE_WEIGHT,
     physical_prior: PhysicalPrior | None = None,
+    carried: Mapping[str, np.ndarray] | None = None,
 ) -> ConsistentSolution:
     """Physically consistent least squares over the standard parameters.
 
     Solves ``min ‖R K χ − z‖² (+ prior_weight·‖χ_P − χ_prior‖²)`` subject to every body's
-    pseudo-inertia ``⪰ epsilon·1`` and the options below, where (R, z) is the QR-compressed
+    pseudo-inertia ``⪰ epsilon·1`` (checked after the solve) and the options below, where (R, z) is the QR-compressed
     weighted base-parameter system (``W = Q R``, ``z = Qᵀ Y``, ``rss_outside = ‖Y‖² − ‖z‖²``),
     so the conic problem has the size of the base parameters, not of the data.
 
@@ -115,14 +124,15 @@ def consistent_least_squares(
         total_mass: ``(lo, hi)`` in kg on the sum of the *link* masses (payload excluded).
         com_boxes: ``{link: (lo3, hi3)}`` box on the centre of mass in frame j (m), imposed as
             ``M·lo ≤ (MX, MY, MZ) ≤ M·hi``; ±inf for an open side.
-        epsilon: margin: ``J ⪰ ε·1`` and prefixed parameters ``≥ ε`` (ε > 0 gives strict
-            consistency).
+        epsilon: margin ε: ``J ⪰ ε·1`` and prefixed parameters ``≥ ε`` in the returned χ
+            (default rx90sym.physical.DEFAULT_MARGIN, 1e-8 SI, absolute: its docstring says
+            why; what every export then accepts without a tolerance argument). 0: physical
+            only, to rounding (an MJCF export may then refuse a near-massless link).
         solver: ``"CLARABEL"`` (default, interior point) or ``"SCS"`` (first order; run here with
             1e-7 tolerances and up to 1e5 iterations unless ``solver_options`` says otherwise;
             slower, and usually needs the margin retry below).
         nonnegative: name prefixes forced ``≥ epsilon`` (prefix rule, module docstring).
         solver_options: extra keyword arguments for ``cvxpy.Problem.solve``.
-        tol: tolerance of the external :func:`consistency_report` check.
         null_space_weight: δ, weight of the tie-break ``δ·s_n²·‖Nᵀ(χ − χ_ref)‖²`` on the
             components ν of χ in the null space of K (χ_ref = prior values, 0 elsewhere), in
             residuals per SI unit². It picks one bounded χ among the many with the same β and
@@ -131,6 +141,9 @@ def consistent_least_squares(
         physical_prior: a :class:`identify.estimation.consistency.prior.PhysicalPrior`: its
             bounds (bounding ellipsoids, mass floors, rotor-inertia ratios) are imposed too; the
             choice of the unseen directions is :func:`identify.estimation.consistency.prior_fit.prior_fit`.
+        carried: ``{body: XX..M}`` (body "1".."n") a link carries that an export writes apart (a
+            URDF link's lumped hand and fingers: rx90sym.urdf_export.carried_bodies): the link
+            minus it is held physical with the margin, so the export never refuses it.
 
     Returns:
         :class:`ConsistentSolution` whose ``report.ok`` is always True.
@@ -141,13 +154,14 @@ def consistent_least_squares(
         ValueError: malformed input (shapes, names, bounds).
 
     Solver-tolerance handling: interior-point solvers meet the cone constraints only to their
-    feasibility tolerance (~1e-8 relative), so a solution on the boundary (the usual case when
-    the unconstrained estimate is inconsistent) can show a pseudo-inertia eigenvalue of, say,
-    −3e-9. The returned χ is always re-checked with :func:`consistency_report` (``tol``). If the
-    check fails, the problem is solved again with the margin (``J ⪰ ε·1``, prefixed parameters
-    ``≥ ε``) raised by ``10·(worst violation + tol)``, then if needed by 100× the new
-    violation; with Clarabel's tolerances that is ~1e-8, far below any physical resolution. If
-    the third solve still fails the check, :class:`ConsistencyError` (status
+    feasibility tolerance, so a solution on the boundary (the usual case when the unconstrained
+    estimate is inconsistent) comes back up to ~1e-9 outside (we saw pseudo-inertia eigenvalues
+    of −8e-10 and a rotor inertia of −2.7e-10 that exports then refused). The problem is
+    therefore solved with ``SOLVE_FACTOR``·ε (``J ⪰ 10ε·1``, prefixed parameters ``≥ 10ε``) and
+    the returned χ checked against ε with :func:`consistency_report` (rx90sym.physical: the
+    check of every export, one tolerance). If the check fails, the problem is solved again with
+    the solve's margin raised by ``10·max(shortfall, 1e-9)``, then if needed by 100× the new
+    shortfall. If the third solve still fails the check, :class:`ConsistencyError` (status
     ``"external_check_failed"``) is raised. ``solution.epsilon`` and ``solution.retried`` say
     what happened. User bounds (mass, total mass, CoM box) hold to the solver tolerance.
 
@@ -169,13 +183,15 @@ def consistent_least_squares(
         return build_consistent_problem(
             R, z, K, names, epsilon=margin, rss_outside=rss_outside, prior=prior, prior_weight=prior_weight,
             mass_bounds=mass_bounds, total_mass=total_mass, com_boxes=com_boxes, nonnegative=nonnegative,
-            null_space_weight=null_space_weight, physical_prior=physical_prior,
+            null_space_weight=null_space_weight, physical_prior=physical_prior, carried=carried,
             # see build_consistent_problem: noise scaling for the interior-point solver, data
             # scaling for the first-order one (same minimiser).
             objective_scale="noise" if solver == "CLARABEL" else "data")
 
     options = {**DEFAULT_SOLVER_OPTIONS[solver], **(solver_options or {})}
-    solve = _solve_checked(build, epsilon, solver, options, names, tol, nonnegative)
+    if not (np.isfinite(epsilon) and epsilon >= 0.0):
+        raise ValueError(f"epsilon: must be finite and >= 0, got {epsilon!r}")
+    solve = _solve_checked(build, epsilon, solver, options, names, nonnegative, carried=carried)
     return _solution(solve, R, z, K, names, rss_outside, prior, prior_weight, solver, rows)
 
 
@@ -191,35 +207,40 @@ class _CheckedSolve:
     retried: bool
 
 
-def _worst_violation(report: ConsistencyReport) -> float:
-    """Largest violation of the external check: a negative eigenvalue or a negative parameter."""
-    return max([-b.min_eigenvalue for b in report.bodies] + [-v for _, v, _ in report.nonnegative] + [0.0])
+def _shortfall(report: ConsistencyReport) -> float:
+    """How far the solution is from the checked margin: the largest margin − eigenvalue or
+    margin − prefixed parameter (≤ 0 when every one is above the margin)."""
+    return max([report.margin - b.min_eigenvalue for b in report.bodies]
+               + [report.margin - v for _, v, _ in report.nonnegative] + [0.0])
 
 
-def _solve_checked(build: Callable[[float], ConsistentProblem], epsilon: float, solver: str,
-                   options: Mapping[str, Any], names: tuple[str, ...], tol: float,
-                   nonnegative: Sequence[str]) -> _CheckedSolve:
-    """Solve, check externally, and re-solve with a larger margin while the check fails
-    (at most ``_RETRY_ATTEMPTS`` solves; see consistent_least_squares)."""
-    margin, retried = epsilon, False
-    built = build(margin)
+def _solve_checked(build: Callable[[float], ConsistentProblem], margin: float, solver: str,
+                   options: Mapping[str, Any], names: tuple[str, ...],
+                   nonnegative: Sequence[str], solve_margin: float | None = None,
+                   carried: Mapping[str, np.ndarray] | None = None) -> _CheckedSolve:
+    """Solve with ``solve_margin`` (default SOLVE_FACTOR × ``margin``), check against ``margin``,
+    and re-solve with a larger solve margin while the check fails (at most ``_RETRY_ATTEMPTS``
+    solves; see consistent_least_squares)."""
+    retried = False
+    solve_at = SOLVE_FACTOR * margin if solve_margin is None else max(solve_margin, margin)
+    built = build(solve_at)
     chi, elapsed, iters = solve_problem(built, solver, options)
-    report = consistency_report(chi, names, tol=tol, nonnegative=nonnegative)
+    report = consistency_report(chi, names, margin=margin, nonnegative=nonnegative, carried=carried)
     for attempt in range(1, _RETRY_ATTEMPTS):
         if report.ok:
             return _CheckedSolve(built, chi, elapsed, iters, report, retried)
-        # Tighten by 10×, 100× the violation: the next solve lands at least that far inside,
+        # Tighten by 10×, 100× the shortfall: the next solve lands at least that far inside,
         # unless the solver's own error grows with it (then the loop gives up and raises).
-        margin += _RETRY_MARGIN_FACTOR**attempt * (_worst_violation(report) + tol)
-        built = build(margin)
+        solve_at += _RETRY_MARGIN_FACTOR**attempt * max(_shortfall(report), _SOLVER_ERROR)
+        built = build(solve_at)
         chi, more_time, iters = solve_problem(built, solver, options)
         elapsed += more_time
         retried = True
-        report = consistency_report(chi, names, tol=tol, nonnegative=nonnegative)
+        report = consistency_report(chi, names, margin=margin, nonnegative=nonnegative, carried=carried)
     if not report.ok:
         raise ConsistencyError(
             f"consistent least squares: solver {solver} returned 'optimal' but the solution fails the "
-            f"external consistency check (tol {tol:.0e}) even with margin {margin:.1e}: "
+            f"external consistency check (margin {margin:.1e}) even when solved with margin {solve_at:.1e}: "
             f"{'; '.join(report.violations())}",
             status="external_check_failed",
             solver=solver,

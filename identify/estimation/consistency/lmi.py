@@ -19,14 +19,14 @@ Pseudo-inertia (Wensing et al. 2017, eq. 11)::
 ``m ≥ 0``, inertia about the centre of mass PSD *and* its principal moments obeying the
 triangle inequalities. ``J ≻ 0`` ⇔ strictly consistent.
 
-Non-negativity rule (documented once, used by the check and the fits): a parameter is
-required to be ``≥ 0`` when its name *starts with* one of the given prefixes, default
-``("IA", "FV", "FS")``. ``FVM6`` and ``FSM6`` therefore fall under ``FV`` and ``FS``; offsets
-``OFFj`` and all inertial names are not affected (no inertial name starts with these prefixes).
+Non-negativity rule and the check itself (one function with one tolerance, shared with every
+export): :mod:`rx90sym.physical`. A parameter is required to be ``≥ 0`` (``≥ margin``) when its
+name *starts with* one of the given prefixes, default ``("IA", "FV", "FS")``. ``FVM6`` and
+``FSM6`` therefore fall under ``FV`` and ``FS``; offsets ``OFFj`` and all inertial names are not
+affected (no inertial name starts with these prefixes).
 """
 from __future__ import annotations
 
-import re
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any
@@ -34,15 +34,11 @@ from typing import Any
 import cvxpy as cp
 import numpy as np
 
+from rx90sym.physical import (INERTIAL_FIELDS, NONNEGATIVE, body_indices, body_problem,  # noqa: F401 (re-exported)
+                             nonnegative_indices, parameter_problems)
+
 __all__ = ["INERTIAL_FIELDS", "BodyConsistency", "ConsistencyReport", "body_indices",
            "consistency_report", "nonnegative_indices", "pseudo_inertia"]
-
-#: The ten inertial entries of one body, in the order of eq. 4 (and of the payload XXc..Mc).
-INERTIAL_FIELDS: tuple[str, ...] = ("XX", "XY", "XZ", "YY", "YZ", "ZZ", "MX", "MY", "MZ", "M")
-
-# A body is a link number or the payload suffix "c". The alternation lists two-letter fields
-# first so that "MX1" is read as MX of link 1, never as M of a link called "X1".
-_INERTIAL_NAME = re.compile(r"^(XX|XY|XZ|YY|YZ|ZZ|MX|MY|MZ|M)(\d+|c)$")
 
 def _pseudo_inertia_map() -> np.ndarray:
     """Constant (16, 10) matrix L with vec_row(J) = L @ p10 (J row-major)."""
@@ -85,47 +81,6 @@ def pseudo_inertia(p10: Any) -> Any:
     return (_PSEUDO_INERTIA_MAP @ p).reshape(4, 4)
 
 
-def body_indices(names: Sequence[str]) -> dict[str, np.ndarray]:
-    """Indices of the ten inertial parameters of every body present in ``names``.
-
-    Returns:
-        ``{body: indices (10,)}`` with body ``"1"``, ``"2"``, … for links (numeric order) and
-        ``"c"`` for the payload (last); indices follow :data:`INERTIAL_FIELDS`.
-
-    Raises:
-        ValueError: a body has some but not all of its ten inertial parameters (a partial body
-            cannot be checked and would silently escape the constraints), or a name repeats.
-    """
-    position: dict[str, int] = {}
-    for i, name in enumerate(names):
-        if name in position:
-            raise ValueError(f"parameter names: {name!r} appears twice (positions {position[name]} and {i})")
-        position[name] = i
-    found: dict[str, dict[str, int]] = {}
-    for name, i in position.items():
-        match = _INERTIAL_NAME.match(name)
-        if match:
-            found.setdefault(match.group(2), {})[match.group(1)] = i
-    out: dict[str, np.ndarray] = {}
-    for body in sorted(found, key=lambda b: (b == "c", int(b) if b.isdigit() else 0)):
-        fields = found[body]
-        missing = [f + body for f in INERTIAL_FIELDS if f not in fields]
-        if missing:
-            raise ValueError(
-                f"parameter names: body {body!r} has only some inertial parameters; missing {missing}"
-            )
-        out[body] = np.array([fields[f] for f in INERTIAL_FIELDS], dtype=int)
-    return out
-
-
-def nonnegative_indices(names: Sequence[str], prefixes: Sequence[str]) -> np.ndarray:
-    """Indices of names starting with any of ``prefixes`` (the documented prefix rule)."""
-    prefixes = tuple(prefixes)
-    if not prefixes:
-        return np.zeros(0, dtype=int)
-    return np.array([i for i, n in enumerate(names) if n.startswith(prefixes)], dtype=int)
-
-
 # ---------------------------------------------------------------------------------------------
 # The check
 # ---------------------------------------------------------------------------------------------
@@ -141,7 +96,7 @@ class BodyConsistency:
             inertial directions, kg for the mass direction; reported as computed).
         mass: M (kg).
         com: centre of mass S = h / M in frame j (m); NaN when M ≤ 0.
-        ok: ``min_eigenvalue ≥ −tol``.
+        ok: physical with the report's margin (rx90sym.physical.body_problem).
     """
 
     body: str
@@ -158,14 +113,19 @@ class ConsistencyReport:
     Attributes:
         bodies: one entry per body with inertial parameters.
         nonnegative: ``(name, value, ok)`` for every parameter under the prefix rule.
-        tol: tolerance used (same units as the quantities compared).
-        ok: every body PSD within ``tol`` and every prefixed parameter ``≥ −tol``.
+        margin: margin checked (pseudo-inertias ⪰ margin·1, prefixed parameters ≥ margin; SI).
+        problems: rx90sym.physical.parameter_problems: one line per failure (empty when ``ok``).
+        ok: no problem.
     """
 
     bodies: tuple[BodyConsistency, ...]
     nonnegative: tuple[tuple[str, float, bool], ...]
-    tol: float
-    ok: bool
+    margin: float
+    problems: tuple[str, ...]
+
+    @property
+    def ok(self) -> bool:
+        return not self.problems
 
     @property
     def min_eigenvalue(self) -> float:
@@ -174,25 +134,29 @@ class ConsistencyReport:
 
     def violations(self) -> tuple[str, ...]:
         """Human-readable list of what fails (empty when ``ok``)."""
-        out = [f"body {b.body}: pseudo-inertia min eigenvalue {b.min_eigenvalue:.3e}" for b in self.bodies if not b.ok]
-        out += [f"{name} = {value:.3e} < 0" for name, value, ok in self.nonnegative if not ok]
-        return tuple(out)
+        return self.problems
 
 
 def consistency_report(
     chi: Any,
     names: Sequence[str],
-    tol: float = 1e-9,
-    nonnegative: Sequence[str] = ("IA", "FV", "FS"),
+    margin: float = 0.0,
+    nonnegative: Sequence[str] = NONNEGATIVE,
+    carried: Mapping[str, np.ndarray] | None = None,
 ) -> ConsistencyReport:
-    """Check a standard parameter vector for physical consistency (numpy only).
+    """Check a standard parameter vector for physical consistency (numpy only): the check of
+    every export (rx90sym.physical.parameter_problems, one tolerance), with a margin.
 
     Args:
         chi: standard parameters, array ``(len(names),)`` in SI units, or a mapping name → value.
         names: their names (eq. 4 layout; payload ``XXc..Mc`` optional).
-        tol: a body passes when its pseudo-inertia's smallest eigenvalue is ``≥ −tol``, a
-            prefixed parameter when it is ``≥ −tol`` (absolute, SI units).
-        nonnegative: name prefixes that must be non-negative (prefix rule, module docstring).
+        margin: a body passes when its pseudo-inertia's smallest eigenvalue is ``≥ margin``, a
+            prefixed parameter when it is ``≥ margin`` (absolute, SI units; 0: physical, what an
+            export needs; a consistent fit checks rx90sym.physical.DEFAULT_MARGIN).
+        nonnegative: name prefixes that must be ``≥ margin`` (prefix rule, module docstring).
+        carried: ``{body: XX..M}`` a body carries that an export writes apart (a URDF link's
+            lumped hand, rx90sym.urdf_export.carried_bodies): the body minus it is checked and
+            reported.
 
     Returns:
         A frozen :class:`ConsistencyReport`.
@@ -212,14 +176,11 @@ def consistency_report(
         raise ValueError(f"consistency_report: non-finite values for {bad}")
     bodies = []
     for body, idx in body_indices(names).items():
-        p = x[idx]
+        p = x[idx] - np.asarray((carried or {}).get(body, 0.0), dtype=float)
         lam = float(np.linalg.eigvalsh(pseudo_inertia(p))[0])
         mass = float(p[9])
         com = tuple(float(v) for v in p[6:9] / mass) if mass > 0 else (float("nan"),) * 3
-        bodies.append(BodyConsistency(body, lam, mass, com, lam >= -tol))  # type: ignore[arg-type]
-    nonneg = tuple((names[i], float(x[i]), bool(x[i] >= -tol)) for i in nonnegative_indices(names, nonnegative))
-    ok = all(b.ok for b in bodies) and all(entry[2] for entry in nonneg)
-    return ConsistencyReport(tuple(bodies), nonneg, float(tol), ok)
-
-
-# ---------------------------------------------------------------------------------------------
+        bodies.append(BodyConsistency(body, lam, mass, com, body_problem(p, margin) is None))  # type: ignore[arg-type]
+    nonneg = tuple((names[i], float(x[i]), bool(x[i] >= margin)) for i in nonnegative_indices(names, nonnegative))
+    return ConsistencyReport(tuple(bodies), nonneg, float(margin), parameter_problems(names, x, margin, nonnegative,
+                                                                              carried=carried))

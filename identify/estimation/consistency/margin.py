@@ -7,9 +7,13 @@ import cvxpy as cp
 import numpy as np
 
 from identify.estimation.consistency.lmi import body_indices, nonnegative_indices, pseudo_inertia
+from identify.estimation.consistency.errors import ConsistencyError
 from identify.estimation.consistency.problem import DEFAULT_SOLVER_OPTIONS, SOLVERS, ConsistentProblem, null_space, solve_problem
 
 __all__ = ["consistency_margin"]
+
+# Null-space tie-break weights tried in turn while the solver stops short (docstring).
+_TIE_BREAKS = (1e-8, 1e-6, 1e-4)
 
 def consistency_margin(
     beta: np.ndarray,
@@ -28,8 +32,11 @@ def consistency_margin(
         t* = max t   s.t.  K χ = β,  J_b(χ) ⪰ t·1₄ for every body,  χ_i ≥ t (prefixed names),
                            t ≤ cap
 
-    (tie-break: the smallest null-space component, weight 1e-8, only to keep χ bounded); when
-    t* > 0 a second solve returns the smallest witness χ with margin t*/2.
+    (tie-break: the smallest null-space component, weight 1e-8, only to keep χ bounded; when the
+    solver stops short of its tolerances, as on a far inconsistent β whose unseen directions
+    drift (t* = −705 on a 4 s UR10e twin, |χ| ≈ 4e4), the weight is raised to 1e-6, then 1e-4:
+    t* moved by 2e-4 there); when t* > 0 a second solve returns the smallest witness χ with
+    margin t*/2.
 
     Args:
         beta: (c,) base parameters.
@@ -69,8 +76,14 @@ def consistency_margin(
     null = null_space(K)
     spread = cp.norm(null.T @ chi, 2) if null.shape[1] else cp.Constant(0.0)
     options = DEFAULT_SOLVER_OPTIONS[solver]
-    built = ConsistentProblem(cp.Problem(cp.Maximize(t - 1e-8 * spread), constraints), chi, names, 1.0, 1.0, 0.0)
-    value, _, _ = solve_problem(built, solver, options)
+    for weight in _TIE_BREAKS:
+        built = ConsistentProblem(cp.Problem(cp.Maximize(t - weight * spread), constraints), chi, names, 1.0, 1.0, 0.0)
+        try:
+            value, _, _ = solve_problem(built, solver, options)
+            break
+        except ConsistencyError as exc:
+            if exc.status != cp.OPTIMAL_INACCURATE or weight == _TIE_BREAKS[-1]:
+                raise
     margin = float(t.value)
     if margin > 0 and null.shape[1]:
         # Maximising t leaves the bodies that do not limit it wherever the solver drifted (we

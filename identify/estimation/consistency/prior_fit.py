@@ -9,6 +9,8 @@ from typing import Any
 import cvxpy as cp
 import numpy as np
 
+from rx90sym.physical import DEFAULT_MARGIN
+
 from identify.estimation.consistency.fit import ConsistentSolution, _solution, _solve_checked, consistent_least_squares
 from identify.estimation.consistency.lmi import body_indices
 from identify.estimation.consistency.prior import PhysicalPrior, prior_constraints, prior_scales
@@ -27,9 +29,10 @@ PRIOR_BUDGET = 2.0
 
 def prior_fit(R: np.ndarray, z: np.ndarray, K: np.ndarray, names: Sequence[str], prior: PhysicalPrior, *,
               rss_outside: float = 0.0, rows: int | None = None, solver: str = "CLARABEL",
-              nonnegative: Sequence[str] = ("IA", "FV", "FS"), tol: float = 1e-9,
+              nonnegative: Sequence[str] = ("IA", "FV", "FS"), epsilon: float = DEFAULT_MARGIN,
               solver_options: Mapping[str, Any] | None = None, covariance: np.ndarray | None = None,
-              budget: float = PRIOR_BUDGET) -> tuple[ConsistentSolution, ConsistentSolution]:
+              budget: float = PRIOR_BUDGET, carried: Mapping[str, np.ndarray] | None = None
+              ) -> tuple[ConsistentSolution, ConsistentSolution]:
     """(stage 1, stage 2) solutions: the consistent least squares under the prior's bounds, and
     the physical chi nearest the prior (scaled norm, :func:`prior_scales`) whose base parameters
     lie within ``budget`` standard deviations of stage 1's:
@@ -42,8 +45,8 @@ def prior_fit(R: np.ndarray, z: np.ndarray, K: np.ndarray, names: Sequence[str],
     if rows is None:
         raise ValueError("prior_fit: rows (the number of equations) is needed for the residual variance")
     first = consistent_least_squares(R, z, K, names, rss_outside=rss_outside, rows=rows, solver=solver,
-                                     nonnegative=nonnegative, tol=tol, solver_options=solver_options,
-                                     physical_prior=prior)
+                                     nonnegative=nonnegative, epsilon=epsilon, solver_options=solver_options,
+                                     physical_prior=prior, carried=carried)
     R, z, K = (np.asarray(a, dtype=float) for a in (R, z, K))
     fit1 = float(np.sum((R @ first.beta - z) ** 2))
     whiten = _whitening(R, covariance, (fit1 + rss_outside) / max(rows - K.shape[0], 1))
@@ -54,13 +57,15 @@ def prior_fit(R: np.ndarray, z: np.ndarray, K: np.ndarray, names: Sequence[str],
     def build(margin: float) -> ConsistentProblem:
         chi = cp.Variable(len(names), name="chi")
         fit = cp.norm((whiten @ K) @ chi - whiten @ first.beta, 2) <= float(budget)
-        constraints = [fit, *_cone_constraints(chi, names, body_indices(names), margin, nonnegative),
+        constraints = [fit, *_cone_constraints(chi, names, body_indices(names), margin, nonnegative, carried),
                        *prior_constraints(chi, names, prior)]
         problem = cp.Problem(cp.Minimize(cp.norm(cp.multiply(1.0 / scales, chi - reference), 2)), constraints)
         return ConsistentProblem(problem, chi, names, noise, noise, float(margin))
 
     options = {**DEFAULT_SOLVER_OPTIONS[solver.upper()], **(solver_options or {})}
-    solve = _solve_checked(build, first.epsilon, solver.upper(), options, names, tol, nonnegative)
+    # Stage 2 starts from the margin stage 1 needed (its retry, if any, says the solver needs it).
+    solve = _solve_checked(build, epsilon, solver.upper(), options, names, nonnegative, solve_margin=first.epsilon,
+                           carried=carried)
     second = _solution(solve, R, z, K, names, rss_outside, None, 0.0, solver.upper(), rows)
     return first, second
 

@@ -113,13 +113,14 @@ def build_consistent_problem(
     null_space_weight: float = NULL_SPACE_WEIGHT,
     objective_scale: str = "noise",
     physical_prior: PhysicalPrior | None = None,
+    carried: Mapping[str, np.ndarray] | None = None,
 ) -> ConsistentProblem:
     """Build the conic problem behind :func:`consistent_least_squares` (same arguments).
 
     Formulation (one second-order cone + 4×4 LMIs, no quadratic objective)::
 
         minimise   (1/s_o)·‖ [ R K χ − z ;  √w·(χ_P − χ_prior) ;  √δ·s_n·Nᵀ(χ − χ_ref) ] ‖₂
-        subject to J_b(χ) ⪰ ε·1₄ for every body b,  χ_i ≥ ε for prefixed names,
+        subject to J_b(χ) − J(carried_b) ⪰ ε·1₄ for every body b,  χ_i ≥ ε for prefixed names,
                    mass / total-mass bounds, m·lo ≤ h ≤ m·hi CoM boxes,
 
     with N an orthonormal basis of null(K), δ = ``null_space_weight``, χ_ref the prior values
@@ -146,7 +147,7 @@ def build_consistent_problem(
     residuals += _prior_residual(chi, names, prior, prior_weight, scale)
     residuals += _null_space_residual(chi, names, K, prior, null_space_weight, noise_scale / scale)
     objective = cp.norm(cp.hstack(residuals), 2)
-    constraints = (_cone_constraints(chi, names, bodies, epsilon, nonnegative)
+    constraints = (_cone_constraints(chi, names, bodies, epsilon, nonnegative, carried)
                    + _mass_constraints(chi, bodies, mass_bounds, total_mass)
                    + _com_box_constraints(chi, bodies, com_boxes))
     if physical_prior is not None:  # its bounding ellipsoids, mass floors, rotor-inertia ratios
@@ -247,10 +248,14 @@ def _null_space_residual(chi: cp.Variable, names: tuple[str, ...], K: np.ndarray
 
 
 def _cone_constraints(chi: cp.Variable, names: tuple[str, ...], bodies: Mapping[str, np.ndarray],
-                      epsilon: float, nonnegative: Sequence[str]) -> list[cp.Constraint]:
-    """J_b(χ) ⪰ ε·1 per body and χ_i ≥ ε for the prefixed names."""
+                      epsilon: float, nonnegative: Sequence[str],
+                      carried: Mapping[str, np.ndarray] | None = None) -> list[cp.Constraint]:
+    """J_b(χ) − J(carried_b) ⪰ ε·1 per body and χ_i ≥ ε for the prefixed names (carried_b: XX..M
+    of what body b carries and an export writes apart, e.g. a URDF link's lumped hand; 0 if none)."""
     # J ⪰ ε·1: PSD ⇔ physically consistent incl. triangle inequalities (Wensing 2017).
-    constraints = [pseudo_inertia(chi[idx]) - epsilon * np.eye(4) >> 0 for idx in bodies.values()]
+    carried = carried or {}
+    constraints = [pseudo_inertia(chi[idx]) - (pseudo_inertia(np.asarray(carried[b], dtype=float)) if b in carried else 0.0)
+                   - epsilon * np.eye(4) >> 0 for b, idx in bodies.items()]
     nonneg = nonnegative_indices(names, nonnegative)
     if nonneg.size:
         constraints.append(chi[nonneg] >= epsilon)
