@@ -1,12 +1,14 @@
 # Two entry points for a fresh machine (Python 3.11, a C compiler, make):
 #   make demo   set up, then run the end-to-end job on the embedded RX90
 #   make test   set up, then run the test suite
+#   make docs   run every block of README.md and docs/*.md, the slow ones too, and write the
+#               console blocks' output back into the pages (the fast blocks run in make test)
 PYTHON ?= python3.11
 VENV   ?= .venv
 PY     := $(VENV)/bin/python
 STAMP  := $(VENV)/.installed
 
-.PHONY: demo test test-quick bench setup clean
+.PHONY: demo test test-quick docs bench setup clean
 
 setup: $(STAMP)
 
@@ -29,6 +31,9 @@ test: $(STAMP)
 
 test-quick: $(STAMP)
 	$(PY) -m pytest -q -m "not slow"
+
+docs: $(STAMP)
+	$(PY) scripts/run_docs.py --all --update
 
 bench: $(STAMP)
 	$(PY) benchmarks/bench_model.py
