@@ -140,3 +140,25 @@ def twin_loaded(rx90):
     return {name: [rx90sym.twin.simulate(rx90, multisine(rx90, s), duration=20.0, payload=name,
                                          noise="realistic", seed=100 + s) for s in EMPTY_SEEDS[:2]]
             for name in ("tables_4", "tables_5")}
+
+
+# --------------------------------------------------------------------------- parallel runs
+# `make test` runs the suite on pytest-xdist workers, one per core. A file's tests stay on one
+# worker (its module- and session-scoped fixtures are made once), except in the files below whose
+# tests share no fixture and each cost seconds: those are spread one test at a time.
+SPREAD_FILES = frozenset({"test_notebooks.py"})
+
+
+def pytest_xdist_make_scheduler(config, log):
+    """The xdist scheduler of ``--dist loadfile`` with the tests of SPREAD_FILES scheduled one
+    by one (pytest-xdist's own ``loadgroup`` marks do not reach its scheduler under pytest 9)."""
+    if config.getvalue("dist") != "loadfile":
+        return None
+    from xdist.scheduler import LoadFileScheduling
+
+    class FileScheduling(LoadFileScheduling):
+        def _split_scope(self, nodeid: str) -> str:
+            path = nodeid.split("::", 1)[0]
+            return nodeid if Path(path).name in SPREAD_FILES else path
+
+    return FileScheduling(config, log)
