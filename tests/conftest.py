@@ -1,14 +1,22 @@
 """Shared fixtures: robots and random physically consistent parameters."""
 from __future__ import annotations
 
-import importlib.util
-import re
-from pathlib import Path
+import os
 
-import numpy as np
-import pytest
+# One BLAS thread per test process (and the command lines it starts), set before NumPy loads:
+# OpenBLAS's second thread costs far more than it gives on the suite's tall, thin least squares
+# (a 6000 x 54 QR: 17 ms of CPU alone, 730 ms with two threads on a loaded 2-core machine), and
+# `make test` runs one worker per core. An explicit OPENBLAS_NUM_THREADS is kept.
+os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
 
-import rx90sym
+import importlib.util  # noqa: E402
+import re  # noqa: E402
+from pathlib import Path  # noqa: E402
+
+import numpy as np  # noqa: E402
+import pytest  # noqa: E402
+
+import rx90sym  # noqa: E402
 
 SHARED = Path(__file__).resolve().parents[1].parent / "shared"
 
