@@ -153,13 +153,16 @@ def twin_loaded(rx90):
 # --------------------------------------------------------------------------- parallel runs
 # `make test` runs the suite on pytest-xdist workers, one per core. A file's tests stay on one
 # worker (its module- and session-scoped fixtures are made once), except in the files below whose
-# tests share no fixture and each cost seconds: those are spread one test at a time.
+# tests share no fixture and each cost seconds: those are spread one test at a time. The files
+# holding slow-marked tests are handed out first, so that no long file starts last and holds the
+# run while the other worker idles.
 SPREAD_FILES = frozenset({"test_notebooks.py"})
 
 
 def pytest_xdist_make_scheduler(config, log):
     """The xdist scheduler of ``--dist loadfile`` with the tests of SPREAD_FILES scheduled one
-    by one (pytest-xdist's own ``loadgroup`` marks do not reach its scheduler under pytest 9)."""
+    by one, in the workers' collection order (pytest-xdist's own ``loadgroup`` marks do not
+    reach its scheduler under pytest 9)."""
     if config.getvalue("dist") != "loadfile":
         return None
     from xdist.scheduler import LoadFileScheduling
@@ -169,4 +172,14 @@ def pytest_xdist_make_scheduler(config, log):
             path = nodeid.split("::", 1)[0]
             return nodeid if Path(path).name in SPREAD_FILES else path
 
+    config.option.loadscopereorder = False   # keep the order below, not the count of tests
     return FileScheduling(config, log)
+
+
+def pytest_collection_modifyitems(config, items):
+    """On an xdist worker: the files with a slow-marked test first (a stable sort: a file's tests
+    stay together and in order). A run without workers keeps pytest's order."""
+    if not hasattr(config, "workerinput"):
+        return
+    slow_files = {item.path for item in items if item.get_closest_marker("slow")}
+    items.sort(key=lambda item: item.path not in slow_files)
