@@ -23,14 +23,18 @@ demo: $(STAMP)
 	$(VENV)/bin/rx90 demo --out demo-output
 
 # PYTEST_STATUS_FILE: where to write pytest's own exit status (make only says 2); .ci/run uses it.
+# TEST_WORKERS: pytest-xdist processes (one per core); a file's tests run on one worker, so its
+# module fixtures are made once; tests/conftest.py names the files spread test by test and sets
+# one BLAS thread per process.
+TEST_WORKERS ?= auto
 test: $(STAMP)
-	$(PY) -m pytest -q; rc=$$?; \
+	$(PY) -m pytest -q -n $(TEST_WORKERS) --dist loadfile; rc=$$?; \
 	if [ -n "$(PYTEST_STATUS_FILE)" ]; then echo $$rc > "$(PYTEST_STATUS_FILE)"; fi; \
 	if [ $$rc -eq 5 ]; then echo "error: pytest collected no tests (exit 5)" >&2; fi; \
 	exit $$rc
 
 test-quick: $(STAMP)
-	$(PY) -m pytest -q -m "not slow"
+	$(PY) -m pytest -q -n $(TEST_WORKERS) --dist loadfile -m "not slow"
 
 docs: $(STAMP)
 	$(PY) scripts/run_docs.py --all --update

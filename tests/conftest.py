@@ -1,14 +1,22 @@
 """Shared fixtures: robots and random physically consistent parameters."""
 from __future__ import annotations
 
-import importlib.util
-import re
-from pathlib import Path
+import os
 
-import numpy as np
-import pytest
+# One BLAS thread per test process (and the command lines it starts), set before NumPy loads:
+# OpenBLAS's second thread costs far more than it gives on the suite's tall, thin least squares
+# (a 6000 x 54 QR: 17 ms of CPU alone, 730 ms with two threads on a loaded 2-core machine), and
+# `make test` runs one worker per core. An explicit OPENBLAS_NUM_THREADS is kept.
+os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
 
-import rx90sym
+import importlib.util  # noqa: E402
+import re  # noqa: E402
+from pathlib import Path  # noqa: E402
+
+import numpy as np  # noqa: E402
+import pytest  # noqa: E402
+
+import rx90sym  # noqa: E402
 
 SHARED = Path(__file__).resolve().parents[1].parent / "shared"
 
@@ -140,3 +148,38 @@ def twin_loaded(rx90):
     return {name: [rx90sym.twin.simulate(rx90, multisine(rx90, s), duration=20.0, payload=name,
                                          noise="realistic", seed=100 + s) for s in EMPTY_SEEDS[:2]]
             for name in ("tables_4", "tables_5")}
+
+
+# --------------------------------------------------------------------------- parallel runs
+# `make test` runs the suite on pytest-xdist workers, one per core. A file's tests stay on one
+# worker (its module- and session-scoped fixtures are made once), except in the files below whose
+# tests share no fixture and each cost seconds: those are spread one test at a time. The files
+# holding slow-marked tests are handed out first, so that no long file starts last and holds the
+# run while the other worker idles.
+SPREAD_FILES = frozenset({"test_notebooks.py"})
+
+
+def pytest_xdist_make_scheduler(config, log):
+    """The xdist scheduler of ``--dist loadfile`` with the tests of SPREAD_FILES scheduled one
+    by one, in the workers' collection order (pytest-xdist's own ``loadgroup`` marks do not
+    reach its scheduler under pytest 9)."""
+    if config.getvalue("dist") != "loadfile":
+        return None
+    from xdist.scheduler import LoadFileScheduling
+
+    class FileScheduling(LoadFileScheduling):
+        def _split_scope(self, nodeid: str) -> str:
+            path = nodeid.split("::", 1)[0]
+            return nodeid if Path(path).name in SPREAD_FILES else path
+
+    config.option.loadscopereorder = False   # keep the order below, not the count of tests
+    return FileScheduling(config, log)
+
+
+def pytest_collection_modifyitems(config, items):
+    """On an xdist worker: the files with a slow-marked test first (a stable sort: a file's tests
+    stay together and in order). A run without workers keeps pytest's order."""
+    if not hasattr(config, "workerinput"):
+        return
+    slow_files = {item.path for item in items if item.get_closest_marker("slow")}
+    items.sort(key=lambda item: item.path not in slow_files)
