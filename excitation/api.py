@@ -55,17 +55,6 @@ def resolve_nominal(robot: rx90sym.Robot, chi_nominal: Any, stream: TextIO = sys
     return np.asarray(chi_nominal, dtype=float)
 
 
-def urdf_default_acceleration(robot: rx90sym.Robot) -> bool:
-    """True when the robot's acceleration limits are the URDF loader's generic default (a URDF
-    gives none): the envelope then replaces them by its conservative assumption."""
-    if getattr(robot, "urdf", None) is None:
-        return False
-    from rx90sym.urdf import DEFAULT_ACCELERATION
-
-    kinds = ["prismatic" if s else "revolute" for s in robot.sigma]
-    return bool(np.array_equal(robot.limits.qdd_max, [DEFAULT_ACCELERATION[k] for k in kinds]))
-
-
 def resolve_envelope(robot: rx90sym.Robot, envelope: Envelope | str | None, stream: TextIO = sys.stderr,
                      z_min: float | None = None) -> Envelope | None:
     """The envelope to apply: ``"default"`` -> ``Envelope()`` with the URDF acceleration default
@@ -74,7 +63,9 @@ def resolve_envelope(robot: rx90sym.Robot, envelope: Envelope | str | None, stre
     if isinstance(envelope, str):
         if envelope != DEFAULT:
             raise ValueError(f"envelope: expected {DEFAULT!r}, None or an Envelope, got {envelope!r}")
-        return Envelope(urdf_acceleration=urdf_default_acceleration(robot))
+        from rx90sym.urdf import default_acceleration
+
+        return Envelope(urdf_acceleration=default_acceleration(robot))
     if envelope is None:
         print(NO_ENVELOPE.format(floor="" if z_min is None else " and the floor z_min"), file=stream)
     return envelope

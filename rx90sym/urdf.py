@@ -19,7 +19,7 @@ import math
 import warnings
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Sequence
+from typing import Any, Sequence
 
 import numpy as np
 
@@ -71,6 +71,15 @@ class UrdfChain:
     def snap_length(self) -> float:
         """Length tolerance [m] the joint origins were snapped with (0: as written)."""
         return self.tree.snap_length
+
+
+def default_acceleration(robot: Any) -> bool:
+    """True when ``robot`` comes from a URDF and its acceleration limits are this loader's generic
+    default (DEFAULT_ACCELERATION: a URDF gives none), not limits given with ``acceleration=``."""
+    if getattr(robot, "urdf", None) is None:
+        return False
+    default = [DEFAULT_ACCELERATION["prismatic" if s else "revolute"] for s in robot.sigma]
+    return bool(np.array_equal(robot.limits.qdd_max, default))
 
 
 def zero_poses(tree: UrdfTree) -> dict[str, Pose]:

@@ -54,13 +54,10 @@ class EmbeddedRobot:
             table = tomllib.loads(text).get("spring", {}).get("table")
             if table is not None:
                 files[str(table)] = (path.parent / str(table)).read_text()
-        acceleration = None
-        if robot.urdf is not None:
-            from rx90sym.urdf import DEFAULT_ACCELERATION
+        from rx90sym.urdf import default_acceleration
 
-            default = [DEFAULT_ACCELERATION["prismatic" if s else "revolute"] for s in robot.sigma]
-            if not np.array_equal(robot.limits.qdd_max, default):
-                acceleration = tuple(float(a) for a in robot.limits.qdd_max)
+        given = robot.urdf is not None and not default_acceleration(robot)
+        acceleration = tuple(float(a) for a in robot.limits.qdd_max) if given else None
         return cls(text, fmt, path.name, _sha256(text), files, acceleration)
 
     def to_json(self) -> dict[str, Any]:
