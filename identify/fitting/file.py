@@ -184,9 +184,8 @@ def robot_of(model: FitModel, spec: str | None = None) -> rx90sym.Robot:
     joint count or other parameters; the lesser differences: :meth:`FitModel.check_robot`)."""
     emb = model.embedded()
     if spec is not None and emb is not None:
-        given = robot_of(model, None)
         robot = _rebuilt(model, spec, None)
-        robot_differences(given, robot)  # raises when they cannot be the same arm
+        robot_differences(robot_of(model, None), robot)  # the embedded one: raises when they cannot be the same arm
         return robot
     if emb is not None:
         return _rebuilt(model, str(emb.path()), emb.acceleration)
