@@ -91,8 +91,8 @@ def one_run(robot, base, truth, seed: int, noise: float, duration: float) -> dic
     default, default_common, form = held_out_error(robot, base, fit_part, test_clean, None, 50.0, None, window)
     former = held_out_error(robot, base, fit_part, test_clean, None, 50.0, "zero-coulomb", window,
                             cross_validate=False)[0]
-    beta = plain_ls(robot, fit_part, base)
-    pred, kept = plain_prediction(robot, beta, test_clean, base)
+    baseline = plain_ls(robot, fit_part)
+    pred, kept = plain_prediction(robot, baseline, test_clean)
     plain = relative(pred, np.asarray(test_clean.tau)[kept])
     inside = _inside(np.asarray(test_clean.t)[kept], window)
     plain_common = relative(pred[inside], np.asarray(test_clean.tau)[kept][inside])

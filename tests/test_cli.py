@@ -92,7 +92,10 @@ def test_identify_writes_json_and_report(workdir):
     essential = {p["name"]: p for p in data["essential"]["parameters"]}
     full = {p["name"]: p for p in data["parameters"]}
     assert "MX2R" in essential and len(essential) < 54
-    assert abs(essential["MX2R"]["value"] - full["MX2R"]["value"]) < 3 * full["MX2R"]["std"] + 1e-9
+    # within 3 sigma, the larger of eq. 13's and the segment bootstrap's (eq. 13 is optimistic on coloured
+    # residuals, the more so without decimation)
+    boot = dict(zip([p["name"] for p in data["parameters"]], data["bootstrap_std"]))["MX2R"]
+    assert abs(essential["MX2R"]["value"] - full["MX2R"]["value"]) < 3 * max(full["MX2R"]["std"], boot) + 1e-9
     assert 0 < essential["MX2R"]["std"] <= full["MX2R"]["std"] * 1.5
     assert len(data["residual_rms"]) == 6 and len(data["validation"]["relative_error_pct"]) == 6
     figs = figures_of(workdir / "id.html")

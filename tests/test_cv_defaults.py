@@ -35,8 +35,8 @@ def _defaults_and_plain(robot, base, seed: int) -> tuple[np.ndarray, np.ndarray]
     assert f.choice is not None  # no cut-off given: cross-validated
     val = predict(robot, f.result, test, base=base, cutoff=f.cutoff, decimate_to=None,
                   min_velocity=f.min_velocity, rest=f.rest)
-    beta = plain.plain_ls(robot, fit_part, base)
-    pred, kept = plain.plain_prediction(robot, beta, test, base)
+    baseline = plain.plain_ls(robot, fit_part)
+    pred, kept = plain.plain_prediction(robot, baseline, test)
     return _relative(val.predicted, val.measured), _relative(pred, np.asarray(test.tau)[kept])
 
 

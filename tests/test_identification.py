@@ -33,7 +33,8 @@ def test_well_identified_parameters_lie_within_3_sigma_of_the_truth(wls, rx90_tr
 def test_without_removing_rest_samples_the_stribeck_mismatch_biases_friction(rx90, rx90_base, twin_empty, rx90_truth):
     """The reason for min_velocity: the same data without it puts FS/FV out of their 3 sigma."""
     res = identify.fit(rx90, twin_empty, identify.Processing(min_velocity=None, estimate_delay=False), base=rx90_base).result
-    z = {n: (v - rx90_truth[n]) / s for n, v, s in zip(res.names, res.values, res.std)}
+    # (torque offsets the cross-validation may add are 0 in the truth)
+    z = {n: (v - rx90_truth.get(n, 0.0)) / s for n, v, s in zip(res.names, res.values, res.std)}
     assert max(abs(z[f"FS{j}"]) for j in range(1, 7)) > 3
 
 

@@ -73,24 +73,33 @@ def test_coupled_coulomb_rest_is_per_motor(tx40):
 # --------------------------------------------------------------------------- one filtering
 
 def test_prediction_with_the_fits_filtering_reproduces_the_fit(rx90, rx90_base, stop_go):
-    """predict() given the fit's filtering rebuilds exactly the fitted rows: its residual on the
-    fitted recording is the fit's own residual (zero-coulomb keeps every row)."""
-    fit = identify.fit(rx90, [stop_go[0]], identify.Processing(rest="zero-coulomb", estimate_delay=False), base=rx90_base)
+    """predict() given the fit's filtering rebuilds exactly the fitted rows: without decimation its
+    error against the raw torques, on the samples it scores, is the fit's own residual there
+    (zero-coulomb keeps every row)."""
+    fit = identify.fit(rx90, [stop_go[0]], identify.Processing(rest="zero-coulomb", cutoff=6.0, decimate_to=None,
+                                                               estimate_delay=False), base=rx90_base)
     val = identify.predict(rx90, fit.result, stop_go[0], base=rx90_base, **fit.filtering())
-    np.testing.assert_allclose(val.rms_error, fit.result.residual_rms, rtol=1e-9)
+    obs = fit.observation
+    residual = obs.Y - obs.W @ fit.result.values
+    scored = np.isin(obs.t[obs.samples], val.t)
+    own = [np.sqrt(np.mean(residual[scored & (obs.joint == j)] ** 2)) for j in range(rx90.n)]
+    assert np.sum(scored) == val.t.size * rx90.n
+    np.testing.assert_allclose(val.rms_error, own, rtol=1e-9)
     assert val.cutoff == fit.cutoff
     # Choosing the cut-off again on another file would be another processing.
     other = identify.predict(rx90, fit.result, stop_go[0], base=rx90_base,
                              **{**fit.filtering(), "cutoff": 2 * fit.cutoff})
-    assert not np.allclose(other.rms_error, fit.result.residual_rms, rtol=1e-3)
+    assert not np.allclose(other.rms_error, own, rtol=1e-3)
 
 
 def test_time_axis_is_the_recordings(rx90, rx90_base, stop_go):
+    """The samples scored are the recording's own: from the fit's filter's edges, and 0.5 s, from its ends."""
     fit = identify.fit(rx90, [stop_go[0]], identify.Processing(estimate_delay=False), base=rx90_base)
     val = identify.predict(rx90, fit.result, stop_go[1], base=rx90_base, **fit.filtering())
-    edge = identify.signal.filtering.EDGE_PERIODS / fit.cutoff
+    edge = max(identify.signal.filtering.EDGE_PERIODS / fit.cutoff, 0.5)
     assert val.t[0] == pytest.approx(stop_go[1].t[0] + edge, abs=2 / stop_go[1].rate)
     assert val.t[-1] == pytest.approx(stop_go[1].t[-1] - edge, abs=2 / fit.observation.rate + 2 / stop_go[1].rate)
+    assert np.all(np.isin(val.t, stop_go[1].t))
 
 
 def test_cutoff_is_stable_over_twin_seeds(twin_empty):

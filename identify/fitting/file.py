@@ -32,6 +32,9 @@ __all__ = ["SCHEMA_VERSION", "FitModel", "read_fit_file", "robot_file_hash", "to
 #: Version 2 files are still read (their fields mean the same in 3). 4: ``model.description`` embeds
 #: the robot description (:class:`~identify.fitting.embedded.EmbeddedRobot`) and ``model.robot_file``
 #: is absolute; versions 2 and 3 are still read (their robot from the recorded path or the name).
+#: Also in 4: ``baseline`` (the plain OLS baseline's parameters and figures, identify.fitting.baseline),
+#: ``model.offset_joints`` (torque offsets chosen per joint) and the processing choice's ``offsets``,
+#: ``offset_candidate`` and ``scored_against``; a file without them reads None.
 SCHEMA_VERSION = 4
 #: Older layouts read as they are.
 READABLE_VERSIONS = (2, 3, SCHEMA_VERSION)
@@ -67,7 +70,8 @@ class FitModel:
     a list of one per joint) and its velocity scales (null on a Coulomb joint;
     identify.estimation.separable.VelocityScales.to_json), the presliding travels; None: Coulomb;
     description: the robot description itself (EmbeddedRobot.to_json; None: a robot built in memory,
-    or a file of schema version 3 or older).
+    or a file of schema version 3 or older); offset_joints: the joints (1-based) the cross-validated
+    choice gave a torque offset OFFj (None: none; an older file reads None).
     """
 
     robot: str
@@ -90,6 +94,7 @@ class FitModel:
     description: dict | None = None
     snap_rad: float | None = None       # a URDF's joint origin tolerances (rx90sym.urdf_snap); None: not a
     snap_length_m: float | None = None  # URDF, or a file written before snapping (read as 1e-9 rad, 0 m)
+    offset_joints: tuple[int, ...] | None = None
 
     @classmethod
     def of(cls, robot: rx90sym.Robot, **fields: Any) -> "FitModel":
@@ -103,7 +108,11 @@ class FitModel:
                    **_snap_of(robot), **fields)
 
     def to_json(self) -> dict[str, Any]:
-        return asdict(self)
+        d = asdict(self)
+        for key in ("rest", "offset_joints"):  # tuples written as the lists they read back as
+            if isinstance(d.get(key), tuple):
+                d[key] = list(d[key])
+        return d
 
     to_dict = to_json
 
@@ -117,6 +126,8 @@ class FitModel:
         values = {k: d[k] for k in names if k in d}
         if isinstance(values["rest"], list):  # one policy per joint
             values["rest"] = tuple(values["rest"])
+        if values.get("offset_joints") is not None:
+            values["offset_joints"] = tuple(int(j) for j in values["offset_joints"])
         return cls(**values)
 
     from_dict = from_json

@@ -19,7 +19,11 @@ from identify.estimation.bootstrap import bootstrap_std
 from identify.estimation.results import METHODS, IdentificationResult
 from identify.fitting.file import FitModel
 from identify.io.gains import DriveGains
-from identify.observation.matrix import Observation, observation_matrix
+from identify.observation.matrix import DECIMATION_PASSBAND, Observation, observation_matrix
+from identify.observation.friction_model import FrictionBase
+from identify.observation.offsets import OffsetBase, offset_base, offset_joints
+from rx90sym.base_parameters import BaseParameters
+from identify.fitting.baseline import plain_baseline
 from identify.io.recordings import layout_summary
 from identify.observation.processing import Processing, friction_label, has_policy, has_smooth_friction
 from identify.fitting.friction import chosen_friction, friction_columns
@@ -103,16 +107,30 @@ def fit(robot: rx90sym.Robot, recordings: Sequence[Any], processing: Processing 
         # (W and Y filtered alike, it hardly depends on the cut-off; one delay search).
         scored_lag = (estimate_delay(robot, recordings, base=base, **options).delay if p.delay == "auto"
                       else float(p.delay))
+        # Torque offsets are a candidate of the WLS fits on the symbolic base (not of the consistent fit, whose
+        # columns map back to standard parameters, nor beside a robot's own offsets or asymmetric Coulomb).
+        eligible = offset_joints(robot, base) if method != "consistent" and isinstance(base, BaseParameters) else ()
         choice = choose_processing(robot, recordings, base=base, min_velocity=p.min_velocity, rest=p.rest,
-                                   spring=p.spring, default_decimate=p.decimate_to, delay=scored_lag)
+                                   spring=p.spring, default_decimate=p.decimate_to, delay=scored_lag,
+                                   offsets=eligible)
         c = choice.chosen
         options.update(cutoff=c.cutoff, decimate_to=c.decimate_to, rest=c.rest or options["rest"])
+        base = offset_base(base, choice.offsets)
+    # The delay search, the friction forms and their scales on rows decimated as by default when the processing
+    # chosen keeps the full rate (the same cut-off, within the decimation's pass band): they then cost what they
+    # did before (the search shifts the raw torques: its resolution is the recording's rate either way).
+    light = dict(options)
+    if choice is not None and light["decimate_to"] is None and p.decimate_to and \
+            options["cutoff"] <= DECIMATION_PASSBAND * p.decimate_to and \
+            all(r.rate >= 2 * p.decimate_to for r in recordings):
+        light["decimate_to"] = p.decimate_to
     found = None
     if observation is None and (p.estimate_delay or p.delay == "auto"):
-        found = estimate_delay(robot, recordings, base=base, **options)
+        found = estimate_delay(robot, recordings, base=base, **light)
     lag = found.delay if p.delay == "auto" else float(p.delay)
-    form, choice = chosen_friction(robot, recordings, base, p, method, choice, dict(options, delay=lag))
-    base, friction = friction_columns(robot, recordings, base, form, observation, dict(options, delay=lag))
+    forms = dict(light, delay=lag)
+    form, choice = chosen_friction(robot, recordings, base, p, method, choice, forms)
+    base, friction = friction_columns(robot, recordings, base, form, observation, forms)
     obs = observation if observation is not None else observation_matrix(robot, recordings, delay=lag,
                                                                          base=base, **options)
     result = _solve(robot, obs, base, method, consistent_options)
@@ -120,13 +138,20 @@ def fit(robot: rx90sym.Robot, recordings: Sequence[Any], processing: Processing 
                         rest=options["rest"], min_velocity=options["min_velocity"],
                         spring=spring_source or _spring_label(robot, base),
                         cutoff_hz=obs.cutoffs[0], decimate_to_hz=options["decimate_to"], rate_hz=obs.rate, delay_s=lag,
-                        friction=friction)
+                        friction=friction, offset_joints=_offset_record(base))
     from identify.observation.spring_fit import BaseWithSpring, spring_summary
 
     spring = spring_summary(robot, base if isinstance(base, BaseWithSpring) else None, result, recordings)[0]
     return Fit(robot, result, p, model, base, obs, found, found.delay if found is not None else None, spring,
                recordings=tuple(layout_summary(r) for r in recordings if hasattr(r, "measured_mask")),
-               choice=choice, flags=tuple(rank_flags(base)))
+               choice=choice, flags=tuple(rank_flags(base)),
+               baseline=plain_baseline(robot, recordings if observation is None else [], p.spring))
+
+
+def _offset_record(base: Any) -> tuple[int, ...] | None:
+    """The joints (1-based) given a torque offset by the cross-validated choice (None: none)."""
+    inner = base.base if isinstance(base, FrictionBase) else base
+    return tuple(j + 1 for j in inner.joints) if isinstance(inner, OffsetBase) else None
 
 
 def _honest_covariance(obs: Observation, result: IdentificationResult) -> np.ndarray:

@@ -24,6 +24,8 @@ from identify.observation.processing import Processing
 from identify.fitting.friction import defaulted_travels
 from identify.estimation.delay import DelayEstimate
 from identify.fitting.validation import Validation, predict
+from identify.fitting.baseline import PlainBaseline
+from identify.observation.offsets import offset_base
 
 
 __all__ = ["BOOTSTRAP_BLOCK_S", "BOOTSTRAP_DRAWS", "Bootstrap", "Fit", "load_fit"]
@@ -99,6 +101,7 @@ class Fit:
     choice: dict | None = None
     block: int | None = None        # logs read block by block with this many samples (None: whole)
     streamed: Any = None            # the block-wise fit's record (identify.fitting.streamed.StreamedFit)
+    baseline: Any = None            # the plain OLS baseline (identify.fitting.baseline.PlainBaseline) or None
     contact_thresholds: np.ndarray | None = None  # contact monitor's per joint [N·m] (identify.monitor)
 
     # ------------------------------------------------------------ what the fit used
@@ -142,7 +145,8 @@ class Fit:
 
             return predict_streamed(self.robot, result or self.result, recording, base=self.base, block=self.block,
                                     convention=self.model.convention, gains=self.gains, **self.filtering())
-        return predict(self.robot, result or self.result, recording, base=self.base, **self.filtering())
+        return predict(self.robot, result or self.result, recording, base=self.base, baseline=self.baseline,
+                       **self.filtering())
 
     def validate(self, recording: Any) -> Validation:
         """Cross-validation on a recording not used in the fit (with the essential parameters when
@@ -190,6 +194,7 @@ class Fit:
                     "schema_version": SCHEMA_VERSION, "processing": self.processing.to_json(),
                     "flags": [f.to_json() for f in self.flags], "recordings": list(self.recordings),
                     "processing_choice": self.choice,
+                    "baseline": self.baseline.to_json() if self.baseline is not None else None,
                     "contact_thresholds_nm": (None if self.contact_thresholds is None
                                               else [float(v) for v in self.contact_thresholds])})
         return out
@@ -211,6 +216,7 @@ class Fit:
             essential = IdentificationResult.from_dict(data["essential"]) if data.get("essential") else None
             bootstrap = Bootstrap.from_json(data)
             flags = tuple(Flag.from_json(f) for f in data.get("flags", []))
+            baseline = PlainBaseline.from_json(data.get("baseline"))  # None in older files
         except (KeyError, TypeError, ValueError) as exc:
             raise ValueError(f"{path}: {exc}".replace(f"{path}: {path}: ", f"{path}: ")) from None
         rob = robot if isinstance(robot, rx90sym.Robot) else robot_of(model, robot)
@@ -218,7 +224,7 @@ class Fit:
         asymmetric = tuple(j for j in range(rob.n) if f"FSP{j + 1}" in result.names)
         if asymmetric != tuple(rob.asymmetric_coulomb):
             rob = rob.with_options(asymmetric_coulomb=asymmetric)
-        base = rx90sym.base_parameters(rob)
+        base = offset_base(rx90sym.base_parameters(rob), [j - 1 for j in model.offset_joints or ()])
         if model.friction is not None:  # the friction columns found: smooth form's scales, presliding travels
             fr = model.friction
             scales = [np.nan if v is None else v for v in fr["velocity_scale"]] if "velocity_scale" in fr else None
@@ -229,6 +235,7 @@ class Fit:
                    delay_estimate_s=data.get("delay_estimate_s"), spring=data.get("spring"),
                    bootstrap=bootstrap, essential=essential, flags=flags,
                    recordings=tuple(data.get("recordings", [])), choice=data.get("processing_choice"),
+                   baseline=baseline,
                    contact_thresholds=(None if data.get("contact_thresholds_nm") is None
                                        else np.asarray(data["contact_thresholds_nm"], dtype=float)))
 

@@ -1,7 +1,9 @@
 """Torque prediction and cross-validation on a motion not used for fitting (section III-B).
 
 The prediction uses the filtering of the fit (cut-off, decimation: pass the values the fit used)
-and, given a rest threshold, takes the Coulomb term as 0 where its joint (or motor) rests: at rest
+and is scored against the raw measured torques at the recording's own time stamps
+(:mod:`identify.fitting.raw_scoring`; beside the plain OLS baseline on the same samples when one is
+given, :mod:`identify.fitting.baseline`); given a rest threshold, it takes the Coulomb term as 0 where its joint (or motor) rests: at rest
 the static friction lies anywhere in [−FS, FS] and the sign of a noisy speed says nothing. The
 errors are reported on all samples and on the samples where each joint moves.
 """
@@ -18,6 +20,8 @@ from identify.observation.matrix import automatic_cutoff, filtered_motions, pres
 from identify.observation.processing import RestPolicy, has_policy, predicted_rest
 from identify.estimation.results import IdentificationResult, json_number
 from identify.io.blocks import block_source
+from identify.fitting.raw_scoring import SCORE_TRIM_S, RawScores, raw_scores
+from identify.signal.interpolate import onto
 from identify.observation.matrix import column_regressor
 from identify.observation.stream import DEFAULT_BLOCK, StreamSettings, piece, plan_windows, scan_all, windows_in_order
 
@@ -42,9 +46,13 @@ class Validation:
     relative_error_pct: (n,) 100 ||Y_j - W_j beta|| / ||Y_j|| per joint on all samples; rms_error:
     (n,) N m; the ``_moving`` pair: the same on the samples where joint j moves (|q̇j| ≥
     moving_threshold rad/s; equal to the all-sample figures without a threshold);
-    moving_fraction: (n,) share of samples where joint j moves; measured, predicted: (S, n)
-    torques (spring added) at the decimated samples; t: (S,) their true time [s]; moving: (S, n).
-    cutoff [Hz], rate [Hz]: the filtering used.
+    moving_fraction: (n,) share of samples where joint j moves; measured: (S, n) the raw measured
+    torques [N m] at the recorded samples scored (inside the prediction, measured; with a baseline,
+    0.5 s from each segment's ends too), predicted: (S, n) the prediction interpolated there (spring
+    not added); t: (S,) their time [s]; moving: (S, n). cutoff [Hz], rate [Hz]: the filtering used.
+    baseline_rms_error, baseline_rms_error_moving: (n,) the plain OLS baseline's RMS [N m] on the same
+    samples (None: no baseline); beats_baseline: (n,) rms_error <= baseline_rms_error;
+    baseline_predicted: (S, n) its prediction.
     """
 
     relative_error_pct: np.ndarray
@@ -60,6 +68,14 @@ class Validation:
     moving: np.ndarray | None = None
     cutoff: float = float("nan")
     rate: float = float("nan")
+    baseline_rms_error: np.ndarray | None = None
+    baseline_rms_error_moving: np.ndarray | None = None
+    baseline_predicted: np.ndarray | None = None
+
+    @property
+    def beats_baseline(self) -> np.ndarray | None:
+        """(n,) per joint: the toolkit's RMS on all samples scored at most the plain baseline's."""
+        return None if self.baseline_rms_error is None else self.rms_error <= self.baseline_rms_error
 
     def table(self) -> str:
         head = ("joint  rms error [N m]  relative error [%]  rms moving [N m]  relative moving [%]"
@@ -68,12 +84,27 @@ class Validation:
         rel_m = self.relative_error_pct_moving if self.relative_error_pct_moving is not None else self.relative_error_pct
         rms_m = self.rms_error_moving if self.rms_error_moving is not None else self.rms_error
         frac = self.moving_fraction if self.moving_fraction is not None else np.ones(n)
+        base = self.baseline_rms_error is not None
+        if base:
+            head += "  baseline rms [N m]  baseline moving [N m]"
         rows = [f"{j + 1:5d}  {self.rms_error[j]:15.3f}  {self.relative_error_pct[j]:18.2f}  "
-                f"{rms_m[j]:16.3f}  {rel_m[j]:19.2f}  {100 * frac[j]:10.1f}" for j in range(n)]
+                f"{rms_m[j]:16.3f}  {rel_m[j]:19.2f}  {100 * frac[j]:10.1f}"
+                + (f"  {self.baseline_rms_error[j]:18.3f}  {self.baseline_rms_error_moving[j]:21.3f}" if base else "")
+                for j in range(n)]
         thr = ("no rest threshold" if self.moving_threshold is None
                else f"moving: |q̇j| ≥ {self.moving_threshold:g} rad/s")
-        return "\n".join([f"Validation on {self.source} (cut-off {self.cutoff:.4g} Hz, rate {self.rate:.6g} Hz, "
-                          f"{thr})", head, *rows])
+        lines = [f"Validation on {self.source} against the raw measured torques ({self.t.size} samples; cut-off "
+                 f"{self.cutoff:.4g} Hz, rate {self.rate:.6g} Hz, {thr})", head, *rows]
+        return "\n".join(lines + ([self.baseline_verdict()] if base else []))
+
+    def baseline_verdict(self) -> str:
+        """"beats the plain baseline on joints ..." (RMS on all samples scored, per joint)."""
+        beats = self.beats_baseline
+        won = ", ".join(str(j + 1) for j in np.flatnonzero(beats)) or "none"
+        lost = ", ".join(f"{j + 1} ({self.rms_error[j] / self.baseline_rms_error[j]:.3f}x)"
+                         for j in np.flatnonzero(~beats))
+        return (f"beats the plain baseline (OLS, 10 Hz, same samples) on joints {won}"
+                + (f"; not on joints {lost}" if lost else ""))
 
     def still_message(self) -> str | None:
         """What to say when joints never move in the recording (their while-moving errors are
@@ -97,7 +128,11 @@ class Validation:
                 "rms_error_moving": listed(self.rms_error_moving),
                 "moving_fraction": listed(self.moving_fraction),
                 "moving_threshold": self.moving_threshold,
-                "cutoff_hz": json_number(self.cutoff), "rate_hz": json_number(self.rate)}
+                "cutoff_hz": json_number(self.cutoff), "rate_hz": json_number(self.rate),
+                "scored_against": "raw measured torques", "samples_scored": int(self.t.size),
+                "baseline_rms_error": listed(self.baseline_rms_error),
+                "baseline_rms_error_moving": listed(self.baseline_rms_error_moving),
+                "beats_baseline": None if self.beats_baseline is None else [bool(v) for v in self.beats_baseline]}
 
 
 def base_vector(result: IdentificationResult, base: Any, robot: rx90sym.Robot) -> np.ndarray:
@@ -112,35 +147,44 @@ def base_vector(result: IdentificationResult, base: Any, robot: rx90sym.Robot) -
 
 def predict(robot: rx90sym.Robot, result: IdentificationResult, recording: Any, base: Any = None,
             cutoff: float | None = None, decimate_to: float | None = 50.0, spring: bool = True,
-            min_velocity: float | None = None, delay: float = 0.0, rest: RestPolicy = "zero-coulomb") -> Validation:
+            min_velocity: float | None = None, delay: float = 0.0, rest: RestPolicy = "zero-coulomb",
+            baseline: Any = None) -> Validation:
     """Predicted vs measured torques of ``recording`` with the parameters of ``result``.
 
     cutoff [Hz], decimate_to [Hz]: give those of the fit (None: chosen on this recording);
     min_velocity [rad/s]: rest threshold (Coulomb term 0 at rest, errors also while moving);
     delay [s]: torque lag compensated as in the fit; rest: the fit's rest policy, one or one per joint
     (every sample is predicted: "drop" takes Coulomb 0 at rest; "presliding" the presliding state
-    times FPj; the others as in the fit).
+    times FPj; the others as in the fit); baseline: the fit's plain OLS baseline
+    (identify.fitting.baseline.PlainBaseline), scored on the same raw samples (None: none).
+    Scored against the raw measured torques at the recording's own time stamps.
     """
     base = presliding_base(robot, base, rest if has_policy(rest, "presliding") and min_velocity is not None else None)
     beta = base_vector(result, base, robot)
     cutoff = cutoff if cutoff is not None else automatic_cutoff([recording], decimate_to)
-    motions, _, _ = filtered_motions(robot, [recording], cutoff, decimate_to, spring, base.regressor_batch,
-                                     base.names, min_velocity,
-                                     predicted_rest(rest), delay)
-    # Samples bridged over lost packets are no measurements: they are not scored.
-    rows = [m.measured if m.measured is not None else slice(None) for m in motions]
-    Y = np.concatenate([m.Y[r] for m, r in zip(motions, rows)])
-    predicted = np.concatenate([(m.Phi @ beta)[r] for m, r in zip(motions, rows)])
-    moving = np.concatenate([m.moving[r] for m, r in zip(motions, rows)])
+    motions, _, used = filtered_motions(robot, [recording], cutoff, decimate_to, spring, base.regressor_batch,
+                                        base.names, min_velocity, predicted_rest(rest), delay)
+    raw = raw_scores(robot, motions, used, beta, spring, delay, baseline)
+    return scored_validation(raw, recording.source, min_velocity, motions[0].cutoff, motions[0].rate)
+
+
+def scored_validation(raw: RawScores, source: str, min_velocity: float | None, cutoff: float,
+                      rate: float) -> Validation:
+    """The :class:`Validation` of raw-torque scores (identify.fitting.raw_scoring.RawScores)."""
+    Y, predicted, moving = raw.measured, raw.predicted, raw.moving
     err = Y - predicted
     every = np.ones_like(moving)
+    b_all = b_mov = None
+    if raw.baseline is not None:
+        b_err = Y - raw.baseline
+        b_all, b_mov = _rms(b_err, every), _rms(b_err, moving)
     return Validation(
         relative_error_pct=_relative(err, Y, every), rms_error=_rms(err, every),
-        measured=Y, predicted=predicted, t=np.concatenate([m.t[r] for m, r in zip(motions, rows)]),
-        source=recording.source,
+        measured=Y, predicted=predicted, t=raw.t, source=source,
         relative_error_pct_moving=_relative(err, Y, moving), rms_error_moving=_rms(err, moving),
         moving_fraction=moving.mean(axis=0), moving_threshold=min_velocity, moving=moving,
-        cutoff=motions[0].cutoff, rate=motions[0].rate)
+        cutoff=cutoff, rate=rate, baseline_rms_error=b_all, baseline_rms_error_moving=b_mov,
+        baseline_predicted=raw.baseline)
 
 
 def validate(robot: rx90sym.Robot, result: IdentificationResult, recording: Any, **options: Any) -> Validation:
@@ -163,16 +207,30 @@ def predict_streamed(robot: rx90sym.Robot, result: IdentificationResult, recordi
     scans, fc = scan_all([src], settings)
     plans, _ = plan_windows(scans[0], fc, settings)
     names, regressor = column_regressor(robot, base)
-    parts = []
+    length = {g.start: g.samples for g in scans[0].segments}
+    groups: dict[int, list] = {}
     for plan, window, rec, _ in windows_in_order([src], [plans]):
         m = piece(robot, rec, window, plan, fc, settings, regressor, names, 0).motion
-        rows = m.measured if m.measured is not None else slice(None)  # as identify.predict: measured samples
-        parts.append((m.Y[rows], (m.Phi @ beta)[rows], m.t[rows], m.moving[rows]))
-    Y, pred, t, mov = (np.concatenate(a) for a in zip(*parts))
-    err = Y - pred
-    every = np.ones_like(mov)
-    return Validation(
-        relative_error_pct=_relative(err, Y, every), rms_error=_rms(err, every), measured=Y, predicted=pred, t=t,
-        source=src.source, relative_error_pct_moving=_relative(err, Y, mov), rms_error_moving=_rms(err, mov),
-        moving_fraction=mov.mean(axis=0), moving_threshold=settings.min_velocity, moving=mov, cutoff=fc,
-        rate=plans[0].rate)
+        pred = m.Phi @ beta
+        if spring and robot.spring is not None:
+            pred = pred - robot.spring_torque_batch(m.q)[:, :, 0]
+        # The raw samples this core owns: from its first prediction to the next core's (scored on raw torques).
+        t_pred, t = m.t + settings.delay, np.asarray(rec.t, dtype=float)
+        step = float(np.median(np.diff(t)))
+        own = ((t >= t_pred[0] - 1e-6 * step) & (t < t_pred[0] + (m.t.size * m.factor - 1e-6) * step)
+               & rec.measured_mask)
+        # The segment's first and last times (the windows' raw samples lie on its regular grid).
+        ends = (t[0] - window.raw[0] * step, t[-1] + (length[plan.start] - window.raw[1]) * step)
+        groups.setdefault(id(plan), []).append((t_pred, pred, m.moving, t[own], np.asarray(rec.torques)[own], ends))
+    parts = []
+    for group in groups.values():  # one segment: its predictions interpolated onto its raw samples
+        first, last = group[0][5][0], group[-1][5][1]
+        tp, pr, mv, t, tau = (np.concatenate(a) for a in list(zip(*group))[:5])
+        tol = 1e-9 * max(1.0, abs(tp[-1]))
+        # As identify.predict: SCORE_TRIM_S from the segment's ends, inside the prediction.
+        inside = (t <= tp[-1] + tol) & (t >= first + SCORE_TRIM_S - tol) & (t <= last - SCORE_TRIM_S + tol)
+        t, tau = t[inside], tau[inside]
+        nearest = np.clip(np.searchsorted(tp, t - 0.5 * (tp[1] - tp[0] if tp.size > 1 else 0.0)), 0, tp.size - 1)
+        parts.append((t, tau, onto(t, tp, pr), mv[nearest]))
+    t, Y, pred, mov = (np.concatenate(a) for a in zip(*parts))
+    return scored_validation(RawScores(t, Y, pred, mov), src.source, settings.min_velocity, fc, plans[0].rate)

@@ -41,22 +41,25 @@ class Candidate:
 
 @dataclass(frozen=True)
 class ProcessingChoice:
-    """The candidates scored, the chosen one (lowest score), the knee [Hz], the reference
-    bandwidth [Hz], the number of blocks, the time spent [s] and, where the rest policy was open,
+    """The candidates scored, the chosen one (lowest score), the knee [Hz], the common scoring rate
+    [Hz] (None: not decimated; "raw": scored against the raw measured torques), the number of blocks, the time spent [s] and, where the rest policy was open,
     the per-joint scores [%] of each policy at the knee (``rest_scores``)."""
 
     candidates: tuple[Candidate, ...]
     chosen: Candidate
     knee: float
-    reference_hz: float | None
+    reference_hz: float | str | None
     blocks: int
     seconds: float
     rest_scores: tuple[tuple[str, tuple[float, ...]], ...] = ()
+    offsets: tuple[int, ...] = ()
+    offset_candidate: Candidate | None = None
 
     def table(self) -> str:
         n = max((len(c.per_joint) for c in self.candidates), default=0)
-        head = (f"processing chosen by {self.blocks}-block cross-validation (scored at "
-                f"{'the full rate' if self.reference_hz is None else f'{self.reference_hz:.4g} Hz'}; "
+        scored = ("against the raw measured torques, at the recordings' own time stamps" if self.reference_hz == "raw"
+                  else "at the full rate" if self.reference_hz is None else f"at {self.reference_hz:.4g} Hz")
+        head = (f"processing chosen by {self.blocks}-block cross-validation (scored {scored}; "
                 f"knee {self.knee:.3g} Hz)\n  cut-off [Hz]  decimate to [Hz]  "
                 f"held-back error [%]" + "".join(f"{'j' + str(j + 1):>7}" for j in range(n)) + "  rest policy")
         lines = [head]
@@ -67,6 +70,13 @@ class ProcessingChoice:
             joints = "".join(f"{v:7.2f}" for v in c.per_joint) if c.per_joint else " " * 7 * n
             lines.append(f"  {c.cutoff:12.4g}  {dec:>16}  {score:>19}{joints}  {_rest_text(c.rest)}"
                          f"{' ' + c.label if c.label else ''}{mark}")
+        if self.offset_candidate is not None:
+            c = self.offset_candidate
+            joints = "".join(f"{v:7.2f}" for v in c.per_joint) if c.per_joint else ""
+            score = "-" if math.isnan(c.score) else f"{c.score:.3f}"
+            what = ("the offsets kept scored together" if c.label == "offsets kept" else
+                    "an offset on every joint allowed one")
+            lines.append(f"  {'with offsets':>12}  {'':>16}  {score:>19}{joints}  (the chosen processing, {what})")
         return "\n".join(lines + ["  " + self.reason()])
 
     def reason(self) -> str:
@@ -87,13 +97,22 @@ class ProcessingChoice:
                     f"{DEFAULT_REST}'s, else {DEFAULT_REST} ("
                     + "; ".join(f"j{j + 1} " + ", ".join(f"{name} {v[j]:.2f}" for name, v in self.rest_scores)
                                 for j in range(len(self.rest_scores[0][1]))) + " %)")
+        if self.offset_candidate is not None:
+            out += ("; torque offsets on joints " + (", ".join(str(j + 1) for j in self.offsets) or "none")
+                    + " (where they lower that joint's held-back error by more than the blocks' spread, and together "
+                      "the mean over joints)")
         return out
 
     def to_dict(self) -> dict[str, Any]:
-        return {"method": "blocked cross-validation", "blocks": self.blocks, "scoring_rate_hz": self.reference_hz,
+        raw = self.reference_hz == "raw"
+        return {"method": "blocked cross-validation", "blocks": self.blocks,
+                "scored_against": "raw measured torques" if raw else "torques filtered as the candidate's rows",
+                "scoring_rate_hz": None if raw else self.reference_hz,
                 "knee_hz": self.knee, "seconds": self.seconds, "chosen": self.chosen.to_dict(),
                 "reason": self.reason(), "rest_scores_pct": {name: list(v) for name, v in self.rest_scores},
-                "candidates": [c.to_dict() for c in self.candidates], "table": self.table()}
+                "candidates": [c.to_dict() for c in self.candidates], "table": self.table(),
+                "offsets": [j + 1 for j in self.offsets],
+                "offset_candidate": None if self.offset_candidate is None else self.offset_candidate.to_dict()}
 
 
 def _rest_text(rest: RestPolicy | None) -> str:

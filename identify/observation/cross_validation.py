@@ -8,18 +8,25 @@ the position filter, with the decimation to about 2.5 fc so that the parallel fi
 1. the recordings' time span is cut into ``blocks`` contiguous blocks of equal duration;
 2. for each block, the base parameters are fitted (WLS) on the rows of the other blocks and the
    torques of the held-back block are predicted;
-3. every candidate is scored at one **common rate** (the grid's highest decimated rate): the rows
-   of W and Y are decimated to it whatever the candidate's own decimation, so the held-back
-   torque Y is the same signal for every candidate (its noise is common: no candidate is rewarded
-   or punished for the noise its own filter lets through), while the noise the candidate's
-   cut-off lets into its prediction counts; the score of joint j is 100 ||Y_j - W_j beta|| /
-   ||Y_j|| over every held-back block, the candidate's score the mean over joints. (An earlier
-   version low-passed prediction and torque at the lowest cut-off: it hid the prediction noise of
-   the high cut-offs, and on the Panda twin kept 20 Hz where 5 Hz was 5x better.)
+3. every candidate is scored against the **raw measured torques** (:mod:`identify.observation.cv_scoring`):
+   its held-back prediction, at its own cut-off and decimation, is interpolated (linearly) onto the
+   recordings' own time stamps and compared with the torques the log holds, unfiltered, on the same
+   samples for every candidate (measured, beyond the edges of the grid's lowest cut-off): no
+   candidate is judged on its own filtered torques, the noise of the torques is common to all, the
+   noise a cut-off lets into the prediction counts. The score of joint j is 100 ||tau_j - tau^_j|| /
+   ||tau_j|| over every held-back block, the candidate's score the mean over joints. (Before, every
+   candidate's rows were decimated to the grid's highest decimated rate and scored against torques
+   filtered like them: ``choose_processing(raw=False)``, what the block-by-block choice still does.
+   An earlier version low-passed prediction and torque at the lowest cut-off: it hid the prediction
+   noise of the high cut-offs, and on the Panda twin kept 20 Hz where 5 Hz was 5x better.)
 
-The grid is small: the knee times (0.5, 0.7, 1, 1.4, 2), within [2 Hz, 40 % of Nyquist], each
-decimated to max(2.5 fc, 25 Hz), and the default processing (the automatic cut-off with the
-default decimation). Where the fit leaves the rest policy open, every policy that keeps the rest
+The grid is small: the knee times (0.5, 1, 2), within [2 Hz, 40 % of Nyquist], each
+decimated to max(2.5 fc, 25 Hz), the knee without decimation, and the default processing (the
+automatic cut-off with the default decimation). Where the fit allows torque offsets (``offsets``:
+not beside the robot's own offsets nor on a joint with asymmetric Coulomb friction, collinear with
+an offset), the chosen processing is scored once more with an offset on each allowed joint, and a
+joint keeps its offset where it lowers that joint's held-back error by more than the blocks' spread
+(the offset of joint j enters joint j's rows only). Where the fit leaves the rest policy open, every policy that keeps the rest
 rows (:data:`SCORED_REST`: zero-coulomb, presliding, none, and any later one of
 ``REST_POLICIES``) is first scored at the knee, and each joint takes the policy of its lowest
 per-joint score (the Coulomb column of joint j enters joint j's rows only: the choice is nearly
@@ -51,19 +58,29 @@ import numpy as np
 
 import rx90sym
 
-from identify.observation.matrix import (DECIMATION_PASSBAND, DEFAULT_MIN_VELOCITY, automatic_cutoff, column_regressor,
-                                         filtered_motions, stack_rows)
-from identify.observation.processing import DEFAULT_REST, REST_POLICIES, RestPolicy, drops_rest
+from identify.observation.matrix import DECIMATION_PASSBAND, DEFAULT_MIN_VELOCITY, automatic_cutoff
+from identify.observation.processing import DEFAULT_REST, REST_POLICIES, RestPolicy
 from identify.signal.filtering import choose_cutoff
 from identify.observation.candidates import CLEAR_MARGIN, DEFAULT_LABEL, Candidate, ProcessingChoice
+# The scores (and the fold helpers other choices import from here).
+from identify.observation.cv_scoring import (block_factors, block_scores, fold_wls, raw_targets,  # noqa: F401
+                                             score_common_rate, score_raw, time_blocks, time_folds)
 
 __all__ = ["Candidate", "ProcessingChoice", "GRID_FACTORS", "DEFAULT_BLOCKS", "SCORED_REST",
            "candidate_grid", "grid_around", "choose_processing", "select_processing", "scoring_rate", "time_folds",
            "time_blocks", "fold_wls", "clearly_better", "block_factors", "block_scores", "DEFAULT_ROW_CAP", "Budget",
            "observation_rows"]
 
-#: Cut-offs of the grid, as multiples of the position-spectrum knee.
-GRID_FACTORS = (0.5, 0.7, 1.0, 1.4, 2.0)
+#: Cut-offs of the grid, as multiples of the position-spectrum knee. (0.5, 0.7, 1, 1.4, 2) until the
+#: candidates without decimation and with offsets came: 0.7 and 1.4 were dropped to keep the choice's
+#: cost (scored against the raw torques, neighbouring cut-offs at one decimation scored alike).
+GRID_FACTORS = (0.5, 1.0, 2.0)
+#: The scorer of the in-memory choice (a name tests can replace).
+_score = score_raw
+#: ``reference`` of a choice scored against the raw measured torques (ProcessingChoice.reference_hz).
+RAW = "raw"
+#: Label of the candidate without decimation (candidate_grid).
+NO_DECIMATION = "no decimation"
 #: Contiguous blocks of the cross-validation.
 DEFAULT_BLOCKS = 5
 #: Lowest rate a candidate decimates to, Hz (enough rows per block for the fits and the scores).
@@ -89,7 +106,12 @@ def candidate_grid(recordings: Sequence[Any], default_decimate: float | None = 5
     rate = min(1.0 / float(np.median(np.diff(np.asarray(p.t)))) for r in recordings for p in r.pieces())
     knee = max(choose_cutoff(np.asarray(p.q), rate) for r in recordings for p in r.pieces()
                if p.n_samples >= 64)
-    return knee, grid_around(knee, rate, automatic_cutoff(recordings, default_decimate), default_decimate)
+    grid = grid_around(knee, rate, automatic_cutoff(recordings, default_decimate), default_decimate)
+    # No decimation, at the knee: the rows at the recordings' own rate (scored against the raw torques like the
+    # others). Third, after the knee and the default.
+    if grid[0].decimate_to is not None:
+        grid.insert(2, Candidate(grid[0].cutoff, None, label=NO_DECIMATION))
+    return knee, grid
 
 
 def grid_around(knee: float, rate: float, default_cutoff: float, default_decimate: float | None) -> list[Candidate]:
@@ -114,112 +136,12 @@ def scoring_rate(grid: Sequence[Candidate]) -> float | None:
     return None if any(c.decimate_to is None for c in grid) else max(c.decimate_to for c in grid)
 
 
-def time_folds(t: np.ndarray, start: float, span: float, blocks: int) -> np.ndarray:
-    """The contiguous block (0 .. blocks-1) of each time ``t`` [s] in ``[start, start + span)``."""
-    return np.minimum((blocks * (t - start) / span).astype(int), blocks - 1)
-
-
-def time_blocks(times: Sequence[np.ndarray], blocks: int) -> list[np.ndarray]:
-    """The fold of every sample: per array of sample times [s] (one per motion or segment), the
-    block 0..blocks-1 it falls in when the common span (earliest to latest time of all) is cut into
-    ``blocks`` contiguous blocks of equal duration (:func:`time_folds`). The one fold assignment of the
-    processing and the friction choices (by time, not by sample index: recordings and segments of other
-    lengths or rates fall in the same blocks for both)."""
-    start = min(float(np.min(t)) for t in times)
-    span = max(float(np.max(t)) for t in times) - start + 1e-9
-    return [time_folds(np.asarray(t), start, span, blocks) for t in times]
-
-
-def _compressed_blocks(motions: Sequence[Any], ids: Sequence[np.ndarray], blocks: int, drop: bool,
-                       n: int) -> dict[tuple[int, int], tuple[np.ndarray, int]]:
-    """(block, joint) -> (the triangular factor of [W | Y] over the block's rows of that joint, their number)."""
-    out = {}
-    for b in range(blocks):
-        rows = [m.rows(drop) & (i == b)[:, None] for m, i in zip(motions, ids)]
-        W, Y, joint, _ = stack_rows([m.Phi for m in motions], [m.Y for m in motions], masks=rows)
-        out.update(block_factors(W, Y, joint, np.full(joint.size, b), [b], n))
-    return out
-
-
-def block_factors(W: np.ndarray, Y: np.ndarray, joint: np.ndarray, ids: np.ndarray, blocks: Sequence[int],
-                  n: int) -> dict[tuple[int, int], tuple[np.ndarray, int]]:
-    """(block, joint) -> (the triangular factor of [W | Y] over the rows of that block (``ids``) and
-    joint, their number), for the ``blocks`` listed: what :func:`fold_wls` solves from."""
-    A = np.column_stack([W, Y])
-    return {(b, j): (np.linalg.qr(A[m], mode="r"), int(m.sum())) for b in blocks for j in range(n)
-            if (m := (ids == b) & (joint == j)).any()}
-
-
-def block_scores(err2: np.ndarray, ref2: np.ndarray) -> tuple[float, tuple[float, ...], tuple[tuple[float, ...], ...]]:
-    """(score, per joint, per held-back block and joint), relative errors 100 sqrt(err2 / ref2) in %,
-    from the squared errors and references (blocks, n) of the held-back blocks."""
-    total = ref2.sum(axis=0)
-    per_joint = 100.0 * np.sqrt(err2.sum(axis=0) / np.where(total > 0, total, np.nan))
-    per_block = 100.0 * np.sqrt(err2 / np.where(ref2 > 0, ref2, np.nan))
-    return (float(np.nanmean(per_joint)), tuple(float(v) for v in per_joint),
-            tuple(tuple(float(v) for v in row) for row in per_block))
-
-
-def fold_wls(factors: dict[tuple[int, int], tuple[np.ndarray, int]], held: int, n: int) -> np.ndarray | None:
-    """WLS (each joint weighted by 1 / its residual standard deviation, as the fit does) on every
-    block but ``held``, from the compressed blocks; None when a joint has too few rows."""
-    systems = []
-    for j in range(n):
-        parts = [f for (b, jj), f in factors.items() if jj == j and b != held]
-        if not parts:
-            return None
-        stacked = np.vstack([R for R, _ in parts])  # the same norms as the rows it compresses
-        rows = sum(count for _, count in parts)
-        c = stacked.shape[1] - 1
-        x, *_ = np.linalg.lstsq(stacked[:, :c], stacked[:, c], rcond=None)
-        resid = np.linalg.norm(stacked[:, :c] @ x - stacked[:, c])
-        if rows <= c or resid == 0:
-            return None
-        systems.append(stacked / (resid / np.sqrt(rows - c)))  # sigma_j as in eq. 12, per joint
-    R = np.vstack(systems)
-    c = R.shape[1] - 1
-    beta, *_ = np.linalg.lstsq(R[:, :c], R[:, c], rcond=None)
-    return beta
-
-
-def _score(robot: rx90sym.Robot, recordings: Sequence[Any], cand: Candidate, base: Any, reference: float | None,
-           blocks: int, options: dict) -> tuple[float, tuple[float, ...], tuple[tuple[float, ...], ...]]:
-    """(score, per joint, per held-back block and joint), relative errors in %; the rows decimated
-    to the common scoring rate ``reference`` [Hz] (None: not decimated), whatever the candidate's."""
-    min_velocity = options["min_velocity"] if cand.rest is not None else None
-    rest = cand.rest or "zero-coulomb"
-    # A presliding joint gets its magnitude FPj (travel PRESLIDING_TRAVEL), as in the fit.
-    names, regressor = column_regressor(robot, base, rest=rest if min_velocity is not None else None)
-    motions, _, _ = filtered_motions(robot, recordings, cand.cutoff, reference, options["spring"],
-                                     regressor, names, min_velocity, rest, options.get("delay", 0.0))
-    ids = time_blocks([m.t for m in motions], blocks)
-    drop = min_velocity is not None and drops_rest(rest)
-    n = robot.n
-    # One compression per (block, joint): [R | z] of the QR of [W | Y] (eq. 10 on few rows).
-    blocks_R = _compressed_blocks(motions, ids, blocks, drop, n)
-    err2, ref2 = np.zeros((blocks, n)), np.zeros((blocks, n))
-    for b in range(blocks):
-        beta = fold_wls(blocks_R, b, n)
-        if beta is None:
-            continue
-        for m, i in zip(motions, ids):
-            held = np.flatnonzero(i == b)
-            pred = m.Phi[held] @ beta
-            meas = m.Y[held]
-            ok = m.measured[held] if m.measured is not None else np.ones(held.size, dtype=bool)
-            err2[b] += np.sum((pred - meas)[ok] ** 2, axis=0)
-            ref2[b] += np.sum(meas[ok] ** 2, axis=0)
-    if not np.any(ref2 > 0):
-        raise ValueError("no fold could be fitted and scored (too few rows left after the filters' edges)")
-    return block_scores(err2, ref2)
-
-
 def choose_processing(robot: rx90sym.Robot, recordings: Sequence[Any], base: Any = None,
                       min_velocity: float | None = DEFAULT_MIN_VELOCITY, rest: RestPolicy | None = None,
                       spring: bool = True, blocks: int = DEFAULT_BLOCKS, row_cap: int | None = DEFAULT_ROW_CAP,
                       time_cap: float | None = None, default_decimate: float | None = 50.0,
                       candidates: Sequence[Candidate] | None = None, policies: Sequence[str] = SCORED_REST,
-                      delay: float = 0.0) -> ProcessingChoice:
+                      delay: float = 0.0, raw: bool = True, offsets: Sequence[int] = ()) -> ProcessingChoice:
     """Score the candidate processings (module docstring) and choose the lowest held-back error.
 
     min_velocity [rad/s], spring: the fit's rest threshold (None: no rest handling) and spring (the
@@ -229,18 +151,61 @@ def choose_processing(robot: rx90sym.Robot, recordings: Sequence[Any], base: Any
     first is always scored); time_cap [s]: the same on the wall clock, on request (None: off, the
     default: the choice then never depends on the machine's speed); candidates: another grid (default
     :func:`candidate_grid`); delay [s]: the torque lag the fit compensates (every candidate is scored
-    with it, as the fit will use it).
+    with it, as the fit will use it); raw: score against the raw measured torques (the default);
+    False: the former scoring, every candidate's rows decimated to the grid's common rate against
+    the torques filtered alike (what the block-by-block choice, :mod:`identify.estimation.stream_cv`,
+    still does; no "no decimation" candidate then); offsets: the joints (0-based) that may get a
+    torque offset (:func:`identify.observation.offsets.offset_joints`): the chosen processing is
+    scored again with an offset on each of them, and a joint keeps its offset where it clearly
+    lowers that joint's held-back error (``ProcessingChoice.offsets``).
     """
     if blocks < 2:
         raise ValueError(f"cross-validation needs at least 2 blocks, got {blocks}")
     base = base if base is not None else rx90sym.base_parameters(robot)
     knee, grid = candidate_grid(recordings, default_decimate)
     grid = list(candidates) if candidates is not None else grid
-    reference = scoring_rate(grid)
     options = {"min_velocity": min_velocity, "spring": spring, "delay": delay}
     budget = Budget(observation_rows(robot, recordings), row_cap, time_cap)
-    return select_processing(lambda cand: _score(robot, recordings, cand, base, reference, blocks, options),
-                             knee, grid, reference, blocks, min_velocity, rest, budget, policies)
+    if not raw:
+        grid = [c for c in grid if c.label != NO_DECIMATION]  # the former grid: every candidate decimated
+        reference = scoring_rate(grid)
+        return select_processing(lambda c: score_common_rate(robot, recordings, c, base, reference, blocks, options),
+                                 knee, grid, reference, blocks, min_velocity, rest, budget, policies)
+    targets = raw_targets(recordings, grid, blocks, delay)
+    # The filtered rows of the best candidates and the default kept: the offsets' pass reuses the chosen one's.
+    cache: dict = {}
+    kept_scores: dict = {}
+
+    def scored(cand: Candidate) -> Any:
+        out = _score(robot, recordings, cand, base, targets, blocks, {**options, "cache": cache})
+        kept_scores[(cand.cutoff, cand.decimate_to, cand.rest)] = (cand.label == DEFAULT_LABEL, out[0])
+        best = sorted((k for k, (_, v) in kept_scores.items() if not math.isnan(v)), key=lambda k: kept_scores[k][1])
+        keep = set(best[:2]) | {k for k, (default, _) in kept_scores.items() if default}
+        for k in [k for k in cache if k not in keep]:
+            del cache[k]
+        return out
+
+    choice = select_processing(scored, knee, grid, RAW, blocks, min_velocity, rest, budget, policies)
+    if not offsets:
+        return choice
+    extra = {**options, "cache": cache, "offsets": tuple(offsets)}
+    with_offsets = _run(lambda c: _score(robot, recordings, c, base, targets, blocks, extra),
+                        [replace(choice.chosen, label="offsets")], time.perf_counter(), Budget(budget.rows, None))[0]
+    if not with_offsets.per_block:
+        return replace(choice, offset_candidate=with_offsets)
+    kept = tuple(j for j in offsets if clearly_better(with_offsets, choice.chosen, j))
+    if kept and kept != tuple(offsets):
+        # The joints share the other parameters: the offsets kept are scored together (the rows reused),
+        # and dropped unless that lowers the mean held-back error and stays clearly better on each of them.
+        alone = _run(lambda c: _score(robot, recordings, c, base, targets, blocks, {**extra, "offsets": kept}),
+                     [replace(choice.chosen, label="offsets kept")], time.perf_counter(), Budget(budget.rows, None))[0]
+        if not (alone.per_block and alone.score < choice.chosen.score
+                and all(clearly_better(alone, choice.chosen, j) for j in kept)):
+            kept = ()
+        with_offsets = alone
+    elif kept and with_offsets.score >= choice.chosen.score:
+        kept = ()
+    return replace(choice, offsets=kept, offset_candidate=with_offsets)
 
 
 def observation_rows(robot: rx90sym.Robot, recordings: Sequence[Any]) -> int:
@@ -269,7 +234,7 @@ class Budget:
         return None
 
 
-Scorer = Callable[[Candidate], tuple[float, tuple[float, ...], tuple[tuple[float, ...], ...]]]  # as _score's
+Scorer = Callable[[Candidate], tuple[float, tuple[float, ...], tuple[tuple[float, ...], ...]]]  # as score_raw's
 
 
 def select_processing(score: Scorer, knee: float, grid: Sequence[Candidate], reference: float | None, blocks: int,

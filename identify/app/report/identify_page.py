@@ -231,7 +231,9 @@ def processing_table(record: Mapping[str, Any]) -> Any:
              ("Angle convention of the files", "", m.get("convention") or "the file's own (default: controller)"),
              ("Friction: coupled Coulomb form", "", m.get("coulomb_sign") or "not coupled"),
              ("Friction form per joint", "", _friction_text(m.get("friction"))),
-             ("Torque offsets", "", bool(m.get("offsets"))),
+             ("Torque offsets", "", "every joint (robot option)" if m.get("offsets") else
+              "joints " + ", ".join(map(str, m["offset_joints"])) + " (cross-validated)" if m.get("offset_joints")
+              else "none"),
              ("Spring", "", m.get("spring") or "none"),
              ("Rest threshold", "rad/s", m.get("min_velocity") if m.get("min_velocity") is not None else "off"),
              ("Rest samples", "", rest_label(m["rest"]) if m.get("rest") else "–"),

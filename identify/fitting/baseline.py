@@ -1,0 +1,205 @@
+"""The plain OLS baseline: the yardstick every validation prints beside the toolkit's figure.
+
+Exactly as the project's issue notes define it (what a user writes in 40 lines):
+
+- q filtered by a 4th-order Butterworth at 10 Hz, zero phase (``scipy.signal.filtfilt``), at the
+  recording's own rate, no decimation; q̇ and q̈ by ``numpy.gradient`` of the filtered q;
+- the regressor of the standard rigid-body parameters (the toolkit's compiled regressor, equal to
+  Pinocchio's ``computeJointTorqueRegressor`` to 1e-9: 10 columns per link in Pinocchio's order)
+  plus, per joint, [q̇ⱼ, sign(q̇ⱼ), 1] (viscous, Coulomb, offset);
+- ``numpy.linalg.lstsq(W, y, rcond=1e-10)`` on the fitted samples with 0.5 s trimmed at both ends
+  of each segment (bridged samples left out);
+- errors against the raw measured torques on the predicted samples, 0.5 s trimmed at both ends.
+
+A robot whose description has a spring gets its known spring torque added to the measured torque
+(as the toolkit does; none of the real arms has one). Rows are compressed chunk by chunk with a QR
+factorisation ([W | y] -> R, same singular values, so lstsq on R with the same rcond solves the same
+problem) so that a long log never holds the whole W.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any, Sequence
+
+import numpy as np
+from scipy.signal import butter, filtfilt
+
+import rx90sym
+from rx90sym.pinocchio_bridge import PINOCCHIO_ORDER, pinocchio_columns
+
+from identify.estimation.results import json_number
+
+__all__ = ["BASELINE_CUTOFF_HZ", "BASELINE_ORDER", "BASELINE_TRIM_S", "BASELINE_RCOND", "PlainBaseline",
+           "BaselinePrediction", "baseline_names", "baseline_regressor", "baseline_signals", "fit_baseline",
+           "baseline_rms", "plain_baseline"]
+
+#: Cut-off [Hz] and order of the baseline's zero-phase Butterworth on q.
+BASELINE_CUTOFF_HZ = 10.0
+BASELINE_ORDER = 4
+#: Seconds trimmed at both ends of every segment, fitted or predicted.
+BASELINE_TRIM_S = 0.5
+#: numpy.linalg.lstsq's rcond of the baseline.
+BASELINE_RCOND = 1e-10
+#: Samples of W evaluated at a time (each chunk compressed by a QR).
+_CHUNK = 4096
+
+
+def baseline_names(robot: rx90sym.Robot) -> tuple[str, ...]:
+    """The baseline's columns: the 10 rigid-body parameters of each link in Pinocchio's order
+    (M, MX, MY, MZ, XX, XY, YY, XZ, YZ, ZZ), then per joint FVj, FSj, OFFj."""
+    body = [f"{p}{j + 1}" for j in range(robot.n) for p in PINOCCHIO_ORDER]
+    return tuple(body + [f"{p}{j + 1}" for j in range(robot.n) for p in ("FV", "FS", "OFF")])
+
+
+def baseline_regressor(robot: rx90sym.Robot, q: np.ndarray, dq: np.ndarray, ddq: np.ndarray) -> np.ndarray:
+    """(S, n, 13 n) regressor of :func:`baseline_names` at the samples (S, n) [rad, rad/s, rad/s²]."""
+    rigid = robot.regressor_batch(q, dq, ddq)[:, :, pinocchio_columns(robot)]
+    S, n = np.shape(q)
+    extra = np.zeros((S, n, 3 * n))
+    for j in range(n):
+        extra[:, j, 3 * j] = dq[:, j]
+        extra[:, j, 3 * j + 1] = np.sign(dq[:, j])
+        extra[:, j, 3 * j + 2] = 1.0
+    return np.concatenate([rigid, extra], axis=2)
+
+
+@dataclass(frozen=True, eq=False)
+class BaselineSignals:
+    """One segment through the baseline's filter: t (N,) [s]; q, dq, ddq (N, n) filtered and
+    differentiated; tau (N, n) the raw measured torques [N m]; spring (N, n) the known spring torque
+    at the filtered q (0 without); kept (N,) the samples fitted or scored (0.5 s from each end,
+    measured)."""
+
+    t: np.ndarray
+    q: np.ndarray
+    dq: np.ndarray
+    ddq: np.ndarray
+    tau: np.ndarray
+    spring: np.ndarray
+    kept: np.ndarray
+
+
+def baseline_signals(robot: rx90sym.Robot, piece: Any, spring: bool = True) -> BaselineSignals:
+    """The baseline's derivatives of one segment (a recording without gaps too long to bridge)."""
+    t = np.asarray(piece.t, dtype=float)
+    if t.size < 2:
+        raise ValueError(f"{piece.source}: {t.size} sample(s): the plain baseline needs a motion")
+    step = float(np.median(np.diff(t)))
+    rate = 1.0 / step
+    if BASELINE_CUTOFF_HZ >= rate / 2:
+        raise ValueError(f"{piece.source}: recorded at {rate:g} Hz: the plain baseline's {BASELINE_CUTOFF_HZ:g} Hz "
+                         f"filter needs a rate above {2 * BASELINE_CUTOFF_HZ:g} Hz")
+    b, a = butter(BASELINE_ORDER, BASELINE_CUTOFF_HZ, fs=rate)
+    q = filtfilt(b, a, np.asarray(piece.q, dtype=float), axis=0)
+    dq = np.gradient(q, step, axis=0)
+    ddq = np.gradient(dq, step, axis=0)
+    kept = (t >= t[0] + BASELINE_TRIM_S - 1e-9 * step) & (t <= t[-1] - BASELINE_TRIM_S + 1e-9 * step)
+    kept &= np.asarray(piece.measured_mask, dtype=bool)
+    extra = robot.spring_torque_batch(q)[:, :, 0] if spring and robot.spring is not None else np.zeros_like(q)
+    return BaselineSignals(t, q, dq, ddq, np.asarray(piece.torques, dtype=float), extra, kept)
+
+
+@dataclass(frozen=True, eq=False)
+class BaselinePrediction:
+    """The baseline's torques of one recording at its own time stamps: t (N,) [s]; predicted (N, n)
+    joint torques [N m] (spring not added; nan outside ``scored``); measured (N, n) the raw torques;
+    scored (N,) the samples it predicts (0.5 s from each segment's ends, measured)."""
+
+    t: np.ndarray
+    predicted: np.ndarray
+    measured: np.ndarray
+    scored: np.ndarray
+
+
+@dataclass(frozen=True, eq=False)
+class PlainBaseline:
+    """The plain OLS baseline fitted: values over ``names`` (:func:`baseline_names`), the fitted
+    samples, the rank of W, whether the spring torque was added; per joint residual RMS [N m] on the
+    fitted samples."""
+
+    names: tuple[str, ...]
+    values: np.ndarray
+    samples: int
+    rank: int
+    spring: bool
+    residual_rms: np.ndarray
+
+    def predict(self, robot: rx90sym.Robot, recording: Any) -> BaselinePrediction:
+        """The baseline's prediction of ``recording`` (every segment on its own)."""
+        if tuple(baseline_names(robot)) != self.names:
+            raise ValueError(f"the plain baseline was fitted with other columns than robot {robot.name!r}'s")
+        parts = []
+        for piece in recording.pieces():
+            s = baseline_signals(robot, piece, self.spring)
+            pred = np.full(s.tau.shape, np.nan)
+            rows = np.flatnonzero(s.kept)
+            if rows.size:
+                Phi = baseline_regressor(robot, s.q[rows], s.dq[rows], s.ddq[rows])
+                pred[rows] = Phi @ self.values - s.spring[rows]
+            parts.append((s.t, pred, s.tau, s.kept))
+        t, pred, tau, kept = (np.concatenate(a) for a in zip(*parts))
+        return BaselinePrediction(t, pred, tau, kept)
+
+    def to_json(self) -> dict[str, Any]:
+        return {"definition": "plain OLS: q by a 4th-order zero-phase Butterworth at 10 Hz, numpy.gradient, "
+                              "rigid-body regressor + [dq_j, sign(dq_j), 1] per joint, lstsq(rcond=1e-10), "
+                              "0.5 s trimmed at both ends",
+                "cutoff_hz": BASELINE_CUTOFF_HZ, "order": BASELINE_ORDER, "trim_s": BASELINE_TRIM_S,
+                "rcond": BASELINE_RCOND, "names": list(self.names),
+                "values": [json_number(v) for v in self.values], "samples": self.samples, "rank": self.rank,
+                "spring": self.spring, "residual_rms": [json_number(v) for v in self.residual_rms]}
+
+    @classmethod
+    def from_json(cls, d: dict[str, Any] | None) -> "PlainBaseline | None":
+        if not d:
+            return None
+        values = np.array([np.nan if v is None else v for v in d["values"]], dtype=float)
+        rms = np.array([np.nan if v is None else v for v in d.get("residual_rms", [])], dtype=float)
+        return cls(tuple(d["names"]), values, int(d["samples"]), int(d["rank"]), bool(d["spring"]), rms)
+
+
+def fit_baseline(robot: rx90sym.Robot, recordings: Sequence[Any], spring: bool = True) -> PlainBaseline:
+    """The plain OLS baseline (module docstring) on every segment of ``recordings``. The rows of each joint
+    are compressed apart ([W_j | y_j] -> R_j, stacked: the same singular values as W), which gives each
+    joint's residual on the fitted samples without a second pass."""
+    names = baseline_names(robot)
+    c, n = len(names), robot.n
+    R = [np.zeros((0, c + 1)) for _ in range(n)]
+    rows = 0
+    for rec in recordings:
+        for piece in rec.pieces():
+            s = baseline_signals(robot, piece, spring)
+            kept = np.flatnonzero(s.kept)
+            for start in range(0, kept.size, _CHUNK):
+                idx = kept[start:start + _CHUNK]
+                Phi = baseline_regressor(robot, s.q[idx], s.dq[idx], s.ddq[idx])
+                y = s.tau[idx] + s.spring[idx]
+                R = [np.linalg.qr(np.vstack([R[j], np.column_stack([Phi[:, j, :], y[:, j]])]), mode="r")
+                     for j in range(n)]
+                rows += idx.size
+    if rows == 0:
+        raise ValueError(f"the plain baseline has no sample to fit (every segment shorter than "
+                         f"{2 * BASELINE_TRIM_S:g} s)")
+    stacked = np.vstack(R)
+    values, _, rank, _ = np.linalg.lstsq(stacked[:, :c], stacked[:, c], rcond=BASELINE_RCOND)
+    x = np.r_[values, -1.0]
+    residual = np.array([np.linalg.norm(Rj @ x) / np.sqrt(rows) for Rj in R])
+    return PlainBaseline(names, values, rows, int(rank), bool(spring), residual)
+
+
+def baseline_rms(err: np.ndarray, mask: np.ndarray) -> np.ndarray:
+    """Per joint RMS [N m] of ``err`` (S, n) over the rows of ``mask`` (S,) or (S, n) (nan: none)."""
+    m = np.broadcast_to(mask if np.ndim(mask) == 2 else np.asarray(mask)[:, None], err.shape)
+    return np.array([np.sqrt(np.mean(err[m[:, j], j] ** 2)) if m[:, j].any() else np.nan
+                     for j in range(err.shape[1])])
+
+
+def plain_baseline(robot: rx90sym.Robot, recordings: Sequence[Any], spring: bool = True) -> PlainBaseline | None:
+    """:func:`fit_baseline`, or None where it cannot be fitted (no recordings, a rate of 20 Hz or
+    less, every segment shorter than 1 s): the validation then shows no baseline."""
+    if not recordings:
+        return None
+    try:
+        return fit_baseline(robot, recordings, spring)
+    except ValueError:
+        return None
