@@ -58,9 +58,9 @@ def fit(robot: rx90sym.Robot, recordings: Sequence[Any], processing: Processing 
     parameter file; None: no prior; or a PhysicalPrior: the unseen directions from nominal parameters,
     within a covariance of the base parameters calibrated by the segment bootstrap) or
     consistent_least_squares' prior, prior_weight, total_mass, mass_bounds, com_boxes, solver);
-    base: the columns (default: the symbolic base parameters; a BaseWithSpring identifies the
-    spring too, with processing.spring
-    False). Recorded in the fit file for :func:`load_fit`: gains (already applied to current
+    base: the columns (default: the symbolic base parameters, plus the torque offsets the
+    cross-validated processing chooses; columns given are fitted as they are; a BaseWithSpring
+    identifies the spring too, with processing.spring False). Recorded in the fit file for :func:`load_fit`: gains (already applied to current
     recordings), convention (of the files; None: each file's header), spring_source ("default",
     "none" or a table file; None: from the robot). observation: an already built observation
     matrix (the recordings are then not read; no delay estimate).
@@ -97,6 +97,7 @@ def fit(robot: rx90sym.Robot, recordings: Sequence[Any], processing: Processing 
     recordings = list(recordings) if isinstance(recordings, (list, tuple)) else [recordings]
     for rec in recordings if observation is None else ():
         rec.torques  # currents without gains: refused once, here, not by every candidate processing
+    columns_given = base is not None  # the caller's columns are fitted as they are (no offset added)
     base = base if base is not None else rx90sym.base_parameters(robot)
     options = p.observation_options()
     choice = None
@@ -107,9 +108,11 @@ def fit(robot: rx90sym.Robot, recordings: Sequence[Any], processing: Processing 
         # (W and Y filtered alike, it hardly depends on the cut-off; one delay search).
         scored_lag = (estimate_delay(robot, recordings, base=base, **options).delay if p.delay == "auto"
                       else float(p.delay))
-        # Torque offsets are a candidate of the WLS fits on the symbolic base (not of the consistent fit, whose
-        # columns map back to standard parameters, nor beside a robot's own offsets or asymmetric Coulomb).
-        eligible = offset_joints(robot, base) if method != "consistent" and isinstance(base, BaseParameters) else ()
+        # Torque offsets are a candidate of the WLS fits on the default symbolic base (not of the consistent fit,
+        # whose columns map back to standard parameters, nor of columns the caller gave, nor beside a robot's own
+        # offsets or asymmetric Coulomb).
+        eligible = (offset_joints(robot, base) if method != "consistent" and not columns_given
+                    and isinstance(base, BaseParameters) else ())
         choice = choose_processing(robot, recordings, base=base, min_velocity=p.min_velocity, rest=p.rest,
                                    spring=p.spring, default_decimate=p.decimate_to, delay=scored_lag,
                                    offsets=eligible)
