@@ -23,6 +23,7 @@ from identify.io.blocks import block_source
 from identify.fitting.raw_scoring import SCORE_TRIM_S, RawScores, raw_scores
 from identify.signal.interpolate import onto
 from identify.observation.matrix import column_regressor
+from identify.observation.offsets import offset_base, result_offsets
 from identify.observation.stream import DEFAULT_BLOCK, StreamSettings, piece, plan_windows, scan_all, windows_in_order
 
 __all__ = ["Validation", "predict", "validate"]
@@ -165,6 +166,8 @@ def predict(robot: rx90sym.Robot, result: IdentificationResult, recording: Any, 
     (identify.fitting.baseline.PlainBaseline), scored on the same raw samples (None: none).
     Scored against the raw measured torques at the recording's own time stamps.
     """
+    if base is None:  # the symbolic base, with the torque offsets the fit chose (OFFj in the result)
+        base = offset_base(rx90sym.base_parameters(robot), result_offsets(result, robot))
     base = presliding_base(robot, base, rest if has_policy(rest, "presliding") and min_velocity is not None else None)
     beta = base_vector(result, base, robot)
     cutoff = cutoff if cutoff is not None else automatic_cutoff([recording], decimate_to)
