@@ -27,8 +27,12 @@ def run(args: argparse.Namespace) -> int:
     from excitation import read_trajectory
     from identify.io.recordings import write_recording
 
+    from rx90sym.urdf import acceleration_note
+
     robot = load_robot(args)
     check_output(args.out)
+    if acceleration_note(robot):  # the trajectory is read against the robot's limits
+        progress(f"warning: {acceleration_note(robot)}")
     try:  # the twin's truth: the bundled RX90's own set, else the robot's nominal parameters
         params = rx90sym.default_parameters(robot, args.params)
     except ValueError as exc:
