@@ -36,14 +36,11 @@ import rx90sym
 from rx90sym.compiled import _c_compiler, shared_library
 from rx90sym.momentum import base_momentum_regressors
 
+from identify.monitor.defaults import DEFAULT_GAIN
 from identify.observation.processing import DEFAULT_MIN_VELOCITY
 
 __all__ = ["DEFAULT_GAIN", "FRICTION_KINDS", "ObserverModel", "observer_model"]
 
-#: Default observer gain K_O [rad/s] on every joint (docs/contact-monitor.md): a pulse reaches
-#: 1 − e^{−K_O t} of its size in t; at 25 rad/s, 63 % in 40 ms (the 50 ms detection budget less the
-#: 10 ms minimum duration), while the residual's noise (∝ √K_O on white torque noise) stays small.
-DEFAULT_GAIN = 25.0
 #: Parameter kinds of the actuation model (friction, offsets): absent from p and β.
 FRICTION_KINDS = ("FS", "FV", "FVM", "FSM", "FSP", "FSN", "OFF", "FST", "FP")
 #: A Coulomb term counts as uncertain (slack) while its driver speed is below this many times the
