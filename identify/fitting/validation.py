@@ -16,6 +16,7 @@ import numpy as np
 
 import rx90sym
 
+from identify.observation.defaults import DEFAULT_DECIMATE_TO
 from identify.observation.matrix import automatic_cutoff, filtered_motions, presliding_base
 from identify.observation.processing import RestPolicy, has_policy, predicted_rest
 from identify.estimation.results import IdentificationResult, json_number
@@ -153,7 +154,7 @@ def base_vector(result: IdentificationResult, base: Any, robot: rx90sym.Robot) -
 
 
 def predict(robot: rx90sym.Robot, result: IdentificationResult, recording: Any, base: Any = None,
-            cutoff: float | None = None, decimate_to: float | None = 50.0, spring: bool = True,
+            cutoff: float | None = None, decimate_to: float | None = DEFAULT_DECIMATE_TO, spring: bool = True,
             min_velocity: float | None = None, delay: float = 0.0, rest: RestPolicy = "zero-coulomb",
             baseline: Any = None) -> Validation:
     """Predicted vs measured torques of ``recording`` with the parameters of ``result``.
@@ -212,7 +213,7 @@ def validate(robot: rx90sym.Robot, result: IdentificationResult, recording: Any,
 
 
 def predict_streamed(robot: rx90sym.Robot, result: IdentificationResult, recording: Any, base: Any = None,
-                     cutoff: float | None = None, decimate_to: float | None = 50.0, spring: bool = True,
+                     cutoff: float | None = None, decimate_to: float | None = DEFAULT_DECIMATE_TO, spring: bool = True,
                      min_velocity: float | None = None, delay: float = 0.0, block: int = DEFAULT_BLOCK,
                      convention: str | None = None, gains: Any = None, rest: RestPolicy = "zero-coulomb") -> Validation:
     """:func:`identify.predict` on a recording of any length: predicted and measured torques block by block
