@@ -4,8 +4,8 @@ then the push log and the moving runs.
 Data: ../shared/data/ur10e (no licence: read in place, never copied). Fit: the empty run, rows 195-4966
 on a 100 Hz grid (benchmarks/ur10e_gains.py), torque offsets on, drive gains = the controller's own
 ratio of target torque to target current (joint side), rx90 identify's defaults with a fixed cut-off
-(10 Hz) and Coulomb friction. Thresholds: stored as ``rx90 identify`` stores them without a held-out
-file, i.e. calibrated on the fitted run's residual (identify.monitor.thresholds).
+(10 Hz) and Coulomb friction. Thresholds: as ``rx90 identify`` stores them without a held-out
+file, i.e. on the held-out blocks of the fitted run (identify.monitor.thresholds).
 
 Pushes (the source does not label them; docs/contact-monitor.md): in the push log the arm holds a
 pose, so the currents of joints 2 and 3 stay at their holding values except while a person pushes.
@@ -31,7 +31,8 @@ from identify import Processing, fit  # noqa: E402
 from identify.io.gains import DriveGains, apply_gains  # noqa: E402
 from identify.io.logs import read_log  # noqa: E402
 from identify.io.recordings import RecordingWarning  # noqa: E402
-from identify.monitor.log import calibrate, monitor_log  # noqa: E402
+from identify.monitor.log import monitor_log  # noqa: E402
+from identify.monitor.thresholds import with_contact_thresholds  # noqa: E402
 
 DATA = g.DATA
 PUSH = "collision/ur-20_01_22-push_pose_1.csv"
@@ -56,7 +57,9 @@ def ur10e_fit(data: Path = DATA, run: tuple[str, tuple[int, int]] = g.EMPTY):
     gains = DriveGains(g.controller_constants(empty), side="joint", source="controller constants")
     F = fit(robot(), [apply_gains(empty, gains, robot())],
             Processing(cutoff=10.0, friction="coulomb", rest="zero-coulomb"), gains=gains)
-    F = F.__class__(**{**F.__dict__, "contact_thresholds": calibrate(F, [empty])})
+    F, why = with_contact_thresholds(F, [empty])
+    if why:
+        raise RuntimeError(f"UR10e fit: no contact thresholds ({why})")
     return F, empty, gains
 
 

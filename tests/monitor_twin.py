@@ -1,13 +1,15 @@
 """Twin recordings with injected external-torque pulses, and fits on them, for the contact-monitor tests."""
 from __future__ import annotations
 
+from dataclasses import dataclass, field
 from functools import lru_cache
+from typing import Any, Iterable
 
 import numpy as np
 
 import rx90sym
 from identify import Processing, fit
-from motions import multisine
+from motions import multisine, stop_and_go
 from rx90sym.recording import Recording
 
 #: The fit's processing in these tests: fixed (no cross-validation), Coulomb friction, zero-Coulomb rest.
@@ -62,4 +64,69 @@ def ideal_response(t: np.ndarray, pulse_list: list, n: int, K: np.ndarray) -> np
         rise = 1 - np.exp(-k * np.clip(t - s, 0, None))
         top = 1 - np.exp(-k * (e - s))
         out[:, j] += A * np.where(t < e, rise, top * np.exp(-k * (t - e)))
+    return out
+
+
+#: First seed of the contact-free runs (apart from the fit's 100, the calibration's 101, the pulses' 0-4).
+FREE_SEED0 = 1000
+#: Every this many-th contact-free run holds rests (motions.stop_and_go: half of its samples at rest).
+FREE_REST_EVERY = 3
+
+
+def free_run(name: str, k: int, duration: float = 20.0) -> Recording:
+    """Contact-free run number ``k`` (0, 1, ...) on the realistic twin: a multisine of seed
+    FREE_SEED0 + k (its own frequencies, phases, amplitudes and noise draws), run with rests
+    (stop_and_go) when k % FREE_REST_EVERY == FREE_REST_EVERY - 1. Not cached (an hour of runs)."""
+    robot = rx90sym.load_robot(name)
+    seed = FREE_SEED0 + k
+    motion = multisine(robot, seed, duration=duration)
+    if k % FREE_REST_EVERY == FREE_REST_EVERY - 1:
+        motion = stop_and_go(motion)
+    return rx90sym.twin.simulate(robot, motion, duration=duration, noise="realistic", seed=seed)
+
+
+@dataclass
+class FreeScan:
+    """The monitor over contact-free runs, each monitored on its own (observer reset between runs):
+    seconds monitored, events [(run k, ContactEvent, moving)] (moving: some event joint above the fit's
+    rest threshold at the event's start), margin (n,) the largest |r_j| / (T_j + d_j) over all samples
+    (below 1 everywhere: no joint ever active), and where it was: (run k, t [s], |q̇_j| [rad/s]) per joint."""
+
+    thresholds: np.ndarray
+    seconds: float = 0.0
+    events: list = field(default_factory=list)
+    margin: np.ndarray | None = None
+    where: list = field(default_factory=list)
+
+    def add(self, k: int, rec: Recording, res: Any, vmin: float) -> None:
+        ratio = np.abs(res.residual) / (self.thresholds + res.slack)
+        if self.margin is None:
+            self.margin, self.where = np.zeros(ratio.shape[1]), [None] * ratio.shape[1]
+        tt = rec.t - rec.t[0]
+        qd = rec.dq if rec.dq is not None else np.gradient(rec.q, rec.t, axis=0, edge_order=2)  # as monitor_log
+        for j, i in enumerate(np.argmax(ratio, axis=0)):
+            if ratio[i, j] > self.margin[j]:
+                self.margin[j], self.where[j] = ratio[i, j], (k, float(tt[i]), float(abs(qd[i, j])))
+        for e in res.events:
+            i = int(np.searchsorted(tt, e.start_s))
+            moving = any(abs(qd[i, j - 1]) > vmin for j in e.joints)
+            self.events.append((k, e, moving))
+        self.seconds += res.duration_s
+
+
+def scan_free_motion(name: str, fit: Any, thresholds: dict[str, np.ndarray], runs: Iterable[int],
+                     duration: float = 20.0) -> dict[str, FreeScan]:
+    """Monitor the contact-free runs ``runs`` of robot ``name`` (numbers k of :func:`free_run`) with each set of
+    thresholds (label -> T per joint [N·m]); one simulation per run, the observer reset between runs."""
+    from identify.monitor.log import monitor_log
+    from identify.monitor.observer import observer_model
+    from identify.observation.processing import DEFAULT_MIN_VELOCITY
+
+    model = observer_model(fit, "torque")
+    vmin = fit.min_velocity or DEFAULT_MIN_VELOCITY
+    out = {label: FreeScan(np.asarray(T, dtype=float)) for label, T in thresholds.items()}
+    for k in runs:
+        rec = free_run(name, k, duration)
+        for label, scan in out.items():
+            scan.add(k, rec, monitor_log(fit, rec, scan.thresholds, keep=True, model=model), vmin)
     return out

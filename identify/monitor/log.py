@@ -3,8 +3,9 @@
 The same compiled observer step as :class:`identify.monitor.contact.ContactMonitor`, run on each
 block in one C loop: the residual of a log equals the online monitor's, sample for sample. Times
 count from the recording's first sample; no edge is trimmed. A recording without velocities gets
-them by central differences of q (``numpy.gradient`` on the whole record, one-sided at its two
-ends; blocks overlap so that the result does not depend on the block size).
+them by central differences of q (``numpy.gradient`` on the whole record, one-sided of second order
+at its two ends: a first-order end of a log that starts moving kicked the residual by up to 2.9 N·m on
+the RX90 twin; blocks overlap so that the result does not depend on the block size).
 """
 from __future__ import annotations
 
@@ -20,7 +21,7 @@ from identify.monitor.contact import (CALIBRATION_MARGIN, CALIBRATION_QUANTILE, 
 from identify.monitor.defaults import DEFAULT_MONITOR_BLOCK
 from identify.monitor.observer import ObserverModel, observer_model
 
-__all__ = ["DEFAULT_MONITOR_BLOCK", "MonitorLog", "MonitorInputError", "calibrate", "check_fit", "monitor_log"]
+__all__ = ["DEFAULT_MONITOR_BLOCK", "MonitorLog", "MonitorInputError", "calibrate", "check_fit", "excess", "monitor_log"]
 
 #: Residual envelope kept for the report: the signed extremes per this span [s] (memory: 1 h at
 #: 1 kHz, 7 joints, about 12 MB).
@@ -157,7 +158,7 @@ def monitor_log(fit: Any, recording: Any, thresholds: float | Sequence[float] | 
             rows = slice(done - first_abs, stop - first_abs)
             t = np.asarray(rec.t, dtype=float)
             qd_all = (np.asarray(rec.dq, dtype=float) if rec.dq is not None
-                      else np.gradient(np.asarray(rec.q, dtype=float), t, axis=0))
+                      else np.gradient(np.asarray(rec.q, dtype=float), t, axis=0, edge_order=2 if t.size > 2 else 1))
             Q, QD, E, tb = rec.q[rows], qd_all[rows], rec.torques[rows], t[rows]
             if tb.shape[0] == 0:
                 continue
@@ -215,8 +216,13 @@ def calibrate(fit: Any, recordings: Sequence[Any], gain: float | Sequence[float]
     friction slack d_j over all their samples, times ``margin`` (docs/contact-monitor.md)."""
     if not recordings:
         raise MonitorInputError("calibrate: no contact-free recording given")
-    n = fit.robot.n
-    big = np.full(n, 1e300)
-    runs = [monitor_log(fit, rec, big, gain, block=block, keep=True) for rec in recordings]
-    mags = [np.maximum(np.abs(x.residual) - x.slack, 0.0) for x in runs]
+    mags = [excess(fit, rec, gain, block=block) for rec in recordings]
     return margin * np.quantile(np.concatenate(mags), quantile, axis=0)
+
+
+def excess(fit: Any, recording: Any, gain: float | Sequence[float] | None = None, *,
+           block: int = DEFAULT_MONITOR_BLOCK, model: ObserverModel | None = None) -> np.ndarray:
+    """(S, n) the residual's magnitude above the friction slack, (|r_j| − d_j)⁺ [N·m], per sample of a
+    contact-free ``recording`` (no threshold applied): what the thresholds are a quantile of."""
+    run = monitor_log(fit, recording, np.full(fit.robot.n, 1e300), gain, block=block, keep=True, model=model)
+    return np.maximum(np.abs(run.residual) - run.slack, 0.0)

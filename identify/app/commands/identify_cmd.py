@@ -241,7 +241,7 @@ def run(args: argparse.Namespace) -> int:
     if args.json:
         from identify.monitor.thresholds import with_contact_thresholds
 
-        result, why = with_contact_thresholds(result, [val_rec] if val_rec is not None else (recs or args.recordings))
+        result, why = with_contact_thresholds(result, recs or args.recordings, val_rec)
         if why:
             progress(f"contact thresholds not stored ({why}): rx90 monitor will need --calibrate")
         result.save(args.json)
