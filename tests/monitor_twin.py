@@ -3,7 +3,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 from functools import lru_cache
-from typing import Any, Iterable
+from typing import Any, Iterable, Sequence
 
 import numpy as np
 
@@ -67,7 +67,33 @@ def ideal_response(t: np.ndarray, pulse_list: list, n: int, K: np.ndarray) -> np
     return out
 
 
-#: First seed of the contact-free runs (apart from the fit's 100, the calibration's 101, the pulses' 0-4).
+#: The runs the false-alarm tests fit on (three different multisines, 60 s: a fit on twin_fit's one 20 s
+#: multisine misses the Panda's joint-1 torque by up to 2.5 N·m on other motions, 0.7 N·m with these),
+#: and the contact-free run calibrate() sees.
+FREE_FIT_SEEDS = (100, 101, 102)
+FREE_CALIBRATION_SEED = 103
+
+
+@lru_cache(maxsize=None)
+def free_fit(name: str):
+    """The fit of ``name`` on the three runs FREE_FIT_SEEDS (the processing of twin_fit)."""
+    return fit(rx90sym.load_robot(name), [twin_run(name, s) for s in FREE_FIT_SEEDS], PROCESSING)
+
+
+def toolkit_thresholds(name: str, F: Any, seeds: Sequence[int], calibration_seed: int) -> dict[str, np.ndarray]:
+    """The thresholds [N·m] the toolkit makes for ``F`` (fitted on the twin runs ``seeds``): "identify",
+    what rx90 identify stores without --validate (the fitted runs' held-out blocks), and "calibrate",
+    identify.monitor.log.calibrate on the contact-free run ``calibration_seed``."""
+    from identify.monitor.log import calibrate
+    from identify.monitor.thresholds import with_contact_thresholds
+
+    own, why = with_contact_thresholds(F, [twin_run(name, s) for s in seeds])
+    if why:
+        raise ValueError(f"{name}: no thresholds from the fit ({why})")
+    return {"identify": own.contact_thresholds, "calibrate": calibrate(F, [twin_run(name, calibration_seed)])}
+
+
+#: First seed of the contact-free runs (apart from the fits' 100-102, the calibrations' 101 and 103, the pulses' 0-4).
 FREE_SEED0 = 1000
 #: Every this many-th contact-free run holds rests (motions.stop_and_go: half of its samples at rest).
 FREE_REST_EVERY = 3

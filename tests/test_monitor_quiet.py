@@ -2,18 +2,17 @@
 thresholds the toolkit makes itself (issue 30; the hour is benchmarks/monitor_false_alarms.py).
 
 The 5 minutes are the first 15 of the benchmark's runs (tests/monitor_twin.free_run: 20 s multisines of
-their own seeds, every third with rests), each monitored on its own. Thresholds: what ``rx90 identify``
-stores without --validate (identify.monitor.thresholds.with_contact_thresholds: the held-out blocks of
-the fitted run), and identify.monitor.log.calibrate on one other contact-free run.
+their own seeds, every third with rests), each monitored on its own. The fit: three different 20 s
+multisines (monitor_twin.free_fit). Thresholds (monitor_twin.toolkit_thresholds): what ``rx90 identify``
+stores without --validate (the held-out blocks of the fitted runs), and identify.monitor.log.calibrate on
+one other contact-free run.
 """
 from __future__ import annotations
 
 import numpy as np
 import pytest
 
-from identify.monitor.log import calibrate
-from identify.monitor.thresholds import with_contact_thresholds
-from monitor_twin import scan_free_motion, twin_fit, twin_run
+from monitor_twin import FREE_CALIBRATION_SEED, FREE_FIT_SEEDS, free_fit, scan_free_motion, toolkit_thresholds
 
 RUNS = 15  # × 20 s
 
@@ -21,10 +20,8 @@ RUNS = 15  # × 20 s
 @pytest.mark.slow
 @pytest.mark.parametrize("name", ["rx90", "panda"])
 def test_no_event_on_five_minutes_of_free_motion(name):
-    F = twin_fit(name)
-    own, why = with_contact_thresholds(F, [twin_run(name, 100)])
-    assert why == ""
-    T = {"identify": own.contact_thresholds, "calibrate": calibrate(F, [twin_run(name, 101)])}
+    F = free_fit(name)
+    T = toolkit_thresholds(name, F, FREE_FIT_SEEDS, FREE_CALIBRATION_SEED)
     scans = scan_free_motion(name, F, T, range(RUNS))
     for label, scan in scans.items():
         print(f"\n{name} {label}: {scan.seconds / 60:.1f} min, {len(scan.events)} event(s), largest "

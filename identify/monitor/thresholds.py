@@ -4,10 +4,10 @@ On data the fit has not seen: the held-out validation recording when there is on
 held-out blocks of the fitted recordings (the cross-validation's blocks: their time span cut into
 :data:`HELD_OUT_BLOCKS` contiguous blocks of equal duration; per block, the fit's columns refitted
 by its weighted least squares on the other blocks' rows of its own observation matrix, and the
-observer of that fold's fit run over the block). The fitted data's own residual is smaller than any other motion's (the fit
-absorbed part of its noise and model error): on the Panda twin, thresholds calibrated on the fitted
-run were 0.46-0.89 × those of another run and gave false events on contact-free motion
-(docs/contact-monitor.md).
+observer of that fold's fit run over the block). The fitted data's own residual is smaller than
+another motion's (the fit absorbed part of its noise and model error): on the Panda twin,
+thresholds calibrated on the fitted run were 0.46-0.89 × those of another run and gave false
+events on contact-free motion (docs/contact-monitor.md).
 """
 from __future__ import annotations
 
