@@ -24,7 +24,7 @@ def ur10e():
 
 def test_every_push_is_an_event_and_nothing_else(ur10e):
     """Measured: 3 pushes labelled from the currents (4.78-6.26, 8.54-9.95, 11.99-13.51 s), 3 events
-    (4.88-5.79, 8.77-9.36, 12.10-13.12 s), peaks 58, 54, 73 N·m on joint 2."""
+    (4.92-5.78, 8.91-9.35, 12.15-13.10 s, thresholds of the held-out blocks), peaks 58, 54, 73 N·m on joint 2."""
     from identify.monitor.log import monitor_log
 
     b, F, _ = ur10e

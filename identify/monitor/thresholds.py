@@ -6,7 +6,7 @@ held-out blocks of the fitted recordings (the cross-validation's blocks: their t
 by its weighted least squares on the other blocks' rows of its own observation matrix, and the
 observer of that fold's fit run over the block). The fitted data's own residual is smaller than
 another motion's (the fit absorbed part of its noise and model error): on the Panda twin,
-thresholds calibrated on the fitted run were 0.46-0.89 × those of another run and gave false
+thresholds calibrated on the fitted run were 0.46-0.88 × those of another run and gave false
 events on contact-free motion (docs/contact-monitor.md).
 """
 from __future__ import annotations
