@@ -123,10 +123,13 @@ def candidate_grid(recordings: Sequence[Any], default_decimate: float | None = 5
 
 def grid_around(knee: float, rate: float, default_cutoff: float, default_decimate: float | None) -> list[Candidate]:
     """The candidates around the position-spectrum ``knee`` [Hz] at the recordings' ``rate`` [Hz]
-    (the knee first, the default processing (``default_cutoff`` [Hz], ``default_decimate`` [Hz]),
+    (the knee first, the default processing (``default_cutoff`` [Hz], raised to the grid's floor
+    :data:`MIN_GRID_CUTOFF`, ``default_decimate`` [Hz]),
     then outwards): what :func:`candidate_grid` returns, from numbers a streamed scan also gives."""
     top = 0.4 * rate / 2.0
-    cuts = sorted({min(max(MIN_GRID_CUTOFF, f * knee), top) for f in GRID_FACTORS}, key=lambda c: abs(math.log(c / knee)))
+    floor = min(MIN_GRID_CUTOFF, top)
+    cuts = sorted({min(max(floor, f * knee), top) for f in GRID_FACTORS}, key=lambda c: abs(math.log(c / knee)))
+    default_cutoff = max(default_cutoff, floor)  # without decimation the automatic cut-off is the knee itself
     out = []
     for fc in cuts:
         target = max(fc / DECIMATION_PASSBAND, MIN_DECIMATED_RATE)  # pass band >= fc
