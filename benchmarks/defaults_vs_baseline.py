@@ -9,9 +9,11 @@ toolkit's prediction interpolated onto the recording's time stamps).
 Records:
 1. TX40 (the record shipped in the package, 5 kHz, motor side): the first 6 s fitted, the rest
    predicted; robot file as shipped.
-2. UR10e (../shared/data/ur10e; skipped when absent; source gains, joint side): the 14-harmonic
-   run fitted (rows 195..4966), the whole p4 file predicted (the arm holds still there); and the first
-   half of the 14-harmonic run fitted (rows 195..2566), the second half predicted (motion and rest).
+2. UR10e (../shared/data/ur10e; skipped when absent; joint side): the 14-harmonic run fitted (rows
+   195..4966), the whole p4 file predicted (the arm holds still there); and the first half of the
+   14-harmonic run fitted (rows 195..2566), the second half predicted (motion and rest); with the
+   source's gains (a, b), then with the gains ``rx90 gains`` identifies with its defaults from the
+   empty/loaded pair (c, d).
 3. The time of the default identification on a 50 s, 100 Hz, 6-joint log (UR10e twin, seed 0), and
    of the baseline's own fit in it.
 4. (``--twins``) The unseen-robot trial on twins (tests/twin_logs.py): a chirp fitted, a trapezoidal
@@ -112,9 +114,24 @@ def ur10e() -> list[bool]:
     first, second = bench.EMPTY[1][0], bench.SECOND_HALF
     half = bench.torques(bench.DATA / bench.EMPTY[0], (first, second[0] - 1), robot)
     rest = bench.torques(bench.DATA / bench.EMPTY[0], second, robot)
-    return [compare(f"2a. UR10e: 14-harmonic run fitted, {bench.HELD_OUT[0]} predicted (at rest)", robot, empty, p4),
-            compare(f"2b. UR10e: rows {first}..{second[0] - 1} fitted, rows {second[0]}..{second[1]} predicted",
-                    robot, half, rest)]
+    out = [compare(f"2a. UR10e: 14-harmonic run fitted, {bench.HELD_OUT[0]} predicted (at rest)", robot, empty, p4),
+           compare(f"2b. UR10e: rows {first}..{second[0] - 1} fitted, rows {second[0]}..{second[1]} predicted",
+                   robot, half, rest)]
+    # The gains a user gets from `rx90 gains` with its defaults (identify.drive_gains on the empty/loaded pair).
+    from identify.gains.drive_gains import drive_gains
+
+    g = bench.gains_bench
+    pair = (g.load_run(bench.DATA / g.EMPTY[0], g.EMPTY[1]), g.load_run(bench.DATA / g.LOADED[0], g.LOADED[1]))
+    k = drive_gains(robot, [pair[0]], [pair[1]], g.MASS, mass_std=g.MASS_STD).gains.gains
+    print(f"\n  gains from rx90 gains' defaults [N·m/A]: {np.round(k, 3)} (the source's: {bench.SOURCE_GAINS})")
+    ours = {name: bench.torques(bench.DATA / f, rows, robot, gains=k)
+            for name, f, rows in (("empty", *bench.EMPTY), ("p4", *bench.HELD_OUT),
+                                  ("half", bench.EMPTY[0], (first, second[0] - 1)), ("rest", bench.EMPTY[0], second))}
+    out += [compare(f"2c. UR10e, gains from rx90 gains: 14-harmonic run fitted, {bench.HELD_OUT[0]} predicted",
+                    robot, ours["empty"], ours["p4"]),
+            compare(f"2d. UR10e, gains from rx90 gains: rows {first}..{second[0] - 1} fitted, the rest predicted",
+                    robot, ours["half"], ours["rest"])]
+    return out
 
 
 def timing() -> None:

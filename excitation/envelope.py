@@ -28,6 +28,8 @@ from typing import TYPE_CHECKING, Any, Sequence
 import casadi as ca
 import numpy as np
 
+from rx90sym.defaults import ACCELERATION_PER_VELOCITY
+
 from .collision import CollisionModel, _segment_distance
 from .constraints import Margins, position_bounds
 from .model import ExcitationModel, JointLimits
@@ -42,7 +44,7 @@ DEFAULT_MAX_SPEED = 1.0        # [m/s] tool point and capsule ends (UR's default
 POSITION_FRACTION = 0.9        # of each joint range, about its centre
 VELOCITY_SCALE = 0.7           # of the robot's joint velocity limits
 ACCELERATION_SCALE = 0.5       # of the robot's joint acceleration limits
-URDF_ACCELERATION_PER_VELOCITY = 2.0  # [1/s] a URDF without accelerations: full speed in 0.5 s
+URDF_ACCELERATION_PER_VELOCITY = ACCELERATION_PER_VELOCITY  # [1/s] a URDF without accelerations (rx90sym.defaults)
 
 
 @dataclass(frozen=True)

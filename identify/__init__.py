@@ -55,6 +55,7 @@ _EXPORTS = {
     "ContactMonitor": "identify.monitor.contact",
     "ContactEvent": "identify.monitor.contact",
     "monitor_log": "identify.monitor.log",
+    "with_contact_thresholds": "identify.monitor.thresholds",
     "drive_gains": "identify.gains.drive_gains",
     # models out: URDF and MJCF with actuator terms
     "export_urdf": "identify.export.models",

@@ -16,7 +16,6 @@ from __future__ import annotations
 
 import difflib
 import math
-import warnings
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Sequence
@@ -26,11 +25,13 @@ import numpy as np
 from .description import GRAVITY, Limits, Robot, robot_from_table
 from .parameters import LINK_PARAMETERS
 from .rigid_body import RigidBody, physical_problem
+from .defaults import ACCELERATION_CAP, ACCELERATION_DEFAULT_TEXT, ACCELERATION_PER_VELOCITY
 from .urdf_snap import SNAP_LENGTH_M, SNAP_RAD
 from .urdf_tree import MOVABLE, UrdfError, UrdfTree, read_urdf
 
-# A URDF has no acceleration limits: these are used, with a warning, unless given.
-DEFAULT_ACCELERATION = {"revolute": 10.0, "prismatic": 2.0}  # rad/s^2, m/s^2
+# A URDF has no acceleration limits: min(ACCELERATION_PER_VELOCITY x the velocity limit, the cap) unless given
+# (rx90sym.defaults; the commands that use limits, excite and simulate, say so).
+DEFAULT_ACCELERATION = ACCELERATION_CAP  # rad/s^2, m/s^2: the ceiling
 _EPS = 1e-12  # round-off of the frame construction (lengths in m, cosines)
 
 Pose = tuple[np.ndarray, np.ndarray]  # (R, p): a frame's axes and origin in another frame
@@ -73,13 +74,29 @@ class UrdfChain:
         return self.tree.snap_length
 
 
+def assumed_acceleration(qd_max: Any, prismatic: Any) -> np.ndarray:
+    """The acceleration limits assumed for a URDF joint [rad/s^2, m/s^2]: ACCELERATION_PER_VELOCITY x
+    its velocity limit, at most ACCELERATION_CAP (the cap where no velocity limit is given)."""
+    cap = np.array([ACCELERATION_CAP["prismatic" if p else "revolute"] for p in prismatic])
+    qd = np.asarray(qd_max, dtype=float)
+    return np.where(np.isfinite(qd), np.minimum(ACCELERATION_PER_VELOCITY * qd, cap), cap)
+
+
 def default_acceleration(robot: Any) -> bool:
-    """True when ``robot`` comes from a URDF and its acceleration limits are this loader's generic
-    default (DEFAULT_ACCELERATION: a URDF gives none), not limits given with ``acceleration=``."""
+    """True when ``robot`` comes from a URDF and its acceleration limits are the assumed ones
+    (:func:`assumed_acceleration`: a URDF gives none), not limits given with ``acceleration=``."""
     if getattr(robot, "urdf", None) is None:
         return False
-    default = [DEFAULT_ACCELERATION["prismatic" if s else "revolute"] for s in robot.sigma]
-    return bool(np.array_equal(robot.limits.qdd_max, default))
+    return bool(np.array_equal(robot.limits.qdd_max, assumed_acceleration(robot.limits.qd_max, robot.sigma)))
+
+
+def acceleration_note(robot: Any) -> str | None:
+    """What a command that uses the limits (excite, simulate) says once about a URDF's assumed
+    accelerations, or None when they were given."""
+    if not default_acceleration(robot):
+        return None
+    return (f"the URDF gives no acceleration limits: assumed {ACCELERATION_DEFAULT_TEXT}; give --acceleration "
+            f"(Python: acceleration=) to set them")
 
 
 def zero_poses(tree: UrdfTree) -> dict[str, Pose]:
@@ -210,7 +227,7 @@ def load_urdf(path: str | Path, tip: str | None = None,
     """Robot of the chain from the URDF root to link ``tip`` (default: the only leaf, if one).
 
     acceleration: joint acceleration limits [rad/s^2 or m/s^2] (a URDF has none); by default
-    DEFAULT_ACCELERATION with a warning. snap [rad], snap_length [m]: joint origin angles within
+    min(2 x the velocity limit, 10 rad/s^2) (:func:`assumed_acceleration`). snap [rad], snap_length [m]: joint origin angles within
     snap of a multiple of pi/2 and lengths within snap_length of 0 are made exact, each change
     listed in one warning (rx90sym.urdf_snap, docs/urdf.md; 1.5708 written for pi/2 otherwise
     leaves a near-singular model); snap=0 turns both off. Raises UrdfError naming the file and
@@ -335,12 +352,8 @@ def _limits(path: str, joints: list, acceleration: float | Sequence[float] | Non
     # URDF: velocity/effort <= 0 or absent means no limit given.
     qd = np.array([j.velocity if j.velocity and j.velocity > 0 else inf for j in joints])
     tau = np.array([j.effort if j.effort and j.effort > 0 else inf for j in joints])
-    if acceleration is None:
-        qdd = np.array([DEFAULT_ACCELERATION["prismatic" if j.type == "prismatic" else "revolute"]
-                        for j in joints])
-        warnings.warn(f"{path}: a URDF has no acceleration limits; using {DEFAULT_ACCELERATION['revolute']:g} "
-                      f"rad/s^2 (revolute) and {DEFAULT_ACCELERATION['prismatic']:g} m/s^2 (prismatic): "
-                      f"give acceleration= (Python) or --acceleration (command line) to set them", stacklevel=3)
+    if acceleration is None:  # no warning here: excite and simulate, which use the limits, say it once
+        qdd = assumed_acceleration(qd, [j.type == "prismatic" for j in joints])
     else:
         given = np.atleast_1d(np.asarray(acceleration, dtype=float))
         if given.size not in (1, n):

@@ -140,6 +140,181 @@ NOTEBOOKS = {
                  'fig, axes = plt.subplots(6, 1, figsize=(9, 10), sharex=True)\n'
                  'for j, ax in enumerate(axes):\n    ax.plot(val.t, val.measured[:, j], lw=0.7); ax.plot(val.t, val.predicted[:, j], lw=0.7)'),
     ],
+    "07_urdf_arm_loop.ipynb": [
+        ("md", "# The loop on a URDF arm: UR5\n\n"
+               "What a user runs on their own arm, from its URDF: plan a safe excitation and check it, "
+               "identify from a log (here the twin's), export URDF and MJCF and reload the MJCF in MuJoCo, "
+               "and identify a payload for the controller. Every step uses the library's defaults, "
+               "those of the command named beside it; only the motion is made short (8 s, 3 harmonics, "
+               "1 start) to keep the notebook quick."),
+        ("code", COMMON + "\nimport warnings"),
+        ("code", '# The UR5 (CB3) URDF of the tests, copied beside the notebook (data/README.md: where it comes from).\n'
+                 '# rx90 ... --robot data/ur5.urdf --tip tool0; a URDF gives no acceleration limits: a default is assumed.\n'
+                 'URDF = Path("data/ur5.urdf")\n'
+                 'robot = rx90sym.load_robot(str(URDF), tip="tool0")\n'
+                 'print(robot.name, robot.n, "joints; velocity limits", robot.limits.qd_max, "rad/s;",\n'
+                 '      "torque limits", robot.limits.tau_max, "N m")'),
+        ("md", "## 1. Plan an excitation, safe by default\n\n"
+               "`excitation.optimise(robot)` applies `rx90 excite`'s envelope: every moving point 0.05 m "
+               "above the mounting plane, the tool and capsule ends at most 1 m/s, narrowed joint ranges and "
+               "scaled velocity and acceleration limits, the URDF's collision capsules kept apart, and the "
+               "torque limits with the URDF's inertials. The trajectory carries its own check, on a fine grid."),
+        ("code", '# rx90 excite --robot data/ur5.urdf --tip tool0 --duration 8 --harmonics 3 --starts 1\n'
+                 'traj = excitation.optimise(robot, duration=8.0, harmonics=3, starts=1, seed=0)\n'
+                 'print("\\n".join(excitation.envelope_lines(traj.envelope)))\n'
+                 'u = traj.usage\n'
+                 'print(f"criterion {traj.criterion}, cond {traj.cond:.1f}; checked at {u.rate:g} Hz:")\n'
+                 'plane = traj.envelope["mounting_plane_z_m"]  # frame 0 sits 0.089 m above the URDF root\n'
+                 'print(f"  lowest point z = {u.min_height:.4f} m in frame 0: {u.min_height - plane:.4f} m above the "\n'
+                 '      f"mounting plane (allowed >= {u.z_min - plane:.4f} m)")\n'
+                 'print(f"  fastest point {u.max_speed:.3f} m/s (allowed <= {u.speed_max:g} m/s)")\n'
+                 'print(f"  smallest capsule clearance {1e3 * u.min_clearance:.1f} mm")\n'
+                 'print(f"  largest use of the limits planned with: velocity {u.velocity.max():.3f}, acceleration "\n'
+                 '      f"{u.acceleration.max():.3f} (both as the envelope scales them), torque {np.nanmax(u.torque):.3f}; "\n'
+                 '      f"violations: {list(u.violations) or \'none\'}")\n'
+                 'fig = traj.plot()'),
+        ("md", "The same motion checked independently of the optimiser, with Pinocchio on the URDF itself at "
+               "500 Hz (the URDF's root frame: its base plane is z = 0): every frame that moves stays 0.05 m "
+               "above the base plane, the tool frame `tool0` moves at most 1 m/s (finite differences), and the "
+               "joints stay within the URDF's limits. (Pinocchio's frames are the joints' and links' origins; "
+               "the envelope's own check above also covers the capsules' ends, which pass lower.)"),
+        ("code", 'import pinocchio as pin\n'
+                 'model = pin.buildModelFromUrdf(str(URDF)); data = model.createData()\n'
+                 'rate = 500.0\n'
+                 't, q, qd, qdd = traj.sample(rate)\n'
+                 'qc = q + robot.controller_offsets  # the controller\'s angles: the URDF\'s\n'
+                 'frames = {f.name: [] for f in model.frames}\n'
+                 'for row in qc:\n'
+                 '    pin.framesForwardKinematics(model, data, row)\n'
+                 '    for f, placement in zip(model.frames, data.oMf):\n'
+                 '        frames[f.name].append(placement.translation.copy())\n'
+                 'frames = {name: np.array(p) for name, p in frames.items()}\n'
+                 'moving = [name for name, p in frames.items() if np.ptp(p[:, 2]) > 1e-9]  # heights that change\n'
+                 'low = min(moving, key=lambda name: frames[name][:, 2].min())\n'
+                 'lowest = frames[low][:, 2].min()\n'
+                 'speed = np.linalg.norm(np.diff(frames["tool0"], axis=0), axis=1).max() * rate\n'
+                 'inside = np.all((qc >= model.lowerPositionLimit) & (qc <= model.upperPositionLimit))\n'
+                 'joint_speed = (np.abs(np.diff(qc, axis=0)) * rate / model.velocityLimit).max()  # of the URDF\'s limits\n'
+                 'print(f"lowest moving frame: {low} at z = {lowest:.4f} m above the base plane (>= 0.05 m)")\n'
+                 'print(f"tool0 speed at most {speed:.4f} m/s (<= 1 m/s); joints inside the URDF limits: {inside}; "\n'
+                 '      f"fastest joint at {joint_speed:.3f} of its URDF velocity limit (envelope: x0.7)")\n'
+                 'assert lowest >= 0.05 - 1e-6 and speed <= 1.0 * 1.01 and inside and joint_speed <= 0.7 * 1.01'),
+        ("md", "## 2. A log, and the fit from it\n\n"
+               "The twin runs the motion in closed loop with its default, realistic noise profile "
+               "(`rx90 simulate`): the \"recorded\" log. A second safe motion (another seed) is held out "
+               "for validation."),
+        ("code", 'held_traj = excitation.optimise(robot, duration=8.0, harmonics=3, starts=1, seed=1, progress=False)\n'
+                 'with warnings.catch_warnings():  # said once here: the twin assumes 50:1 gears for the ripple\n'
+                 '    warnings.filterwarnings("ignore", message="twin: robot \'ur5\' has no gear ratios")\n'
+                 '    rec = rx90sym.twin.simulate(robot, traj, seed=1)\n'
+                 '    held = rx90sym.twin.simulate(robot, held_traj, seed=2)\n'
+                 'print("twin: UR5 without gear ratios: the motor torque ripple assumes 50:1 gears")\n'
+                 'print(f"recorded: {rec.q.shape[0]} samples of {rec.q.shape[1]} joints over {rec.t[-1] - rec.t[0]:.2f} s; "\n'
+                 '      f"held out: {held.q.shape[0]} samples")'),
+        ("code", '# rx90 identify recorded.csv --robot data/ur5.urdf --tip tool0 (same defaults: processing, bootstrap seed 0)\n'
+                 'fit = identify.fit(robot, [rec])\n'
+                 'print(f"chosen: cut-off {fit.cutoff:.3g} Hz, rows at {fit.decimate_to:.3g} Hz, torque delay "\n'
+                 '      f"{1e3 * fit.delay:.2f} ms, rest: {fit.rest}")\n'
+                 'print(fit.result.table())'),
+        ("md", "Validation on the held-out motion, against the raw measured torques, beside the plain OLS "
+               "baseline fitted on the same log (q low-passed at 10 Hz, `numpy.gradient`, rigid body plus viscous, "
+               "Coulomb and an offset per joint): the last two columns. The verdict below the table says on which "
+               "joints the fit beats the baseline, and by how much it loses on the others."),
+        ("code", 'val = fit.validate(held)\n'
+                 'print(val.table())\n'
+                 'fig, axes = plt.subplots(robot.n, 1, figsize=(9, 10), sharex=True)\n'
+                 'for j, ax in enumerate(axes):\n'
+                 '    ax.plot(val.t, val.measured[:, j], lw=0.7, label="measured")\n'
+                 '    ax.plot(val.t, val.predicted[:, j], lw=0.7, label="fit")\n'
+                 '    ax.plot(val.t, val.baseline_predicted[:, j], lw=0.7, ls="--", label="plain OLS")\n'
+                 '    ax.set_ylabel(f"τ{j + 1} [N m]")\n'
+                 'axes[0].legend(ncol=3); axes[-1].set_xlabel("t [s]")'),
+        ("md", "## 3. The physically consistent fit\n\n"
+               "Standard parameters a simulator accepts (every link's pseudo-inertia positive definite, rotor "
+               "inertia and friction non-negative), with the robot's own prior for what the data do not see: "
+               "the URDF's inertials, as `rx90 identify --method consistent`."),
+        ("code", '# rx90 identify recorded.csv --robot data/ur5.urdf --tip tool0 --method consistent --json id.json\n'
+                 'cfit = identify.fit(robot, [rec], method="consistent")\n'
+                 'res = cfit.result\n'
+                 'print(f"WLS estimate consistent: {res.wls_was_consistent}; cost of the constraints: "\n'
+                 '      f"{res.cost_increase_pct:.2f} % of the WLS residual")\n'
+                 'truth = rec.meta["true_parameters"]  # the twin\'s: known here, not on a real arm\n'
+                 'print("link  mass fit [kg]  twin [kg]")\n'
+                 'for j in range(1, robot.n + 1):\n'
+                 '    print(f"{j:4d}  {res.standard[f\'M{j}\']:13.3f}  {truth[f\'M{j}\']:9.3f}")\n'
+                 'print(cfit.validate(held).table())'),
+        ("md", "## 4. Export, and reload in MuJoCo\n\n"
+               "`identify.export_urdf` writes the user's URDF back with the chain's `<inertial>` and "
+               "`<dynamics>` replaced; `identify.export_mjcf` an MJCF whose world frame is the URDF's root. "
+               "Each has a companion JSON with what the format cannot hold (docs/export.md). The exported "
+               "URDF reads back with the fitted inertials."),
+        ("code", '# rx90 export id.json --urdf ur5_identified.urdf --mjcf ur5_identified.xml\n'
+                 'written = identify.export_urdf(cfit, "ur5_identified.urdf") + identify.export_mjcf(cfit, "ur5_identified.xml")\n'
+                 'print(*written, sep="\\n")\n'
+                 'chi_fit = robot.parameter_vector(res.standard)\n'
+                 'back = rx90sym.load_robot("ur5_identified.urdf", tip="tool0")\n'
+                 'chi_back = back.parameter_vector(rx90sym.nominal_parameters(back))\n'
+                 'inertial = [i for i, n in enumerate(robot.parameter_names) if not n.startswith(("IA", "FS", "FV"))]\n'
+                 'print(f"inertials read back from the URDF: largest difference "\n'
+                 '      f"{np.abs(chi_back[inertial] - chi_fit[inertial]).max():.1e} (SI units)")'),
+        ("md", "MuJoCo's inverse dynamics of the exported MJCF (`mj_inverse`) against the fit's model "
+               "(`robot.inverse_dynamics` with the fit's standard parameters) at a few samples of the held-out "
+               "motion. MuJoCo applies Coulomb friction (`frictionloss`) through its constraint solver: it is "
+               "switched off there and its `FS sign(q̇)` added back. MuJoCo is an optional extra "
+               "(`pip install '.[mujoco]'`): without it the cell says so and skips."),
+        ("code", 'try:\n'
+                 '    import mujoco\n'
+                 'except ImportError:\n'
+                 '    mujoco = None\n'
+                 '    print("skipped: MuJoCo is not installed (an optional extra: pip install \'.[mujoco]\'); "\n'
+                 '          "ur5_identified.xml was written without it")\n'
+                 'if mujoco is not None:\n'
+                 '    mj = mujoco.MjModel.from_xml_path("ur5_identified.xml"); md = mujoco.MjData(mj)\n'
+                 '    mj.opt.disableflags |= int(mujoco.mjtDisableBit.mjDSBL_CONSTRAINT | mujoco.mjtDisableBit.mjDSBL_FRICTIONLOSS)\n'
+                 '    FS = np.array([res.standard[f"FS{j}"] for j in range(1, robot.n + 1)])\n'
+                 '    th, qh, qdh, qddh = held_traj.sample(250.0)\n'
+                 '    worst = 0.0\n'
+                 '    for k in np.linspace(0, th.size - 1, 6).astype(int)[1:-1]:\n'
+                 '        md.qpos[:], md.qvel[:], md.qacc[:] = qh[k] + robot.controller_offsets, qdh[k], qddh[k]\n'
+                 '        mujoco.mj_inverse(mj, md)\n'
+                 '        tau_mujoco = md.qfrc_inverse + FS * np.sign(qdh[k])\n'
+                 '        tau_fit = np.asarray(robot.inverse_dynamics(qh[k], qdh[k], qddh[k], chi_fit)).ravel()\n'
+                 '        worst = max(worst, np.abs(tau_mujoco - tau_fit).max())\n'
+                 '        print(f"t = {th[k]:5.2f} s  MuJoCo {tau_mujoco}  fit {tau_fit}")\n'
+                 '    print(f"largest difference {worst:.1e} N m")\n'
+                 '    assert worst <= 1e-8 * max(1.0, np.abs(tau_fit).max())'),
+        ("md", "## 5. A payload for the controller\n\n"
+               "A 1.5 kg tool on the flange (a cylinder 3 cm in radius, its centre of gravity 5 cm out along "
+               "`tool0`'s z), run on the same motion. Method 4 identifies the robot and the payload together "
+               "from the empty and the loaded log, constrained to a physical body. (Method 3 would pair the two "
+               "logs sample by sample: on this twin the UR5's wrist 3 follows its reference only within the "
+               "tracking error printed below (the twin's motor torque ripple on a wrist whose URDF gives no "
+               "rotor inertia), so the two runs of one motion differ and the pairing refuses them, saying so; "
+               "method 4 needs no pairing.)"),
+        ("code", 'm, r, h = 1.5, 0.03, 0.10  # kg, m: the tool as a solid cylinder, its CoG at z = h / 2\n'
+                 'side, axial = m * (3 * r**2 + h**2) / 12, m * r**2 / 2  # about its CoG [kg m^2]\n'
+                 'tool = {"Mc": m, "MXc": 0.0, "MYc": 0.0, "MZc": m * h / 2, "XXc": side + m * (h / 2)**2,\n'
+                 '        "YYc": side + m * (h / 2)**2, "ZZc": axial, "XYc": 0.0, "XZc": 0.0, "YZc": 0.0}\n'
+                 'with warnings.catch_warnings():\n'
+                 '    warnings.filterwarnings("ignore", message="twin: robot \'ur5\' has no gear ratios")\n'
+                 '    loaded = rx90sym.twin.simulate(robot, traj, payload=tool, seed=3)\n'
+                 'print("twin tracking error, largest [rad]:", np.array(rec.meta["tracking_error_max"]))\n'
+                 '# rx90 payload --method 4 --constrained --empty recorded.csv --loaded loaded.csv --json payload.json\n'
+                 'p = identify.payload(robot, 4, empty=[rec], loaded=[loaded], constrained=True, a_priori=tool)\n'
+                 'print("parameter      tool   identified")\n'
+                 'for name in rx90sym.PAYLOAD_NAMES:\n'
+                 '    print(f"{name:8s} {tool[name]:10.5f} {p[name]:12.5f}")\n'
+                 'print(p.headline())'),
+        ("md", "In the controller's form: mass, centre of gravity from the tool flange and inertia at it in "
+               "the flange's axes (the `flange` block `rx90 payload --json` writes), and the URScript line "
+               "`rx90 export payload.json --ur payload.script` writes from it (`set_target_payload`: UR's "
+               "e-Series and PolyScope 5 command)."),
+        ("code", 'flange = rx90sym.flange_payload(robot, p.as_dict())\n'
+                 'print(f"mass {flange.mass:.4f} kg, CoG {flange.cog} m, physical: {flange.problem is None}")\n'
+                 'script = rx90sym.ur_script(flange)\n'
+                 'Path("payload.script").write_text(script)\n'
+                 'print(script)'),
+    ],
 }
 
 

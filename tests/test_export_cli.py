@@ -129,3 +129,17 @@ def test_bad_input_exits_2_with_a_message_and_writes_nothing(fits, tmp_path, cap
     err = capsys.readouterr().err
     assert needle in err and err.count("\n") == 1, err
     assert list(out.iterdir()) == []
+
+
+@pytest.mark.parametrize("robot_name, option", [("ur10e", "--ur"), ("panda", "--franka")])
+def test_the_library_writes_the_payload_form_the_command_writes(tmp_path, robot_name, option):
+    """rx90sym.flange_payload + ur_script / franka_load: the bytes of rx90 export --ur / --franka."""
+    robot = rx90sym.load_robot(robot_name)
+    load = rx90sym.load_payload("tables_4")
+    flange = rx90sym.flange_payload(robot, load)
+    out = tmp_path / "p.out"
+    assert main(["export", str(_payload_json(tmp_path / "p.json", load, flange.to_dict())), option, str(out)]) == 0
+    text = (rx90sym.ur_script(flange) if option == "--ur"
+            else json.dumps(rx90sym.franka_load(flange), indent=1) + "\n")
+    assert out.read_text() == text
+    assert abs(flange.mass - load["Mc"]) <= 1e-12 * load["Mc"]  # a rigid move keeps the mass

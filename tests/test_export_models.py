@@ -31,8 +31,7 @@ def moving_states(robot, rng, count):
 
 
 def urdf_robot():
-    with pytest.warns(UserWarning, match="no acceleration limits"):
-        return rx90sym.load_robot(URDF_DIR / "ur10_robot.urdf", tip="tool0")
+    return rx90sym.load_robot(URDF_DIR / "ur10_robot.urdf", tip="tool0")
 
 
 def urdf_chi(robot, rng):

@@ -43,12 +43,12 @@ def cli_fit(runs):
 
 @pytest.fixture(scope="module")
 def lib_fit(runs, rx90):
-    """``identify.fit`` with every default on the same file, bootstrapped and with its contact thresholds
-    (identify.monitor.thresholds) as the command does."""
+    """``identify.fit`` with every default on the same file (its segment bootstrap too), with its contact
+    thresholds (identify.monitor.thresholds) as the command's --json stores them."""
     from identify.monitor.thresholds import with_contact_thresholds
 
     rec = identify.read_recording(runs / "fit.csv", rx90)
-    return with_contact_thresholds(identify.fit(rx90, [rec]).bootstrapped(seed=0), [rec])[0]
+    return with_contact_thresholds(identify.fit(rx90, [rec]), [rec])[0]
 
 
 def _without(d: dict, keys) -> dict:

@@ -37,5 +37,7 @@ def test_notebook_runs(path, tmp_path):
     work = tmp_path / path.stem
     work.mkdir()
     shutil.copy(path, work / path.name)
+    if (path.parent / "data").is_dir():  # what the notebooks read beside them (notebooks/data/README.md)
+        shutil.copytree(path.parent / "data", work / "data")
     NotebookClient(nb, timeout=600, kernel_name="python3",
                    resources={"metadata": {"path": str(work)}}).execute()

@@ -18,9 +18,11 @@ from test_friction_choice import OPTIONS, coulomb_twin
 
 
 def _processing_blocks(robot, recordings, base):
-    """Per-block scores of the one candidate of OPTIONS' processing (no decimation: scored at the full rate)."""
+    """Per-block scores of the one candidate of OPTIONS' processing (no decimation: scored at the full rate),
+    against the filtered torques as the friction choice scores its forms (all at one processing, on the
+    same rows: raw=False; the processing choice's default scores against the raw torques)."""
     choice = choose_processing(robot, recordings, base=base, min_velocity=OPTIONS["min_velocity"],
-                               rest=OPTIONS["rest"], candidates=[Candidate(OPTIONS["cutoff"], None)])
+                               rest=OPTIONS["rest"], candidates=[Candidate(OPTIONS["cutoff"], None)], raw=False)
     return np.asarray(choice.chosen.per_block)
 
 

@@ -27,6 +27,8 @@ ALLOWED = (
     "identify.signal", "identify.signal.defaults",
     "identify.observation", "identify.observation.defaults",
     "identify.gains", "identify.gains.defaults",
+    "identify.payloads", "identify.payloads.defaults",
+    "identify.monitor", "identify.monitor.defaults",
 )
 
 

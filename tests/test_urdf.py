@@ -86,11 +86,16 @@ def test_hand_and_fingers_beyond_the_tip_are_lumped_into_link_7():
 
 
 def test_limits_friction_and_continuous_joints_come_from_the_urdf():
-    with pytest.warns(UserWarning, match="no acceleration limits"):
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")  # the assumed accelerations are said by excite and simulate, not here
         panda = load_urdf(DATA / "panda.urdf", "panda_link8")
     assert panda.limits.q_min[0] == -2.8973 and panda.limits.q_max[3] == -0.0698
     assert panda.limits.tau_max[0] == 87.0 and panda.limits.qd_max[6] == 2.61
-    assert np.all(np.isfinite(panda.limits.qdd_max))
+    # No acceleration in a URDF: 2 x the velocity limit, at most 10 rad/s^2 (2.61 rad/s -> 5.22; 2.175 -> 4.35).
+    np.testing.assert_allclose(panda.limits.qdd_max, np.minimum(2 * panda.limits.qd_max, 10.0), rtol=0)
+    from rx90sym.urdf import default_acceleration
+
+    assert panda.limits.qdd_max[6] == 5.22 and default_acceleration(panda)
     assert urdf_parameters(panda)["FV3"] == 0.003  # <dynamics damping="0.003">
     kinova = _load(DATA / "kinova.urdf", "j2s6s200_end_effector", acceleration=4.0)
     assert np.isinf(kinova.limits.q_max[0]) and np.isinf(kinova.limits.q_min[3])  # continuous

@@ -11,7 +11,7 @@ import sys
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, Sequence
 
-from rx90sym.defaults import MAX_SNAP_LENGTH_M, MAX_SNAP_RAD, SNAP_LENGTH_M, SNAP_RAD
+from rx90sym.defaults import ACCELERATION_DEFAULT_TEXT, MAX_SNAP_LENGTH_M, MAX_SNAP_RAD, SNAP_LENGTH_M, SNAP_RAD
 
 if TYPE_CHECKING:  # annotations only
     import numpy as np
@@ -180,7 +180,7 @@ def convention_option(sp: argparse.ArgumentParser) -> None:
 
 
 def robot_option(sp: argparse.ArgumentParser, default: str | None = "rx90", source: str = "",
-                 acceleration_default: str = "10 rad/s^2, 2 m/s^2") -> None:
+                 acceleration_default: str = ACCELERATION_DEFAULT_TEXT) -> None:
     """``--robot``: a bundled robot name, a robot file or a URDF; ``--tip``: a URDF's end link.
     ``default`` None: no default robot (``source`` says where the robot is taken from instead).
     ``acceleration_default``: what the command uses when a URDF's --acceleration is not given."""

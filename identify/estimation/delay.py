@@ -16,6 +16,7 @@ import rx90sym
 
 from identify.signal.filtering import decimate
 from identify.observation.matrix import automatic_cutoff, column_regressor, filtered_motions, shifted_torques, stack_rows
+from identify.observation.defaults import DEFAULT_DECIMATE_TO
 from identify.observation.processing import RestPolicy, drops_rest
 
 __all__ = ["DelayEstimate", "delay_grid", "estimate_delay", "joint_log_rms", "refined_delay"]
@@ -46,7 +47,7 @@ def _cost(W: np.ndarray, Y: np.ndarray, joint: np.ndarray, n: int) -> float:
 
 
 def estimate_delay(robot: rx90sym.Robot, recordings: Sequence[Any], base: Any = None,
-                   cutoff: float | None = None, decimate_to: float | None = 50.0,
+                   cutoff: float | None = None, decimate_to: float | None = DEFAULT_DECIMATE_TO,
                    spring: bool = True, min_velocity: float | None = None, rest: RestPolicy = "drop",
                    max_delay: float = 0.02, steps: int = 41) -> DelayEstimate:
     """Torque-to-position lag [s] of ``recordings`` (one lag for all), within ±``max_delay`` s.

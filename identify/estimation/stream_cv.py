@@ -40,6 +40,7 @@ from identify.observation.cross_validation import (DEFAULT_BLOCKS, DEFAULT_ROW_C
                                                    ProcessingChoice, block_scores, fold_wls, grid_around,
                                                    scoring_rate, select_processing, time_folds)
 from identify.observation.matrix import DECIMATION_PASSBAND, DEFAULT_MIN_VELOCITY, presliding_base
+from identify.observation.defaults import DEFAULT_DECIMATE_TO
 from identify.observation.processing import RestPolicy, drops_rest
 from identify.observation.stream import (DEFAULT_BLOCK, Plan, Scan, StreamSettings, in_order, piece, plan_windows,
                                          scan, scanned_cutoff, windows_in_order)
@@ -68,7 +69,7 @@ def choose_processing_streamed(robot: rx90sym.Robot, sources: Sequence[BlockSour
                                min_velocity: float | None = DEFAULT_MIN_VELOCITY, rest: RestPolicy | None = None,
                                spring: bool = True, blocks: int = DEFAULT_BLOCKS,
                                row_cap: int | None = DEFAULT_ROW_CAP, time_cap: float | None = None,
-                               default_decimate: float | None = 50.0,
+                               default_decimate: float | None = DEFAULT_DECIMATE_TO,
                                block: int = DEFAULT_BLOCK, client: Any = None,
                                policies: Sequence[str] = SCORED_REST,
                                scans: Sequence[Scan] | None = None) -> ProcessingChoice:

@@ -47,7 +47,7 @@ def fit(robot: rx90sym.Robot, recordings: Sequence[Any], processing: Processing 
         method: str = "wls", *, base: Any = None, gains: DriveGains | None = None,
         convention: str | None = None, spring_source: str | None = None,
         observation: Observation | None = None, block: int | None = None, client: Any = None,
-        bootstrap_seed: int = 0, **consistent_options: Any) -> Fit:
+        bootstrap_seed: int | None = 0, **consistent_options: Any) -> Fit:
     """Identify the base parameters of ``robot`` from ``recordings``.
 
     processing: the signal processing (None: the defaults, those of ``rx90 identify``);
@@ -64,6 +64,8 @@ def fit(robot: rx90sym.Robot, recordings: Sequence[Any], processing: Processing 
     recordings), convention (of the files; None: each file's header), spring_source ("default",
     "none" or a table file; None: from the robot). observation: an already built observation
     matrix (the recordings are then not read; no delay estimate).
+    bootstrap_seed: seed of the segment bootstrap whose σ the fit carries beside eq. 13's
+    (:meth:`Fit.bootstrapped`, as ``rx90 identify --bootstrap-seed``; None: none, on whole recordings).
     block: read, filter and fit the recordings (CSV paths, recordings) in blocks of this many
     samples: memory bounded by the block whatever the logs' length (docs/long-logs.md), the
     segment bootstrap computed on the way with ``bootstrap_seed``; client: a
@@ -145,10 +147,11 @@ def fit(robot: rx90sym.Robot, recordings: Sequence[Any], processing: Processing 
     from identify.observation.spring_fit import BaseWithSpring, spring_summary
 
     spring = spring_summary(robot, base if isinstance(base, BaseWithSpring) else None, result, recordings)[0]
-    return Fit(robot, result, p, model, base, obs, found, found.delay if found is not None else None, spring,
+    done = Fit(robot, result, p, model, base, obs, found, found.delay if found is not None else None, spring,
                recordings=tuple(layout_summary(r) for r in recordings if hasattr(r, "measured_mask")),
                choice=choice, flags=tuple(rank_flags(base)),
                baseline=plain_baseline(robot, recordings if observation is None else [], p.spring))
+    return done if bootstrap_seed is None else done.bootstrapped(bootstrap_seed)  # rx90 identify's σ, alike
 
 
 def _offset_record(base: Any) -> tuple[int, ...] | None:

@@ -171,8 +171,10 @@ class Fit:
         """This fit with the segment-bootstrap σ of each estimate (blocks of ``block_s`` s)."""
         obs = self.observation
         done = self.bootstrap
-        if self.streamed is not None and done is not None and (done.seed, done.draws) == (seed, draws):
-            return self  # computed while the blocks streamed by (fit(..., block=...))
+        same = done is not None and (done.seed, done.draws) == (seed, draws)
+        if same and (self.streamed is not None or (obs is not None and
+                                                   done.block_s == max(1, int(round(block_s * obs.rate))) / obs.rate)):
+            return self  # computed already: by fit(), or while the blocks streamed by (fit(..., block=...))
         if obs is None:
             raise ValueError("bootstrap needs the fit's observation matrix (not a fit loaded from a file; "
                              "a fit in blocks computes it while it reads them: fit(..., bootstrap_seed=...))")

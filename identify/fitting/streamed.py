@@ -29,6 +29,7 @@ from identify.estimation.results import METHODS, IdentificationResult
 from identify.io.blocks import BlockSource, block_source
 from identify.observation.cross_validation import ProcessingChoice
 from identify.observation.matrix import DEFAULT_MIN_VELOCITY, DEFAULT_REST, presliding_base
+from identify.observation.defaults import DEFAULT_DECIMATE_TO
 from identify.observation.processing import RestPolicy, drops_rest
 from identify.observation.stream import (DEFAULT_BLOCK, Piece, Plan, Scan, StreamSettings, in_order, piece,
                                          plan_windows, scan_all, windows_in_order)
@@ -171,7 +172,7 @@ def _choose(robot: rx90sym.Robot, sources: Sequence[BlockSource], base: Any, cut
 
 
 def fit_streamed(robot: rx90sym.Robot, recordings: Sequence[Any], method: str = "wls", base: Any = None,
-                 cutoff: float | None = None, decimate_to: float | None = 50.0,
+                 cutoff: float | None = None, decimate_to: float | None = DEFAULT_DECIMATE_TO,
                  min_velocity: float | None = DEFAULT_MIN_VELOCITY, rest: RestPolicy | None = None,
                  delay: float | str = 0.0, spring: bool = True, estimate: bool = False,
                  block: int = DEFAULT_BLOCK, client: Any = None, bootstrap: BootstrapSpec | None = None,

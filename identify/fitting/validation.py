@@ -16,6 +16,7 @@ import numpy as np
 
 import rx90sym
 
+from identify.observation.defaults import DEFAULT_DECIMATE_TO
 from identify.observation.matrix import automatic_cutoff, filtered_motions, presliding_base
 from identify.observation.processing import RestPolicy, has_policy, predicted_rest
 from identify.estimation.results import IdentificationResult, json_number
@@ -23,6 +24,7 @@ from identify.io.blocks import block_source
 from identify.fitting.raw_scoring import SCORE_TRIM_S, RawScores, raw_scores
 from identify.signal.interpolate import onto
 from identify.observation.matrix import column_regressor
+from identify.observation.offsets import offset_base, result_offsets
 from identify.observation.stream import DEFAULT_BLOCK, StreamSettings, piece, plan_windows, scan_all, windows_in_order
 
 __all__ = ["Validation", "predict", "validate"]
@@ -152,7 +154,7 @@ def base_vector(result: IdentificationResult, base: Any, robot: rx90sym.Robot) -
 
 
 def predict(robot: rx90sym.Robot, result: IdentificationResult, recording: Any, base: Any = None,
-            cutoff: float | None = None, decimate_to: float | None = 50.0, spring: bool = True,
+            cutoff: float | None = None, decimate_to: float | None = DEFAULT_DECIMATE_TO, spring: bool = True,
             min_velocity: float | None = None, delay: float = 0.0, rest: RestPolicy = "zero-coulomb",
             baseline: Any = None) -> Validation:
     """Predicted vs measured torques of ``recording`` with the parameters of ``result``.
@@ -165,6 +167,8 @@ def predict(robot: rx90sym.Robot, result: IdentificationResult, recording: Any, 
     (identify.fitting.baseline.PlainBaseline), scored on the same raw samples (None: none).
     Scored against the raw measured torques at the recording's own time stamps.
     """
+    if base is None:  # the symbolic base, with the torque offsets the fit chose (OFFj in the result)
+        base = offset_base(rx90sym.base_parameters(robot), result_offsets(result, robot))
     base = presliding_base(robot, base, rest if has_policy(rest, "presliding") and min_velocity is not None else None)
     beta = base_vector(result, base, robot)
     cutoff = cutoff if cutoff is not None else automatic_cutoff([recording], decimate_to)
@@ -209,7 +213,7 @@ def validate(robot: rx90sym.Robot, result: IdentificationResult, recording: Any,
 
 
 def predict_streamed(robot: rx90sym.Robot, result: IdentificationResult, recording: Any, base: Any = None,
-                     cutoff: float | None = None, decimate_to: float | None = 50.0, spring: bool = True,
+                     cutoff: float | None = None, decimate_to: float | None = DEFAULT_DECIMATE_TO, spring: bool = True,
                      min_velocity: float | None = None, delay: float = 0.0, block: int = DEFAULT_BLOCK,
                      convention: str | None = None, gains: Any = None, rest: RestPolicy = "zero-coulomb") -> Validation:
     """:func:`identify.predict` on a recording of any length: predicted and measured torques block by block

@@ -35,6 +35,7 @@ from identify.signal.filtering import choose_cutoff
 from identify.io.gains import DriveGains, apply_gains
 from identify.estimation.bootstrap import bootstrap_std
 from identify.estimation.least_squares import triangular_cond, weighted_least_squares
+from identify.observation.defaults import DEFAULT_DECIMATE_TO
 from identify.observation.matrix import FilteredMotion, column_regressor, filtered_motion, stack_rows
 from identify.signal.pairing import POSITION_TOLERANCE, PairedRuns, pair_runs
 from identify.estimation.results import IdentificationResult, json_number
@@ -154,7 +155,7 @@ def drive_gains(robot: rx90sym.Robot, empty: Sequence[Recording], loaded: Sequen
                 method: str = DEFAULT_METHOD, fix: Mapping[int, float] | None = None, mass_std: float = 0.0,
                 side: str | None = None, offsets: bool = True, flag_pct: float = FLAG_PCT,
                 position_tol: float = POSITION_TOLERANCE, base: rx90sym.BaseParameters | None = None,
-                cutoff: float | None = None, decimate_to: float | None = 50.0,
+                cutoff: float | None = None, decimate_to: float | None = DEFAULT_DECIMATE_TO,
                 min_velocity: float | None = None, spring: bool = True,
                 iterations: int = IV_ITERATIONS, bootstrap_seed: int = 0, _swap_check: bool = True) -> DriveGainsResult:
     """Identify the drive gains from current recordings and a payload of known mass.

@@ -17,12 +17,11 @@ import numpy as np
 
 from identify.monitor.contact import (CALIBRATION_MARGIN, CALIBRATION_QUANTILE, MIN_DURATION_S, RELEASE, ContactEvent,
                                       EventTracker, detectable_sizes, gain_vector, threshold_vector)
+from identify.monitor.defaults import DEFAULT_MONITOR_BLOCK
 from identify.monitor.observer import ObserverModel, observer_model
 
 __all__ = ["DEFAULT_MONITOR_BLOCK", "MonitorLog", "MonitorInputError", "calibrate", "check_fit", "monitor_log"]
 
-#: Samples per block of the log mode (60 s at 1 kHz).
-DEFAULT_MONITOR_BLOCK = 60_000
 #: Residual envelope kept for the report: the signed extremes per this span [s] (memory: 1 h at
 #: 1 kHz, 7 joints, about 12 MB).
 ENVELOPE_S = 0.05

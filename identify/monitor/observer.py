@@ -36,14 +36,11 @@ import rx90sym
 from rx90sym.compiled import _c_compiler, shared_library
 from rx90sym.momentum import base_momentum_regressors
 
+from identify.monitor.defaults import DEFAULT_GAIN
 from identify.observation.processing import DEFAULT_MIN_VELOCITY
 
 __all__ = ["DEFAULT_GAIN", "FRICTION_KINDS", "ObserverModel", "observer_model"]
 
-#: Default observer gain K_O [rad/s] on every joint (docs/contact-monitor.md): a pulse reaches
-#: 1 − e^{−K_O t} of its size in t; at 25 rad/s, 63 % in 40 ms (the 50 ms detection budget less the
-#: 10 ms minimum duration), while the residual's noise (∝ √K_O on white torque noise) stays small.
-DEFAULT_GAIN = 25.0
 #: Parameter kinds of the actuation model (friction, offsets): absent from p and β.
 FRICTION_KINDS = ("FS", "FV", "FVM", "FSM", "FSP", "FSN", "OFF", "FST", "FP")
 #: A Coulomb term counts as uncertain (slack) while its driver speed is below this many times the
@@ -151,6 +148,16 @@ class ObserverModel:
         return out
 
 
+def _rigid_base(base: Any) -> Any:
+    """The symbolic base inside a fit's columns (a FrictionBase's smooth forms, the offsets the
+    cross-validated choice added: identify.observation.offsets.OffsetBase)."""
+    from identify.observation.friction_model import FrictionBase
+    from identify.observation.offsets import OffsetBase
+
+    base = base.base if isinstance(base, FrictionBase) else base
+    return base.base if isinstance(base, OffsetBase) else base
+
+
 def _rigid_values(fit: Any, base: Any) -> np.ndarray:
     values = dict(zip(fit.result.names, fit.result.values))
     return np.array([values.get(nm, 0.0) for nm in base.names])
@@ -166,11 +173,13 @@ def _friction(fit: Any, q: ca.SX, qd: ca.SX) -> tuple[ca.SX, ca.SX, ca.SX, ca.SX
     from identify.observation.friction_model import FrictionBase, coulomb_terms
 
     robot, base = fit.robot, fit.base
-    inner = base.base if isinstance(base, FrictionBase) else base
+    inner = _rigid_base(base)
     phi = inner.regressor(q, qd, ca.SX.zeros(robot.n, 1))
     names = list(inner.names)
+    # Offsets the cross-validated choice added (OFFj beyond the robot's columns): a constant on joint j.
+    added = [nm for nm in fit.result.names if _kind(nm) == "OFF" and nm not in names]
     used = [nm for nm in names if _kind(nm) in FRICTION_KINDS] + [
-        nm for nm in fit.result.names if _kind(nm) == "FST"]
+        nm for nm in fit.result.names if _kind(nm) == "FST"] + added
     fv = ca.SX.sym("fv", len(used))
     sym = {nm: fv[k] for k, nm in enumerate(used)}
     terms = coulomb_terms(robot, names)
@@ -185,6 +194,8 @@ def _friction(fit: Any, q: ca.SX, qd: ca.SX) -> tuple[ca.SX, ca.SX, ca.SX, ca.SX
         if nm not in sym or c in coulomb:
             continue
         rows = [rows[j] + phi[j, c] * sym[nm] for j in range(robot.n)]
+    for nm in added:
+        rows[int(nm[3:]) - 1] += sym[nm]
     for t in terms:
         v = ca.mtimes(ca.DM(t.driver).T, qd)
         own = sum(abs(d) for d in t.driver) == 1 and t.driver[t.row] == 1
@@ -206,13 +217,11 @@ def _friction(fit: Any, q: ca.SX, qd: ca.SX) -> tuple[ca.SX, ca.SX, ca.SX, ca.SX
 
 def supported(fit: Any) -> str:
     """'' when the monitor can evaluate this fit, else why not."""
-    from identify.observation.friction_model import FrictionBase
-
-    base = fit.base.base if isinstance(fit.base, FrictionBase) else fit.base
+    base = _rigid_base(fit.base)
     if not isinstance(base, rx90sym.BaseParameters):
         return (f"the fit's columns ({type(base).__name__}: an identified spring) are not supported by the "
                 f"contact monitor yet: fit with the robot's spring table")
-    extra = [nm for nm in fit.result.names if nm not in base.names and _kind(nm) not in ("FST", "FP")]
+    extra = [nm for nm in fit.result.names if nm not in base.names and _kind(nm) not in ("FST", "FP", "OFF")]
     if extra:
         return f"the fit has parameters {extra[:4]} the contact monitor does not model"
     return ""
@@ -224,8 +233,6 @@ def observer_model(fit: Any, effort: str | None = None) -> ObserverModel:
     why = supported(fit)
     if why:
         raise ValueError(why)
-    from identify.observation.friction_model import FrictionBase
-
     robot = fit.robot
     gains = fit.gains
     effort = effort or ("current" if gains is not None else "torque")
@@ -234,7 +241,7 @@ def observer_model(fit: Any, effort: str | None = None) -> ObserverModel:
     if effort == "current" and gains is None:
         raise ValueError("effort 'current' needs a fit with drive gains (rx90 identify --gains)")
     n = robot.n
-    base = fit.base.base if isinstance(fit.base, FrictionBase) else fit.base
+    base = _rigid_base(fit.base)
     q, qd, e = (ca.SX.sym(s, n) for s in ("q", "qd", "effort"))
     theta = ca.SX.sym("theta", base.nb)
     phi_p, phi_beta = base_momentum_regressors(base)(q, qd)

@@ -61,6 +61,7 @@ import numpy as np
 import rx90sym
 
 from identify.observation.matrix import DECIMATION_PASSBAND, DEFAULT_MIN_VELOCITY, automatic_cutoff
+from identify.observation.defaults import DEFAULT_DECIMATE_TO
 from identify.observation.processing import DEFAULT_REST, REST_POLICIES, RestPolicy
 from identify.signal.filtering import choose_cutoff
 from identify.observation.candidates import CLEAR_MARGIN, DEFAULT_LABEL, Candidate, ProcessingChoice
@@ -107,7 +108,7 @@ SCORED_REST = tuple(r for r in REST_POLICIES if r not in ("drop", "none", "presl
 
 
 
-def candidate_grid(recordings: Sequence[Any], default_decimate: float | None = 50.0) -> tuple[float, list[Candidate]]:
+def candidate_grid(recordings: Sequence[Any], default_decimate: float | None = DEFAULT_DECIMATE_TO) -> tuple[float, list[Candidate]]:
     """(knee [Hz], candidates in scoring order: the knee first, the default (labelled, the
     automatic cut-off with ``default_decimate``), then outwards from the knee)."""
     rate = min(1.0 / float(np.median(np.diff(np.asarray(p.t)))) for r in recordings for p in r.pieces())
@@ -149,7 +150,7 @@ def scoring_rate(grid: Sequence[Candidate]) -> float | None:
 def choose_processing(robot: rx90sym.Robot, recordings: Sequence[Any], base: Any = None,
                       min_velocity: float | None = DEFAULT_MIN_VELOCITY, rest: RestPolicy | None = None,
                       spring: bool = True, blocks: int = DEFAULT_BLOCKS, row_cap: int | None = DEFAULT_ROW_CAP,
-                      time_cap: float | None = None, default_decimate: float | None = 50.0,
+                      time_cap: float | None = None, default_decimate: float | None = DEFAULT_DECIMATE_TO,
                       candidates: Sequence[Candidate] | None = None, policies: Sequence[str] = SCORED_REST,
                       delay: float = 0.0, raw: bool = True, offsets: Sequence[int] = ()) -> ProcessingChoice:
     """Score the candidate processings (module docstring) and choose the lowest held-back error.

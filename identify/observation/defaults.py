@@ -2,10 +2,12 @@
 them without importing the observation matrix)."""
 from __future__ import annotations
 
-__all__ = ["DEFAULT_DECIMATE_TO", "DEFAULT_MIN_VELOCITY", "REST_POLICIES", "DEFAULT_REST", "FRICTION_FORMS", "DEFAULT_FRICTION"]
+__all__ = ["DEFAULT_DECIMATE_TO", "DEFAULT_DELAY", "DEFAULT_MIN_VELOCITY", "REST_POLICIES", "DEFAULT_REST", "FRICTION_FORMS", "DEFAULT_FRICTION"]
 
 #: Rate after parallel filtering [Hz].
 DEFAULT_DECIMATE_TO = 50.0
+#: Torque lag behind the positions compensated [s] (its estimate is reported all the same).
+DEFAULT_DELAY = 0.0
 #: Rest threshold [rad/s]: a joint slower than this is at rest (its Coulomb sign is unknown).
 DEFAULT_MIN_VELOCITY = 0.05
 #: What rest samples do: their rows are dropped, kept with a Coulomb term of 0, kept with the

@@ -30,6 +30,7 @@ import rx90sym
 from identify.observation.friction import crossing_passes, presliding_state
 from identify.observation.friction_model import (PRESLIDING_PREFIX, STRIBECK_PREFIX, CoulombTerm, coulomb_terms, own_terms,
                                                 presliding_base, without_empty_presliding)
+from identify.observation.defaults import DEFAULT_DECIMATE_TO
 from identify.observation.processing import (CROSSING_SECONDS, CROSSING_TRAVEL, DEFAULT_MIN_VELOCITY, DEFAULT_REST,
                                              REST_POLICIES, RestPolicy, drops_rest, rest_label, rest_per_joint)
 from identify.signal.filtering import EDGE_PERIODS, choose_cutoff, decimate, decimation_plan, derivatives
@@ -351,7 +352,7 @@ def column_regressor(robot: rx90sym.Robot, base: Any = None, columns: Sequence[s
 
 
 def observation_matrix(robot: rx90sym.Robot, recordings: Sequence[Any], cutoff: float | None = None,
-                       decimate_to: float | None = 50.0, base: Any = None,
+                       decimate_to: float | None = DEFAULT_DECIMATE_TO, base: Any = None,
                        columns: Sequence[str] | None = None, spring: bool = True,
                        min_velocity: float | None = None, rest: RestPolicy = "drop",
                        delay: float = 0.0) -> Observation:

@@ -16,7 +16,7 @@ import numpy as np
 
 import rx90sym
 
-__all__ = ["OffsetBase", "offset_base", "offset_columns", "offset_joints"]
+__all__ = ["OffsetBase", "offset_base", "offset_columns", "offset_joints", "result_offsets"]
 
 
 @dataclass(frozen=True, eq=False)
@@ -70,3 +70,11 @@ def offset_base(base: Any, joints: Sequence[int]) -> Any:
     if not joints:
         return base
     return OffsetBase(base, joints)
+
+
+def result_offsets(result: Any, robot: rx90sym.Robot) -> tuple[int, ...]:
+    """The joints (0-based) given an offset column OFFj by a fit (``result.names``) that the robot's own
+    base parameters lack (the cross-validated choice's offsets)."""
+    own = set(rx90sym.base_parameters(robot).names)
+    return tuple(int(nm[3:]) - 1 for nm in result.names
+                 if nm.startswith("OFF") and nm[3:].isdigit() and nm not in own)

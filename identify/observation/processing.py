@@ -10,8 +10,8 @@ import math
 from dataclasses import asdict, dataclass, fields
 from typing import Any
 
-from identify.observation.defaults import (DEFAULT_DECIMATE_TO, DEFAULT_FRICTION, DEFAULT_MIN_VELOCITY, DEFAULT_REST,
-                                           FRICTION_FORMS, REST_POLICIES)
+from identify.observation.defaults import (DEFAULT_DECIMATE_TO, DEFAULT_DELAY, DEFAULT_FRICTION, DEFAULT_MIN_VELOCITY,
+                                           DEFAULT_REST, FRICTION_FORMS, REST_POLICIES)
 
 __all__ = ["Processing", "FRICTION_FORMS", "REST_POLICIES", "CROSSING_SECONDS", "CROSSING_TRAVEL",
            "DEFAULT_MIN_VELOCITY", "DEFAULT_REST", "DEFAULT_DECIMATE_TO", "RestPolicy", "rest_per_joint",
@@ -129,7 +129,7 @@ class Processing:
     decimate_to: float | None = DEFAULT_DECIMATE_TO
     min_velocity: float | None = DEFAULT_MIN_VELOCITY
     rest: RestPolicy | None = None
-    delay: float | str = 0.0
+    delay: float | str = DEFAULT_DELAY
     estimate_delay: bool = True
     spring: bool = True
     cross_validate: bool | None = None

@@ -33,6 +33,7 @@ import rx90sym
 from identify.io.blocks import DEFAULT_BLOCK, BlockSource
 from identify.io.log_fields import layout_fields
 from identify.observation.matrix import DECIMATION_PASSBAND, SPECTRUM_SAMPLES, filtered_motion, shifted_torques
+from identify.observation.defaults import DEFAULT_DECIMATE_TO
 from identify.observation.processing import RestPolicy
 from identify.signal.blocks import WelchAccumulator, decimation_margin, lowpass_margin, motion_windows
 from identify.signal.cutoff import choose_cutoff
@@ -50,7 +51,7 @@ class StreamSettings:
     min_velocity [rad/s] (None: no rest mask), rest policy, torque delay [s], spring, block [raw samples]."""
 
     cutoff: float | None = None
-    decimate_to: float | None = 50.0
+    decimate_to: float | None = DEFAULT_DECIMATE_TO
     min_velocity: float | None = None
     rest: RestPolicy = "drop"
     delay: float = 0.0

@@ -31,7 +31,9 @@ from identify.estimation.consistency import ConsistencyError, pseudo_inertia
 from identify.estimation.consistency.fit import SOLVE_FACTOR
 from identify.estimation.bootstrap import bootstrap_estimates, bootstrap_std
 from identify.estimation.least_squares import compress, solve_system, weighted_least_squares
+from identify.observation.defaults import DEFAULT_DECIMATE_TO
 from identify.observation.processing import Processing
+from identify.payloads.defaults import MASS_TOL
 from identify.signal.filtering import choose_cutoff
 from identify.observation.matrix import column_regressor, filtered_motion, stack_rows
 from identify.signal.pairing import POSITION_TOLERANCE, PairedRuns, pair_runs
@@ -74,7 +76,7 @@ def check_wrist_motion(robot: rx90sym.Robot, loaded: Sequence[Any]) -> None:
 def payload_motions(robot: rx90sym.Robot, recs: Sequence[Any], columns: Sequence[int], options: Mapping[str, Any]):
     """Filtered motions with the standard regressor's ``columns`` (indices) as Phi."""
     _, regressor = column_regressor(robot, columns=[robot.parameter_names[i] for i in columns])
-    return [filtered_motion(robot, r, options.get("cutoff"), options.get("decimate_to", 50.0),
+    return [filtered_motion(robot, r, options.get("cutoff"), options.get("decimate_to", DEFAULT_DECIMATE_TO),
                             options.get("spring", True), regressor, delay=options.get("delay", 0.0))
             for r in recs]
 
@@ -105,7 +107,7 @@ def _robot_vector(robot: rx90sym.Robot, base: Any, robot_params: Any) -> np.ndar
 # --------------------------------------------------------------------------------------------
 def payload(robot: rx90sym.Robot, method: int, empty: Sequence[Any] = (), loaded: Sequence[Any] = (),
             robot_params: Any = None, base: Any = None, a_priori: Mapping[str, float] | str | None = None,
-            constrained: bool = False, mass: float | None = None, mass_tol: float = 0.05,
+            constrained: bool = False, mass: float | None = None, mass_tol: float = MASS_TOL,
             position_tol: float = POSITION_TOLERANCE, bootstrap_seed: int | None = 0, **options: Any) -> PayloadResult:
     """Identify the payload by method 1, 2, 3 or 4 of section IV.
 
@@ -151,7 +153,7 @@ def payload(robot: rx90sym.Robot, method: int, empty: Sequence[Any] = (), loaded
     if callable(rows) and bootstrap_seed is not None:  # method 2: a difference of two fits
         boot = rows(bootstrap_seed)
     elif rows is not None and bootstrap_seed is not None:
-        rate = options.get("decimate_to", 50.0) or loaded[0].rate
+        rate = options.get("decimate_to", DEFAULT_DECIMATE_TO) or loaded[0].rate
         boot = bootstrap_std(*rows, fit.weights, rate, bootstrap_seed)[[fit.names.index(n) for n in PAYLOAD_NAMES]]
     if constrained:
         values = _constrained(fit, mass, mass_tol)
@@ -250,7 +252,7 @@ def _method_2(robot, base, empty, loaded, options, **_):
     # One processing for both runs (their difference is the payload): not chosen on each run.
     processing = Processing(**{"min_velocity": None, "rest": "drop", "estimate_delay": False, "cross_validate": False,
                                **kw})
-    empty_fit, loaded_fit = fit(robot, empty, processing, base=base), fit(robot, loaded, processing, base=base)
+    empty_fit, loaded_fit = (fit(robot, runs, processing, base=base, bootstrap_seed=None) for runs in (empty, loaded))
     fit_v, fit_t = empty_fit.result, loaded_fit.result
     delta = fit_t.values - fit_v.values                    # eq. 23
     cov = fit_t.covariance + fit_v.covariance

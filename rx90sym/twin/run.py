@@ -8,6 +8,7 @@ from typing import TYPE_CHECKING, Any, Mapping
 
 import numpy as np
 
+from ..defaults import TWIN_NOISE
 from ..payloads import Payload, add_payload, as_payload
 from ..recording import Recording
 from .noise import CurrentSensor, NoiseProfile, _profile, quantise_positions, torque_noise_sigma
@@ -20,7 +21,7 @@ if TYPE_CHECKING:  # for annotations only
 
 
 def simulate(robot: Robot, trajectory: Trajectory, params: Mapping[str, float] | Any | None = None,
-             payload: str | Path | Payload | None = None, noise: str | NoiseProfile = "realistic",
+             payload: str | Path | Payload | None = None, noise: str | NoiseProfile = TWIN_NOISE,
              seed: int = 0, rate: float = 250.0, duration: float | None = None,
              currents: CurrentSensor | None = None) -> Recording:
     """Simulate the robot on a trajectory and record positions and motor torques at ``rate``.

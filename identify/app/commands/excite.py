@@ -5,7 +5,6 @@ import argparse
 import contextlib
 import dataclasses
 import sys
-import warnings
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -25,7 +24,7 @@ def register(sub: Any) -> None:
     sp = sub.add_parser("excite", help="optimise an excitation trajectory",
                         description="optimise an excitation trajectory (see docs/excitation.md)")
     sp.set_defaults(func=run)
-    robot_option(sp, acceleration_default="2 x each joint's velocity limit per second, at most 10 rad/s^2")
+    robot_option(sp)
     sp.add_argument("--duration", type=float, default=None,
                     help="duration [s] (default 20, or 10 with --for payload)")
     sp.add_argument("--for", dest="target", choices=("robot", "payload"), default="robot",
@@ -125,7 +124,7 @@ def run(args: argparse.Namespace) -> int:
     for path in (args.out, args.json, args.program, args.report):
         check_output(path)
     _check_options(args)
-    robot = _load_robot(args)
+    robot = load_robot(args)
     params = rx90sym.nominal_parameters(robot, args.params)
     chi = None if params is None else robot.parameter_vector(params)
     # Without nominal parameters excitation.optimise says the torque limits are unchecked (once).
@@ -275,19 +274,6 @@ def _collision(args: argparse.Namespace, robot: rx90sym.Robot) -> Any:
     return collision
 
 
-def _load_robot(args: argparse.Namespace) -> rx90sym.Robot:
-    """The robot of --robot. A URDF without --acceleration: the loader's warning (its generic
-    default) is dropped, since the envelope replaces that default with its own and says so
-    (one warning, not two that disagree)."""
-    with warnings.catch_warnings(record=True) as caught:
-        warnings.simplefilter("always")
-        robot = load_robot(args)
-    for w in caught:
-        if not (robot.urdf is not None and "has no acceleration limits" in str(w.message)):
-            warnings.warn_explicit(w.message, w.category, w.filename, w.lineno)
-    return robot
-
-
 def _envelope(args: argparse.Namespace, robot: rx90sym.Robot) -> Any:
     """The safety envelope from the options (angles in controller angles, as the envelope takes
     them; a refusal names the option and the values the user typed)."""
@@ -304,9 +290,9 @@ def _envelope(args: argparse.Namespace, robot: rx90sym.Robot) -> Any:
     centre = None if args.centre_pose is None else floats(args.centre_pose, "--centre-pose", robot.n)
     urdf_default = robot.urdf is not None and getattr(args, "acceleration", None) is None
     if urdf_default:
-        progress("warning: the URDF gives no acceleration limits: the excitation uses the conservative "
-                 f"default {excitation.envelope.URDF_ACCELERATION_PER_VELOCITY:g} x the velocity limit per "
-                 "second (x the acceleration scale); give --acceleration to set them")
+        from rx90sym.urdf import acceleration_note
+
+        progress(f"warning: {acceleration_note(robot)} (the excitation uses them x the acceleration scale)")
     given = {k: v for k, v in (("margin", args.mounting_margin), ("floor", args.floor),
                                ("max_speed", args.max_tool_speed), ("velocity_scale", args.velocity_scale),
                                ("acceleration_scale", args.acceleration_scale)) if v is not None}

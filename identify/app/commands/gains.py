@@ -7,6 +7,7 @@ import math
 from typing import TYPE_CHECKING, Any
 
 from identify.gains.defaults import DEFAULT_METHOD, FLAG_PCT, GAIN_METHODS
+from identify.observation.defaults import DEFAULT_DECIMATE_TO
 from identify.signal.defaults import POSITION_TOLERANCE
 
 from ..flags import checked, flag_lines, settle
@@ -47,7 +48,8 @@ def register(sub: Any) -> None:
     sp.add_argument("--gains", help="reference gains (K1,...,Kn or a gains JSON) printed beside the result")
     convention_option(sp)
     sp.add_argument("--cutoff", type=float, help="Butterworth cut-off for q [Hz] (default: chosen from the data)")
-    sp.add_argument("--decimate-to", type=float, default=50.0, help="rate after parallel filtering [Hz] (default 50)")
+    sp.add_argument("--decimate-to", type=float, default=DEFAULT_DECIMATE_TO,
+                    help=f"rate after parallel filtering [Hz] (default {DEFAULT_DECIMATE_TO:g})")
     sp.add_argument("--json", help="the gains as JSON (read by --gains of every command)")
     sp.add_argument("--report", help="self-contained HTML report")
 

@@ -11,8 +11,8 @@ import math
 from typing import TYPE_CHECKING, Any
 
 from identify.io.defaults import DEFAULT_BLOCK
-from identify.observation.defaults import (DEFAULT_DECIMATE_TO, DEFAULT_MIN_VELOCITY, DEFAULT_REST, FRICTION_FORMS,
-                                           REST_POLICIES)
+from identify.observation.defaults import (DEFAULT_DECIMATE_TO, DEFAULT_DELAY, DEFAULT_MIN_VELOCITY, DEFAULT_REST,
+                                           FRICTION_FORMS, REST_POLICIES)
 
 from ..flags import given_gain_flags, settle, with_hint
 from ..common import (UsageError, check_output, convention_option, progress, read_recordings, robot_option,
@@ -89,9 +89,9 @@ def register(sub: Any) -> None:
                          f"squares; one, or one per joint separated by commas (default: coulomb or tanh chosen per "
                          f"joint by the cross-validation, coulomb unless clearly beaten on that joint; else coulomb, "
                          f"and for long logs fitted block by block)")
-    sp.add_argument("--delay", type=_delay, default=0.0,
-                    help="torque lag behind the positions: 'auto' (estimated) or seconds (default 0; "
-                         "the estimate is always reported)")
+    sp.add_argument("--delay", type=_delay, default=DEFAULT_DELAY,
+                    help=f"torque lag behind the positions: 'auto' (estimated) or seconds (default {DEFAULT_DELAY:g}; "
+                         f"the estimate is always reported)")
     sp.add_argument("--block", type=block_option, default=DEFAULT_BLOCK,
                     help=f"samples per block for long logs: a log longer than this is read, filtered and "
                          f"fitted block by block, memory bounded by the block (default {DEFAULT_BLOCK})")
@@ -226,8 +226,8 @@ def run(args: argparse.Namespace) -> int:
         prior = physical_prior(args, robot) if args.method == "consistent" else None
         options = {"physical_prior": prior} if args.method == "consistent" else {}
         result = fit(robot, recs, processing_of(args, sb is None), args.method, base=sb, gains=gains,
-                     convention=args.convention, spring_source=args.spring, **options)
-    result = result.bootstrapped(args.bootstrap_seed)
+                     convention=args.convention, spring_source=args.spring, bootstrap_seed=args.bootstrap_seed,
+                     **options)
     for f in result.flags:  # the fit's own errors (a rank that depends on the threshold): fitted, never silent
         progress(f"error: {with_hint(f)}")
     result = result.with_flags([*result.flags, *flags, *_fit_flags(result, args.method, prior)])

@@ -9,6 +9,8 @@ from typing import Any
 
 
 def register(sub: Any) -> None:
+    from identify.monitor.defaults import DEFAULT_GAIN, DEFAULT_MONITOR_BLOCK  # standard library only
+
     sp = sub.add_parser("monitor", help="contact events and external torques on a recording (momentum observer)",
                         description="run the generalised-momentum observer of an identification over a recording: "
                                     "contact events (start, end, joints, peak external torque), residual CSV, report "
@@ -24,10 +26,11 @@ def register(sub: Any) -> None:
                     help="contact-free recording(s) to compute the thresholds on (repeatable); needed when the "
                          "identification has no contact_thresholds_nm")
     sp.add_argument("--threshold", help="T or T1,..,Tn [N·m]: thresholds (override the file's and --calibrate)")
-    sp.add_argument("--gain", help="K or K1,..,Kn [rad/s]: observer gain (default 25 on every joint)")
+    sp.add_argument("--gain", help=f"K or K1,..,Kn [rad/s]: observer gain (default {DEFAULT_GAIN:g} on every joint)")
     sp.add_argument("--convention", choices=("controller", "model", "staubli", "khalil"), default=None,
                     help="joint angles of the file (default: the identification's, else the file's header)")
-    sp.add_argument("--block", type=int, default=None, help="samples per block (default 60000)")
+    sp.add_argument("--block", type=int, default=DEFAULT_MONITOR_BLOCK,
+                    help=f"samples per block (default {DEFAULT_MONITOR_BLOCK})")
 
 
 def _numbers(text: str | None, what: str, n: int) -> Any:
@@ -51,13 +54,14 @@ def run(args: argparse.Namespace) -> int:
     from rx90sym.files import write_json
 
     from identify import load_fit
-    from identify.monitor.log import DEFAULT_MONITOR_BLOCK, MonitorInputError, calibrate, check_fit, monitor_log
+    from identify.monitor.defaults import DEFAULT_GAIN
+    from identify.monitor.log import MonitorInputError, calibrate, check_fit, monitor_log
 
     from ..common import UsageError, check_output, progress
 
     for out in (args.out, args.json, args.report):
         check_output(out)
-    block = args.block or DEFAULT_MONITOR_BLOCK
+    block = args.block
     if block < 3:
         raise UsageError(f"--block must be at least 3 samples, got {block}")
     f = load_fit(args.identification)
@@ -76,8 +80,8 @@ def run(args: argparse.Namespace) -> int:
         thresholds = getattr(f, "contact_thresholds", None)
         source = "the identification file"
         if gain is not None:
-            progress("warning: the identification's thresholds were computed at the default gain (25 rad/s); "
-                     "with --gain, --calibrate gives thresholds for that gain")
+            progress(f"warning: the identification's thresholds were computed at the default gain ({DEFAULT_GAIN:g} "
+                     f"rad/s); with --gain, --calibrate gives thresholds for that gain")
         if thresholds is None:
             raise MonitorInputError(f"{args.identification}: no contact thresholds (contact_thresholds_nm; a file "
                                     f"written before they were stored): give --calibrate CONTACT_FREE.csv or --threshold")

@@ -5,6 +5,7 @@ import argparse
 import dataclasses
 from typing import TYPE_CHECKING, Any
 
+from identify.payloads.defaults import MASS_TOL
 from identify.signal.defaults import POSITION_TOLERANCE
 
 from ..flags import checked, flag_lines, given_gain_flags, settle
@@ -36,7 +37,7 @@ def register(sub: Any) -> None:
     sp.add_argument("--robot-params", help="JSON of the robot's parameters (rx90 identify --json)")
     sp.add_argument("--a-priori", help="bundled payload name or JSON file of a priori values")
     sp.add_argument("--mass", type=float, help="weighed mass [kg] (constrained fit)")
-    sp.add_argument("--mass-tol", type=float, help="tolerance of the weighed mass [kg] (default 0.05)")
+    sp.add_argument("--mass-tol", type=float, help=f"tolerance of the weighed mass [kg] (default {MASS_TOL:g})")
     sp.add_argument("--constrained", action="store_true", help="payload pseudo-inertia PSD (and mass)")
     sp.add_argument("--filtering-from", metavar="ID.json",
                     help="reuse the cut-off, decimation and torque delay of an identification (rx90 identify --json)")
@@ -85,12 +86,12 @@ def run(args: argparse.Namespace) -> int:
         filt = {k: f[k] for k in ("cutoff", "decimate_to", "delay")}
     res = payload(robot, args.method, empty=empty, loaded=loaded, robot_params=params, **filt,
                   a_priori=args.a_priori, constrained=args.constrained, mass=args.mass,
-                  mass_tol=args.mass_tol if args.mass_tol is not None else 0.05,
+                  mass_tol=args.mass_tol if args.mass_tol is not None else MASS_TOL,
                   position_tol=args.position_tol if args.position_tol is not None else POSITION_TOLERANCE)
     std = res.std_headline
     flags += settle(_unconstrained_mass_flags(res, std) + payload_flags(res.names, res.values, std))
     if args.constrained and args.mass is not None:
-        flags += settle(mass_bound_flags(res["Mc"], args.mass, args.mass_tol if args.mass_tol is not None else 0.05))
+        flags += settle(mass_bound_flags(res["Mc"], args.mass, args.mass_tol if args.mass_tol is not None else MASS_TOL))
     print(res.table())
     if "Mc" in res.names:
         print(res.headline())

@@ -4,6 +4,8 @@ from __future__ import annotations
 import argparse
 from typing import Any
 
+from rx90sym.defaults import TWIN_NOISE
+
 from ..common import UsageError, check_output, load_robot, progress, robot_option, spring_notice
 
 
@@ -17,7 +19,8 @@ def register(sub: Any) -> None:
                     "JSON of 'rx90 identify --method consistent' (default: the bundled RX90's twin "
                     "set, else the robot's nominal parameters: its [nominal] table or URDF inertials)")
     sp.add_argument("--payload", help="bundled payload name (tables_4, tables_5) or JSON file")
-    sp.add_argument("--noise", choices=("ideal", "realistic"), default="realistic")
+    sp.add_argument("--noise", choices=("ideal", "realistic"), default=TWIN_NOISE,
+                    help=f"the twin's noise profile (default {TWIN_NOISE})")
     sp.add_argument("--seed", type=int, default=0)
     sp.add_argument("--out", required=True, help="recording CSV (controller angles)")
 
@@ -27,8 +30,12 @@ def run(args: argparse.Namespace) -> int:
     from excitation import read_trajectory
     from identify.io.recordings import write_recording
 
+    from rx90sym.urdf import acceleration_note
+
     robot = load_robot(args)
     check_output(args.out)
+    if acceleration_note(robot):  # the trajectory is read against the robot's limits
+        progress(f"warning: {acceleration_note(robot)}")
     try:  # the twin's truth: the bundled RX90's own set, else the robot's nominal parameters
         params = rx90sym.default_parameters(robot, args.params)
     except ValueError as exc:
