@@ -192,6 +192,8 @@ def twins(seeds: int, names: list[str] | None, tables: bool) -> bool:
                 print(f"  {name:<26}" + "".join(f"{x:7.3f}" for x in values))
             for seed, r in enumerate(ratios):
                 print(f"  {'seed ' + str(seed) + ', all samples':<26}" + "".join(f"{x:7.3f}" for x in r))
+            for seed, r in enumerate(moving):
+                print(f"  {'seed ' + str(seed) + ', moving':<26}" + "".join(f"{x:7.3f}" for x in r))
             above = [f"j{j + 1} (median {med[j]:.3f}, max {top[j]:.3f})" for j in range(n)
                      if med[j] > TWIN_MEDIAN or top[j] > TWIN_MAX]
             print(f"  targets on every joint: {'yes' if ok else 'NO: ' + ', '.join(above)}")
