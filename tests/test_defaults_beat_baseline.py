@@ -7,9 +7,9 @@ Stribeck static part in the plant (tests/twin_logs.py). The issue's bound for an
 the defaults' RMS (all samples scored) at most 1.10x the baseline's on every joint.
 
 Measured, the worst joint's ratio per seed 0..4 (all samples):
-- UR5 from its maker-rounded URDF, 100 Hz, 15 s chirp, 10 s predicted: 0.618, 0.667, 0.636, 0.807,
-  0.667 with the grid's 10 Hz floor; 0.618, 0.821, 1.184, 0.827, 0.780 with the former 2 Hz floor
-  (seed 2 chose 2 Hz: 1.14x on joint 2, 1.18x on joint 4; the case below);
+- UR5 from its maker-rounded URDF, 100 Hz, 15 s chirp, 10 s predicted: 0.706, 1.057, 0.820, 0.871,
+  0.728 with the grid's 10 Hz floor; 0.706, 0.606, 1.273, 0.904, 0.755 with the former 2 Hz floor
+  (seed 2 chose 2 Hz: 1.06x on joint 2, 1.27x on joint 4; the case below);
 - Panda, 200 Hz, 12 s chirp, 8 s predicted: 0.586, 0.854, 1.000, 0.487, 0.773 (seed 0 below).
 The full trial (6 and 7 joints, 100 Hz and 1 kHz, with and without a static part, 5 seeds) is
 benchmarks/defaults_vs_baseline.py --twins.
