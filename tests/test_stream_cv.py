@@ -116,4 +116,5 @@ def test_the_streamed_choice_on_dask_equals_the_serial_one(rx90, rx90_base):
         spread = choose_processing_streamed(rx90, [src], base=rx90_base, block=BLOCK, client=client)
     assert [(c.cutoff, c.rest, c.score, c.per_block) for c in spread.candidates] == \
         [(c.cutoff, c.rest, c.score, c.per_block) for c in serial.candidates]
-    assert spread.chosen.cutoff == serial.chosen.cutoff and len(serial.candidates) >= 4
+    # the knee (about 2 Hz) below the grid's 10 Hz floor: two rest policies at 10 Hz and the default
+    assert spread.chosen.cutoff == serial.chosen.cutoff and len(serial.candidates) >= 3

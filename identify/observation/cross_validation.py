@@ -20,7 +20,9 @@ the position filter, with the decimation to about 2.5 fc so that the parallel fi
    An earlier version low-passed prediction and torque at the lowest cut-off: it hid the prediction
    noise of the high cut-offs, and on the Panda twin kept 20 Hz where 5 Hz was 5x better.)
 
-The grid is small: the knee times (0.5, 1, 2), within [2 Hz, 40 % of Nyquist], each
+The grid is small: the knee times (0.5, 1, 2), within [10 Hz (:data:`MIN_GRID_CUTOFF`, the plain
+baseline's cut-off: a knee is the fitted motion's, and a prediction of another motion filtered below
+it loses that motion's acceleration), 40 % of Nyquist], each
 decimated to max(2.5 fc, 25 Hz), the knee without decimation, and the default processing (the
 automatic cut-off with the default decimation). Where the fit allows torque offsets (``offsets``:
 not beside the robot's own offsets nor on a joint with asymmetric Coulomb friction, collinear with
@@ -76,6 +78,11 @@ __all__ = ["Candidate", "ProcessingChoice", "GRID_FACTORS", "DEFAULT_BLOCKS", "S
 #: candidates without decimation and with offsets came: 0.7 and 1.4 were dropped to keep the choice's
 #: cost (scored against the raw torques, neighbouring cut-offs at one decimation scored alike).
 GRID_FACTORS = (0.5, 1.0, 2.0)
+#: Lowest cut-off of the grid [Hz] (or 40 % of Nyquist where lower): the plain baseline's. The knee is a
+#: property of the fitted motion; a prediction of another motion filtered below it loses that motion's
+#: acceleration (twin trial, tests/twin_logs.py: a chirp up to 1 Hz fitted, knee 2.1 Hz, chosen in 2 of 5
+#: seeds; the trapezoidal motion predicted 1.46-1.67x the baseline's error while moving on joints 1-3).
+MIN_GRID_CUTOFF = 10.0
 #: The scorer of the in-memory choice (a name tests can replace).
 _score = score_raw
 #: ``reference`` of a choice scored against the raw measured torques (ProcessingChoice.reference_hz).
@@ -117,10 +124,13 @@ def candidate_grid(recordings: Sequence[Any], default_decimate: float | None = D
 
 def grid_around(knee: float, rate: float, default_cutoff: float, default_decimate: float | None) -> list[Candidate]:
     """The candidates around the position-spectrum ``knee`` [Hz] at the recordings' ``rate`` [Hz]
-    (the knee first, the default processing (``default_cutoff`` [Hz], ``default_decimate`` [Hz]),
+    (the knee first, the default processing (``default_cutoff`` [Hz], raised to the grid's floor
+    :data:`MIN_GRID_CUTOFF`, ``default_decimate`` [Hz]),
     then outwards): what :func:`candidate_grid` returns, from numbers a streamed scan also gives."""
     top = 0.4 * rate / 2.0
-    cuts = sorted({min(max(2.0, f * knee), top) for f in GRID_FACTORS}, key=lambda c: abs(math.log(c / knee)))
+    floor = min(MIN_GRID_CUTOFF, top)
+    cuts = sorted({min(max(floor, f * knee), top) for f in GRID_FACTORS}, key=lambda c: abs(math.log(c / knee)))
+    default_cutoff = max(default_cutoff, floor)  # without decimation the automatic cut-off is the knee itself
     out = []
     for fc in cuts:
         target = max(fc / DECIMATION_PASSBAND, MIN_DECIMATED_RATE)  # pass band >= fc
