@@ -23,7 +23,7 @@ from identify.observation.matrix import Observation, coulomb_terms
 from identify.observation.processing import Processing
 from identify.fitting.friction import defaulted_travels
 from identify.estimation.delay import DelayEstimate
-from identify.fitting.validation import Validation, predict
+from identify.fitting.validation import Validation, predict, prediction_rate
 from identify.fitting.baseline import PlainBaseline
 from identify.observation.offsets import offset_base
 
@@ -145,8 +145,10 @@ class Fit:
 
             return predict_streamed(self.robot, result or self.result, recording, base=self.base, block=self.block,
                                     convention=self.model.convention, gains=self.gains, **self.filtering())
-        return predict(self.robot, result or self.result, recording, base=self.base, baseline=self.baseline,
-                       **self.filtering())
+        # At 20 x the cut-off (identify.fitting.validation.prediction_rate), not at the fit's decimated rate.
+        options = dict(self.filtering(), decimate_to=prediction_rate(self.cutoff, recording.rate),
+                       filtered_at=self.decimate_to)
+        return predict(self.robot, result or self.result, recording, base=self.base, baseline=self.baseline, **options)
 
     def validate(self, recording: Any) -> Validation:
         """Cross-validation on a recording not used in the fit (with the essential parameters when
