@@ -42,12 +42,10 @@ def time_blocks(times: Sequence[np.ndarray], blocks: int) -> list[np.ndarray]:
 def _compressed_blocks(motions: Sequence[Any], ids: Sequence[np.ndarray], blocks: int, drop: bool,
                        n: int) -> dict[tuple[int, int], tuple[np.ndarray, int]]:
     """(block, joint) -> (the triangular factor of [W | Y] over the block's rows of that joint, their number)."""
-    out = {}
-    for b in range(blocks):
-        rows = [m.rows(drop) & (i == b)[:, None] for m, i in zip(motions, ids)]
-        W, Y, joint, _ = stack_rows([m.Phi for m in motions], [m.Y for m in motions], masks=rows)
-        out.update(block_factors(W, Y, joint, np.full(joint.size, b), [b], n))
-    return out
+    # The rows stacked once (a block's rows of a joint keep their order): one copy of W, not one per block.
+    W, Y, joint, samples = stack_rows([m.Phi for m in motions], [m.Y for m in motions],
+                                      masks=[m.rows(drop) for m in motions])
+    return block_factors(W, Y, joint, np.concatenate(ids)[samples], range(blocks), n)
 
 
 def block_factors(W: np.ndarray, Y: np.ndarray, joint: np.ndarray, ids: np.ndarray, blocks: Sequence[int],

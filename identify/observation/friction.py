@@ -15,6 +15,7 @@ Coulomb entry unchanged.
 """
 from __future__ import annotations
 
+import math
 from functools import lru_cache
 from typing import Any
 
@@ -83,6 +84,13 @@ def friction_columns(form: str, v: np.ndarray, vs: float) -> tuple[np.ndarray, n
     if not (np.isfinite(vs) and vs > 0):
         raise ValueError(f"friction velocity scale must be a positive speed in rad/s, got {vs!r}")
     v = np.asarray(v, dtype=float).reshape(-1)
+    if form == "tanh":
+        # _form_expression's tanh(v/vs) and CasADi's derivative of it, operation for operation (the same
+        # numbers, tests/test_friction_forms.py), without a CasADi call: the scale search evaluates it
+        # hundreds of times. The C library's tanh, as CasADi's (NumPy's vectorised one differs by an ulp).
+        x = v / vs
+        t = np.fromiter(map(math.tanh, x.tolist()), dtype=float, count=x.size)
+        return t[:, None], (-((1 - t * t) * (x / vs)))[:, None]
     cols, dcols = _mapped(form, max(v.size, 1))(v.reshape(1, -1), vs)
     return np.asarray(cols).T, np.asarray(dcols).T
 
