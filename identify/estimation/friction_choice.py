@@ -202,7 +202,8 @@ def _score_form(robot: rx90sym.Robot, recordings: Sequence[Any], base: Any, opti
                 failed.add(b + 1)
         if W is None or scales is not None:  # Coulomb's columns (and their factors) do not depend on the fold
             W = _exact(robot, recordings, base, options, exact, form, scales)
-            factors = block_factors(W, obs.Y, obs.joint, ids, range(blocks), n)
+            # A smooth form's W holds this fold's scales: the fitting blocks' factors only.
+            factors = block_factors(W, obs.Y, obs.joint, ids, [x for x in range(blocks) if scales is None or x != b], n)
         beta = fold_wls(factors, b, n)  # eq. 11's per-joint weights, as the processing's folds
         if beta is None:
             raise ValueError(f"friction choice: too few rows to fit without block {b + 1}")

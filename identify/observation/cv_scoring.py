@@ -78,8 +78,11 @@ def fold_wls(factors: dict[tuple[int, int], tuple[np.ndarray, int]], held: int, 
         stacked = np.vstack([R for R, _ in parts])  # the same norms as the rows it compresses
         rows = sum(count for _, count in parts)
         c = stacked.shape[1] - 1
-        x, *_ = np.linalg.lstsq(stacked[:, :c], stacked[:, c], rcond=None)
-        resid = np.linalg.norm(stacked[:, :c] @ x - stacked[:, c])
+        # The joint's own columns only (its rows hold no parameter of the links before it): the same
+        # residual, and rank threshold (rows > columns), from a smaller SVD.
+        live = np.flatnonzero(np.any(stacked[:, :c] != 0.0, axis=0))
+        x, *_ = np.linalg.lstsq(stacked[:, live], stacked[:, c], rcond=None)
+        resid = np.linalg.norm(stacked[:, live] @ x - stacked[:, c])
         if rows <= c or resid == 0:
             return None
         systems.append(stacked / (resid / np.sqrt(rows - c)))  # sigma_j as in eq. 12, per joint

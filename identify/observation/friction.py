@@ -15,7 +15,6 @@ Coulomb entry unchanged.
 """
 from __future__ import annotations
 
-import math
 from functools import lru_cache
 from typing import Any
 
@@ -85,11 +84,10 @@ def friction_columns(form: str, v: np.ndarray, vs: float) -> tuple[np.ndarray, n
         raise ValueError(f"friction velocity scale must be a positive speed in rad/s, got {vs!r}")
     v = np.asarray(v, dtype=float).reshape(-1)
     if form == "tanh":
-        # _form_expression's tanh(v/vs) and CasADi's derivative of it, operation for operation (the same
-        # numbers, tests/test_friction_forms.py), without a CasADi call: the scale search evaluates it
-        # hundreds of times. The C library's tanh, as CasADi's (NumPy's vectorised one differs by an ulp).
+        # _form_expression's tanh(v/vs) and CasADi's derivative of it, operation for operation, in NumPy
+        # (tests/test_friction_rows.py: within an ulp of CasADi's): the scale search evaluates it hundreds of times.
         x = v / vs
-        t = np.fromiter(map(math.tanh, x.tolist()), dtype=float, count=x.size)
+        t = np.tanh(x)
         return t[:, None], (-((1 - t * t) * (x / vs)))[:, None]
     cols, dcols = _mapped(form, max(v.size, 1))(v.reshape(1, -1), vs)
     return np.asarray(cols).T, np.asarray(dcols).T
