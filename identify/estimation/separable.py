@@ -153,14 +153,15 @@ class _Problem:
             part = []
             for rows, col, v in self.entries[j]:
                 cols, dcols = friction_columns(self.forms[j], v, float(s[k]))
-                A[rows, col] = cols[:, 0]
-                part.append((rows, col, dcols[:, 0] * self.d[rows]))
+                d = self.d[rows]
+                A[rows, col] = cols[:, 0] * d
+                part.append((rows, col, dcols[:, 0] * d))
                 if j in stribeck:
                     extra = m + stribeck.index(j)
-                    A[rows, extra] = cols[:, 1]
-                    part.append((rows, extra, dcols[:, 1] * self.d[rows]))
+                    A[rows, extra] = cols[:, 1] * d
+                    part.append((rows, extra, dcols[:, 1] * d))
             parts.append(part)
-        return A * self.d[:, None], parts
+        return A, parts
 
     def solve(self, s: np.ndarray) -> tuple[float, np.ndarray, np.ndarray, np.ndarray]:
         """(cost, weighted residual, weighted friction columns, ∂(D·W·β̂)/∂s (r, joints)) at s."""
