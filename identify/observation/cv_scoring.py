@@ -52,9 +52,16 @@ def block_factors(W: np.ndarray, Y: np.ndarray, joint: np.ndarray, ids: np.ndarr
                   n: int) -> dict[tuple[int, int], tuple[np.ndarray, int]]:
     """(block, joint) -> (the triangular factor of [W | Y] over the rows of that block (``ids``) and
     joint, their number), for the ``blocks`` listed: what :func:`fold_wls` solves from."""
-    A = np.column_stack([W, Y])
-    return {(b, j): (np.linalg.qr(A[m], mode="r"), int(m.sum())) for b in blocks for j in range(n)
-            if (m := (ids == b) & (joint == j)).any()}
+    # The rows grouped by (block, joint) with one stable sort (each group keeps its order), not a mask per group.
+    key = np.asarray(ids) * n + joint
+    order = np.argsort(key, kind="stable")
+    edges = np.searchsorted(key[order], [[b * n + j, b * n + j + 1] for b in blocks for j in range(n)])
+    out = {}
+    for bj, (lo, hi) in zip([(b, j) for b in blocks for j in range(n)], edges):
+        if hi > lo:
+            rows = order[lo:hi]
+            out[bj] = (np.linalg.qr(np.column_stack([W[rows], Y[rows]]), mode="r"), int(hi - lo))
+    return out
 
 
 def block_scores(err2: np.ndarray, ref2: np.ndarray) -> tuple[float, tuple[float, ...], tuple[tuple[float, ...], ...]]:
