@@ -19,6 +19,7 @@ import numpy as np
 
 import rx90sym
 
+from identify.observation.defaults import DEFAULT_DECIMATE_TO
 from identify.observation.friction import friction_columns
 from identify.observation.friction_model import coulomb_terms, friction_base, own_terms
 from identify.observation.matrix import Observation, filtered_motions, observation_matrix
@@ -58,7 +59,7 @@ def with_friction_form(robot: rx90sym.Robot, recordings: Sequence[Any], obs: Obs
         return out
 
     names = tuple(t.name for t in changed)   # their rest masks found as in the whole observation
-    motions, _, _ = filtered_motions(robot, recordings, obs.cutoffs[0], options.get("decimate_to", 50.0),
+    motions, _, _ = filtered_motions(robot, recordings, obs.cutoffs[0], options.get("decimate_to", DEFAULT_DECIMATE_TO),
                                      options.get("spring", True), regressor, names, options.get("min_velocity"),
                                      options.get("rest", "drop"), options.get("delay", 0.0))
     Phi = np.concatenate([m.Phi for m in motions])
