@@ -191,7 +191,7 @@ def _score_form(robot: rx90sym.Robot, recordings: Sequence[Any], base: Any, opti
         if smooth:  # searched on the fitting blocks only: the held-back block is unseen
             sub = replace(obs, W=obs.W[fit_rows], Y=obs.Y[fit_rows], joint=obs.joint[fit_rows],
                           samples=obs.samples[fit_rows])
-            found = scales_from_observation(sub, terms, form, n)
+            found = scales_from_observation(sub, terms, form, n, std=False)
             scales = found.scales
             # The upper bound: the form is a second viscous term there, its scale not identified; on
             # the lower one it is a sign on that joint, Coulomb's own column: Coulomb is kept there.

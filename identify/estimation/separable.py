@@ -192,10 +192,11 @@ def _log_bounds(prob: _Problem) -> tuple[np.ndarray, np.ndarray]:
 
 
 def scales_from_observation(obs: Observation, terms: Sequence[Any], form: str | Sequence[str],
-                            n: int) -> VelocityScales:
+                            n: int, std: bool = True) -> VelocityScales:
     """The velocity scales of ``form`` (one smooth form, or one form per joint: only the smooth
     joints' scales are searched, a Coulomb joint keeps sign(v)) from a probe observation (Coulomb
-    columns = driver speed)."""
+    columns = driver speed); ``std`` False: their σ left NaN (the friction choice's folds use the
+    scales only)."""
     form = form if isinstance(form, str) else tuple(form)
     if not any((form if isinstance(form, str) else form[t.row]) in ("tanh", "stribeck") for t in terms):
         raise ValueError(f"friction form {form!r}: no joint with a Coulomb term has a velocity scale to search")
@@ -223,13 +224,15 @@ def scales_from_observation(obs: Observation, terms: Sequence[Any], form: str | 
     best = minimize(cost, u0, jac=True, method="L-BFGS-B", bounds=list(zip(lo, hi)))
     s = np.exp(best.x)
     f, r, A, ds = prob.solve(s)
-    J = np.hstack([prob.W[:, prob.fixed] * prob.d[:, None], A, ds])   # ∂(D·model)/∂(β, s): Gauss-Newton
-    dof = max(1, J.shape[0] - J.shape[1])
-    cov = (r @ r) / dof * np.linalg.pinv(J.T @ J)
-    std = np.sqrt(np.maximum(np.diag(cov)[-len(s):], 0.0))
+    sigma = np.full(len(s), np.nan)
+    if std:
+        J = np.hstack([prob.W[:, prob.fixed] * prob.d[:, None], A, ds])   # ∂(D·model)/∂(β, s): Gauss-Newton
+        dof = max(1, J.shape[0] - J.shape[1])
+        cov = (r @ r) / dof * np.linalg.pinv(J.T @ J)
+        sigma = np.sqrt(np.maximum(np.diag(cov)[-len(s):], 0.0))
     out_s, out_std, out_b = np.full(n, np.nan), np.full(n, np.nan), [False] * n
     for k, j in enumerate(prob.joints):
-        out_s[j], out_std[j] = s[k], std[k]
+        out_s[j], out_std[j] = s[k], sigma[k]
         out_b[j] = bool(min(best.x[k] - lo[k], hi[k] - best.x[k]) < 1e-3)
     return VelocityScales(form, tuple(out_s), tuple(out_std), tuple(out_b), f, bool(best.success))
 
