@@ -6,26 +6,23 @@ Each run is a fresh ``python -m identify.app.cli identify`` (start-up and import
 user sees it); wall time and CPU time (user + system of the child) are the best of ``--repeat``
 runs. CPU time is the figure to compare on a shared machine: wall time grows with the load. The
 fixed cut-off is the one the defaults choose on this run (read from the defaults' fit file), so
-the two runs differ by the choices only. BLAS runs on one thread unless OPENBLAS_NUM_THREADS /
-OMP_NUM_THREADS are set.
+the two runs differ by the choices only. The commands run with this process's environment: the
+``rx90`` command's own BLAS default (one OpenBLAS thread) unless OPENBLAS_NUM_THREADS is set
+(e.g. ``OPENBLAS_NUM_THREADS=2``: what a command that leaves OpenBLAS its threads costs).
 
     PYTHONPATH=. python benchmarks/bench_identify_command.py [--repeat 3] [--duration 50] [--seed 0]
 """
 from __future__ import annotations
 
+import argparse
+import json
 import os
-
-for _var in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
-    os.environ.setdefault(_var, "1")  # before numpy loads BLAS
-
-import argparse  # noqa: E402
-import json  # noqa: E402
-import resource  # noqa: E402
-import subprocess  # noqa: E402
-import sys  # noqa: E402
-import tempfile  # noqa: E402
-import time  # noqa: E402
-from pathlib import Path  # noqa: E402
+import resource
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
 sys.path[:0] = [str(ROOT), str(ROOT / "tests")]
@@ -76,7 +73,7 @@ def main() -> None:
         cutoff = json.loads(out.read_text())["cutoff_hz"]
         fixed = best(identify + ["--cutoff", repr(cutoff)], args.repeat)
     print(f"UR10e twin, {args.duration:g} s at 100 Hz ({rec.t.size} samples, 6 joints), seed {args.seed}; "
-          f"best of {args.repeat} runs each; BLAS threads {os.environ['OPENBLAS_NUM_THREADS']}\n")
+          f"best of {args.repeat} runs each; OPENBLAS_NUM_THREADS {os.environ.get('OPENBLAS_NUM_THREADS', 'unset')}\n")
     head = f"{'rx90 identify':<34} {'wall [s]':>9} {'CPU [s]':>9} {'CPU / fixed':>12} {'CPU / target':>13}"
     print(head + "\n" + "-" * len(head))
     for label, (wall, cpu) in ((f"fixed cut-off (--cutoff {cutoff:.4g})", fixed), ("defaults (cross-validated)", defaults)):

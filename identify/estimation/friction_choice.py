@@ -14,7 +14,8 @@ common span):
    the base parameters fitted (WLS, eq. 11's weights, the processing's fold solver) on those rows,
    the held-back torques predicted;
 3. every form is scored with the fit's **exact** columns (its own observation matrix: one for
-   Coulomb, one per fold for a smooth form at that fold's scales). Evaluating the forms on the
+   Coulomb, one per fold for a smooth form at that fold's scales, the Coulomb one with its friction
+   columns evaluated and filtered again, :mod:`identify.observation.friction_rows`). Evaluating the forms on the
    probe's decimated speed (sign(Dv), tanh(Dv/vs)) handicapped Coulomb against the fit's smooth
    D·sign(v) (TX40: 10.655 % instead of 8.427 %) and chose tanh where the held-out errors got worse.
 

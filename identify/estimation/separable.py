@@ -4,8 +4,8 @@ The smooth Coulomb FS·tanh(q̇/vs) and Stribeck (FS + (FST − FS)·exp(−(q̇
 (identify.observation.friction) are linear in every parameter but the joint's velocity scale vs
 [rad/s]. For given scales the linear parameters β are the least-squares solution (eq. 10); the
 scales minimise the projected cost F(s) = ½‖D(Y − W(s)·β̂(s))‖² (Golub & Pereyra): the
-gradient needs only ∂W/∂s at β̂ (β̂ optimal), from CasADi (identify.observation.friction
-.friction_function). D holds the paper's per-joint weights (eq. 11) of a first fit.
+gradient needs only ∂W/∂s at β̂ (β̂ optimal), CasADi's derivative of the form
+(identify.observation.friction.friction_columns; tanh's evaluated in NumPy). D holds the paper's per-joint weights (eq. 11) of a first fit.
 
 Procedure (:func:`velocity_scales`): one observation matrix whose Coulomb columns hold the
 filtered, decimated driver speed v of every row (``FrictionBase`` form "probe"); a scan of a
