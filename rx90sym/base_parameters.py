@@ -11,9 +11,10 @@ are independent of the preceding columns, so both give the same names and the sa
 """
 from __future__ import annotations
 
+from collections.abc import Mapping
 from dataclasses import dataclass, replace
 from functools import cached_property
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, Callable, Iterator
 
 import casadi as ca
 import numpy as np
@@ -32,6 +33,36 @@ if TYPE_CHECKING:  # for annotations only
 RANK_TOL = 1e-9
 
 
+class Expressions(Mapping):
+    """name -> closed form of each base parameter in the standard parameters, worked out on first
+    use: the symbolic forms cost a tenth of a second of CasADi on a 6-joint arm, which a fit never
+    reads (a table and ``rx90 model --base`` do). Pickled as the worked-out strings."""
+
+    def __init__(self, make: Callable[[], dict[str, str]]) -> None:
+        self._make: Callable[[], dict[str, str]] | None = make
+        self._done: dict[str, str] | None = None
+
+    def _forms(self) -> dict[str, str]:
+        if self._done is None:
+            self._done, self._make = self._make(), None
+        return self._done
+
+    def __getitem__(self, name: str) -> str:
+        return self._forms()[name]
+
+    def __iter__(self) -> Iterator[str]:
+        return iter(self._forms())
+
+    def __len__(self) -> int:
+        return len(self._forms())
+
+    def __repr__(self) -> str:
+        return repr(self._forms())
+
+    def __getstate__(self) -> dict[str, Any]:
+        return {"_make": None, "_done": self._forms()}
+
+
 @dataclass(frozen=True, eq=False)
 class BaseParameters(PickledFields):
     """Base parameters of a robot: beta = K chi, Phi chi = Phi_b beta (eq. 2 on the base set)."""
@@ -41,7 +72,7 @@ class BaseParameters(PickledFields):
     names: tuple[str, ...]
     K: np.ndarray                        # (nb, n_params), numeric for the robot's geometry
     independent: tuple[int, ...]         # columns of the standard regressor kept as base columns
-    expressions: dict[str, str]          # name -> closed form in the standard parameters
+    expressions: Mapping[str, str]       # name -> closed form in the standard parameters (Expressions)
     K_symbolic: ca.Function | None = None  # geometry symbols -> K (symbolic method)
     geometry_names: tuple[str, ...] = ()
     geometry_values: tuple[float, ...] = ()
@@ -203,7 +234,7 @@ def _symbolic(robot: Robot, samples: int, seed: int) -> BaseParameters:
     K[np.abs(K) < 1e-14] = 0.0
     geo_names = tuple(g.geometry[i].name() for i in range(g.geometry.numel()))
     names = tuple(_base_name(names_std[b], K[i], b) for i, b in enumerate(base))
-    expressions = {nm: _symbolic_expression(K_sx[i, :], g, names_std) for i, nm in enumerate(names)}
+    expressions = Expressions(lambda: {nm: _symbolic_expression(K_sx[i, :], g, names_std) for i, nm in enumerate(names)})
     return BaseParameters(robot, "symbolic", names, K, tuple(base), expressions, K_fun, geo_names,
                           g.geometry_values)
 

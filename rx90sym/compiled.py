@@ -110,12 +110,19 @@ def map_samples(f: ca.Function, *inputs: np.ndarray) -> np.ndarray:
 
 
 def _has_openmp(cc: str) -> bool:
-    """Whether the compiler accepts -fopenmp (gcc does; plain clang on macOS may not)."""
-    with tempfile.TemporaryDirectory() as tmp:
+    """Whether the compiler accepts -fopenmp (gcc does; plain clang on macOS may not): tried once
+    per compiler, the answer kept in the cache beside the libraries (a compile costs ~50 ms)."""
+    marker = cache_dir() / f"openmp_{hashlib.sha256(cc.encode()).hexdigest()[:20]}"
+    if marker.exists():
+        return marker.read_text().strip() == "1"
+    with tempfile.TemporaryDirectory(dir=cache_dir()) as tmp:
         src = Path(tmp) / "omp.c"
         src.write_text("#include <omp.h>\nint f(void) { return omp_get_max_threads(); }\n")
         proc = subprocess.run([cc, "-fopenmp", "-shared", "-fPIC", str(src), "-o", str(Path(tmp) / "omp.so")],
                               capture_output=True, timeout=60)
+        partial = Path(tmp) / "answer"
+        partial.write_text("1" if proc.returncode == 0 else "0")
+        os.replace(partial, marker)  # atomic: a concurrent run reads a whole answer or none
         return proc.returncode == 0
 
 

@@ -304,7 +304,9 @@ class Robot(PickledFields):
         return BatchFunction(self.spring_torque, name=f"{self.name}_spring", compile=False)
 
     def spring_torque_batch(self, Q: Any) -> np.ndarray:
-        """Spring torque on N samples: (N, n) -> (N, n) [N m]."""
+        """Spring torque on N samples: (N, n) -> (N, n, 1) [N m] (zeros without a spring: no CasADi call)."""
+        if self.spring is None and np.ndim(Q) == 2 and np.shape(Q)[1] == self.n:
+            return np.zeros((np.shape(Q)[0], self.n, 1))
         return self._spring_batch(Q)
 
     def frame_origins(self, q: Any) -> np.ndarray:

@@ -2,14 +2,16 @@
 from __future__ import annotations
 
 from dataclasses import dataclass, field, replace
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 import rx90sym
 
-from identify.estimation.consistency import ConsistentSolution, consistency_margin, consistent_least_squares
 from identify.estimation.results import IdentificationResult
+
+if TYPE_CHECKING:  # cvxpy is imported by the consistent fit only, not by every fit that loads this module
+    from identify.estimation.consistency import ConsistentSolution
 
 __all__ = ["ConsistentResult", "consistent_fit"]
 
@@ -98,6 +100,8 @@ def consistent_fit(robot: rx90sym.Robot, wls: IdentificationResult, base: Any, p
                          "(not one loaded from JSON)")
     if tuple(wls.names) != tuple(base.names):
         raise ValueError("consistent fit needs a result on the full base parameter set")
+    from identify.estimation.consistency import consistency_margin, consistent_least_squares
+
     prior_record = None
     # A URDF link's lumped hand is written apart on export: the link minus it stays physical too.
     from rx90sym.urdf_carried import carried_bodies

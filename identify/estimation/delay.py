@@ -38,12 +38,13 @@ class DelayEstimate:
         return f"torque delay {1e3 * self.delay:.3g} ms{warn}"
 
 
-def _cost(W: np.ndarray, Y: np.ndarray, joint: np.ndarray, n: int) -> float:
+def _costs(W: np.ndarray, Y: np.ndarray, joint: np.ndarray, n: int) -> np.ndarray:
+    """The cost of each column of ``Y`` (rows, lags): plain LS on W, then the sum over joints of
+    the log of each joint's residual RMS (scale-free: every joint counts alike whatever its torque range)."""
     x, *_ = np.linalg.lstsq(W, Y, rcond=None)
     r = Y - W @ x
-    # Scale-free: each joint's residual RMS counts alike whatever its torque range.
-    return float(sum(np.log(np.sqrt(np.mean(r[joint == j] ** 2)) + 1e-300) for j in range(n)
-                     if np.any(joint == j)))
+    return sum((np.log(np.sqrt(np.mean(r[joint == j] ** 2, axis=0)) + 1e-300) for j in range(n) if np.any(joint == j)),
+               np.zeros(Y.shape[1]))
 
 
 def estimate_delay(robot: rx90sym.Robot, recordings: Sequence[Any], base: Any = None,
@@ -65,15 +66,23 @@ def estimate_delay(robot: rx90sym.Robot, recordings: Sequence[Any], base: Any = 
     period = max(float(np.median(np.diff(rec.t))) for rec in recordings)
     grid, step = delay_grid(period, max_delay, steps)
 
-    def cost(delay: float) -> float:
-        Ys = []
-        for rec, m in zip(pieces, motions):
-            Y = shifted_torques(rec, delay)[m.kept] + m.extra
-            Ys.append(decimate(Y, m.factor) if m.factor > 1 else Y)
-        W, Y, joint, _ = stack_rows([m.Phi for m in motions], Ys, masks=masks)
-        return _cost(W, Y, joint, robot.n)
+    # W does not depend on the lag: its rows stacked once; the torques of every lag shifted, decimated in one
+    # call (each column filtered alone) and fitted together (one factorisation of W for all the lags).
+    W, _, joint, samples = stack_rows([m.Phi for m in motions], [m.Y for m in motions], masks=masks)
+    Ys = []
+    for rec, m in zip(pieces, motions):
+        group = max(1, LAG_BYTES // (8 * robot.n * max(1, np.asarray(rec.t)[m.kept].size)))  # lags at once: memory bounded
+        parts = []
+        for g in range(0, grid.size, group):
+            Y = np.stack([shifted_torques(rec, d)[m.kept] + m.extra for d in grid[g:g + group]], axis=2)  # (S, n, lags)
+            parts.append(decimate(Y, m.factor) if m.factor > 1 else Y)
+        Ys.append(np.concatenate(parts, axis=2))
+    Y = np.concatenate(Ys)[samples, joint]   # (rows, lags), the rows of W
+    return refined_delay(grid, _costs(W, Y, joint, robot.n), step)
 
-    return refined_delay(grid, np.array([cost(d) for d in grid]), step)
+
+#: Bytes of shifted torques :func:`estimate_delay` holds at once before decimating them.
+LAG_BYTES = 64 << 20
 
 
 def delay_grid(period: float, max_delay: float = 0.02, steps: int = 41) -> tuple[np.ndarray, float]:

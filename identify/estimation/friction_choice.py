@@ -14,7 +14,8 @@ common span):
    the base parameters fitted (WLS, eq. 11's weights, the processing's fold solver) on those rows,
    the held-back torques predicted;
 3. every form is scored with the fit's **exact** columns (its own observation matrix: one for
-   Coulomb, one per fold for a smooth form at that fold's scales). Evaluating the forms on the
+   Coulomb, one per fold for a smooth form at that fold's scales, the Coulomb one with its friction
+   columns evaluated and filtered again, :mod:`identify.observation.friction_rows`). Evaluating the forms on the
    probe's decimated speed (sign(Dv), tanh(Dv/vs)) handicapped Coulomb against the fit's smooth
    D·sign(v) (TX40: 10.655 % instead of 8.427 %) and chose tanh where the held-out errors got worse.
 
@@ -53,7 +54,8 @@ from identify.observation.cross_validation import (DEFAULT_BLOCKS, DEFAULT_ROW_C
                                                    block_scores, clearly_better, fold_wls, observation_rows,
                                                    time_blocks)
 from identify.observation.friction import DEFAULT_FRICTION, FRICTION_FORMS
-from identify.observation.friction_model import coulomb_terms, friction_probe
+from identify.observation.friction_model import friction_probe
+from identify.observation.friction_rows import with_friction_form
 from identify.observation.matrix import Observation, observation_matrix
 from identify.observation.processing import FrictionForm, friction_label, has_smooth_friction, uniform
 
@@ -139,15 +141,14 @@ class FrictionChoice:
                 "candidates": [dict(c.to_dict(), form=c.label) for c in self.candidates], "table": self.table()}
 
 
-def _exact(robot: rx90sym.Robot, recordings: Sequence[Any], base: Any, options: dict[str, Any], probe: Observation,
+def _exact(robot: rx90sym.Robot, recordings: Sequence[Any], base: Any, options: dict[str, Any], exact: Observation,
            form: FrictionForm, scales: Sequence[float] | None) -> np.ndarray:
     """W of ``form`` (one, or one per joint) at ``scales`` with the fit's exact (parallel-filtered)
-    columns, on the probe's rows."""
-    from identify.observation.friction_model import friction_base
-
-    columns = friction_base(base, coulomb_terms(robot, base.names), form, scales) if has_smooth_friction(form) else base
-    obs = observation_matrix(robot, recordings, base=columns, **options)
-    if obs.W.shape[0] != probe.W.shape[0] or not np.array_equal(obs.joint, probe.joint):
+    columns, on the rows of ``exact`` (the Coulomb form's observation): its friction columns replaced."""
+    if not has_smooth_friction(form):
+        return exact.W
+    obs = with_friction_form(robot, recordings, exact, base, form, scales, **options)
+    if obs.W.shape[0] != exact.W.shape[0] or not np.array_equal(obs.joint, exact.joint):
         raise RuntimeError(f"friction choice: the observation of form {form!r} has other rows than the probe's")
     return obs.W
 
@@ -175,8 +176,9 @@ class _Scored:
 
 def _score_form(robot: rx90sym.Robot, recordings: Sequence[Any], base: Any, options: dict[str, Any],
                 obs: Observation, terms: Sequence[Any], form: FrictionForm, ids: np.ndarray,
-                blocks: int, label: str) -> _Scored:
-    """``form`` (one, or one per joint) scored on the folds; ``obs`` the probe observation."""
+                blocks: int, label: str, exact: Observation) -> _Scored:
+    """``form`` (one, or one per joint) scored on the folds; ``obs`` the probe observation, ``exact``
+    the Coulomb form's (the same rows)."""
     n = robot.n
     from identify.estimation.separable import SCALE_BOUNDS, scales_from_observation
 
@@ -190,7 +192,7 @@ def _score_form(robot: rx90sym.Robot, recordings: Sequence[Any], base: Any, opti
         if smooth:  # searched on the fitting blocks only: the held-back block is unseen
             sub = replace(obs, W=obs.W[fit_rows], Y=obs.Y[fit_rows], joint=obs.joint[fit_rows],
                           samples=obs.samples[fit_rows])
-            found = scales_from_observation(sub, terms, form, n)
+            found = scales_from_observation(sub, terms, form, n, std=False)
             scales = found.scales
             # The upper bound: the form is a second viscous term there, its scale not identified; on
             # the lower one it is a sign on that joint, Coulomb's own column: Coulomb is kept there.
@@ -200,8 +202,9 @@ def _score_form(robot: rx90sym.Robot, recordings: Sequence[Any], base: Any, opti
             if not found.converged:
                 failed.add(b + 1)
         if W is None or scales is not None:  # Coulomb's columns (and their factors) do not depend on the fold
-            W = _exact(robot, recordings, base, options, obs, form, scales)
-            factors = block_factors(W, obs.Y, obs.joint, ids, range(blocks), n)
+            W = _exact(robot, recordings, base, options, exact, form, scales)
+            # A smooth form's W holds this fold's scales: the fitting blocks' factors only.
+            factors = block_factors(W, obs.Y, obs.joint, ids, [x for x in range(blocks) if scales is None or x != b], n)
         beta = fold_wls(factors, b, n)  # eq. 11's per-joint weights, as the processing's folds
         if beta is None:
             raise ValueError(f"friction choice: too few rows to fit without block {b + 1}")
@@ -251,7 +254,10 @@ def choose_friction(robot: rx90sym.Robot, recordings: Sequence[Any], base: Any, 
         return FrictionChoice((), DEFAULT_FRICTION, tuple((f, why) for f in forms if f != DEFAULT_FRICTION),
                               blocks, 0.0)
     try:
-        obs = observation_matrix(robot, recordings, base=probe, **options)
+        # The Coulomb form's observation built once; the probe's and the smooth forms' are it with their
+        # friction columns (identify.observation.friction_rows: the same numbers as built whole).
+        exact = observation_matrix(robot, recordings, base=inner, **options)
+        obs = with_friction_form(robot, recordings, exact, inner, probe.form, **options)
     except ValueError as exc:  # the fit's own observation then says what is wrong, in its words
         return FrictionChoice((), DEFAULT_FRICTION, tuple((f, f"not scored: {str(exc).splitlines()[0]}")
                                                           for f in forms if f != DEFAULT_FRICTION), blocks, 0.0)
@@ -266,7 +272,7 @@ def choose_friction(robot: rx90sym.Robot, recordings: Sequence[Any], base: Any, 
         t0 = time.perf_counter()
         passes += 1
         try:
-            done = _score_form(robot, recordings, inner, options, obs, terms, form, ids, blocks, label)
+            done = _score_form(robot, recordings, inner, options, obs, terms, form, ids, blocks, label, exact)
         except ValueError as exc:  # too few rows in a fold, a form's columns rank deficient on the fitting blocks
             return _Scored(Candidate(obs.cutoffs[0], None, obs.rest, label=label)), \
                 f"not scored: {str(exc).splitlines()[0]}"

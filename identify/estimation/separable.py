@@ -4,8 +4,8 @@ The smooth Coulomb FS·tanh(q̇/vs) and Stribeck (FS + (FST − FS)·exp(−(q̇
 (identify.observation.friction) are linear in every parameter but the joint's velocity scale vs
 [rad/s]. For given scales the linear parameters β are the least-squares solution (eq. 10); the
 scales minimise the projected cost F(s) = ½‖D(Y − W(s)·β̂(s))‖² (Golub & Pereyra): the
-gradient needs only ∂W/∂s at β̂ (β̂ optimal), from CasADi (identify.observation.friction
-.friction_function). D holds the paper's per-joint weights (eq. 11) of a first fit.
+gradient needs only ∂W/∂s at β̂ (β̂ optimal), CasADi's derivative of the form
+(identify.observation.friction.friction_columns; tanh's evaluated in NumPy). D holds the paper's per-joint weights (eq. 11) of a first fit.
 
 Procedure (:func:`velocity_scales`): one observation matrix whose Coulomb columns hold the
 filtered, decimated driver speed v of every row (``FrictionBase`` form "probe"); a scan of a
@@ -153,14 +153,15 @@ class _Problem:
             part = []
             for rows, col, v in self.entries[j]:
                 cols, dcols = friction_columns(self.forms[j], v, float(s[k]))
-                A[rows, col] = cols[:, 0]
-                part.append((rows, col, dcols[:, 0] * self.d[rows]))
+                d = self.d[rows]
+                A[rows, col] = cols[:, 0] * d
+                part.append((rows, col, dcols[:, 0] * d))
                 if j in stribeck:
                     extra = m + stribeck.index(j)
-                    A[rows, extra] = cols[:, 1]
-                    part.append((rows, extra, dcols[:, 1] * self.d[rows]))
+                    A[rows, extra] = cols[:, 1] * d
+                    part.append((rows, extra, dcols[:, 1] * d))
             parts.append(part)
-        return A * self.d[:, None], parts
+        return A, parts
 
     def solve(self, s: np.ndarray) -> tuple[float, np.ndarray, np.ndarray, np.ndarray]:
         """(cost, weighted residual, weighted friction columns, ∂(D·W·β̂)/∂s (r, joints)) at s."""
@@ -191,10 +192,11 @@ def _log_bounds(prob: _Problem) -> tuple[np.ndarray, np.ndarray]:
 
 
 def scales_from_observation(obs: Observation, terms: Sequence[Any], form: str | Sequence[str],
-                            n: int) -> VelocityScales:
+                            n: int, std: bool = True) -> VelocityScales:
     """The velocity scales of ``form`` (one smooth form, or one form per joint: only the smooth
     joints' scales are searched, a Coulomb joint keeps sign(v)) from a probe observation (Coulomb
-    columns = driver speed)."""
+    columns = driver speed); ``std`` False: their σ left NaN (the friction choice's folds use the
+    scales only)."""
     form = form if isinstance(form, str) else tuple(form)
     if not any((form if isinstance(form, str) else form[t.row]) in ("tanh", "stribeck") for t in terms):
         raise ValueError(f"friction form {form!r}: no joint with a Coulomb term has a velocity scale to search")
@@ -222,13 +224,15 @@ def scales_from_observation(obs: Observation, terms: Sequence[Any], form: str | 
     best = minimize(cost, u0, jac=True, method="L-BFGS-B", bounds=list(zip(lo, hi)))
     s = np.exp(best.x)
     f, r, A, ds = prob.solve(s)
-    J = np.hstack([prob.W[:, prob.fixed] * prob.d[:, None], A, ds])   # ∂(D·model)/∂(β, s): Gauss-Newton
-    dof = max(1, J.shape[0] - J.shape[1])
-    cov = (r @ r) / dof * np.linalg.pinv(J.T @ J)
-    std = np.sqrt(np.maximum(np.diag(cov)[-len(s):], 0.0))
+    sigma = np.full(len(s), np.nan)
+    if std:
+        J = np.hstack([prob.W[:, prob.fixed] * prob.d[:, None], A, ds])   # ∂(D·model)/∂(β, s): Gauss-Newton
+        dof = max(1, J.shape[0] - J.shape[1])
+        cov = (r @ r) / dof * np.linalg.pinv(J.T @ J)
+        sigma = np.sqrt(np.maximum(np.diag(cov)[-len(s):], 0.0))
     out_s, out_std, out_b = np.full(n, np.nan), np.full(n, np.nan), [False] * n
     for k, j in enumerate(prob.joints):
-        out_s[j], out_std[j] = s[k], std[k]
+        out_s[j], out_std[j] = s[k], sigma[k]
         out_b[j] = bool(min(best.x[k] - lo[k], hi[k] - best.x[k]) < 1e-3)
     return VelocityScales(form, tuple(out_s), tuple(out_std), tuple(out_b), f, bool(best.success))
 

@@ -9,7 +9,7 @@ and validates with its own processing, bootstraps its σ, and saves itself
 from __future__ import annotations
 
 from types import SimpleNamespace
-from typing import Any, Sequence
+from typing import TYPE_CHECKING, Any, Sequence
 
 import numpy as np
 
@@ -28,9 +28,11 @@ from identify.io.recordings import layout_summary
 from identify.observation.processing import Processing, friction_label, has_policy, has_smooth_friction
 from identify.fitting.friction import chosen_friction, friction_columns
 from identify.estimation.delay import estimate_delay
-from identify.fitting.streamed import DEFAULT_BLOCK, BootstrapSpec, ProcessingChoice, fit_streamed
 from identify.fitting.record import BOOTSTRAP_BLOCK_S, BOOTSTRAP_DRAWS, Bootstrap, Fit
 from identify.fitting.rank_flags import rank_flags
+
+if TYPE_CHECKING:
+    from identify.fitting.streamed import ProcessingChoice
 
 __all__ = ["fit"]
 
@@ -192,6 +194,7 @@ def fit_in_blocks(robot: rx90sym.Robot, recordings: Sequence[Any], processing: A
                   **consistent_options: Any) -> Any:
     """:func:`identify.fit` block by block (``identify.fit(..., block=..., client=...)`` calls this): a
     :class:`identify.Fit` without an observation matrix, its bootstrap computed on the way."""
+    from identify.fitting.streamed import DEFAULT_BLOCK, BootstrapSpec, fit_streamed  # the block path's modules
     from identify.observation.spring_fit import BaseWithSpring, spring_summary
 
     p = processing if processing is not None else Processing()

@@ -42,21 +42,26 @@ def time_blocks(times: Sequence[np.ndarray], blocks: int) -> list[np.ndarray]:
 def _compressed_blocks(motions: Sequence[Any], ids: Sequence[np.ndarray], blocks: int, drop: bool,
                        n: int) -> dict[tuple[int, int], tuple[np.ndarray, int]]:
     """(block, joint) -> (the triangular factor of [W | Y] over the block's rows of that joint, their number)."""
-    out = {}
-    for b in range(blocks):
-        rows = [m.rows(drop) & (i == b)[:, None] for m, i in zip(motions, ids)]
-        W, Y, joint, _ = stack_rows([m.Phi for m in motions], [m.Y for m in motions], masks=rows)
-        out.update(block_factors(W, Y, joint, np.full(joint.size, b), [b], n))
-    return out
+    # The rows stacked once (a block's rows of a joint keep their order): one copy of W, not one per block.
+    W, Y, joint, samples = stack_rows([m.Phi for m in motions], [m.Y for m in motions],
+                                      masks=[m.rows(drop) for m in motions])
+    return block_factors(W, Y, joint, np.concatenate(ids)[samples], range(blocks), n)
 
 
 def block_factors(W: np.ndarray, Y: np.ndarray, joint: np.ndarray, ids: np.ndarray, blocks: Sequence[int],
                   n: int) -> dict[tuple[int, int], tuple[np.ndarray, int]]:
     """(block, joint) -> (the triangular factor of [W | Y] over the rows of that block (``ids``) and
     joint, their number), for the ``blocks`` listed: what :func:`fold_wls` solves from."""
-    A = np.column_stack([W, Y])
-    return {(b, j): (np.linalg.qr(A[m], mode="r"), int(m.sum())) for b in blocks for j in range(n)
-            if (m := (ids == b) & (joint == j)).any()}
+    # The rows grouped by (block, joint) with one stable sort (each group keeps its order), not a mask per group.
+    key = np.asarray(ids) * n + joint
+    order = np.argsort(key, kind="stable")
+    edges = np.searchsorted(key[order], [[b * n + j, b * n + j + 1] for b in blocks for j in range(n)])
+    out = {}
+    for bj, (lo, hi) in zip([(b, j) for b in blocks for j in range(n)], edges):
+        if hi > lo:
+            rows = order[lo:hi]
+            out[bj] = (np.linalg.qr(np.column_stack([W[rows], Y[rows]]), mode="r"), int(hi - lo))
+    return out
 
 
 def block_scores(err2: np.ndarray, ref2: np.ndarray) -> tuple[float, tuple[float, ...], tuple[tuple[float, ...], ...]]:
@@ -80,8 +85,11 @@ def fold_wls(factors: dict[tuple[int, int], tuple[np.ndarray, int]], held: int, 
         stacked = np.vstack([R for R, _ in parts])  # the same norms as the rows it compresses
         rows = sum(count for _, count in parts)
         c = stacked.shape[1] - 1
-        x, *_ = np.linalg.lstsq(stacked[:, :c], stacked[:, c], rcond=None)
-        resid = np.linalg.norm(stacked[:, :c] @ x - stacked[:, c])
+        # The joint's own columns only (its rows hold no parameter of the links before it): the same
+        # residual, and rank threshold (rows > columns), from a smaller SVD.
+        live = np.flatnonzero(np.any(stacked[:, :c] != 0.0, axis=0))
+        x, *_ = np.linalg.lstsq(stacked[:, live], stacked[:, c], rcond=None)
+        resid = np.linalg.norm(stacked[:, live] @ x - stacked[:, c])
         if rows <= c or resid == 0:
             return None
         systems.append(stacked / (resid / np.sqrt(rows - c)))  # sigma_j as in eq. 12, per joint

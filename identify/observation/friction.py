@@ -83,6 +83,12 @@ def friction_columns(form: str, v: np.ndarray, vs: float) -> tuple[np.ndarray, n
     if not (np.isfinite(vs) and vs > 0):
         raise ValueError(f"friction velocity scale must be a positive speed in rad/s, got {vs!r}")
     v = np.asarray(v, dtype=float).reshape(-1)
+    if form == "tanh":
+        # _form_expression's tanh(v/vs) and CasADi's derivative of it, operation for operation, in NumPy
+        # (tests/test_friction_rows.py: within an ulp of CasADi's): the scale search evaluates it hundreds of times.
+        x = v / vs
+        t = np.tanh(x)
+        return t[:, None], (-((1 - t * t) * (x / vs)))[:, None]
     cols, dcols = _mapped(form, max(v.size, 1))(v.reshape(1, -1), vs)
     return np.asarray(cols).T, np.asarray(dcols).T
 

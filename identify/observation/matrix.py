@@ -313,23 +313,24 @@ def stack_rows(blocks: Sequence[np.ndarray], Ys: Sequence[np.ndarray], min_veloc
     masks: per motion (S, n) rows to keep (e.g. ``FilteredMotion.usable``); otherwise
     min_velocity [rad/s] with dqs drops joint i's rows where |qd_i| is below it.
     """
-    Phi = np.concatenate(blocks, axis=0)
-    Y = np.concatenate(Ys, axis=0)
+    # One motion is not copied; the rows are gathered straight into W (each large temporary array costs
+    # its page faults, as much as the copy itself on a loaded machine).
+    Phi = blocks[0] if len(blocks) == 1 else np.concatenate(blocks, axis=0)
+    Y = Ys[0] if len(Ys) == 1 else np.concatenate(Ys, axis=0)
     S, n, c = Phi.shape
     keep = np.ones((S, n), dtype=bool)
     if masks is not None:
         keep = np.concatenate(masks, axis=0)
     elif min_velocity is not None:
         keep = np.abs(np.concatenate(dqs, axis=0)) >= min_velocity
-    W_rows, Y_rows, joints, samples = [], [], [], []
-    for i in range(n):
-        idx = np.flatnonzero(keep[:, i])
-        W_rows.append(Phi[idx, i, :])
-        Y_rows.append(Y[idx, i])
-        joints.append(np.full(idx.size, i))
-        samples.append(idx)
-    return (np.concatenate(W_rows), np.concatenate(Y_rows), np.concatenate(joints),
-            np.concatenate(samples))
+    samples = [np.flatnonzero(keep[:, i]) for i in range(n)]
+    W = np.empty((sum(idx.size for idx in samples), c), dtype=Phi.dtype)
+    start = 0
+    for i, idx in enumerate(samples):   # "clip": no bounds to check (flatnonzero's), no buffered copy
+        np.take(Phi[:, i, :], idx, axis=0, out=W[start:start + idx.size], mode="clip")
+        start += idx.size
+    return (W, np.concatenate([Y[idx, i] for i, idx in enumerate(samples)]),
+            np.concatenate([np.full(idx.size, i) for i, idx in enumerate(samples)]), np.concatenate(samples))
 
 
 def column_regressor(robot: rx90sym.Robot, base: Any = None, columns: Sequence[str] | None = None,

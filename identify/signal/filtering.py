@@ -256,16 +256,19 @@ def decimate(x: np.ndarray, factor: int, ftype: str = "iir") -> np.ndarray:
         raise ValueError(f"ftype must be 'iir' or 'fir', got {ftype!r}")
     a = _as_samples(x, "x")
     flat = a.reshape(a.shape[0], -1)
+    # A column of zeros stays zeros through the filter (half a regressor's entries: a joint's row
+    # holds no parameter of the links before it): only the others are filtered.
+    live = np.flatnonzero(np.any(flat != 0.0, axis=0))
     # Column groups of about DECIMATE_CHUNK_BYTES: the filter's padded copies and passes then take
     # that much memory, not several copies of a wide W (each column is filtered alone either way).
     step = max(1, DECIMATE_CHUNK_BYTES // (8 * max(1, flat.shape[0])))
-    parts = []
-    for c0 in range(0, flat.shape[1], step):
-        y = np.array(flat[:, c0:c0 + step], dtype=float, copy=True)
+    out = np.zeros((len(range(0, flat.shape[0], int(factor))), flat.shape[1]))
+    for c0 in range(0, live.size, step):
+        cols = live[c0:c0 + step]
+        y = np.array(flat[:, cols], dtype=float, copy=True)
         for stage in _stages(int(factor)):
             y = signal.decimate(y, stage, ftype=ftype, zero_phase=True, axis=0)
-        parts.append(y)
-    out = parts[0] if len(parts) == 1 else np.concatenate(parts, axis=1)
+        out[:, cols] = y
     return out.reshape((out.shape[0],) + a.shape[1:])
 
 

@@ -35,7 +35,7 @@ def run(args: argparse.Namespace) -> int:
     if args.base:
         bp = rx90sym.base_parameters(robot)
         print(bp.table())
-        out["base"] = {"names": list(bp.names), "expressions": bp.expressions}
+        out["base"] = {"names": list(bp.names), "expressions": dict(bp.expressions)}
     if args.json:
         write_json(args.json, out)
     return 0
