@@ -98,8 +98,17 @@ def test_block_fit_of_a_lossy_log_equals_the_in_memory_fit(panda, lossy, tmp_pat
     assert blocks.recordings == (layout,) and layout["segments"] == 3
     # The prediction block by block (measured samples only, segment by segment) as in memory.
     streamed, memory = blocks.predict(str(out)), ref.predict(whole)
-    np.testing.assert_array_equal(streamed.t, memory.t)
-    np.testing.assert_allclose(streamed.predicted, memory.predicted, rtol=0, atol=1e-8 * np.abs(memory.predicted).max())
+    # Both predict at 20 x the cut-off; the block path's windows start its segments' predictions a few
+    # samples later (their filter edges at that rate): compared on the samples both scored (> 98 %), but
+    # for the last one before a stretch left out (lost packets: one sample of 27895, interpolated there
+    # between predictions of different windows; the samples next to a lost one are left out).
+    common, a, b = np.intersect1d(streamed.t, memory.t, return_indices=True)
+    assert common.size > 0.98 * memory.t.size
+    step = float(np.median(np.diff(common)))
+    inner = np.r_[np.diff(common) < 1.5 * step, True] & np.r_[True, np.diff(common) < 1.5 * step]
+    assert inner.sum() > 0.85 * common.size  # measured 0.91 (packets are lost every few samples here)
+    np.testing.assert_allclose(streamed.predicted[a][inner], memory.predicted[b][inner], rtol=0,
+                               atol=1e-8 * np.abs(memory.predicted).max())
     # The same fit with the bridged samples taken as measured moves by far more than the tolerance:
     # the comparison above can fail.
     kept = identify.Recording(t=whole.t, q=whole.q, tau=whole.tau, dq=whole.dq, robot=panda.name, segment=whole.segment)

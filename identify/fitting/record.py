@@ -144,7 +144,8 @@ class Fit:
             from identify.fitting.validation import predict_streamed
 
             return predict_streamed(self.robot, result or self.result, recording, base=self.base, block=self.block,
-                                    convention=self.model.convention, gains=self.gains, **self.filtering())
+                                    convention=self.model.convention, gains=self.gains, prediction=True,
+                                    **self.filtering())
         # At 20 x the cut-off (identify.fitting.validation.prediction_rate), not at the fit's decimated rate.
         options = dict(self.filtering(), decimate_to=prediction_rate(self.cutoff, recording.rate),
                        filtered_at=self.decimate_to)

@@ -235,9 +235,11 @@ def validate(robot: rx90sym.Robot, result: IdentificationResult, recording: Any,
 def predict_streamed(robot: rx90sym.Robot, result: IdentificationResult, recording: Any, base: Any = None,
                      cutoff: float | None = None, decimate_to: float | None = DEFAULT_DECIMATE_TO, spring: bool = True,
                      min_velocity: float | None = None, delay: float = 0.0, block: int = DEFAULT_BLOCK,
-                     convention: str | None = None, gains: Any = None, rest: RestPolicy = "zero-coulomb") -> Validation:
+                     convention: str | None = None, gains: Any = None, rest: RestPolicy = "zero-coulomb",
+                     prediction: bool = False) -> Validation:
     """:func:`identify.predict` on a recording of any length: predicted and measured torques block by block
-    (only the decimated torques are held, n columns at the decimated rate)."""
+    (only the decimated torques are held, n columns at the decimated rate). prediction: predict at
+    :func:`prediction_rate` of the cut-off (``decimate_to`` then only serves the automatic cut-off)."""
     base = presliding_base(robot, base, rest if min_velocity else None)
     beta = base_vector(result, base, robot)
     src = block_source(recording, robot, convention, gains)
@@ -245,6 +247,8 @@ def predict_streamed(robot: rx90sym.Robot, result: IdentificationResult, recordi
     settings = StreamSettings(cutoff, decimate_to or None, min_velocity or None, predicted_rest(rest), float(delay),
                               spring, int(block))
     scans, fc = scan_all([src], settings)
+    if prediction:  # as identify.Fit.predict in memory: at 20 x the cut-off (or the recording's own rate)
+        settings = replace(settings, decimate_to=prediction_rate(fc, scans[0].rate))
     plans, _ = plan_windows(scans[0], fc, settings)
     names, regressor = column_regressor(robot, base)
     length = {g.start: g.samples for g in scans[0].segments}
