@@ -178,7 +178,8 @@ def test_a_window_after_the_corrupt_head_reads_clean(tmp_path, ur):
     path = write_log(tmp_path / "bad.csv", bad)
     rec = read_log(path, ur, COLUMNS, rows=(4, len(bad)))
     assert rec.meta["log"]["lines"] == [4, len(bad)] and rec.n_samples == len(bad) - 3
-    np.testing.assert_allclose(rec.q, analytic(rec.t)[0], atol=1e-15)
+    clock = rec.t + rec.meta["log"]["t0_s"]  # the recording starts at 0 s; the log's clock kept
+    np.testing.assert_allclose(rec.q, analytic(clock)[0], atol=1e-12)
 
 
 def test_the_window_is_the_only_part_checked(tmp_path, ur):
@@ -190,7 +191,8 @@ def test_the_window_is_the_only_part_checked(tmp_path, ur):
     rec = read_log(path, ur, COLUMNS, t_to=float(bad[58].split(",")[0]))
     assert rec.meta["log"]["lines"] == [1, 59]
     rec = read_log(path, ur, COLUMNS, t_from=float(bad[60].split(",")[0]) - 1e-9)
-    assert rec.meta["log"]["lines"] == [61, len(bad)] and rec.t[0] == float(bad[60].split(",")[0])
+    assert rec.meta["log"]["lines"] == [61, len(bad)] and rec.t[0] == 0.0
+    assert rec.meta["log"]["t0_s"] == float(bad[60].split(",")[0])  # the log's clock at the first sample
 
 
 def test_line_numbers_count_comments_and_the_header(tmp_path, ur):
@@ -202,7 +204,8 @@ def test_line_numbers_count_comments_and_the_header(tmp_path, ur):
         read_log(path, ur, COLUMNS, header=True)
     rec = read_log(path, ur, COLUMNS, header=True, rows=(1, 51))  # the comment and header are no rows
     assert rec.meta["log"]["lines"] == [3, 51] and rec.n_samples == 49
-    np.testing.assert_array_equal(rec.t, [float(line.split(",")[0]) for line in lines[:49]])
+    np.testing.assert_allclose(rec.t + rec.meta["log"]["t0_s"], [float(line.split(",")[0]) for line in lines[:49]],
+                               rtol=0, atol=1e-9)
 
 
 def test_column_the_robot_does_not_have_exits_2(tmp_path, capsys):
@@ -283,8 +286,9 @@ def test_resampling_follows_the_analytic_motion(tmp_path, ur, seed):
     t = jittered_times(600, seed)
     rec = read_log(write_log(tmp_path / "log.csv", log_lines(t)), ur, COLUMNS, resample=100.0)
     h = float(np.max(np.diff(t)))
-    q_true, qd_true, i_true = analytic(rec.t)
-    assert np.allclose(np.diff(rec.t), 0.01, rtol=0, atol=1e-9) and rec.t[0] == t[0] and rec.t[-1] <= t[-1]
+    clock = rec.t + rec.meta["log"]["t0_s"]  # the recording starts at 0 s; the log's clock kept
+    q_true, qd_true, i_true = analytic(clock)
+    assert np.allclose(np.diff(rec.t), 0.01, rtol=0, atol=1e-9) and rec.t[0] == 0 and clock[0] == t[0] and clock[-1] <= t[-1] + 1e-9
     assert np.max(np.abs(rec.q - q_true)) <= h ** 4 / 384 * AMPLITUDE * OMEGA ** 4 * 1.001
     assert np.max(np.abs(rec.current - i_true)) <= h ** 2 / 8 * 2.0 * OMEGA ** 2 * 1.001
     assert np.max(np.abs(rec.dq - qd_true)) <= h ** 2 / 8 * AMPLITUDE * OMEGA ** 3 * 1.001
@@ -332,15 +336,16 @@ def test_real_ur10e_log_window_rate_gap_and_torques(ur):
     assert log["lines"] == [195, 4966] and log["rows"] == 4772
     assert log["rate_hz"] == pytest.approx(1 / dt.mean(), rel=1e-12)
     assert log["largest_gap_s"] == pytest.approx(dt.max(), abs=1e-12) and dt.max() < 1.5 * 0.01
-    assert rec.t[0] == raw[0, 0] and np.allclose(np.diff(rec.t), 0.01, atol=1e-9)
+    assert rec.t[0] == 0 and rec.meta["log"]["t0_s"] == raw[0, 0] and np.allclose(np.diff(rec.t), 0.01, atol=1e-9)
+    clock = rec.t + raw[0, 0]
     # Positions at the log's own samples: within the log's 4-decimal rounding of the grid's
     # Hermite interpolant (checked at the grid points that coincide with a log sample).
-    common, i_rec, i_raw = np.intersect1d(np.round(rec.t, 6), np.round(raw[:, 0], 6), return_indices=True)
+    common, i_rec, i_raw = np.intersect1d(np.round(clock, 6), np.round(raw[:, 0], 6), return_indices=True)
     assert common.size > 500
     np.testing.assert_allclose(rec.q[i_rec], raw[i_raw, 1:7], atol=1e-9)
     # Torques: the README's gains times the currents, interpolated here from the raw columns.
-    current = np.column_stack([np.interp(rec.t, raw[:, 0], raw[:, 13 + j]) for j in range(6)])
-    np.testing.assert_allclose(rec.tau, current * UR_GAINS, rtol=1e-12, atol=1e-12)
+    current = np.column_stack([np.interp(clock, raw[:, 0], raw[:, 13 + j]) for j in range(6)])
+    np.testing.assert_allclose(rec.tau, current * UR_GAINS, rtol=1e-12, atol=1e-9)  # clock rebuilt from t + t0_s
     # Physical sanity: on the gravity-loaded joints 2 and 3 they follow the controller's own model
     # torque (tau_target, its internal model, not a measurement): correlation 0.965 and 0.933.
     for j in (1, 2):

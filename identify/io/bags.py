@@ -208,5 +208,5 @@ def read_bag(path: str | os.PathLike[str], robot: rx90sym.Robot, topic: str = "/
     spec = f"t,q1..q{n}," + (f"qd1..qd{n}," if has_qd else "") + f"{kind}1..{kind}{n}"
     rec = rows_to_recording(source, table, numbers, parse_columns(spec, robot), robot, convention,
                             gains=gains, max_gap=max_gap, segments=segments, resample=resample, window=False)
-    rec.meta["log"].update(report, t0_ns=t0)
+    rec.meta["log"].update(report, t0_ns=t0, t0_s=t0 * 1e-9)  # the one time origin: 0 s at the first sample
     return rec

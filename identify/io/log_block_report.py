@@ -31,6 +31,7 @@ class BlockReport:
         self.split_count = 0
         self.segments = 1
         self.dropped: list[tuple[int, int, int]] = []  # segments too short to filter: lines, rows
+        self.t0_s = 0.0  # the log's clock at its first sample [s] (the recording starts at 0 s)
 
     def add(self, t: np.ndarray, numbers: list[int], found: LogGaps) -> None:
         """A block's kept rows (after the previous block's last kept row, when there is one) and its gaps."""
@@ -60,4 +61,4 @@ class BlockReport:
         return {"lines": [self.first_line, self.last_line], "rows": self.rows, "stale_rows": self.stale,
                 "stale_lines": self.stale_lines, **step_figures(self.steps, TIME_RTOL), "largest_gap_s": self.gap,
                 "largest_gap_lines": self.gap_lines, "gaps": gaps, "bridged_samples": self.bridged,
-                "samples": self.samples}
+                "samples": self.samples, "t0_s": self.t0_s}

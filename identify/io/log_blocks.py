@@ -203,6 +203,7 @@ class _LogStream:
         self.keeping, self.resampler = False, None  # the segment is long enough to keep; its grid
         self.held: list[Recording] = []  # its first rows, until it is
         self.held_rows, self.held_lines = 0, None
+        self.t0: float | None = None  # the log's clock at its first sample [s]
 
     def block(self, values: np.ndarray, numbers: list[int], last: bool) -> Iterator[tuple[Recording, int]]:
         report = self.report
@@ -214,7 +215,11 @@ class _LogStream:
         report.stale_lines += [numbers[k] for k in np.flatnonzero(stale)[:max(0, LISTED_ROWS - len(report.stale_lines))]]
         values, numbers = values[~stale], [n for n, s in zip(numbers, stale) if not s]
         new = values.shape[0]
-        if new:
+        if new:  # 0 s at the first sample, as identify.io.logs.rows_to_recording
+            if self.t0 is None:
+                self.t0 = report.t0_s = float(values[0, self.cmap.t])
+            values = values.copy()
+            values[:, self.cmap.t] -= self.t0
             if self.last_kept is not None:
                 values, numbers = np.vstack([self.last_kept[0], values]), self.last_kept[1] + numbers
             yield from self._kept(values, numbers, new)

@@ -10,7 +10,7 @@ names every column with a *column map* (``columns=``, ``rx90 convert --columns``
 Names (n = the robot's number of joints):
 
 ====================  ==================================================================
-``t``                 time stamp, s (the log's own clock; kept as recorded)
+``t``                 time stamp, s (the log's own clock; the recording starts at 0 s, its first sample)
 ``q1``..``qn``        joint positions, rad, controller angles (all n required)
 ``qd1``..``qdn``      recorded joint velocities, rad/s (all or none) -> ``Recording.dq``
 ``tau1``..``taun``    joint torques, N·m, joint side (all or none)
@@ -316,6 +316,12 @@ def rows_to_recording(source: str, values: np.ndarray, numbers: Sequence[int], c
     report = {"lines": [numbers[0], numbers[-1]], "rows": int(len(numbers)), "stale_rows": int(stale.sum()),
               "stale_lines": [int(numbers[k]) for k in np.flatnonzero(stale)[:LISTED_ROWS]]}
     values, numbers = values[~stale], [n for n, s in zip(numbers, stale) if not s]
+    # One time origin for every input form (CSV, two files with a period, bag): 0 s at the first sample;
+    # the log's own clock there is kept (meta["log"]["t0_s"]); --from/--to select by the log's clock before.
+    t0 = float(values[0, cmap.t]) if values.shape[0] else 0.0
+    values = values.copy()
+    values[:, cmap.t] -= t0
+    report["t0_s"] = t0
     rec = _recording(source, values, numbers, cmap, robot, convention, report, max_gap, segments, resample, window)
     if drive is not None:
         rec = apply_gains(rec, drive, robot)
