@@ -84,6 +84,7 @@ class Validation:
     baseline_predicted: np.ndarray | None = None
     rms_error_filtered: np.ndarray | None = None
     rms_error_filtered_moving: np.ndarray | None = None
+    t0_s: float = 0.0  # the log's own clock at the recording's first sample (t counts from it) [s]
 
     @property
     def beats_baseline(self) -> np.ndarray | None:
@@ -196,7 +197,12 @@ def predict(robot: rx90sym.Robot, result: IdentificationResult, recording: Any, 
     if filtered_at != "prediction" and filtered_at != decimate_to:  # the fit's own rows (FIGAROH's scoring)
         motions = filtered_motions(robot, [recording], cutoff, filtered_at, spring, base.regressor_batch,
                                    base.names, min_velocity, predicted_rest(rest), delay)[0]
-    return replace(scored, **filtered_rms(motions, beta))
+    return replace(scored, **filtered_rms(motions, beta), t0_s=log_clock(recording))
+
+
+def log_clock(recording: Any) -> float:
+    """The log's own clock [s] at ``recording``'s first sample (0 when it was not read from a log)."""
+    return float(((getattr(recording, "meta", None) or {}).get("log") or {}).get("t0_s") or 0.0)
 
 
 def filtered_rms(motions: Sequence[Any], beta: np.ndarray) -> dict[str, np.ndarray]:

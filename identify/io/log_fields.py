@@ -10,7 +10,9 @@ and NPZ 0-d strings ``key``:
 ``split_gaps``
     the gaps longer than ``max_gap`` that split the log: their count, then the first
     :data:`SPLITS_LISTED`, each as the lines (or bag messages) before and after it and its duration
-    in s, e.g. ``1; 3916-3917 0.200732``.
+    in s, e.g. ``1; 3916-3917 0.200732``;
+``t0_s``
+    the log's own clock at the first sample [s] (a recording starts at 0 s), e.g. ``838.7``.
 
 :func:`read_fields` turns them back into the recording's ``meta["log"]`` (``stale_rows`` and
 ``gaps["splits"]``, ``gaps["splits_total"]`` as :meth:`identify.io.gaps.LogGaps.summary` gives
@@ -27,7 +29,7 @@ from identify.io.gaps import SPLITS_LISTED
 __all__ = ["FIELDS", "SPLITS_LISTED", "file_fields", "format_splits", "read_fields", "layout_fields"]
 
 #: The field names, in the order they are written.
-FIELDS = ("stale_rows", "split_gaps")
+FIELDS = ("stale_rows", "split_gaps", "t0_s")
 
 
 def format_splits(splits: Sequence[Mapping[str, Any]], total: int) -> str:
@@ -45,6 +47,8 @@ def file_fields(log: Mapping[str, Any] | None) -> dict[str, str]:
     gaps = log.get("gaps") or {}
     if "splits" in gaps:
         out["split_gaps"] = format_splits(gaps["splits"], gaps["splits_total"])
+    if log.get("t0_s"):
+        out["t0_s"] = repr(float(log["t0_s"]))
     return out
 
 
@@ -90,6 +94,11 @@ def read_fields(meta: Mapping[str, str], source: str) -> dict[str, Any] | None:
         log["stale_rows"] = _count(present["stale_rows"], "stale_rows", source)
     if "split_gaps" in present:
         log["gaps"] = _splits(present["split_gaps"], source)
+    if "t0_s" in present:
+        try:
+            log["t0_s"] = float(present["t0_s"])
+        except ValueError:
+            raise RecordingError(f"{source}: '# t0_s: {present['t0_s']}' is not a number of seconds") from None
     return log
 
 

@@ -123,11 +123,16 @@ def data_record(recs: list, obs: Any, validation: Any = None, samples: list[int]
     recorded rate [Hz] (1 / mean period); the share of samples where each joint moves (after
     filtering); the held-out samples' first and last time [s]. ``samples``: the recordings' sample
     counts when ``recs`` are thinned (a long log)."""
+    from identify.fitting.validation import log_clock
+
     counts = samples if samples is not None else [len(r.t) for r in recs]
-    rows = [{"source": src, "samples": int(k), "t_first_s": float(r.t[0]), "t_last_s": float(r.t[-1]),
+    # First and last times on the logs' own clocks (a recording starts at 0 s: identify.io.logs).
+    rows = [{"source": src, "samples": int(k), "t_first_s": float(r.t[0]) + log_clock(r),
+             "t_last_s": float(r.t[-1]) + log_clock(r),
              "duration_s": float(r.t[-1] - r.t[0]), "rate_hz": float((k - 1) / (r.t[-1] - r.t[0]))}
             for r, src, k in zip(recs, obs.sources, counts)]
     share = None if obs.moving_fraction is None else [float(v) for v in obs.moving_fraction]
-    held = None if validation is None else {"source": validation.source, "t_first_s": float(validation.t[0]),
-                                            "t_last_s": float(validation.t[-1])}
+    held = None if validation is None else {"source": validation.source,
+                                            "t_first_s": float(validation.t[0]) + validation.t0_s,
+                                            "t_last_s": float(validation.t[-1]) + validation.t0_s}
     return {"recordings": rows, "moving_fraction": share, "heldout": held}
