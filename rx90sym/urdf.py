@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import difflib
 import math
+import warnings
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Sequence
@@ -297,10 +298,20 @@ def urdf_parameters(robot: Robot) -> dict[str, float]:
 def _check_tip(tree: UrdfTree, tip: str | None) -> str:
     if tip is None:
         leaves = [l for l in tree.links if not tree.children(l)]
-        if len(leaves) != 1:
-            raise UrdfError(f"{tree.path}: several leaf links {leaves[:6]}: choose the chain's end "
-                            f"with tip=LINK (--tip LINK)")
-        return leaves[0]
+        if len(leaves) == 1:
+            return leaves[0]
+        # Leaves that hang by fixed joints from one moving link (a maker's ee_link and tool0): one chain, the
+        # same dynamics whichever is the tip (fixed children are carried by the moving link).
+        ends = {_last_moving_link(tree, leaf) for leaf in leaves} - {None}  # frames fixed to the base left out
+        if len(ends) == 1:
+            end = ends.pop()
+            hanging = [leaf for leaf in leaves if _last_moving_link(tree, leaf) == end]
+            warnings.warn(f"{tree.path}: leaf links {hanging[:6]} hang by fixed joints from {end!r}: the "
+                          f"chain ends there (the same model whichever of them ends it); give tip=LINK (--tip LINK) "
+                          f"for a tool frame (the excitation's tool point, a payload's frame)", stacklevel=3)
+            return end
+        raise UrdfError(f"{tree.path}: several leaf links {leaves[:6]}: choose the chain's end "
+                        f"with tip=LINK (--tip LINK)")
     if tip not in tree.links:
         close = difflib.get_close_matches(tip, tree.links, n=1)
         raise UrdfError(f"{tree.path}: tip link {tip!r} is not a <link> of the file"
@@ -309,6 +320,12 @@ def _check_tip(tree: UrdfTree, tip: str | None) -> str:
         raise UrdfError(f"{tree.path}: tip {tip!r} is the root link: it is not below the root "
                         f"(no joint between them)")
     return tip
+
+
+def _last_moving_link(tree: UrdfTree, link: str) -> str | None:
+    """The child link of the last movable joint on the path from the root to ``link`` (None: none)."""
+    moving = [j for j in tree.path_from_root(link) if j.type in MOVABLE]
+    return moving[-1].child if moving else None
 
 
 def relative_pose(a: Pose, b: Pose) -> Pose:

@@ -233,8 +233,14 @@ def test_bad_urdfs_are_refused_naming_the_element(tmp_path):
     bad_inertia = _edit(tmp_path, 'izz="0.036365625"', 'izz="5.0"')  # upper_arm_link: triangle rule
     with pytest.raises(UrdfError, match="upper_arm_link.*triangle"):
         _load(bad_inertia, "tool0")
-    with pytest.raises(UrdfError, match="several leaf links"):
-        _load(DATA / "kinova.urdf", None)
+    two_arms = tmp_path / "two_arms.urdf"  # two moving branches: the chain's end must be chosen
+    two_arms.write_text('<robot name="y"><link name="b"/><link name="l"/><link name="r"/>'
+                        '<joint name="jl" type="revolute"><parent link="b"/><child link="l"/><axis xyz="0 0 1"/>'
+                        '<limit lower="-1" upper="1" velocity="1" effort="1"/></joint>'
+                        '<joint name="jr" type="revolute"><parent link="b"/><child link="r"/><axis xyz="0 0 1"/>'
+                        '<limit lower="-1" upper="1" velocity="1" effort="1"/></joint></robot>')
+    with pytest.raises(UrdfError, match=r"several leaf links \['l', 'r'\]: choose the chain's end"):
+        _load(two_arms, None)
     unknown = _edit(tmp_path, '<child link="shoulder_link"/>', '<child link="shoulder_lnk"/>')
     with pytest.raises(UrdfError, match="shoulder_pan_joint.*'shoulder_lnk' is not a <link>"):
         _load(unknown, "tool0")
@@ -420,3 +426,20 @@ def test_right_angles_written_with_five_digits_are_snapped_by_default_and_kept_w
     assert 0 < gap < 1e-5  # kept as written: the table is a little off the right angles
     assert snapped.alpha == exact.alpha and snapped.d == exact.d and snapped.r == exact.r
     assert rx90sym.base_parameters(snapped).names == rx90sym.base_parameters(exact).names
+
+
+def test_leaves_that_hang_by_fixed_joints_from_one_link_end_the_chain_there():
+    """A maker's URDF with two frames after the last joint (UR: ee_link and tool0): without tip= the
+    chain ends at the last moving link, with a warning naming the leaves; its model is the one with
+    either leaf as the tip (fixed children are carried by the moving link): torques equal to 1e-12."""
+    with pytest.warns(UserWarning, match=r"leaf links \['ee_link', 'tool0'\] hang by fixed joints from "
+                                         r"'wrist_3_link'"):
+        free = load_urdf(DATA / "ur10_robot.urdf")
+    tooled = load_urdf(DATA / "ur10_robot.urdf", "tool0")
+    assert free.urdf.tip == "wrist_3_link" and free.n == tooled.n == 6
+    chi = tooled.parameter_vector(urdf_parameters(tooled))
+    np.testing.assert_allclose(free.parameter_vector(urdf_parameters(free)), chi, rtol=0, atol=1e-12)
+    rng = np.random.default_rng(0)
+    q, qd, qdd = (rng.uniform(-2, 2, (5, 6)) for _ in range(3))
+    np.testing.assert_allclose(free.regressor_batch(q, qd, qdd) @ chi, tooled.regressor_batch(q, qd, qdd) @ chi,
+                               rtol=0, atol=1e-12 * max(1.0, float(np.abs(tooled.regressor_batch(q, qd, qdd) @ chi).max())))
