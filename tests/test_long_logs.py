@@ -226,3 +226,17 @@ def test_fleet_fits_every_robot_on_its_own_logs(rx90, rx90_base, twin_empty, who
     assert not np.allclose(other.result.values, whole_fit.result.values, rtol=1e-6)
     lines = fleet.table().splitlines()
     assert len(lines) == 3 and lines[1].startswith("cell-1") and lines[2].startswith("cell-2")
+
+
+def test_a_log_within_one_block_is_one_block(rx90, twin_empty):
+    """identify.fit(..., block=B) on a recording of at most B samples is the whole-signal fit (as rx90
+    identify, which streams only logs longer than --block): the defaults' choices and the estimates equal
+    for B = N and N + 1 and far larger; B = N - 1 goes block by block (its own path)."""
+    rec = twin_empty[0]
+    n = rec.n_samples
+    ref = identify.fit(rx90, [rec])
+    for block in (n, n + 1, 100 * n):
+        got = identify.fit(rx90, [rec], block=block)
+        assert got.block is None and got.result.names == ref.result.names
+        np.testing.assert_array_equal(got.result.values, ref.result.values)
+    assert identify.fit(rx90, [rec], identify.Processing(friction="coulomb"), block=n - 1).block == n - 1

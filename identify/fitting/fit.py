@@ -74,6 +74,8 @@ def fit(robot: rx90sym.Robot, recordings: Sequence[Any], processing: Processing 
     ``dask.distributed.Client`` running the blocks (block by default 60,000 samples); the processing
     is cross-validated block by block as on whole recordings (the friction form stays coulomb).
     """
+    if block is not None and client is None and _within_one_block(recordings, block):
+        block = None  # a log within one block is one block: the whole-signal fit, as rx90 identify does
     if block is not None or client is not None:
         if processing is not None and has_smooth_friction(processing.friction):
             raise ValueError(f"fit: friction form {processing.friction!r} searches its velocity scales on whole "
@@ -154,6 +156,12 @@ def fit(robot: rx90sym.Robot, recordings: Sequence[Any], processing: Processing 
                choice=choice, flags=tuple(rank_flags(base)),
                baseline=plain_baseline(robot, recordings if observation is None else [], p.spring))
     return done if bootstrap_seed is None else done.bootstrapped(bootstrap_seed)  # rx90 identify's σ, alike
+
+
+def _within_one_block(recordings: Any, block: int) -> bool:
+    """Every recording is in memory and holds at most ``block`` samples (a CSV path: read in blocks)."""
+    recs = recordings if isinstance(recordings, (list, tuple)) else [recordings]
+    return all(isinstance(getattr(r, "n_samples", None), int) and r.n_samples <= block for r in recs)
 
 
 def _offset_record(base: Any) -> tuple[int, ...] | None:
