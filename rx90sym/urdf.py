@@ -302,10 +302,11 @@ def _check_tip(tree: UrdfTree, tip: str | None) -> str:
             return leaves[0]
         # Leaves that hang by fixed joints from one moving link (a maker's ee_link and tool0): one chain, the
         # same dynamics whichever is the tip (fixed children are carried by the moving link).
-        ends = {_last_moving_link(tree, leaf) for leaf in leaves} - {None}  # frames fixed to the base left out
+        end_of = {leaf: _last_moving_link(tree, leaf) for leaf in leaves}
+        ends = set(end_of.values()) - {None}  # frames fixed to the base left out
         if len(ends) == 1:
             end = ends.pop()
-            hanging = [leaf for leaf in leaves if _last_moving_link(tree, leaf) == end]
+            hanging = [leaf for leaf in leaves if end_of[leaf] == end]
             warnings.warn(f"{tree.path}: leaf links {hanging[:6]} hang by fixed joints from {end!r}: the "
                           f"chain ends there (the same model whichever of them ends it); give tip=LINK (--tip LINK) "
                           f"for a tool frame (the excitation's tool point, a payload's frame)", stacklevel=3)

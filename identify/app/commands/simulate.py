@@ -34,8 +34,9 @@ def run(args: argparse.Namespace) -> int:
 
     robot = load_robot(args)
     check_output(args.out)
-    if acceleration_note(robot):  # the trajectory is read against the robot's limits
-        progress(f"warning: {acceleration_note(robot)}")
+    note = acceleration_note(robot)
+    if note:  # the trajectory is read against the robot's limits
+        progress(f"warning: {note}")
     try:  # the twin's truth: the bundled RX90's own set, else the robot's nominal parameters
         params = rx90sym.default_parameters(robot, args.params)
     except ValueError as exc:
