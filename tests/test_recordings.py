@@ -561,14 +561,16 @@ def test_a_converted_logs_report_round_trips_and_bad_fields_are_named(tmp_path, 
     t, q, tau, _ = motion(rx90)
     rec = recording_from_arrays(t, q, tau, rx90)
     splits = [{"lines": [120, 121], "duration_s": 0.21000000000000002}, {"lines": [300, 302], "duration_s": 1.5}]
-    rec.meta["log"] = {"stale_rows": 357, "gaps": {"splits": splits, "splits_total": 12, "gaps": []}}
+    rec.meta["log"] = {"stale_rows": 357, "gaps": {"splits": splits, "splits_total": 12, "gaps": []}, "t0_s": 838.7}
     path = tmp_path / f"rec{suffix}"
     write_recording(path, rec, rx90)
-    assert read_recording(path, rx90).meta["log"] == {"stale_rows": 357, "gaps": {"splits": splits, "splits_total": 12}}
+    assert read_recording(path, rx90).meta["log"] == {"stale_rows": 357, "gaps": {"splits": splits, "splits_total": 12},
+                                                      "t0_s": 838.7}  # the log's clock at the first sample
     assert rec_mod.layout_summary(read_recording(path, rx90))["split_gaps_total"] == 12
     for field, value, what in (("stale_rows", "-3", "'# stale_rows: -3' is not a whole number"),
                                ("split_gaps", "1; 12-x 0.2", "'12-x 0.2' is not 'LINE-LINE SECONDS'"),
-                               ("split_gaps", "1; 1-2 0.2; 3-4 0.3", "lists 2 gaps, more than its count 1")):
+                               ("split_gaps", "1; 1-2 0.2; 3-4 0.3", "lists 2 gaps, more than its count 1"),
+                               ("t0_s", "noon", "'# t0_s: noon' is not a number of seconds")):
         bad = tmp_path / f"bad{suffix}"
         if suffix == ".csv":
             bad.write_text("".join(f"# {field}: {value}\n" if line.startswith(f"# {field}:") else line
