@@ -29,7 +29,7 @@ import ur10e_gains as g  # noqa: E402
 
 from identify import Processing, fit  # noqa: E402
 from identify.io.gains import DriveGains, apply_gains  # noqa: E402
-from identify.io.logs import read_log  # noqa: E402
+from identify import read_log  # noqa: E402
 from identify.io.recordings import RecordingWarning  # noqa: E402
 from identify.monitor.log import monitor_log  # noqa: E402
 from identify.monitor.thresholds import with_contact_thresholds  # noqa: E402

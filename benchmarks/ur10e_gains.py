@@ -31,7 +31,7 @@ import rx90sym
 from identify import Processing, fit
 from identify.gains.drive_gains import drive_gains
 from identify.io.gains import DriveGains, apply_gains
-from identify.io.logs import read_log
+from identify import read_log
 from identify.io.recordings import RecordingWarning
 from identify.signal.pairing import pair_runs
 from identify.payloads.methods import payload

@@ -13,7 +13,7 @@ _EXPORTS = {
     "RecordingError": "identify.io.recordings",
     "read_recording": "identify.io.recordings",
     "read_motor_recording": "identify.io.recordings",
-    "read_log": "identify.io.logs",
+    "read_log": "identify.io.log_blocks",
     "read_joint_files": "identify.io.joint_files",
     "write_recording": "identify.io.recordings",
     "split": "identify.io.recordings",

@@ -10,7 +10,7 @@ import pytest
 import rx90sym
 from identify.app.cli import main
 from identify.io.bags import read_bag
-from identify.io.logs import read_log
+from identify import read_log
 from identify.io.recordings import read_recording
 from motions import multisine, panda_truth
 from rx90sym.host_log import HostFaults, host_log

@@ -10,7 +10,7 @@ import identify
 import rx90sym
 from identify.app.cli import main
 from identify.io.log_blocks import convert_log
-from identify.io.logs import read_log
+from identify import read_log
 from motions import multisine, panda_truth
 from rx90sym.host_log import HostFaults, host_log, write_host_log
 from rx90sym.recording import RecordingError

@@ -10,7 +10,7 @@ import pytest
 
 import rx90sym
 from identify.app.cli import main
-from identify.io.logs import read_log
+from identify import read_log
 from identify.io.recordings import layout_summary, read_recording, write_recording
 from identify.observation.matrix import observation_matrix
 from identify import Processing, fit

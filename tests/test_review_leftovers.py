@@ -102,7 +102,7 @@ def test_the_block_converter_checks_the_units_as_the_reader(rx90, rx90_logs, tmp
     counts of the block refused), exit 2, nothing written. Before, the block path skipped the check
     and called the rows corrupt (degrees) or named a velocity mismatch (swapped)."""
     from identify.app.cli import main
-    from identify.io.logs import read_log
+    from identify import read_log
     from rx90sym.recording import RecordingError
 
     cols = "t,q1..q6,qd1..qd6,tau1..tau6"
@@ -132,7 +132,7 @@ def test_a_segment_too_short_to_filter_is_dropped_and_counted(rx90, rx90_logs, t
     failed inside scipy ("`x` must contain at least 2 elements")."""
     from identify.app.cli import main
     from identify.io.log_blocks import convert_log
-    from identify.io.logs import read_log
+    from identify import read_log
     from identify.io.recordings import read_recording
 
     table = np.loadtxt(rx90_logs["log.csv"], delimiter=",")
@@ -165,7 +165,7 @@ def test_a_segment_too_short_to_filter_is_dropped_and_counted(rx90, rx90_logs, t
 
 def test_a_log_of_short_segments_only_is_refused_on_both_paths(rx90, rx90_logs, tmp_path):
     from identify.io.log_blocks import convert_log
-    from identify.io.logs import read_log
+    from identify import read_log
     from rx90sym.recording import RecordingError
 
     table = np.loadtxt(rx90_logs["log.csv"], delimiter=",")

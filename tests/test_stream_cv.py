@@ -13,7 +13,7 @@ import identify
 import rx90sym
 from identify.app.cli import main
 from identify.io.blocks import block_source
-from identify.io.logs import read_log
+from identify import read_log
 from identify.observation.cross_validation import choose_processing
 from identify.observation.stream import StreamSettings, plan_windows, scan
 from identify.estimation.stream_cv import choose_processing_streamed

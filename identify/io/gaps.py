@@ -20,7 +20,7 @@ and a 1 rad sine at 2 Hz, 4e-4 rad on samples that are not used as measurements 
 """
 from __future__ import annotations
 
-from dataclasses import dataclass, replace
+from dataclasses import dataclass
 from typing import Sequence
 
 import numpy as np
@@ -30,7 +30,7 @@ from rx90sym.recording import RecordingError
 from identify.io.defaults import DEFAULT_MAX_GAP
 
 __all__ = ["EDGE_PERIODS", "DEFAULT_MAX_GAP", "LOST_STEPS", "MIN_SEGMENT_ROWS", "SPLITS_LISTED", "Gap", "LogGaps", "stale_rows", "find_gaps",
-           "short_segments", "all_segments_short"]
+           "all_segments_short"]
 
 #: Samples dropped at each end by :func:`identify.signal.filtering.derivatives`, in periods of the cut-off frequency.
 #: The impulse response of the order-4 Butterworth filter has decayed to 1e-3 of its peak after
@@ -126,27 +126,6 @@ def find_gaps(t: np.ndarray, numbers: Sequence[int], max_gap: float = DEFAULT_MA
     return LogGaps(tuple(found), segment, float(max_gap))
 
 
-
-
-def short_segments(found: LogGaps, numbers: Sequence[int], source: str) -> tuple[LogGaps, np.ndarray]:
-    """(the gaps with the segments of fewer than :data:`MIN_SEGMENT_ROWS` rows dropped and the others
-    renumbered, the (N,) mask of the rows kept). A log of one segment is kept whatever its length.
-
-    Raises:
-        RecordingError: every segment of a log of several is that short (nothing to filter).
-    """
-    counts = np.bincount(found.segment)
-    keep = counts[found.segment] >= MIN_SEGMENT_ROWS
-    if counts.size < 2 or keep.all():
-        return found, np.ones(found.segment.size, dtype=bool)
-    starts = np.r_[0, np.cumsum(counts)]
-    dropped = tuple((int(numbers[a]), int(numbers[b - 1]), int(b - a)) for a, b in zip(starts[:-1], starts[1:])
-                    if b - a < MIN_SEGMENT_ROWS)
-    if not keep.any():
-        raise all_segments_short(source, found.max_gap, dropped[0][:2])
-    kept = found.segment[keep]
-    return replace(found, segment=np.r_[0, np.cumsum(np.diff(kept) != 0)].astype(np.int64),
-                   dropped=found.dropped + dropped), keep
 
 
 def all_segments_short(source: str, max_gap: float, first: tuple[int, int]) -> RecordingError:

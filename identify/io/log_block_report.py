@@ -32,6 +32,19 @@ class BlockReport:
         self.segments = 1
         self.dropped: list[tuple[int, int, int]] = []  # segments too short to filter: lines, rows
         self.t0_s = 0.0  # the log's clock at its first sample [s] (the recording starts at 0 s)
+        self.q_min: np.ndarray | None = None  # the smallest and largest position of each joint [rad]
+        self.q_max: np.ndarray | None = None
+
+    def span(self, q: np.ndarray) -> None:
+        """A block's positions (model angles) into the range of each joint."""
+        if q.shape[0]:
+            lo, hi = q.min(axis=0), q.max(axis=0)
+            self.q_min = lo if self.q_min is None else np.minimum(self.q_min, lo)
+            self.q_max = hi if self.q_max is None else np.maximum(self.q_max, hi)
+
+    def position_span(self) -> np.ndarray:
+        """(n,) largest minus smallest position of each joint over the rows checked [rad]."""
+        return np.zeros(0) if self.q_min is None else self.q_max - self.q_min
 
     def add(self, t: np.ndarray, numbers: list[int], found: LogGaps) -> None:
         """A block's kept rows (after the previous block's last kept row, when there is one) and its gaps."""

@@ -15,7 +15,7 @@ from rx90sym.recording import RecordingError
 
 from identify.io.columns import ColumnMap
 
-__all__ = ["ABSURD", "WINDOW_ADVICE", "LogLines", "header_cells", "data_lines", "check_header", "row_window", "bad_rows",
+__all__ = ["ABSURD", "WINDOW_ADVICE", "LogLines", "header_cells", "check_header", "bad_rows",
            "parse_rows"]
 
 #: A value larger than this in magnitude (any column but time) marks its row as corrupt.
@@ -50,30 +50,6 @@ def header_cells(path: Path) -> tuple[list[str], bool]:
     return [], False
 
 
-def data_lines(path: Path, header: bool, n_cols: int, blanks: bool = False) -> LogLines:
-    """The data lines (``blanks``: cells separated by blanks, as UR's RTDE recorder writes them)."""
-    source = path.name
-    lines = _file_lines(path)
-    if blanks:
-        lines = [",".join(line.split()) if not line.lstrip().startswith("#") else line for line in lines]
-    while lines and not lines[-1].strip():  # trailing blank lines are not rows
-        lines.pop()
-    numbers, text = [], []
-    header_line = None
-    for k, line in enumerate(lines, start=1):
-        if line.lstrip().startswith("#"):
-            continue
-        if header and header_line is None:
-            header_line = k
-            check_header(source, k, line, n_cols)
-            continue
-        numbers.append(k)
-        text.append(line)
-    if not numbers:
-        raise RecordingError(f"{source}: no data rows")
-    return LogLines(source, numbers, text)
-
-
 def check_header(source: str, k: int, line: str, n_cols: int) -> None:
     """The header line ``k`` has the column map's cell count and is not a row of numbers."""
     cells = line.split(",")
@@ -97,44 +73,6 @@ def _separator_hint(line: str, n_cols: int) -> str:
     if line.count(",") + 1 < n_cols and line.count(";") + 1 >= n_cols:
         return "; the file seems to use ';' as separator (expected ',')"
     return ""
-
-
-def row_window(lines: LogLines, rows: tuple[int, int] | None, t_from: float | None, t_to: float | None,
-               t_col: int) -> tuple[int, int]:
-    """Indices [a, b) into ``lines`` of the selected window."""
-    source, numbers = lines.source, lines.numbers
-    if rows is not None:
-        first, last = (int(r) for r in rows)
-        if first < 1 or last < first:
-            raise ValueError(f"rows {first}:{last}: expected 1 <= FIRST <= LAST (1-based line numbers)")
-        if last > numbers[-1]:
-            raise RecordingError(f"{source}: rows {first}:{last}: the file ends at line {numbers[-1]}")
-        a = int(np.searchsorted(numbers, first))
-        b = int(np.searchsorted(numbers, last, side="right"))
-        if b - a < 1:
-            raise RecordingError(f"{source}: rows {first}:{last} hold no data row")
-        return a, b
-    if t_from is None and t_to is None:
-        return 0, len(numbers)
-    if t_from is not None and t_to is not None and t_to <= t_from:
-        raise ValueError(f"--to {t_to:g} s must be after --from {t_from:g} s")
-    times = np.full(len(numbers), np.nan)  # rows whose time cannot be read never bound a window
-    for k, line in enumerate(lines.text):
-        cells = line.split(",")
-        if t_col < len(cells):
-            try:
-                times[k] = float(cells[t_col])
-            except ValueError:
-                pass
-    lo = -np.inf if t_from is None else float(t_from)
-    hi = np.inf if t_to is None else float(t_to)
-    after = np.flatnonzero(times >= lo)
-    before = np.flatnonzero(times <= hi)
-    if not after.size or not before.size or before[-1] < after[0]:
-        finite = times[np.isfinite(times)]
-        span = f"{finite.min():g} to {finite.max():g} s" if finite.size else "no readable time"
-        raise RecordingError(f"{source}: no row between {lo:g} and {hi:g} s (the log's clock runs {span})")
-    return int(after[0]), int(before[-1]) + 1
 
 
 #: The advice of a message naming bad rows of a CSV log (a bag has no window: its messages name none).

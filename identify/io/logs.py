@@ -1,4 +1,5 @@
-"""Controller logs: a raw CSV whose columns the user names, read into a :class:`Recording`.
+"""Controller logs: the column map and the checks of their rows (read by :func:`identify.read_log`,
+:mod:`identify.io.log_blocks`, with the rules of :mod:`identify.io.log_stream`).
 
 A log is what a robot controller writes: no header (or one this reader does not trust), one row
 per sample, time stamps of the controller's own clock, the controller's joint angles, often
@@ -47,28 +48,22 @@ from __future__ import annotations
 
 import math
 import os
-import warnings
-from dataclasses import dataclass
 from pathlib import Path
 from typing import Sequence
 
 import numpy as np
 
 import rx90sym
-from rx90sym.recording import Recording, RecordingError
+from rx90sym.recording import RecordingError
 
-from identify.io.columns import ColumnMap, parse_columns, rtde_columns, rtde_refusal
-from identify.io.log_rows import ABSURD, WINDOW_ADVICE, bad_rows, data_lines, header_cells, parse_rows, row_window
-from identify.io.units import check_units
-from identify.io.checks import check_period
-from identify.io.gains import DriveGains, apply_gains, read_gains, warn_negative
-from identify.io.gaps import DEFAULT_MAX_GAP, LOST_STEPS, LogGaps, find_gaps, short_segments, stale_rows
-from identify.io.steps import StepCounts, log_steps, step_figures
-from identify.io.resampling import resample as resample_recording
-from identify.io.recordings import JUMP_ATOL, JUMP_SAFETY, TIME_RTOL, RecordingWarning, _normalise_convention
+from identify.io.columns import ColumnMap, parse_columns
+from identify.io.log_rows import ABSURD, WINDOW_ADVICE, bad_rows
+from identify.io.gains import DriveGains, read_gains, warn_negative
+from identify.io.gaps import DEFAULT_MAX_GAP, LOST_STEPS, LogGaps
+from identify.io.recordings import JUMP_ATOL, JUMP_SAFETY, TIME_RTOL, _normalise_convention
 
-__all__ = ["ColumnMap", "parse_columns", "read_log", "ABSURD", "POSITION_MARGIN", "DEFAULT_MAX_GAP",
-           "STILL", "MOVING_SPAN", "VELOCITY_MISMATCH", "LISTED_ROWS", "rows_to_recording", "gains_label",
+__all__ = ["ColumnMap", "parse_columns", "ABSURD", "POSITION_MARGIN", "DEFAULT_MAX_GAP",
+           "STILL", "MOVING_SPAN", "VELOCITY_MISMATCH", "LISTED_ROWS", "gains_label", "log_drive",
            "log_options", "check_increasing", "refuse_splits", "check_positions", "check_velocities",
            "irregular_refusal"]
 
@@ -213,175 +208,8 @@ def _round_rate(rate: float) -> float:
     return round(rate, digits) if digits else float(round(rate, -int(math.floor(math.log10(rate))) + 1))
 
 
-# --------------------------------------------------------------------------------------------
-# The reader
-# --------------------------------------------------------------------------------------------
-
-
-def read_log(
-    path: str | os.PathLike[str], robot: rx90sym.Robot, columns: str | Sequence[str] | None,
-    header: bool = False, rows: tuple[int, int] | None = None, t_from: float | None = None,
-    t_to: float | None = None, resample: float | None = None, gains: DriveGains | str | None = None,
-    convention: str | None = None, max_gap: float = DEFAULT_MAX_GAP, segments: bool = True,
-    period: float | None = None,
-) -> Recording:
-    """Read a controller log (a CSV whose columns ``columns`` names) as a recording.
-
-    Args:
-        path: the log, comma separated; lines starting with ``#`` are skipped.
-        robot: the robot the log belongs to.
-        columns: the column map (module docstring), a string or a list of names; None for a log
-            whose header names its columns (UR's RTDE recorder: :func:`identify.io.columns.rtde_columns`;
-            cells separated by commas or blanks).
-        header: the first non-comment line is a header (skipped; its cell count is checked).
-        rows: ``(FIRST, LAST)`` 1-based line numbers of the file, inclusive.
-        t_from, t_to: window in seconds of the log's clock (not with ``rows``).
-        resample: rate in Hz of a uniform grid to put every signal on; required when the time
-            steps are irregular (more than 1 % from the median step) or packets were lost.
-        gains: drive gains (a :class:`DriveGains`, a comma list in N·m/A joint side, or a JSON
-            file) turning the currents into joint torques; without them ``tau`` stays None.
-        convention: angles of the log, ``"controller"`` (default: what a controller logs) or
-            ``"model"`` (Khalil); converted once to model angles.
-        max_gap: longest gap (s) of lost packets bridged by interpolation (default 50 ms,
-            :mod:`identify.io.gaps`); a longer one starts a new segment.
-        segments: False refuses a gap longer than ``max_gap`` instead of splitting the log.
-        period: sampling period, s, of a log without time column (the column map names no ``t``):
-            sample k of the rows read is at ``t = k * period`` (t = 0 at the first row read, the
-            first of ``rows``); every row is a sample, a row equal to the previous one included
-            (no stale rows: the clock is the period's).
-
-    Returns:
-        A recording in model angles, with ``measured`` (bridged samples False) and ``segment``
-        when packets were lost; ``meta["log"]`` says what was done: ``lines`` (first, last line
-        read), ``rows`` (count, stale rows included), ``stale_rows`` (dropped), ``stale_lines``
-        (the first few), ``rate_hz`` (1 / mean step, the gaps of lost packets left out),
-        ``median_step_s`` (:func:`identify.io.steps.step_figures`), ``largest_gap_s`` and
-        ``largest_gap_lines``, ``irregular_steps``, ``gaps`` (:meth:`LogGaps.summary`),
-        ``bridged_samples``, ``resampled_hz`` (or None), ``samples``, ``gains``, ``convention``.
-
-    Raises:
-        RecordingError: corrupt rows, irregular time without ``resample``, a gap over ``max_gap``
-            with ``segments=False`` (message names file and lines).
-        ValueError: a bad column map, window or gains.
-    """
-    p = Path(path)
-    if rows is not None and (t_from is not None or t_to is not None):
-        raise ValueError("give rows or t_from/t_to (--rows or --from/--to), not both")
-    if period is not None:
-        check_period(period)
-        if t_from is not None or t_to is not None:
-            raise ValueError("t_from/t_to (--from/--to) select by the log's clock; a log read with a sampling period "
-                             "(--period) has none: select lines with rows= (--rows FIRST:LAST)")
-    blanks = False
-    if columns is None:
-        cells, blanks = header_cells(p)
-        columns = rtde_columns(cells, robot) if header else None
-        if columns is None:
-            raise ValueError(f"{p.name}: give the column map (columns=, --columns): the first line is not a "
-                             f"header this reader knows (UR RTDE: timestamp, actual_q_0..actual_q_{robot.n - 1})")
-        refusal = rtde_refusal(cells, robot)
-        if refusal:
-            raise ValueError(f"{p.name}: {refusal}")
-    cmap = parse_columns(columns, robot, time=period is None)
-    conv = _normalise_convention(convention, p.name) or "controller"
-    lines = data_lines(p, header, len(cmap.names), blanks)
-    a, b = row_window(lines, rows, t_from, t_to, cmap.t)
-    values = parse_rows(lines, a, b, cmap)
-    if period is not None:  # the clock of the period, appended last: column numbers stay the file's
-        values = np.column_stack([values, np.arange(values.shape[0]) * float(period)])
-        cmap = parse_columns([*cmap.names, "t"], robot)
-    rec = rows_to_recording(p.name, values, lines.numbers[a:b], cmap, robot, conv, gains=gains,
-                            max_gap=max_gap, segments=segments, resample=resample, stale=period is None)
-    rec.meta["log"]["columns"] = ",".join(cmap.names[:-1] if period is not None else cmap.names)
-    if period is not None:
-        rec.meta["log"]["period_s"] = float(period)
-    return rec
-
-
-def rows_to_recording(source: str, values: np.ndarray, numbers: Sequence[int], cmap: ColumnMap,
-                      robot: rx90sym.Robot, convention: str, gains: DriveGains | str | None = None,
-                      max_gap: float = DEFAULT_MAX_GAP, segments: bool = True,
-                      resample: float | None = None, window: bool = True, stale: bool = True) -> Recording:
-    """The rows of a log (``values`` (N, columns) as ``cmap`` names them, ``numbers`` their line or
-    message numbers) as a recording, by the rules of :func:`read_log`: stale rows dropped, time,
-    gaps, positions and velocities checked, resampled, currents through the gains. ``window``: the
-    input form can select a window of lines, advised by the refusals (False for a bag); ``stale``:
-    drop rows equal to the previous one (False when the clock is a sampling period: every row is a
-    sample)."""
-    drive = _drive(cmap, gains, robot)
-    if stale:
-        stale = stale_rows(values, cmap.t, [c for c, name in enumerate(cmap.names) if name != "_"])
-    else:
-        stale = np.zeros(values.shape[0], dtype=bool)
-    report = {"lines": [numbers[0], numbers[-1]], "rows": int(len(numbers)), "stale_rows": int(stale.sum()),
-              "stale_lines": [int(numbers[k]) for k in np.flatnonzero(stale)[:LISTED_ROWS]]}
-    values, numbers = values[~stale], [n for n, s in zip(numbers, stale) if not s]
-    # One time origin for every input form (CSV, two files with a period, bag): 0 s at the first sample;
-    # the log's own clock there is kept (meta["log"]["t0_s"]); --from/--to select by the log's clock before.
-    t0 = float(values[0, cmap.t]) if values.shape[0] else 0.0
-    values = values.copy()
-    values[:, cmap.t] -= t0
-    report["t0_s"] = t0
-    rec = _recording(source, values, numbers, cmap, robot, convention, report, max_gap, segments, resample, window)
-    if drive is not None:
-        rec = apply_gains(rec, drive, robot)
-        rec.meta["log"]["gains"] = gains_label(drive)
-    return rec
-
-
 #: How many stale rows the report lists by line.
 LISTED_ROWS = 10
-
-
-def _recording(source: str, values: np.ndarray, numbers: list[int], cmap: ColumnMap, robot: rx90sym.Robot,
-               conv: str, report: dict, max_gap: float, segments: bool, resample: float | None,
-               window: bool) -> Recording:
-    """The checked rows as a recording: time, gaps, positions, velocities, then the grid."""
-    t = values[:, cmap.t]
-    check_increasing(t, numbers, source, window)
-    found = find_gaps(t, numbers, max_gap)
-    if not segments:
-        refuse_splits(found, source, window)
-    q_file = values[:, list(cmap.q)]
-    q = np.asarray(robot.to_model(q_file), dtype=float) if conv == "controller" else q_file
-    dq = values[:, list(cmap.qd)] if cmap.qd else None
-    # Degrees and swapped q/qd groups named as such, before they read as corrupt rows.
-    check_units(t, q_file, dq, robot, source, numbers, to_model=conv == "controller", ranges=False)
-    check_positions(q, t, numbers, cmap, robot, source, window)
-    span = np.ptp(q, axis=0)
-    check_velocities(dq, q, t, span, numbers, cmap, source)
-    if np.all(span < STILL):
-        warnings.warn(f"{source}: no joint moves in lines {numbers[0]}..{numbers[-1]} (largest position span "
-                      f"{span.max():g} rad): a recording at rest identifies gravity and offsets at most",
-                      RecordingWarning, stacklevel=3)
-    dt = np.diff(t)
-    k_gap = int(np.argmax(dt))
-    steps = StepCounts()
-    steps.add(log_steps(dt))  # the block converter's figures are the same: identify.io.steps
-    report.update({**step_figures(steps, TIME_RTOL),
-                   "largest_gap_s": float(dt[k_gap]), "largest_gap_lines": [numbers[k_gap], numbers[k_gap + 1]],
-                   "gaps": found.summary(), "bridged_samples": 0, "resampled_hz": None,
-                   "samples": int(t.size), "gains": None, "convention": conv, "position_span_rad": span.tolist()})
-    if resample is None:
-        refusal = irregular_refusal(t, numbers, source, found)
-        if refusal:
-            raise RecordingError(refusal)
-    # A segment too short to filter (one row between two gaps) is dropped and counted, not refused.
-    found, keep = short_segments(found, numbers, source)
-    values, t, q, dq = values[keep], t[keep], q[keep], None if dq is None else dq[keep]
-    report.update(gaps=found.summary(), samples=int(t.size))
-
-    def take(cols: tuple[int, ...]) -> np.ndarray | None:
-        return values[:, list(cols)] if cols else None
-
-    rec = Recording(t=t, q=q, tau=take(cmap.tau), dq=dq, source=source, robot=robot.name,
-                    meta={"log": report}, current=take(cmap.i),
-                    aux={name: values[:, col] for name, col in cmap.aux}, segment=found.segment)
-    if resample is not None:
-        rec = resample_recording(rec, float(resample))
-        report.update({"resampled_hz": float(resample), "samples": rec.n_samples,
-                       "bridged_samples": int(np.sum(~rec.measured_mask))})
-    return rec
 
 
 def gains_label(drive: DriveGains) -> str:
@@ -391,16 +219,17 @@ def gains_label(drive: DriveGains) -> str:
 
 def log_options(p: Path, robot: rx90sym.Robot, columns: str | Sequence[str], rows: tuple[int, int] | None,
                  t_from: float | None, t_to: float | None, gains: DriveGains | str | None,
-                 convention: str | None) -> tuple[ColumnMap, str, DriveGains | None]:
-    """The column map, the convention and the drive gains of a log, checked together."""
+                 convention: str | None, time: bool = True) -> tuple[ColumnMap, str, DriveGains | None]:
+    """The column map (``time``: with a time column), the convention and the drive gains of a log,
+    checked together."""
     if rows is not None and (t_from is not None or t_to is not None):
         raise ValueError("give rows or t_from/t_to (--rows or --from/--to), not both")
-    cmap = parse_columns(columns, robot)
+    cmap = parse_columns(columns, robot, time=time)
     conv = _normalise_convention(convention, p.name) or "controller"
-    return cmap, conv, _drive(cmap, gains, robot)
+    return cmap, conv, log_drive(cmap, gains, robot)
 
 
-def _drive(cmap: ColumnMap, gains: DriveGains | str | None, robot: rx90sym.Robot) -> DriveGains | None:
+def log_drive(cmap: ColumnMap, gains: DriveGains | str | None, robot: rx90sym.Robot) -> DriveGains | None:
     """The drive gains of a log (read from their file or list), refused when the log has no
     currents or already holds torques."""
     if gains is not None and not cmap.i:

@@ -17,6 +17,7 @@ from __future__ import annotations
 import math
 import numbers
 from dataclasses import replace
+from typing import Any
 
 import numpy as np
 
@@ -25,7 +26,7 @@ from rx90sym.recording import Recording
 
 from identify.io.gaps import LOST_STEPS
 
-__all__ = ["concatenate", "interpolate", "resample", "uniform_grid"]
+__all__ = ["check_rate", "concatenate", "interpolate", "resample", "uniform_grid"]
 
 
 def uniform_grid(t0: float, t1: float, rate: float) -> np.ndarray:
@@ -84,11 +85,16 @@ def _measured(rec: Recording, t: np.ndarray) -> np.ndarray:
     return np.where(on_left, ok[k], np.where(on_right, ok[k + 1], good_step[k]))
 
 
+def check_rate(rate: Any) -> None:
+    """Refuse a resampling rate that is not a positive finite number of Hz."""
+    if not (isinstance(rate, numbers.Real) and math.isfinite(rate) and rate > 0):
+        raise ValueError(f"resample: expected a positive rate in Hz, got {plain(rate)}")
+
+
 def resample(rec: Recording, rate: float) -> Recording:
     """The recording on the uniform grid ``t0 + k/rate`` (rate in Hz) of each segment, from its first
     sample ``t0`` up to its last one; bridged samples marked in ``measured``."""
-    if not (isinstance(rate, numbers.Real) and math.isfinite(rate) and rate > 0):
-        raise ValueError(f"resample: expected a positive rate in Hz, got {plain(rate)}")
+    check_rate(rate)
     parts = [interpolate(p, uniform_grid(float(p.t[0]), float(p.t[-1]), rate)) for p in rec.pieces()]
     if len(parts) == 1:
         return replace(parts[0], source=rec.source)

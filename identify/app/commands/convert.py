@@ -87,8 +87,8 @@ def register(sub: Any) -> None:
                          "or a LOG.csv whose --columns names no t (sample k at t = k S, t = 0 at the first sample)")
     sp.add_argument("--out", required=True, help="recording file (.csv or .npz)")
     sp.add_argument("--block", metavar="LINES",  # checked by run: refused for a bag in one line, not by argparse
-                    help=f"LOG.csv form: lines per block: a longer log is converted block by block, memory bounded "
-                         f"by the block (default {DEFAULT_LOG_BLOCK}, at least 1000; output CSV)")
+                    help=f"LOG.csv form: lines read and checked at a time: memory bounded by the block whatever "
+                         f"the log's length for a CSV output (default {DEFAULT_LOG_BLOCK}, at least 1000)")
 
 
 def _given(args: argparse.Namespace, names: tuple[str, ...]) -> list[str]:
@@ -130,8 +130,7 @@ def _robot(args: argparse.Namespace):
 
 def run(args: argparse.Namespace) -> int:
     from identify.io.bags import is_bag
-    from identify.io.blocks import count_rows
-    from identify.io.logs import read_log
+    from identify.io.log_blocks import read_log
     from identify.io.recordings import write_recording
 
     if args.log is None:
@@ -159,16 +158,13 @@ def run(args: argparse.Namespace) -> int:
     check_output(args.out)
     if args.period is not None and not args.period > 0:
         raise UsageError(f"--period must be a positive sampling period in s, got {args.period:g}")
-    if count_rows(args.log) > block:
-        if args.period is not None:
-            raise UsageError(f"--period: a log longer than --block ({block} lines) is converted block by block, "
-                             f"which needs a time column; raise --block to the log's line count to read it whole")
-        return _run_long(args, robot, block)
-    progress(f"reading the log {args.log}")
+    if args.out.lower().endswith(".csv"):
+        return _convert_csv(args, robot, block)
+    progress(f"reading the log {args.log} ({block} lines per block)")
     rec = read_log(args.log, robot, args.columns, header=not args.no_header, rows=_rows(args.rows),
                    t_from=args.t_from, t_to=args.t_to, resample=args.resample, gains=args.gains,
                    convention=args.convention, max_gap=args.max_gap or DEFAULT_MAX_GAP,
-                   segments=not args.no_segments, period=args.period)
+                   segments=not args.no_segments, period=args.period, block=block)
     write_recording(args.out, rec, robot, convention="controller")
     print(_print_log(args.log, rec.meta["log"], "torques as logged" if rec.current is None else
                      "no gains: the file keeps currents (give --gains to identify with it)"))
@@ -176,27 +172,27 @@ def run(args: argparse.Namespace) -> int:
     return 0
 
 
-def _run_long(args: argparse.Namespace, robot: Any, block: int) -> int:
-    """A log longer than ``block`` lines (--block): converted block by block (identify.io.log_blocks)."""
-    if not args.out.lower().endswith(".csv"):
-        raise UsageError(f"--out {args.out}: a log longer than --block ({block} lines) is converted block by "
-                         f"block into a CSV recording")
-    if args.columns is None:
-        raise UsageError(f"a log longer than --block ({block} lines) is converted block by block, which "
-                         f"needs --columns")
-    from identify.io.columns import parse_columns
+def _convert_csv(args: argparse.Namespace, robot: Any, block: int) -> int:
+    """A log of any length to a CSV recording, ``block`` lines at a time (identify.io.log_blocks.convert_log:
+    the reader of identify.read_log, each part written as it comes)."""
     from identify.io.log_blocks import convert_log
 
-    progress(f"converting the log {args.log} block by block ({block} lines per block)")
+    progress(f"converting the log {args.log} ({block} lines per block)")
     log = convert_log(args.log, robot, args.columns, args.out, header=not args.no_header, rows=_rows(args.rows),
                       t_from=args.t_from, t_to=args.t_to, resample=args.resample, gains=args.gains,
                       convention=args.convention, block=block, max_gap=args.max_gap or DEFAULT_MAX_GAP,
-                      segments=not args.no_segments)
-    currents = bool(parse_columns(args.columns, robot).i)
+                      segments=not args.no_segments, period=args.period)
     print(_print_log(args.log, log, "no gains: the file keeps currents (give --gains to identify with it)"
-                     if currents else "torques as logged"))
+                     if _holds_currents(log, robot) else "torques as logged"))
     print(f"converted {log['samples']} samples -> {args.out}")
     return 0
+
+
+def _holds_currents(log: dict, robot: Any) -> bool:
+    """Whether the converted log holds motor currents (its ``columns``, the column map read)."""
+    from identify.io.columns import parse_columns
+
+    return bool(parse_columns(log["columns"], robot, time="period_s" not in log).i)
 
 
 def _run_bag(args: argparse.Namespace) -> int:
