@@ -454,3 +454,25 @@ def test_windows_line_endings_keep_the_line_numbers(tmp_path, ur):
     with pytest.raises(RecordingError, match=needle.replace("(", r"\(").replace(")", r"\)")):
         read_log(path, ur, COLUMNS)
     assert read_log(path, ur, COLUMNS, rows=(1, 49)).n_samples == 49
+
+
+def test_the_reader_gives_the_same_recording_whatever_its_block(tmp_path, ur):
+    """One reader for every length: a log read 7 lines at a time equals the log read in one block, with a
+    time window, with lost packets resampled, and without time column (a sampling period)."""
+    t = jittered_times(300, seed=3)
+    t = np.delete(t, np.r_[100:104])  # a lost burst: bridged by the resampling
+    lines = log_lines(t)
+    path = write_log(tmp_path / "log.csv", lines)
+    regular = log_lines(838.0 + 0.01 * np.arange(300))
+    nameless = write_log(tmp_path / "nameless.csv", [line.split(",", 1)[1] for line in regular])
+    cases = [(path, COLUMNS, dict(resample=100.0, t_from=838.2, t_to=840.5)),
+             (nameless, COLUMNS.split(",", 1)[1], dict(period=0.01, rows=(5, 250)))]
+    for log, columns, options in cases:
+        whole = read_log(log, ur, columns, block=10**6, **options)
+        small = read_log(log, ur, columns, block=7, **options)
+        assert whole.n_samples > 150 and whole.meta["log"]["lines"] == small.meta["log"]["lines"]
+        for name in ("t", "q", "dq", "current", "measured_mask", "segment"):
+            np.testing.assert_array_equal(getattr(small, name), getattr(whole, name), err_msg=name)
+        assert small.meta["log"]["samples"] == whole.meta["log"]["samples"]
+    # The window of a resampled log starts inside the burst's neighbourhood: the bridged samples are counted.
+    assert read_log(path, ur, COLUMNS, block=7, resample=100.0).meta["log"]["bridged_samples"] > 0
