@@ -240,3 +240,21 @@ def test_a_log_within_one_block_is_one_block(rx90, twin_empty):
         assert got.block is None and got.result.names == ref.result.names
         np.testing.assert_array_equal(got.result.values, ref.result.values)
     assert identify.fit(rx90, [rec], identify.Processing(friction="coulomb"), block=n - 1).block == n - 1
+
+
+def test_a_fit_in_blocks_keeps_the_rows_of_the_whole_observation(rx90, rx90_base, twin_empty, whole_fit):
+    """The decimated rows of a fit made in blocks of 1,000 samples, kept beside its factors
+    (identify.observation.row_store), are those of the whole-signal observation matrix, and the same
+    whatever the block."""
+    obs = whole_fit.observation
+    for block in (1000, 10 ** 6):
+        got = identify.fit(rx90, twin_empty[:1], WHOLE, base=rx90_base, block=block, bootstrap_seed=None)
+        kept = got.observation
+        assert kept is not None and kept.names == obs.names and kept.rows == obs.rows
+        np.testing.assert_array_equal(kept.joint, obs.joint)
+        np.testing.assert_array_equal(kept.samples, obs.samples)
+        np.testing.assert_allclose(kept.t, obs.t, rtol=0, atol=1e-12)
+        scale = np.abs(obs.W).max(axis=0) + 1e-300
+        assert np.max(np.abs(kept.W - obs.W) / scale) < 1e-9
+        assert np.max(np.abs(kept.Y - obs.Y)) < 1e-9 * np.abs(obs.Y).max()
+        np.testing.assert_allclose(kept.moving_fraction, obs.moving_fraction, rtol=1e-12)

@@ -222,7 +222,7 @@ def fit_in_blocks(robot: rx90sym.Robot, recordings: Sequence[Any], processing: A
     spring = spring_summary(robot, base if isinstance(base, BaseWithSpring) else None, sf.result, angles)[0]
     boot = Bootstrap(sf.bootstrap_std, sf.bootstrap_block / sf.rate, spec.draws, spec.seed)
     found = sf.delay_estimate
-    return Fit(robot, sf.result, p, model, base, None, found, found.delay if found is not None else None, spring,
+    return Fit(robot, sf.result, p, model, base, sf.observation, found, found.delay if found is not None else None, spring,
                boot, block=block, streamed=sf, recordings=sf.recordings, choice=_choice_record(sf.choice, p))
 
 

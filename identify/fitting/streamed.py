@@ -28,9 +28,10 @@ from identify.estimation.least_squares import solve_joint_systems
 from identify.estimation.results import METHODS, IdentificationResult
 from identify.io.blocks import BlockSource, block_source
 from identify.observation.cross_validation import ProcessingChoice
-from identify.observation.matrix import DEFAULT_MIN_VELOCITY, DEFAULT_REST, presliding_base
+from identify.observation.matrix import DEFAULT_MIN_VELOCITY, DEFAULT_REST, Observation, presliding_base
 from identify.observation.defaults import DEFAULT_DECIMATE_TO
 from identify.observation.processing import RestPolicy, drops_rest
+from identify.observation.row_store import RowStore, keeps_rows
 from identify.observation.stream import (DEFAULT_BLOCK, Piece, Plan, Scan, StreamSettings, in_order, piece,
                                          plan_windows, scan_all, windows_in_order)
 from identify.estimation.stream_cv import choose_processing_streamed, scans_for_choice
@@ -79,6 +80,7 @@ class StreamedFit:
     q_range: np.ndarray | None = None
     recordings: tuple[dict, ...] = ()
     choice: ProcessingChoice | None = None
+    observation: Observation | None = None  # the decimated rows, when kept (identify.observation.row_store)
 
     def summary(self) -> str:
         """What was fitted, in the manner of :meth:`identify.Observation.summary`."""
@@ -125,8 +127,9 @@ def _workers(client: Any) -> int:
 
 def _accumulate(robot: rx90sym.Robot, sources: Sequence[BlockSource], plans: Sequence[Any], cutoff: float,
                 settings: StreamSettings, base: Any, lags: Sequence[float], client: Any,
-                boot: SegmentBootstrap | None) -> tuple[JointFactors, np.ndarray, int]:
-    """The second pass: per-joint factors, moving-sample counts and the number of blocks."""
+                boot: SegmentBootstrap | None, store: RowStore | None = None) -> tuple[JointFactors, np.ndarray, int]:
+    """The second pass: per-joint factors, moving-sample counts and the number of blocks (``store``: the
+    decimated rows kept too)."""
     names = tuple(base.names)
     factors = JointFactors(robot.n, len(names), 1 + len(lags))
     moving = np.zeros(robot.n)
@@ -139,6 +142,8 @@ def _accumulate(robot: rx90sym.Robot, sources: Sequence[BlockSource], plans: Seq
         count += 1
         m = p.motion
         moving += m.moving.sum(axis=0)
+        if store is not None:
+            store.add(p)
         for j, (factor, rows) in enumerate(block_factors):
             factors.add_factor(j, factor, rows)
             if boot is not None:
@@ -222,22 +227,26 @@ def fit_streamed(robot: rx90sym.Robot, recordings: Sequence[Any], method: str = 
     bblock = max(1, int(round(bootstrap.block_s * flat[0].rate))) if bootstrap else 0
     make_boot = (lambda: SegmentBootstrap(total, bblock, robot.n, len(base.names), bootstrap.draws, bootstrap.seed)
                  if bootstrap else None)
-    boot = make_boot()
-    factors, moving, count = _accumulate(robot, sources, plans, fc, settings, base, lags, client, boot)
+    drop = settings.min_velocity is not None and drops_rest(settings.rest)
+    make_store = (lambda: RowStore(base.names, drop)) if keeps_rows(total, robot.n, len(base.names)) else (lambda: None)
+    boot, store = make_boot(), make_store()
+    factors, moving, count = _accumulate(robot, sources, plans, fc, settings, base, lags, client, boot, store)
     found = None
     if lags:
         found = refined_delay(grid, np.array([joint_log_rms(factors.systems(k + 1)) for k in range(len(lags))]), step)
     if delay == "auto":  # a second pass with the torques put back in step
         settings = replace(settings, delay=found.delay)
-        boot = make_boot()
-        factors, moving, count = _accumulate(robot, sources, plans, fc, settings, base, (), client, boot)
+        boot, store = make_boot(), make_store()
+        factors, moving, count = _accumulate(robot, sources, plans, fc, settings, base, (), client, boot, store)
     result = solve_joint_systems(factors.systems(0), base.names, weighted=method != "ols")
     if method == "consistent":
         result = consistent_fit(robot, result, base, **consistent_options)
     notes = tuple(p.note for p in flat) + skipped
+    observation = None if store is None else store.observation(
+        [fc] * len(flat), [p.rate for p in flat], [p.source for p in flat], notes, settings.min_velocity, settings.rest)
     return StreamedFit(result, fc, flat[0].rate, notes, tuple(s.source for s in scans), total,
                        moving / total if settings.min_velocity is not None else None, found, settings.delay,
                        boot.std(result.weights) if boot is not None else None, bblock, settings, count,
                        np.vstack([np.min([s.q_range[0] for s in scans], axis=0),
                                   np.max([s.q_range[1] for s in scans], axis=0)]),
-                       tuple(s.layout() for s in scans), choice)
+                       tuple(s.layout() for s in scans), choice, observation)
