@@ -18,7 +18,7 @@ import rx90sym
 
 from identify.signal.interpolate import onto
 
-__all__ = ["RawScores", "raw_scores", "SCORE_TRIM_S"]
+__all__ = ["RawScores", "SegmentPrediction", "raw_scores", "SCORE_TRIM_S"]
 
 #: Seconds left out at both ends of every segment when scoring: the plain baseline's trim
 #: (identify.fitting.baseline.BASELINE_TRIM_S). A fit predicts from its filter's edges on (3 periods
@@ -40,20 +40,26 @@ class RawScores:
     baseline: np.ndarray | None = None
 
 
-def raw_scores(robot: rx90sym.Robot, motions: Sequence[Any], pieces: Sequence[Any], beta: np.ndarray,
-               spring: bool, delay: float, baseline: Any = None) -> RawScores:
-    """The fit's prediction (``motions``: identify.observation.matrix.FilteredMotion of each segment
-    ``pieces``, columns for ``beta``) at the raw samples of the segments, beside their measured
-    torques. spring: the motions' torques had the spring torque added (taken off the prediction);
+@dataclass(frozen=True, eq=False)
+class SegmentPrediction:
+    """A fit's prediction of one segment: t (S,) the predicted samples [s] (before the torque lag);
+    torque (S, n) [N m] (spring taken off); moving (S, n) the fit's moving mask there."""
+
+    t: np.ndarray
+    torque: np.ndarray
+    moving: np.ndarray
+
+
+def raw_scores(robot: rx90sym.Robot, predictions: Sequence[SegmentPrediction], segments: Sequence[Any],
+               delay: float, baseline: Any = None) -> RawScores:
+    """The fit's prediction of each segment (``predictions``) at the raw samples of the segments
+    (``segments``: recordings of each segment whole), beside their measured torques.
     delay [s]: the torque lag the fit compensates (a prediction at t is the torque recorded at
     t + delay); baseline: a :class:`identify.fitting.baseline.PlainBaseline` scored on the same
     samples, or None. The samples scored: inside the prediction, measured, :data:`SCORE_TRIM_S` from each
     segment's ends (where the baseline predicts too)."""
     parts = []
-    for m, piece in zip(motions, pieces):
-        pred = m.Phi @ beta
-        if spring and robot.spring is not None:
-            pred = pred - robot.spring_torque_batch(m.q)[:, :, 0]
+    for m, piece in zip(predictions, segments):
         t_pred = np.asarray(m.t, dtype=float) + delay
         t = np.asarray(piece.t, dtype=float)
         tol = 1e-9 * max(1.0, float(np.max(np.abs(t))))
@@ -66,10 +72,10 @@ def raw_scores(robot: rx90sym.Robot, motions: Sequence[Any], pieces: Sequence[An
             b = bp.predicted[inside]
         tt = t[inside]
         nearest = np.clip(np.searchsorted(t_pred, tt - 0.5 * _step(t_pred)), 0, t_pred.size - 1)
-        parts.append((tt, np.asarray(piece.torques, dtype=float)[inside], onto(tt, t_pred, pred),
+        parts.append((tt, np.asarray(piece.torques, dtype=float)[inside], onto(tt, t_pred, m.torque),
                       np.asarray(m.moving)[nearest], b))
     if not any(p[0].size for p in parts):
-        raise ValueError(f"{pieces[0].source}: no recorded sample lies inside the prediction"
+        raise ValueError(f"{segments[0].source}: no recorded sample lies inside the prediction"
                          + (" and 0.5 s from the segments' ends (the plain baseline's trim)" if baseline else ""))
     t, meas, pred, mov = (np.concatenate([p[k] for p in parts]) for k in range(4))
     base = None if baseline is None else np.concatenate([p[4] for p in parts])

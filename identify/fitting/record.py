@@ -23,7 +23,8 @@ from identify.observation.matrix import Observation, coulomb_terms
 from identify.observation.processing import Processing
 from identify.fitting.friction import defaulted_travels
 from identify.estimation.delay import DelayEstimate
-from identify.fitting.validation import Validation, predict, prediction_rate
+from identify.fitting.validation import Validation, predict
+from identify.io.blocks import DEFAULT_BLOCK
 from identify.fitting.baseline import PlainBaseline
 from identify.observation.offsets import offset_base
 
@@ -136,20 +137,18 @@ class Fit:
                 "rest": self.rest}
 
     # ------------------------------------------------------------ using it
-    def predict(self, recording: Any, result: IdentificationResult | None = None) -> Validation:
-        """Torques of ``recording`` predicted with this fit's parameters (or ``result``) and processing.
-        Where a joint rests the Coulomb term is 0, or the presliding state with that rest policy
-        (every sample is predicted, whatever the rest policy)."""
-        if self.block is not None:  # a long log: block by block, as it was fitted
-            from identify.fitting.validation import predict_streamed
-
-            return predict_streamed(self.robot, result or self.result, recording, base=self.base, block=self.block,
-                                    convention=self.model.convention, gains=self.gains, prediction=True,
-                                    **self.filtering())
+    def predict(self, recording: Any, result: IdentificationResult | None = None, *, block: int | None = None,
+                convention: str | None = None) -> Validation:
+        """Torques of ``recording`` (a recording, or a recording file read block by block: ``block`` raw
+        samples at a time, default the fit's, its angles ``convention``, default the fit's) predicted with
+        this fit's parameters (or ``result``) and processing. Where a joint rests the Coulomb term is 0,
+        or the presliding state with that rest policy (every sample is predicted, whatever the rest
+        policy)."""
         # At 20 x the cut-off (identify.fitting.validation.prediction_rate), not at the fit's decimated rate.
-        options = dict(self.filtering(), decimate_to=prediction_rate(self.cutoff, recording.rate),
-                       filtered_at=self.decimate_to)
-        return predict(self.robot, result or self.result, recording, base=self.base, baseline=self.baseline, **options)
+        options = dict(self.filtering(), decimate_to="prediction", filtered_at=self.decimate_to)
+        return predict(self.robot, result or self.result, recording, base=self.base, baseline=self.baseline,
+                       block=block or self.block or DEFAULT_BLOCK, convention=convention or self.model.convention,
+                       gains=self.gains, **options)
 
     def validate(self, recording: Any) -> Validation:
         """Cross-validation on a recording not used in the fit (with the essential parameters when

@@ -17,12 +17,11 @@ import numpy as np
 import rx90sym
 
 from identify.observation.defaults import DEFAULT_DECIMATE_TO
-from identify.observation.matrix import automatic_cutoff, filtered_motions, presliding_base
+from identify.observation.matrix import presliding_base
 from identify.observation.processing import RestPolicy, has_policy, predicted_rest
 from identify.estimation.results import IdentificationResult, json_number
 from identify.io.blocks import block_source
-from identify.fitting.raw_scoring import SCORE_TRIM_S, RawScores, raw_scores
-from identify.signal.interpolate import onto
+from identify.fitting.raw_scoring import RawScores, SegmentPrediction, raw_scores
 from identify.observation.matrix import column_regressor
 from identify.observation.offsets import offset_base, result_offsets
 from identify.observation.stream import DEFAULT_BLOCK, StreamSettings, piece, plan_windows, scan_all, windows_in_order
@@ -170,12 +169,15 @@ def base_vector(result: IdentificationResult, base: Any, robot: rx90sym.Robot) -
 
 
 def predict(robot: rx90sym.Robot, result: IdentificationResult, recording: Any, base: Any = None,
-            cutoff: float | None = None, decimate_to: float | None = DEFAULT_DECIMATE_TO, spring: bool = True,
+            cutoff: float | None = None, decimate_to: float | None | str = DEFAULT_DECIMATE_TO, spring: bool = True,
             min_velocity: float | None = None, delay: float = 0.0, rest: RestPolicy = "zero-coulomb",
-            baseline: Any = None, filtered_at: float | None | str = "prediction") -> Validation:
-    """Predicted vs measured torques of ``recording`` with the parameters of ``result``.
+            baseline: Any = None, filtered_at: float | None | str = "prediction", block: int = DEFAULT_BLOCK,
+            convention: str | None = None, gains: Any = None) -> Validation:
+    """Predicted vs measured torques of ``recording`` (a recording, or a CSV path read block by block)
+    with the parameters of ``result``.
 
-    cutoff [Hz], decimate_to [Hz]: give those of the fit (None: chosen on this recording);
+    cutoff [Hz], decimate_to [Hz]: give those of the fit (None: chosen on this recording; decimate_to
+    "prediction": :func:`prediction_rate` of the cut-off, what :meth:`identify.Fit.predict` does);
     min_velocity [rad/s]: rest threshold (Coulomb term 0 at rest, errors also while moving);
     delay [s]: torque lag compensated as in the fit; rest: the fit's rest policy, one or one per joint
     (every sample is predicted: "drop" takes Coulomb 0 at rest; "presliding" the presliding state
@@ -183,21 +185,56 @@ def predict(robot: rx90sym.Robot, result: IdentificationResult, recording: Any, 
     (identify.fitting.baseline.PlainBaseline), scored on the same raw samples (None: none).
     Scored against the raw measured torques at the recording's own time stamps; the filtered figures
     (``rms_error_filtered``) on rows decimated to ``filtered_at`` [Hz] (None: not decimated;
-    "prediction": the prediction's ``decimate_to``; :meth:`identify.Fit.predict` gives the fit's own).
+    "prediction": the prediction's rate; :meth:`identify.Fit.predict` gives the fit's own).
+    block: raw samples per block (the recording is read, filtered and predicted block by block: memory
+    that of a block and of the scored samples); convention, gains: how a CSV path is read.
     """
     if base is None:  # the symbolic base, with the torque offsets the fit chose (OFFj in the result)
         base = offset_base(rx90sym.base_parameters(robot), result_offsets(result, robot))
     base = presliding_base(robot, base, rest if has_policy(rest, "presliding") and min_velocity is not None else None)
     beta = base_vector(result, base, robot)
-    cutoff = cutoff if cutoff is not None else automatic_cutoff([recording], decimate_to)
-    motions, _, used = filtered_motions(robot, [recording], cutoff, decimate_to, spring, base.regressor_batch,
-                                        base.names, min_velocity, predicted_rest(rest), delay)
-    raw = raw_scores(robot, motions, used, beta, spring, delay, baseline)
-    scored = scored_validation(raw, recording.source, min_velocity, motions[0].cutoff, motions[0].rate)
-    if filtered_at != "prediction" and filtered_at != decimate_to:  # the fit's own rows (FIGAROH's scoring)
-        motions = filtered_motions(robot, [recording], cutoff, filtered_at, spring, base.regressor_batch,
-                                   base.names, min_velocity, predicted_rest(rest), delay)[0]
-    return replace(scored, **filtered_rms(motions, beta), t0_s=log_clock(recording))
+    src = block_source(recording, robot, convention, gains)
+    at_prediction = decimate_to == "prediction"
+    settings = StreamSettings(cutoff, None if at_prediction else (decimate_to or None), min_velocity or None,
+                              predicted_rest(rest), float(delay), spring, int(block))
+    scans, fc = scan_all([src], settings)
+    if at_prediction:
+        settings = replace(settings, decimate_to=prediction_rate(fc, scans[0].rate))
+    names, regressor = column_regressor(robot, base)
+    predictions, errors, plans = _predicted(robot, src, scans[0], fc, settings, regressor, names, beta, spring)
+    segments = list(src.windows([(p.start, p.start + _length(scans[0], p)) for p in plans]))
+    raw = raw_scores(robot, predictions, segments, settings.delay, baseline)
+    scored = scored_validation(raw, src.source, settings.min_velocity, fc, plans[0].rate)
+    filtered_at = settings.decimate_to if filtered_at == "prediction" else filtered_at
+    if filtered_at != settings.decimate_to:  # the fit's own rows (FIGAROH's scoring)
+        errors = _predicted(robot, src, scans[0], fc, replace(settings, decimate_to=filtered_at or None), regressor,
+                            names, beta, spring)[1]
+    return replace(scored, **_filtered_rms(errors), t0_s=log_clock(recording) or float((src.log or {}).get("t0_s") or 0.0))
+
+
+def _length(scan: Any, plan: Any) -> int:
+    """Raw samples of the segment ``plan`` cuts."""
+    return next(g.samples for g in scan.segments if g.start == plan.start)
+
+
+def _predicted(robot: rx90sym.Robot, src: Any, scan: Any, fc: float, settings: StreamSettings, regressor: Any,
+               names: Sequence[str], beta: np.ndarray, spring: bool
+               ) -> tuple[list[SegmentPrediction], list[tuple[np.ndarray, np.ndarray]], list[Any]]:
+    """(the prediction of each segment, block by block; per block the errors against the filtered
+    torques and the moving mask on its measured rows; the segments' plans)."""
+    plans, _ = plan_windows(scan, fc, settings)
+    groups: dict[int, list] = {}
+    errors = []
+    for plan, window, rec, _ in windows_in_order([src], [plans]):
+        m = piece(robot, rec, window, plan, fc, settings, regressor, names, 0).motion
+        fitted = m.Phi @ beta
+        rows = m.measured if m.measured is not None else slice(None)
+        errors.append(((m.Y - fitted)[rows], np.asarray(m.moving)[rows]))
+        if spring and robot.spring is not None:
+            fitted = fitted - robot.spring_torque_batch(m.q)[:, :, 0]
+        groups.setdefault(id(plan), []).append((m.t, fitted, m.moving))
+    predictions = [SegmentPrediction(*(np.concatenate(a) for a in zip(*group))) for group in groups.values()]
+    return predictions, errors, plans
 
 
 def log_clock(recording: Any) -> float:
@@ -205,12 +242,12 @@ def log_clock(recording: Any) -> float:
     return float(((getattr(recording, "meta", None) or {}).get("log") or {}).get("t0_s") or 0.0)
 
 
-def filtered_rms(motions: Sequence[Any], beta: np.ndarray) -> dict[str, np.ndarray]:
-    """RMS error [N m] per joint against the torques filtered like the rows (``motions``' Y), on their
-    measured samples, all and while moving: ``rms_error_filtered`` and ``rms_error_filtered_moving``."""
-    rows = [m.measured if m.measured is not None else slice(None) for m in motions]
-    err = np.concatenate([(m.Y - m.Phi @ beta)[r] for m, r in zip(motions, rows)])
-    moving = np.concatenate([np.asarray(m.moving)[r] for m, r in zip(motions, rows)])
+def _filtered_rms(errors: Sequence[tuple[np.ndarray, np.ndarray]]) -> dict[str, np.ndarray]:
+    """RMS error [N m] per joint against the torques filtered like the rows (per block: errors and
+    moving mask on its measured rows), all and while moving: ``rms_error_filtered`` and
+    ``rms_error_filtered_moving``."""
+    err = np.concatenate([e for e, _ in errors])
+    moving = np.concatenate([m for _, m in errors])
     return {"rms_error_filtered": _rms(err, np.ones_like(moving)), "rms_error_filtered_moving": _rms(err, moving)}
 
 
@@ -236,51 +273,3 @@ def scored_validation(raw: RawScores, source: str, min_velocity: float | None, c
 def validate(robot: rx90sym.Robot, result: IdentificationResult, recording: Any, **options: Any) -> Validation:
     """Cross-validation: torque error per joint on a recording not used in the fit (see :func:`predict`)."""
     return predict(robot, result, recording, **options)
-
-
-def predict_streamed(robot: rx90sym.Robot, result: IdentificationResult, recording: Any, base: Any = None,
-                     cutoff: float | None = None, decimate_to: float | None = DEFAULT_DECIMATE_TO, spring: bool = True,
-                     min_velocity: float | None = None, delay: float = 0.0, block: int = DEFAULT_BLOCK,
-                     convention: str | None = None, gains: Any = None, rest: RestPolicy = "zero-coulomb",
-                     prediction: bool = False) -> Validation:
-    """:func:`identify.predict` on a recording of any length: predicted and measured torques block by block
-    (only the decimated torques are held, n columns at the decimated rate). prediction: predict at
-    :func:`prediction_rate` of the cut-off (``decimate_to`` then only serves the automatic cut-off)."""
-    base = presliding_base(robot, base, rest if min_velocity else None)
-    beta = base_vector(result, base, robot)
-    src = block_source(recording, robot, convention, gains)
-    # As identify.predict: every sample predicted (a dropped joint's rest with Coulomb 0).
-    settings = StreamSettings(cutoff, decimate_to or None, min_velocity or None, predicted_rest(rest), float(delay),
-                              spring, int(block))
-    scans, fc = scan_all([src], settings)
-    if prediction:  # as identify.Fit.predict in memory: at 20 x the cut-off (or the recording's own rate)
-        settings = replace(settings, decimate_to=prediction_rate(fc, scans[0].rate))
-    plans, _ = plan_windows(scans[0], fc, settings)
-    names, regressor = column_regressor(robot, base)
-    length = {g.start: g.samples for g in scans[0].segments}
-    groups: dict[int, list] = {}
-    for plan, window, rec, _ in windows_in_order([src], [plans]):
-        m = piece(robot, rec, window, plan, fc, settings, regressor, names, 0).motion
-        pred = m.Phi @ beta
-        if spring and robot.spring is not None:
-            pred = pred - robot.spring_torque_batch(m.q)[:, :, 0]
-        # The raw samples this core owns: from its first prediction to the next core's (scored on raw torques).
-        t_pred, t = m.t + settings.delay, np.asarray(rec.t, dtype=float)
-        step = float(np.median(np.diff(t)))
-        own = ((t >= t_pred[0] - 1e-6 * step) & (t < t_pred[0] + (m.t.size * m.factor - 1e-6) * step)
-               & rec.measured_mask)
-        # The segment's first and last times (the windows' raw samples lie on its regular grid).
-        ends = (t[0] - window.raw[0] * step, t[-1] + (length[plan.start] - window.raw[1]) * step)
-        groups.setdefault(id(plan), []).append((t_pred, pred, m.moving, t[own], np.asarray(rec.torques)[own], ends))
-    parts = []
-    for group in groups.values():  # one segment: its predictions interpolated onto its raw samples
-        first, last = group[0][5][0], group[-1][5][1]
-        tp, pr, mv, t, tau = (np.concatenate(a) for a in list(zip(*group))[:5])
-        tol = 1e-9 * max(1.0, abs(tp[-1]))
-        # As identify.predict: SCORE_TRIM_S from the segment's ends, inside the prediction.
-        inside = (t <= tp[-1] + tol) & (t >= first + SCORE_TRIM_S - tol) & (t <= last - SCORE_TRIM_S + tol)
-        t, tau = t[inside], tau[inside]
-        nearest = np.clip(np.searchsorted(tp, t - 0.5 * (tp[1] - tp[0] if tp.size > 1 else 0.0)), 0, tp.size - 1)
-        parts.append((t, tau, onto(t, tp, pr), mv[nearest]))
-    t, Y, pred, mov = (np.concatenate(a) for a in zip(*parts))
-    return scored_validation(RawScores(t, Y, pred, mov), src.source, settings.min_velocity, fc, plans[0].rate)

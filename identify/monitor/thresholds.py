@@ -16,7 +16,9 @@ from typing import Any, Sequence
 
 import numpy as np
 
+from identify.io.blocks import BlockSource, MemorySource, block_source
 from identify.monitor.contact import CALIBRATION_MARGIN, CALIBRATION_QUANTILE
+from identify.monitor.defaults import DEFAULT_MONITOR_BLOCK
 from identify.monitor.log import MonitorInputError, calibrate, check_fit, excess
 from identify.observation.cross_validation import DEFAULT_BLOCKS
 from identify.estimation.least_squares import IdentificationError, weighted_least_squares
@@ -31,7 +33,7 @@ HELD_OUT_BLOCKS = DEFAULT_BLOCKS
 def held_out_thresholds(fit: Any, recordings: Sequence[Any], blocks: int = HELD_OUT_BLOCKS,
                         quantile: float = CALIBRATION_QUANTILE, margin: float = CALIBRATION_MARGIN) -> np.ndarray:
     """Thresholds per joint [N·m] from the fitted ``recordings`` (those of ``fit``, whose observation
-    matrix it holds): ``quantile`` of (|r_j| − d_j)⁺ over every held-out block, the residual of each
+    matrix it holds; recordings or recording files): ``quantile`` of (|r_j| − d_j)⁺ over every held-out block, the residual of each
     block from the fit refitted (its columns, its weighted least squares; WLS for a consistent fit)
     without that block's rows,
     times ``margin`` (as :func:`identify.monitor.log.calibrate`)."""
@@ -41,7 +43,8 @@ def held_out_thresholds(fit: Any, recordings: Sequence[Any], blocks: int = HELD_
                                 "recording to calibrate on")
     if list(obs.names) != list(fit.result.names):
         raise MonitorInputError("the fit's values do not follow its observation matrix's columns")
-    times = [np.asarray(rec.t, dtype=float) for rec in recordings]
+    sources = [block_source(rec, fit.robot, fit.model.convention, fit.gains) for rec in recordings]
+    times = [_times(src) for src in sources]
     start = min(float(t[0]) for t in times)
     span = max(float(t[-1]) for t in times) - start + 1e-9  # the cross-validation's folds (cv_scoring.time_blocks)
     ids = time_folds(obs.t[obs.samples], start, span, blocks)
@@ -54,11 +57,18 @@ def held_out_thresholds(fit: Any, recordings: Sequence[Any], blocks: int = HELD_
         except (IdentificationError, ValueError) as exc:
             raise MonitorInputError(f"held-out block {b + 1} of {blocks}: the fit without it fails ({exc})") from None
         fold = replace(fit, result=replace(fit.result, values=np.asarray(beta, dtype=float)))
-        for rec, t in zip(recordings, times):
+        for src, t in zip(sources, times):
             rows = np.flatnonzero(time_folds(t, start, span, blocks) == b)
-            if rows.size >= 3:
-                mags.append(excess(fold, rec.select(slice(int(rows[0]), int(rows[-1]) + 1))))
+            if rows.size >= 3:  # the held-out block's samples (a file: read again, that block only)
+                mags.append(excess(fold, next(src.windows([(int(rows[0]), int(rows[-1]) + 1)]))))
     return margin * np.quantile(np.concatenate(mags), quantile, axis=0)
+
+
+def _times(src: BlockSource) -> np.ndarray:
+    """The time stamps of a recording [s] (a file: its time column, read block by block)."""
+    if isinstance(src, MemorySource):
+        return np.asarray(src.rec.t, dtype=float)
+    return np.concatenate([np.asarray(b.t[b.meta["new_from"]:], dtype=float) for b in src.scan(DEFAULT_MONITOR_BLOCK)])
 
 
 def with_contact_thresholds(fit: Any, recordings: Sequence[Any], validation: Any = None) -> tuple[Any, str]:

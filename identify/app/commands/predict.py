@@ -11,8 +11,8 @@ from typing import Any
 
 from identify.io.defaults import DEFAULT_BLOCK
 
-from ..common import announce_robot, check_output, progress, read_recordings
-from .identify_runs import block_option, streamed
+from ..common import announce_robot, check_output, progress
+from .identify_runs import block_option
 
 
 def register(sub: Any) -> None:
@@ -28,7 +28,8 @@ def register(sub: Any) -> None:
     sp.add_argument("--out", help="CSV: t, measured tau1..n, predicted pred1..n, moving1..n (1/0)")
     sp.add_argument("--json", help="prediction errors as JSON")
     sp.add_argument("--block", type=block_option, default=DEFAULT_BLOCK,
-                    help=f"samples per block: a longer recording is predicted block by block (default {DEFAULT_BLOCK})")
+                    help=f"samples read, filtered and predicted at a time (default {DEFAULT_BLOCK}; the figures do not "
+                         f"depend on it)")
 
 
 def write_prediction(path: str, val: Any) -> None:
@@ -55,15 +56,7 @@ def run(args: argparse.Namespace) -> int:
     warning = f.model.check_robot(f.robot)
     if warning:
         progress(f"warning: {warning}")
-    if streamed([args.recording], args.block, None):  # a long log: predicted block by block
-        from identify.fitting.validation import predict_streamed
-
-        val = predict_streamed(f.robot, f.result, args.recording, base=f.base,
-                               block=args.block, convention=args.convention or f.model.convention, gains=f.gains,
-                               **f.filtering())
-    else:
-        rec = read_recordings([args.recording], f.robot, args.convention or f.model.convention, f.gains)[0]
-        val = f.predict(rec)
+    val = f.predict(args.recording, block=args.block, convention=args.convention)  # block by block, any length
     if val.still_message():
         progress(f"warning: {val.still_message()}")
     print(val.table())
