@@ -476,3 +476,22 @@ def test_the_reader_gives_the_same_recording_whatever_its_block(tmp_path, ur):
         assert small.meta["log"]["samples"] == whole.meta["log"]["samples"]
     # The window of a resampled log starts inside the burst's neighbourhood: the bridged samples are counted.
     assert read_log(path, ur, COLUMNS, block=7, resample=100.0).meta["log"]["bridged_samples"] > 0
+
+
+def test_a_converted_log_keeps_its_clock_and_counts(tmp_path, capsys):
+    """rx90 convert writes each block as it comes and fills the header fields at the end: the log's clock
+    at the first sample (t0_s) and the stale rows read back as identify.read_log reports them."""
+    t = jittered_times(200, seed=5)
+    lines = log_lines(t)
+    lines.insert(50, lines[49].replace(lines[49].split(",")[0], f"{t[49] + 0.004:.17g}", 1))  # a stale row
+    path = write_log(tmp_path / "log.csv", lines)
+    out = tmp_path / "rec.csv"
+    robot_file = ur10e_toml(tmp_path)
+    code, _, err = convert([str(path), "--robot", str(robot_file), "--columns", COLUMNS, "--no-header",
+                            "--resample", "100", "--out", str(out)], capsys)
+    assert code == 0, err
+    rec = read_recording(out, rx90sym.load_robot(str(robot_file)))
+    ref = read_log(path, ur10e_robot(), COLUMNS, resample=100.0)
+    assert rec.meta["log"]["t0_s"] == ref.meta["log"]["t0_s"] == pytest.approx(838.0)
+    assert rec.meta["log"]["stale_rows"] == ref.meta["log"]["stale_rows"] == 1
+    np.testing.assert_allclose(rec.q, ref.q, rtol=0, atol=1e-12)

@@ -32,7 +32,7 @@ from identify.io.columns import ColumnMap, parse_columns, rtde_columns, rtde_ref
 from identify.io.gains import DriveGains
 from identify.io.gaps import DEFAULT_MAX_GAP
 from identify.io.log_block_report import BlockReport
-from identify.io.log_fields import SPLITS_LISTED, format_splits
+from identify.io.log_fields import SPLITS_LISTED, file_fields
 from identify.io.log_rows import ABSURD, LogLines, check_header, header_cells, parse_rows
 from identify.io.log_stream import collected, log_parts, log_report
 from identify.io.logs import log_options
@@ -289,12 +289,11 @@ def convert_log(path: str | os.PathLike[str], robot: rx90sym.Robot, columns: str
                     fh.write(" " * width + "\n")
                 fh.write(",".join(names) + "\n")
             _write_rows(fh, table)
-        if fields_at is not None:
-            splits = report.result(max_gap)["gaps"]
-            values = {"stale_rows": str(report.stale), "split_gaps": format_splits(splits["splits"], splits["splits_total"])}
+        if fields_at is not None:  # the fields of identify.write_recording, known now
+            values = file_fields(report.result(max_gap))
             for key, at in fields_at.items():
                 fh.seek(at)
-                fh.write(f"{values[key]:<{_FIELD_WIDTHS[key]}}")
+                fh.write(f"{values.get(key, ''):<{_FIELD_WIDTHS[key]}}")
 
     atomic_write(out, write, binary=False)
     return {**_report(report, cmap, max_gap, resample, drive, conv, period), "blocks_of_lines": block}
@@ -312,8 +311,8 @@ def _report(report: BlockReport, cmap: ColumnMap, max_gap: float, resample: floa
 
 
 #: Characters kept in the header for the fields of identify.io.log_fields (filled in at the end): a
-#: count, and a count with SPLITS_LISTED gaps of two line numbers and a duration each.
-_FIELD_WIDTHS = {"stale_rows": 20, "split_gaps": 20 + SPLITS_LISTED * 64}
+#: count, a count with SPLITS_LISTED gaps of two line numbers and a duration each, a time [s].
+_FIELD_WIDTHS = {"stale_rows": 20, "split_gaps": 20 + SPLITS_LISTED * 64, "t0_s": 32}
 
 
 def _columns(rec: Recording, robot: rx90sym.Robot, convention: str, segment: int,
