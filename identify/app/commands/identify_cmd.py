@@ -196,7 +196,7 @@ def run(args: argparse.Namespace) -> int:
     from identify.io.gains import read_gains
 
     from ..spring_output import attach_spring
-    from .identify_output import print_fit, write_long_report, write_report
+    from .identify_output import print_fit, write_report
 
     _check(args)
     robot, spring_model = _robot(args)
@@ -246,7 +246,7 @@ def run(args: argparse.Namespace) -> int:
             progress(f"contact thresholds not stored ({why}): rx90 monitor will need --calibrate")
         result.save(args.json)
     if args.report:
-        write_report(args.report, result, recs) if recs else write_long_report(args, result)
+        write_report(args.report, result, recs or args.recordings, args.convention, args.block)
     if args.urdf_out:  # last: a refused (non-physical) link must not cost the fit's JSON and report
         _write_urdf(args, result)
     return 0

@@ -1,8 +1,7 @@
 """What ``rx90 identify`` prints and writes besides the fit file: the fit's tables and notes, the
-spring's summary, and the HTML report (of a fit of whole recordings, or of one made block by block)."""
+spring's summary, and the HTML report (the recordings read again block by block for its figures)."""
 from __future__ import annotations
 
-import argparse
 from types import SimpleNamespace
 from typing import TYPE_CHECKING, Any
 
@@ -76,61 +75,65 @@ def print_fit(f: Fit, recs: list, auto_delay: bool, prior: Any = None) -> None:
 def spring_text(f: Fit, recs: list) -> str:
     from identify.observation.spring_fit import BaseWithSpring, spring_summary
 
-    visited = recs or [SimpleNamespace(q=f.streamed.q_range)]  # a long log: its range, from the scan
+    # The range each joint visited: from the fit's scan (block by block), else from the recordings.
+    visited = [SimpleNamespace(q=f.streamed.q_range)] if f.streamed is not None else recs
     return spring_summary(f.robot, f.base if isinstance(f.base, BaseWithSpring) else None, f.result, visited)[1]
 
 
-def write_report(path: str, f: Fit, recs: list) -> None:
-    """The HTML report from the fit file's content (what --json writes) plus the recordings' extent."""
-    from ..report.writers import write_identify_report
-
-    record = {**f.to_json(), "data": data_record(recs, f.observation, f.validation)}
-    write_identify_report(path, f.robot, record, f.result, recs[0], f.validation, f.predict(recs[0]),
-                          spring_text(f, recs))
-
-
-#: Points of a long log's figures: its positions and torques are thinned to at most this many.
+#: Points of the figures: a recording's positions and torques are thinned to at most this many.
 REPORT_POINTS = 20_000
 
 
-def write_long_report(args: argparse.Namespace, f: Fit) -> None:
-    """The HTML report of a fit made block by block: the figures from the recordings read again block by
-    block and thinned to REPORT_POINTS samples (positions) and decimated samples (torques)."""
+def write_report(path: str, f: Fit, recordings: list, convention: str | None, block: int) -> None:
+    """The HTML report from the fit file's content (what --json writes) plus the recordings' extent and
+    figures: the recordings (recordings or files) read again block by block, thinned to REPORT_POINTS
+    samples (positions), the predictions to as many (torques)."""
     from dataclasses import replace
 
     from identify.io.blocks import block_source
 
     from ..report.writers import write_identify_report
 
-    progress(f"report: reading {args.recordings[0]} again block by block for the figures")
-    samples = [lay["samples"] for lay in f.recordings]
-    thin = [block_source(path, f.robot, args.convention, f.gains).thinned(args.block, -(-n // REPORT_POINTS))
-            for path, n in zip(args.recordings, samples)]
+    sources = [block_source(r, f.robot, convention, f.gains) for r in recordings]
+    samples = [lay["samples"] for lay in f.recordings] if len(f.recordings) == len(sources) else None
+    thin = [src.thinned(block, -(-(n or 1) // REPORT_POINTS))
+            for src, n in zip(sources, samples or [getattr(src, "n_samples", None) for src in sources])]
+    clocks = [_clock(r, src) for r, src in zip(recordings, sources)]
 
-    def shown(v: Any) -> Any:  # the torques of the figures: every k-th decimated sample
+    def shown(v: Any) -> Any:  # the torques of the figures: every k-th sample scored
         every = slice(None, None, -(-v.t.size // REPORT_POINTS))
         return replace(v, t=v.t[every], measured=v.measured[every], predicted=v.predicted[every],
-                       moving=v.moving[every])
+                       moving=v.moving[every], baseline_predicted=None if v.baseline_predicted is None
+                       else v.baseline_predicted[every])
 
-    record = {**f.to_json(), "data": data_record(thin, f.streamed, f.validation, samples)}
+    record = {**f.to_json(), "data": data_record(thin, f.observation or f.streamed, f.validation, samples, clocks)}
     held = shown(f.validation) if f.validation is not None else None
-    write_identify_report(args.report, f.robot, record, f.result, thin[0], held, shown(f.predict(args.recordings[0])),
-                          spring_text(f, []))
+    write_identify_report(path, f.robot, record, f.result, thin[0], held, shown(f.predict(recordings[0])),
+                          spring_text(f, thin))
 
 
-def data_record(recs: list, obs: Any, validation: Any = None, samples: list[int] | None = None) -> dict:
-    """What was fitted: per recording its source, samples, first and last time [s], duration [s] and
-    recorded rate [Hz] (1 / mean period); the share of samples where each joint moves (after
-    filtering); the held-out samples' first and last time [s]. ``samples``: the recordings' sample
-    counts when ``recs`` are thinned (a long log)."""
+def _clock(rec: Any, src: Any) -> float:
+    """The log's clock [s] at a recording's first sample (a recording's meta, or a file's ``t0_s`` field)."""
+    from identify.fitting.validation import log_clock
+
+    return log_clock(rec) or float((getattr(src, "log", None) or {}).get("t0_s") or 0.0)
+
+
+def data_record(recs: list, obs: Any, validation: Any = None, samples: list[int] | None = None,
+                clocks: list[float] | None = None) -> dict:
+    """What was fitted: per recording its source, samples, first and last time [s] (on the log's clock:
+    ``clocks`` per recording, default each recording's own), duration [s] and recorded rate [Hz]
+    (1 / mean period); the share of samples where each joint moves (after filtering); the held-out
+    samples' first and last time [s]. ``samples``: the recordings' sample counts when ``recs`` are
+    thinned."""
     from identify.fitting.validation import log_clock
 
     counts = samples if samples is not None else [len(r.t) for r in recs]
-    # First and last times on the logs' own clocks (a recording starts at 0 s: identify.io.logs).
-    rows = [{"source": src, "samples": int(k), "t_first_s": float(r.t[0]) + log_clock(r),
-             "t_last_s": float(r.t[-1]) + log_clock(r),
+    clocks = clocks if clocks is not None else [log_clock(r) for r in recs]
+    # First and last times on the logs' own clocks (a recording starts at 0 s: identify.io.log_stream).
+    rows = [{"source": r.source, "samples": int(k), "t_first_s": float(r.t[0]) + c, "t_last_s": float(r.t[-1]) + c,
              "duration_s": float(r.t[-1] - r.t[0]), "rate_hz": float((k - 1) / (r.t[-1] - r.t[0]))}
-            for r, src, k in zip(recs, obs.sources, counts)]
+            for r, k, c in zip(recs, counts, clocks)]
     share = None if obs.moving_fraction is None else [float(v) for v in obs.moving_fraction]
     held = None if validation is None else {"source": validation.source,
                                             "t_first_s": float(validation.t[0]) + validation.t0_s,
