@@ -108,7 +108,7 @@ def fit(robot: rx90sym.Robot, recordings: Sequence[Any], processing: Processing 
     options = p.observation_options()
     choice = None
     if p.cross_validates and observation is None:
-        from identify.observation.cross_validation import choose_processing
+        from identify.estimation.stream_cv import choose_processing
 
         # Scored at the lag the fit compensates; "auto": the lag estimated on the default processing
         # (W and Y filtered alike, it hardly depends on the cut-off; one delay search).
