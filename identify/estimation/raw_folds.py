@@ -128,14 +128,15 @@ def _scored_rows(blocks: int, span: RawSpan, t: np.ndarray, tau: np.ndarray, x: 
     return out
 
 
-def window_factors(robot: rx90sym.Robot, rec: Any, window: Any, plan: Plan, settings: StreamSettings, regressor: Any,
+def window_factors(robot: rx90sym.Robot, rec: Any, window: Any, plan: Plan, settings: StreamSettings, columns: Any,
                    names: Sequence[str], span: RawSpan, bounds: tuple[float, float] | None,
                    drop: bool) -> tuple[list, list, _Edge | None, _Edge | None]:
     """One window of a candidate (the streamed fit's :func:`~identify.observation.stream.piece`, a Dask
-    task when distributed): per (time block, joint) the factors of its fitted rows ``[W | 1 | Y]`` and of
+    task when distributed; ``columns``: what gives the regressor, ``regressor_batch``, of the columns
+    ``names``): per (time block, joint) the factors of its fitted rows ``[W | 1 | Y]`` and of
     the raw samples it scores (:func:`_scored_rows`), and its first and last rows with the raw samples
     beyond them (None at a segment's end: there the end row is held, scored here)."""
-    m = piece(robot, rec, window, plan, settings.cutoff, settings, regressor, names, 0).motion
+    m = piece(robot, rec, window, plan, settings.cutoff, settings, columns.regressor_batch, names, 0).motion
     delay, blocks = settings.delay, span.blocks
     ids = np.clip(time_folds(m.t + delay, span.start, span.span, blocks), 0, blocks - 1)
     keep = m.rows(drop)

@@ -33,6 +33,7 @@ from __future__ import annotations
 import math
 import time
 from dataclasses import replace
+from types import SimpleNamespace
 from typing import Any, Sequence
 
 import rx90sym
@@ -198,12 +199,10 @@ def _score(cand: Candidate, ctx: _Context) -> tuple[float, tuple[float, ...], tu
     factors = RawFactors(robot.n, len(names), ctx.span)
     if client is not None:  # the robot and its compiled columns sent once to each worker
         robot, columns = client.scatter([robot, columns], broadcast=True, hash=False)
-        regressor = columns.regressor_batch
-    else:  # one reused buffer for the full-rate regressor (identify.observation.matrix.column_regressor's)
-        regressor = columns.regressor_workspace().evaluate if hasattr(columns, "regressor_workspace") \
-            else columns.regressor_batch
+    elif hasattr(columns, "regressor_workspace"):  # one reused buffer for the full-rate regressor, as in memory
+        columns = SimpleNamespace(regressor_batch=columns.regressor_workspace().evaluate)
     index = {id(src): k for k, src in enumerate(ctx.sources)}
-    tasks = ((robot, rec, window, plan, settings, regressor, names, ctx.span,
+    tasks = ((robot, rec, window, plan, settings, columns, names, ctx.span,
               ctx.span.bounds.get((index[id(src)], plan.start)), drop)
              for src, (plan, window, rec, _) in _with_source(ctx.sources, plans))
     for parts in in_order(window_factors, tasks, client, 4 if client is not None else 1):
