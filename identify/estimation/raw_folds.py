@@ -116,14 +116,14 @@ def _scored_rows(blocks: int, span: RawSpan, t: np.ndarray, tau: np.ndarray, x: 
     at the prediction times ``xp`` interpolated at ``x`` (= t)."""
     if t.size == 0:
         return []
-    W = onto(x, xp, Phi)
     s = onto(x, xp, spring)
     ids = time_folds(t, span.start, span.span, blocks)
     out = []
-    for b in np.unique(ids):
-        here = ids == b
-        for j in range(Phi.shape[1]):
-            rows = np.column_stack([W[here, j, :], np.ones(int(here.sum())), tau[here, j] + s[here, j], tau[here, j]])
+    for j in range(Phi.shape[1]):  # one joint's interpolated rows at a time: (m, c), not (m, n, c)
+        W = onto(x, xp, Phi[:, j, :])
+        for b in np.unique(ids):
+            here = ids == b
+            rows = np.column_stack([W[here], np.ones(int(here.sum())), tau[here, j] + s[here, j], tau[here, j]])
             out.append((int(b), j, JointFactors.block_factor(rows), rows.shape[0]))
     return out
 

@@ -52,14 +52,14 @@ from identify.signal.filtering import EDGE_PERIODS
 
 __all__ = ["choose_processing", "choose_processing_streamed", "grid_of_scans", "scans_for_choice"]
 
-#: Lowest cut-off of the grid [Hz] (candidate_grid's floor): the scan keeps each segment's first and
+#: Lowest cut-off of the grid [Hz] (the knee's floor): the scan keeps each segment's first and
 #: last 2 x EDGE_PERIODS / LOWEST_CUTOFF seconds of times, beyond the filters' longest edge.
 LOWEST_CUTOFF = 2.0
 KEEP_SECONDS = 2.0 * EDGE_PERIODS / LOWEST_CUTOFF
 
 
 def grid_of_scans(scans: Sequence[Scan], default_decimate: float | None) -> tuple[float, list[Candidate]]:
-    """(knee [Hz], candidates) of :func:`~identify.observation.cross_validation.candidate_grid` from scans
+    """(knee [Hz], candidates of :func:`~identify.observation.cross_validation.grid_around`) from scans
     made with the 2 Hz floor: the knee the largest segment cut-off over segments of 64 samples or more,
     the rate the lowest segment rate, the default cut-off the automatic one with ``default_decimate``."""
     segments = [g for s in scans for g in s.segments]

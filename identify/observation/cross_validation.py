@@ -8,7 +8,7 @@ the position filter, with the decimation to about 2.5 fc so that the parallel fi
 1. the recordings' time span is cut into ``blocks`` contiguous blocks of equal duration;
 2. for each block, the base parameters are fitted (WLS) on the rows of the other blocks and the
    torques of the held-back block are predicted;
-3. every candidate is scored against the **raw measured torques** (:mod:`identify.observation.cv_scoring`):
+3. every candidate is scored against the **raw measured torques** (:mod:`identify.estimation.raw_folds`):
    its held-back prediction, at its own cut-off and decimation, is interpolated (linearly) onto the
    recordings' own time stamps and compared with the torques the log holds, unfiltered, on the same
    samples for every candidate (measured, beyond the edges of the grid's lowest cut-off): no
@@ -16,9 +16,9 @@ the position filter, with the decimation to about 2.5 fc so that the parallel fi
    noise a cut-off lets into the prediction counts. The score of joint j is 100 ||tau_j - tau^_j|| /
    ||tau_j|| over every held-back block, the candidate's score the mean over joints. (Before, every
    candidate's rows were decimated to the grid's highest decimated rate and scored against torques
-   filtered like them: ``choose_processing(raw=False)``, what the block-by-block choice still does.
-   An earlier version low-passed prediction and torque at the lowest cut-off: it hid the prediction
-   noise of the high cut-offs, and on the Panda twin kept 20 Hz where 5 Hz was 5x better.)
+   filtered like them. An earlier version low-passed prediction and torque at the lowest cut-off: it
+   hid the prediction noise of the high cut-offs, and on the Panda twin kept 20 Hz where 5 Hz was 5x
+   better.)
 
 The grid is small: the knee times (0.5, 1, 2), within [10 Hz (:data:`MIN_GRID_CUTOFF`, the plain
 baseline's cut-off: a knee is the fitted motion's, and a prediction of another motion filtered below
@@ -46,8 +46,9 @@ not scored): a cap on the work, not on the clock, so that the same log gets the 
 machine under any load (a 60 s wall-clock cap scored 5 of 5 cut-offs of one 10.5 min log in one run
 and 4 of 5 in another). ``time_cap`` adds a wall-clock cap on request. The rest policies and the
 first cut-off are always scored. Bridged samples and rest rows follow the fit's rules (the
-same rows as W). :func:`select_processing` is this selection whatever scores the candidates (in
-memory here; block by block in :mod:`identify.estimation.stream_cv`).
+same rows as W). :func:`select_processing` is this selection whatever scores the candidates; the
+choice itself, on recordings in memory or read block by block (one implementation), is
+:mod:`identify.estimation.stream_cv` (``choose_processing``, ``choose_processing_streamed``).
 """
 from __future__ import annotations
 
@@ -153,17 +154,17 @@ class Budget:
         return None
 
 
-Scorer = Callable[[Candidate], tuple[float, tuple[float, ...], tuple[tuple[float, ...], ...]]]  # as score_raw's
+Scorer = Callable[[Candidate], tuple[float, tuple[float, ...], tuple[tuple[float, ...], ...]]]  # (score, per joint, per held-back block)
 
 
 def select_processing(score: Scorer, knee: float, grid: Sequence[Candidate], reference: float | None, blocks: int,
                       min_velocity: float | None, rest: RestPolicy | None, budget: Budget,
                       policies: Sequence[str] = SCORED_REST) -> ProcessingChoice:
-    """The selection of :func:`choose_processing` (and of the block-by-block choice,
-    :mod:`identify.estimation.stream_cv`) whatever computes the scores: the rest policy per joint at
-    the knee where it is open, the cut-offs from the knee outwards within the ``budget``, the
-    default unless clearly beaten. ``grid``: the knee's candidate first, the default among them;
-    ``reference``: the common scoring rate [Hz] (None: not decimated)."""
+    """The selection of the cross-validated choice (:mod:`identify.estimation.stream_cv`) whatever
+    computes the scores: the rest policy per joint at the knee where it is open, the cut-offs from
+    the knee outwards within the ``budget``, the default unless clearly beaten. ``grid``: the knee's
+    candidate first, the default among them; ``reference``: what the candidates were scored against
+    (:data:`RAW`: the raw measured torques; a rate [Hz]: rows decimated to it; None: not decimated)."""
     start = time.perf_counter()
     first: list[Candidate] = []
     rest_scores: tuple[tuple[str, tuple[float, ...]], ...] = ()
