@@ -37,7 +37,7 @@ from identify.observation.candidates import Candidate
 from identify.observation.cv_scoring import block_scores, fold_wls, time_folds
 from identify.observation.stream import Plan, Scan, StreamSettings, piece
 from identify.signal.filtering import EDGE_PERIODS
-from identify.signal.interpolate import onto
+from identify.signal.interpolate import onto, onto_weights
 
 __all__ = ["RawSpan", "RawFactors", "raw_span", "window_factors"]
 
@@ -116,11 +116,12 @@ def _scored_rows(blocks: int, span: RawSpan, t: np.ndarray, tau: np.ndarray, x: 
     at the prediction times ``xp`` interpolated at ``x`` (= t)."""
     if t.size == 0:
         return []
-    s = onto(x, xp, spring)
+    weights = onto_weights(x, xp) if xp.size > 1 else None
+    s = onto(x, xp, spring, weights)
     ids = time_folds(t, span.start, span.span, blocks)
     out = []
     for j in range(Phi.shape[1]):  # one joint's interpolated rows at a time: (m, c), not (m, n, c)
-        W = onto(x, xp, Phi[:, j, :])
+        W = onto(x, xp, Phi[:, j, :], weights)
         for b in np.unique(ids):
             here = ids == b
             rows = np.column_stack([W[here], np.ones(int(here.sum())), tau[here, j] + s[here, j], tau[here, j]])
