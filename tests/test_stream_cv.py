@@ -19,7 +19,7 @@ from identify.observation.cross_validation import Candidate, block_factors, fold
 from identify.observation.matrix import column_regressor, filtered_motions, stack_rows
 from identify.observation.offsets import offset_joints
 from identify.observation.stream import StreamSettings, plan_windows, scan
-from identify.estimation.stream_cv import choose_processing, choose_processing_streamed
+from identify.estimation.stream_cv import choose_processing, choose_processing_streamed, scans_for_choice
 from identify.signal.filtering import EDGE_PERIODS
 from motions import multisine
 from rx90sym.host_log import HostFaults, host_log, write_host_log
@@ -171,3 +171,20 @@ def test_the_streamed_choice_on_dask_equals_the_serial_one(rx90, rx90_base):
         [(c.cutoff, c.rest, c.score, c.per_block) for c in serial.candidates]
     # the knee (about 2 Hz) below the grid's 10 Hz floor: two rest policies at 10 Hz and the default
     assert spread.chosen.cutoff == serial.chosen.cutoff and len(serial.candidates) >= 3
+
+
+def test_a_long_segment_gets_the_in_memory_choice_from_its_first_and_last_seconds(rx90, rx90_base):
+    """10 s in one segment read in blocks of 500 samples: the scan keeps only its first and last 3 s
+    of times, where the raw samples scored start and end; the choice (torque offsets and a 4 ms
+    delay included) is the in-memory one, block by block as in one block."""
+    run = rx90sym.twin.simulate(rx90, multisine(rx90, 5), duration=10.0, noise="realistic", seed=5)
+    options = dict(base=rx90_base, delay=0.004, offsets=offset_joints(rx90, rx90_base))
+    src = block_source(run, rx90)
+    got = choose_processing_streamed(rx90, [src], block=BLOCK, **options)
+    assert all(g.head.size + g.tail.size < g.samples for s in scans_for_choice([src], BLOCK) for g in s.segments)
+    whole = choose_processing(rx90, [run], **options)
+    assert (got.chosen.cutoff, got.chosen.decimate_to, got.chosen.rest, got.offsets) == \
+        (whole.chosen.cutoff, whole.chosen.decimate_to, whole.chosen.rest, whole.offsets)
+    for a, b in zip(got.candidates + (got.offset_candidate,), whole.candidates + (whole.offset_candidate,)):
+        _same_scores([a.score, *[v for row in a.per_block for v in row]],
+                     [b.score, *[v for row in b.per_block for v in row]])

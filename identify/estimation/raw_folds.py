@@ -80,15 +80,15 @@ def raw_span(scans: Sequence[Scan], grid: Sequence[Candidate], blocks: int, dela
 def _scored_ends(g: Any, lo: float, hi: float, source: str) -> tuple[float, float, int]:
     """(first, last time [s], number) of the measured samples of segment ``g`` within [lo, hi], from the
     times its scan kept (the number is at least 2 when unseen samples lie between its head and tail)."""
-    whole = g.head.size + g.tail.size >= g.samples  # every sample's time seen
-    t = np.concatenate([g.head, g.tail[g.head.size + g.tail.size - g.samples:]]) if whole else None
-    if whole:
-        ok = np.concatenate([g.head_measured, g.tail_measured[g.head.size + g.tail.size - g.samples:]])
+    overlap = g.head.size + g.tail.size - g.samples
+    if overlap >= 0:  # every sample's time seen
+        t = np.concatenate([g.head, g.tail[overlap:]])
+        ok = np.concatenate([g.head_measured, g.tail_measured[overlap:]])
         kept = t[ok & (t >= lo) & (t <= hi)]
         return (float(kept[0]), float(kept[-1]), kept.size) if kept.size else (math.nan, math.nan, 0)
     head = g.head[g.head_measured & (g.head >= lo) & (g.head <= hi)]
     tail = g.tail[g.tail_measured & (g.tail >= lo) & (g.tail <= hi)]
-    if not (head.size and tail.size) or g.head[-1] < lo or g.tail[0] > hi:
+    if not (head.size and tail.size):
         raise ValueError(f"{source}: no measured sample found within the first and last "
                          f"{g.head[-1] - g.head[0]:.3g} s of a segment beyond the filters' edges "
                          f"({lo - g.head[0]:.3g} s): the cross-validation cannot place its time blocks")
