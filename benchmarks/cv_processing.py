@@ -31,7 +31,7 @@ sys.path[:0] = [str(ROOT), str(ROOT / "benchmarks"), str(ROOT / "tests")]
 
 import rx90sym  # noqa: E402
 from identify import Processing, fit, predict, split  # noqa: E402
-from identify.observation.cross_validation import choose_processing  # noqa: E402
+from identify.estimation.stream_cv import choose_processing  # noqa: E402
 from identify.observation.processing import friction_label, rest_label  # noqa: E402
 from identify.signal.filtering import EDGE_PERIODS  # noqa: E402
 from motions import multisine, panda_truth  # noqa: E402

@@ -9,7 +9,9 @@ import pytest
 
 import rx90sym
 from identify import Processing, fit, predict, split
-from identify.observation.cross_validation import Candidate, choose_processing
+import identify.estimation.stream_cv as scv
+from identify.estimation.stream_cv import choose_processing
+from identify.observation.cross_validation import Candidate
 from motions import multisine
 
 
@@ -66,12 +68,12 @@ def test_a_uniform_first_stage_policy_does_not_override_the_per_joint_rule(rx90,
     blocks = {"zero-coulomb": (5.0, 5.5, 4.5, 5.2, 4.8), "crossing": (4.2, 5.9, 4.0, 5.6, 4.8)}
     default = (5.2, 5.4, 4.7, 5.3, 4.9)
 
-    def fake_score(robot, recordings, cand, base, reference, n_blocks, options):
+    def fake_score(cand, context):
         per = default if cand.label == cv.DEFAULT_LABEL else blocks[cand.rest]
-        per_block = tuple((v,) * robot.n for v in per)
-        return float(np.mean(per)), (float(np.mean(per)),) * robot.n, per_block
+        per_block = tuple((v,) * context.robot.n for v in per)
+        return float(np.mean(per)), (float(np.mean(per)),) * context.robot.n, per_block
 
-    monkeypatch.setattr(cv, "_score", fake_score)
+    monkeypatch.setattr(scv, "_score", fake_score)
     rec = rx90sym.twin.simulate(rx90, multisine(rx90, 3), duration=4.0, noise="realistic", seed=3)
     grid = [Candidate(10.0, 25.0), Candidate(20.0, 50.0, label=cv.DEFAULT_LABEL)]
     choice = choose_processing(rx90, [rec], base=rx90_base, min_velocity=0.05, rest=None, candidates=grid)
@@ -81,12 +83,11 @@ def test_a_uniform_first_stage_policy_does_not_override_the_per_joint_rule(rx90,
     assert any(c.rest == "crossing" and c.score < 0.98 * 5.1 for c in choice.candidates)
 
 
-def _fake_scores(cv):
+def _fake_scores(cand, context):
     """A scorer by hand (the fits are tested above): every candidate scores by its cut-off."""
-    def fake_score(robot, recordings, cand, base, reference, n_blocks, options):
-        per = tuple(4.0 + 0.01 * cand.cutoff + 0.1 * b for b in range(n_blocks))
-        return float(np.mean(per)), (float(np.mean(per)),) * robot.n, tuple((v,) * robot.n for v in per)
-    return fake_score
+    n = context.robot.n
+    per = tuple(4.0 + 0.01 * cand.cutoff + 0.1 * b for b in range(context.span.blocks))
+    return float(np.mean(per)), (float(np.mean(per)),) * n, tuple((v,) * n for v in per)
 
 
 def test_the_choice_does_not_depend_on_the_wall_clock(rx90, rx90_base, monkeypatch):
@@ -95,7 +96,7 @@ def test_the_choice_does_not_depend_on_the_wall_clock(rx90, rx90_base, monkeypat
     10.5 min log in one run and 4 of 5 in another). Here the clock jumps 1000 s at every reading."""
     import identify.observation.cross_validation as cv
 
-    monkeypatch.setattr(cv, "_score", _fake_scores(cv))
+    monkeypatch.setattr(scv, "_score", _fake_scores)
     rec = rx90sym.twin.simulate(rx90, multisine(rx90, 3), duration=4.0, noise="realistic", seed=3)
     calm = choose_processing(rx90, [rec], base=rx90_base, min_velocity=0.05)
     clock = iter(range(0, 10 ** 9, 1000))
@@ -115,7 +116,7 @@ def test_the_row_cap_stops_the_cut_offs_after_the_rest_policies_and_the_first(rx
     the others listed as not scored with the count that stopped them; without a cap, all are."""
     import identify.observation.cross_validation as cv
 
-    monkeypatch.setattr(cv, "_score", _fake_scores(cv))
+    monkeypatch.setattr(scv, "_score", _fake_scores)
     rec = rx90sym.twin.simulate(rx90, multisine(rx90, 3), duration=4.0, noise="realistic", seed=3)
     rows = cv.observation_rows(rx90, [rec])
     assert rows == rx90.n * rec.n_samples

@@ -10,30 +10,41 @@ import pytest
 
 import rx90sym
 from identify import Processing, fit
-from identify.observation.cross_validation import Candidate, choose_processing
+import identify.estimation.stream_cv as scv
+from identify.estimation.stream_cv import choose_processing
+from identify.observation.cross_validation import Candidate, block_factors, fold_wls
+from identify.observation.matrix import observation_matrix
 from identify.estimation.friction_choice import choose_friction
 from motions import multisine
 from rx90sym.recording import Recording
 from test_friction_choice import OPTIONS, coulomb_twin
 
 
-def _processing_blocks(robot, recordings, base):
-    """Per-block scores of the one candidate of OPTIONS' processing (no decimation: scored at the full rate),
-    against the filtered torques as the friction choice scores its forms (all at one processing, on the
-    same rows: raw=False; the processing choice's default scores against the raw torques)."""
-    choice = choose_processing(robot, recordings, base=base, min_velocity=OPTIONS["min_velocity"],
-                               rest=OPTIONS["rest"], candidates=[Candidate(OPTIONS["cutoff"], None)], raw=False)
-    return np.asarray(choice.chosen.per_block)
+def _time_fold_blocks(robot, recordings, base):
+    """Per-block relative errors [%] of OPTIONS' processing, its rows cut into 5 blocks of equal
+    duration over the span of both recordings' times (a row's block is that of its time, whichever
+    recording it comes from), each held back in turn and predicted by the WLS fit of the others."""
+    obs = observation_matrix(robot, recordings, base=base, **{k: v for k, v in OPTIONS.items() if k != "delay"})
+    t = obs.t[obs.samples]
+    ids = np.minimum((5 * (t - t.min()) / (t.max() - t.min() + 1e-9)).astype(int), 4)
+    factors = block_factors(obs.W, obs.Y, obs.joint, ids, range(5), robot.n)
+    out = np.zeros((5, robot.n))
+    for b in range(5):
+        beta = fold_wls(factors, b, robot.n)
+        for j in range(robot.n):
+            rows = (ids == b) & (obs.joint == j)
+            out[b, j] = 100 * np.linalg.norm(obs.W[rows] @ beta - obs.Y[rows]) / np.linalg.norm(obs.Y[rows])
+    return out
 
 
-def test_the_friction_choice_scores_coulomb_on_the_processing_choices_folds(rx90, rx90_base):
-    """Two recordings of 4 and 10 s: Coulomb's per-block errors in the friction choice are those of the
-    same processing in the processing choice (the same rows, weights and folds). Cut by sample index,
-    the friction choice's first block held most of the first recording and a block's error differed by up to 140 %."""
+def test_the_friction_choice_cuts_its_folds_by_time_over_all_recordings(rx90, rx90_base):
+    """Two recordings of 4 and 10 s: Coulomb's per-block errors in the friction choice are those of
+    folds cut by time over both (the same rows, weights and folds). Cut by sample index, the friction
+    choice's first block held most of the first recording and a block's error differed by up to 140 %."""
     recordings = [coulomb_twin(rx90, 0, duration=4.0), coulomb_twin(rx90, 1, duration=10.0)]
     friction = choose_friction(rx90, recordings, rx90_base, OPTIONS, forms=("coulomb",))
     coulomb = np.asarray(friction.candidates[0].per_block)
-    np.testing.assert_allclose(coulomb, _processing_blocks(rx90, recordings, rx90_base), rtol=1e-9)
+    np.testing.assert_allclose(coulomb, _time_fold_blocks(rx90, recordings, rx90_base), rtol=1e-9)
 
 
 def _lagged_twin(robot, seed: int, lag: float, duration: float = 8.0, rate: float = 100.0):
@@ -60,11 +71,9 @@ def test_the_processing_is_scored_at_the_fits_delay(rx90, rx90_base, monkeypatch
     """Torques logged 10 ms late (one period), the fit given that delay or "auto" (estimated on the
     default processing): its candidate scores as on the run logged in step, not as at delay 0 (the
     former scoring). One candidate in the grid (the scoring is the library's; the test is the lag)."""
-    import identify.observation.cross_validation as cv
-
     truth, late = _lagged_twin(rx90, 2, 0.01)
     cand = Candidate(10.0, None)
-    monkeypatch.setattr(cv, "candidate_grid", lambda recordings, default: (10.0, [cand]))
+    monkeypatch.setattr(scv, "grid_of_scans", lambda scans, default: (10.0, [cand]))
     p = Processing(delay=delay, estimate_delay=False, min_velocity=0.02, rest="zero-coulomb", friction="coulomb")
     chosen = fit(rx90, [late], p, base=rx90_base).choice["chosen"]["score_pct"]
 

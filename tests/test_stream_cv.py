@@ -1,6 +1,7 @@
 """The processing chosen by blocked cross-validation on a log read block by block
-(identify.estimation.stream_cv) against the in-memory choice on the same recording
-(identify.observation.cross_validation.choose_processing), and through ``rx90 identify``."""
+(identify.estimation.stream_cv.choose_processing_streamed) against the same choice on the recording
+in memory (one block), against a direct computation of one candidate's raw-torque score on the whole
+recording, and through ``rx90 identify``."""
 from __future__ import annotations
 
 import json
@@ -14,9 +15,12 @@ import rx90sym
 from identify.app.cli import main
 from identify.io.blocks import block_source
 from identify import read_log
-from identify.observation.cross_validation import choose_processing
+from identify.observation.cross_validation import Candidate, block_factors, fold_wls, time_folds
+from identify.observation.matrix import column_regressor, filtered_motions, stack_rows
+from identify.observation.offsets import offset_joints
 from identify.observation.stream import StreamSettings, plan_windows, scan
-from identify.estimation.stream_cv import choose_processing_streamed
+from identify.estimation.stream_cv import choose_processing, choose_processing_streamed, scans_for_choice
+from identify.signal.filtering import EDGE_PERIODS
 from motions import multisine
 from rx90sym.host_log import HostFaults, host_log, write_host_log
 
@@ -25,8 +29,8 @@ from rx90sym.host_log import HostFaults, host_log, write_host_log
 BLOCK, CLI_BLOCK = 500, 1000
 #: Scores [%] of the two paths agree to this relative tolerance. The filters agree to ~1e-13 at the
 #: blocks' overlaps (their margins) and the knees to 1e-13 (each segment's rate from its own steps);
-#: the fold fits amplify that by the conditioning of the base parameters: measured 4e-10 relative on
-#: the candidates' scores, 1.2e-9 on the per-block ones.
+#: the fold fits amplify that by the conditioning of the base parameters: measured 4e-12 relative on
+#: the scores (per joint and per held-back block included; 3e-10 on a TX40 twin with offsets).
 RTOL = 1e-6
 
 
@@ -48,8 +52,7 @@ def lossy_rx90(rx90, tmp_path_factory):
 
 @pytest.fixture(scope="module")
 def in_memory(rx90, rx90_base, lossy_rx90):
-    # the block-by-block choice still scores at the common rate (not against the raw torques yet)
-    return choose_processing(rx90, [lossy_rx90[1]], base=rx90_base, raw=False)
+    return choose_processing(rx90, [lossy_rx90[1]], base=rx90_base, offsets=offset_joints(rx90, rx90_base))
 
 
 def _same_scores(a, b) -> None:
@@ -64,8 +67,11 @@ def test_the_streamed_choice_equals_the_in_memory_one(rx90, rx90_base, lossy_rx9
     segments = scan(src, BLOCK, None).segments
     plans, _ = plan_windows(scan(src, BLOCK, None), 4.0, StreamSettings(4.0, 50.0, block=BLOCK))
     assert len(segments) == 3 and all(len(p.windows) >= 2 for p in plans)  # blocks inside every segment
-    got = choose_processing_streamed(rx90, [src], base=rx90_base, block=BLOCK)
+    got = choose_processing_streamed(rx90, [src], base=rx90_base, block=BLOCK, offsets=offset_joints(rx90, rx90_base))
     assert got.knee == pytest.approx(in_memory.knee, rel=1e-9)
+    assert got.offsets == in_memory.offsets and got.reference_hz == in_memory.reference_hz == "raw"
+    _same_scores([v for row in got.offset_candidate.per_block for v in row],
+                 [v for row in in_memory.offset_candidate.per_block for v in row])
     assert [(c.decimate_to, c.rest, c.label) for c in got.candidates] == \
         [(c.decimate_to, c.rest, c.label) for c in in_memory.candidates]
     for a, b in zip(got.candidates, in_memory.candidates):
@@ -74,12 +80,59 @@ def test_the_streamed_choice_equals_the_in_memory_one(rx90, rx90_base, lossy_rx9
         _same_scores(a.per_joint, b.per_joint)
         _same_scores([v for row in a.per_block for v in row], [v for row in b.per_block for v in row])
     assert got.chosen.rest == in_memory.chosen.rest and got.chosen.label == in_memory.chosen.label
+    assert any(c.decimate_to is None for c in got.candidates if not math.isnan(c.score))  # "no decimation" too
     assert got.chosen.cutoff == pytest.approx(in_memory.chosen.cutoff, rel=1e-9)
     assert [name for name, _ in got.rest_scores] == [name for name, _ in in_memory.rest_scores]
     # The choice is not a formality on this log: the candidates' scores differ by far more than the
     # tolerance, and the default (20 Hz) is beaten.
     scores = [c.score for c in got.candidates if not math.isnan(c.score)]
     assert max(scores) > 2 * min(scores) and got.chosen.label != "(default)"
+
+
+def _direct_score(robot, base, rec, cand, blocks, delay):
+    """(score, per block and joint) of one candidate computed on the whole recording in the plainest
+    way: its rows (filtered_motions), the fold fits on the other blocks' rows, each held-back
+    prediction put onto the recording's own measured time stamps by numpy.interp, against the raw
+    torques, on the samples 3 periods of the cut-off, two decimated periods and the delay from
+    each segment's ends."""
+    names, regressor = column_regressor(robot, base)
+    motions, _, used = filtered_motions(robot, [rec], cand.cutoff, cand.decimate_to, True, regressor, names, 0.05,
+                                        cand.rest, delay)
+    margin = EDGE_PERIODS / cand.cutoff + 2.0 / cand.decimate_to + abs(delay)
+    targets = []
+    for piece in used:
+        t = np.asarray(piece.t)
+        keep = (t >= t[0] + margin) & (t <= t[-1] - margin) & piece.measured_mask
+        targets.append((t[keep], np.asarray(piece.torques)[keep]))
+    start = min(t[0] for t, _ in targets)
+    span = max(t[-1] for t, _ in targets) - start + 1e-9
+    ids = [np.clip(time_folds(m.t + delay, start, span, blocks), 0, blocks - 1) for m in motions]
+    W, Y, joint, samples = stack_rows([m.Phi for m in motions], [m.Y for m in motions],
+                                      masks=[m.rows(False) for m in motions])
+    factors = block_factors(W, Y, joint, np.concatenate(ids)[samples], range(blocks), robot.n)
+    err2, ref2 = np.zeros((blocks, robot.n)), np.zeros((blocks, robot.n))
+    for b in range(blocks):
+        beta = fold_wls(factors, b, robot.n)
+        for m, (t, tau) in zip(motions, targets):
+            here = time_folds(t, start, span, blocks) == b
+            pred = m.Phi @ beta - robot.spring_torque_batch(m.q)[:, :, 0]
+            for j in range(robot.n):
+                err2[b, j] += np.sum((tau[here, j] - np.interp(t[here], m.t + delay, pred[:, j])) ** 2)
+                ref2[b, j] += np.sum(tau[here, j] ** 2)
+    return float(np.mean(100 * np.sqrt(err2.sum(0) / ref2.sum(0)))), 100 * np.sqrt(err2 / ref2)
+
+
+def test_a_candidate_scores_its_prediction_interpolated_onto_the_raw_torques(rx90, rx90_base, lossy_rx90):
+    """One candidate read in blocks of 500 samples (every segment in two or more windows, bridged
+    samples, a torque delay of 6 ms: 1.5 samples) scores what the whole recording gives when its
+    held-back prediction is interpolated by numpy onto the raw measured torques."""
+    _, rec = lossy_rx90
+    cand = Candidate(12.0, 50.0, rest="zero-coulomb")
+    got = choose_processing_streamed(rx90, [block_source(rec, rx90)], base=rx90_base, min_velocity=0.05,
+                                     rest="zero-coulomb", block=BLOCK, candidates=[cand], delay=0.006).chosen
+    score, per_block = _direct_score(rx90, rx90_base, rec, cand, 5, 0.006)
+    assert got.score == pytest.approx(score, rel=RTOL)
+    np.testing.assert_allclose(np.asarray(got.per_block), per_block, rtol=RTOL)
 
 
 def test_the_cli_cross_validates_a_long_log(rx90, lossy_rx90, in_memory, tmp_path, capsys):
@@ -118,3 +171,20 @@ def test_the_streamed_choice_on_dask_equals_the_serial_one(rx90, rx90_base):
         [(c.cutoff, c.rest, c.score, c.per_block) for c in serial.candidates]
     # the knee (about 2 Hz) below the grid's 10 Hz floor: two rest policies at 10 Hz and the default
     assert spread.chosen.cutoff == serial.chosen.cutoff and len(serial.candidates) >= 3
+
+
+def test_a_long_segment_gets_the_in_memory_choice_from_its_first_and_last_seconds(rx90, rx90_base):
+    """10 s in one segment read in blocks of 500 samples: the scan keeps only its first and last 3 s
+    of times, where the raw samples scored start and end; the choice (torque offsets and a 4 ms
+    delay included) is the in-memory one, block by block as in one block."""
+    run = rx90sym.twin.simulate(rx90, multisine(rx90, 5), duration=10.0, noise="realistic", seed=5)
+    options = dict(base=rx90_base, delay=0.004, offsets=offset_joints(rx90, rx90_base))
+    src = block_source(run, rx90)
+    got = choose_processing_streamed(rx90, [src], block=BLOCK, **options)
+    assert all(g.head.size + g.tail.size < g.samples for s in scans_for_choice([src], BLOCK) for g in s.segments)
+    whole = choose_processing(rx90, [run], **options)
+    assert (got.chosen.cutoff, got.chosen.decimate_to, got.chosen.rest, got.offsets) == \
+        (whole.chosen.cutoff, whole.chosen.decimate_to, whole.chosen.rest, whole.offsets)
+    for a, b in zip(got.candidates + (got.offset_candidate,), whole.candidates + (whole.offset_candidate,)):
+        _same_scores([a.score, *[v for row in a.per_block for v in row]],
+                     [b.score, *[v for row in b.per_block for v in row]])

@@ -1,6 +1,6 @@
 """Friction form chosen per joint by the blocked cross-validation, where the fit leaves it open (issue 21, item 4).
 
-After :func:`identify.observation.cross_validation.choose_processing` has fixed the cut-off, the
+After :func:`identify.estimation.stream_cv.choose_processing` has fixed the cut-off, the
 decimation and the rest policy, each friction form of :data:`DEFAULT_FORMS` (Coulomb sign(q̇), the
 smooth tanh(q̇/vs); Stribeck on request) is scored the same way, on the same contiguous blocks
 (:func:`~identify.observation.cross_validation.time_blocks`: cut by time over the recordings'
@@ -105,7 +105,7 @@ class FrictionChoice:
 
     def reason(self) -> str:
         scored = {c.label: c for c in self.candidates if not math.isnan(c.score)}
-        rule = (f"each joint takes the form of lowest held-back error on that joint where it is below coulomb's by "
+        rule = ("each joint takes the form of lowest held-back error on that joint where it is below coulomb's by "
                 f"more than the blocks' spread, else coulomb")
         if isinstance(self.chosen, tuple):
             single = _single_choice(self.candidates, dict(self.notes))

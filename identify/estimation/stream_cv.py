@@ -1,23 +1,25 @@
 """Processing chosen on the torques for logs of any length: the blocked cross-validation block by block.
 
-:func:`choose_processing_streamed` makes the choice of
-:func:`identify.observation.cross_validation.choose_processing` (same grid, same common scoring rate,
-same 5 contiguous time blocks, same selection: :func:`~identify.observation.cross_validation.select_processing`)
-without holding a log in memory:
+:func:`choose_processing_streamed` is the cross-validated choice of the cut-off, the decimation, the rest
+policy per joint and the torque offsets (the grid, the folds and the selection of
+:mod:`identify.observation.cross_validation`: :func:`~identify.observation.cross_validation.select_processing`),
+without holding a log in memory; :func:`choose_processing` is the same choice on recordings in memory
+(each read as one block):
 
 1. one scan of every recording (:func:`identify.observation.stream.scan`) gives each segment's rate,
    its position-spectrum cut-off with the 2 Hz floor (the knee; the default candidate's cut-off is
    the same spectrum with the decimation's floor, :func:`~identify.observation.stream.scanned_cutoff`)
-   and the times of its first and last seconds (where the filters' edges end: the time span of the
-   decimated rows, hence the time blocks, exactly as in memory);
+   and the times of its first and last seconds (where the raw samples scored start and end, hence the
+   time blocks: :func:`identify.estimation.raw_folds.raw_span`);
 2. each candidate streams the recordings through the streamed fit's own row code
    (:func:`identify.observation.stream.piece`: segments, bridged rows, rest masks, parallel
-   decimation to the common rate), assigns each decimated row to its time block and folds it into
-   the per-(block, joint) triangular factor ``R_b`` of ``[W | Y]`` (incremental QR): memory
-   blocks × joints × (c + 1)² doubles per candidate;
-3. the fold fits are :func:`~identify.observation.cross_validation.fold_wls` on those factors; the
-   held-back error of block b is ``‖R_b [β_-b; -1]‖²`` and its reference ``‖Y_b‖²`` the squared norm
-   of ``R_b``'s last column: no second pass over the data.
+   decimation to the candidate's own rate) and folds its fitted rows and the raw samples it scores into
+   per-(time block, joint) triangular factors (:mod:`identify.estimation.raw_folds`): memory
+   blocks x joints x (c + 3)^2 doubles per candidate;
+3. the fold fits are :func:`~identify.observation.cross_validation.fold_wls` on those factors, each
+   candidate scored against the raw measured torques, its held-back prediction interpolated onto the
+   recordings' own time stamps: no second pass over the data, and none for the torque offsets (a column
+   of ones is in every factor).
 
 Each candidate costs one pass over the recordings (reading, filtering, regressor, decimation), about
 what the fit itself costs: the row cap (:data:`~identify.observation.cross_validation.DEFAULT_ROW_CAP`
@@ -28,34 +30,36 @@ a task (its factors are folded in block order on the client: the serial result).
 """
 from __future__ import annotations
 
+import math
+import time
+from dataclasses import replace
+from types import SimpleNamespace
 from typing import Any, Sequence
-
-import numpy as np
 
 import rx90sym
 
-from identify.estimation.incremental_qr import JointFactors, stacked_rows
-from identify.io.blocks import BlockSource
-from identify.observation.cross_validation import (DEFAULT_BLOCKS, DEFAULT_ROW_CAP, SCORED_REST, Budget, Candidate,
-                                                   ProcessingChoice, block_scores, fold_wls, grid_around,
-                                                   scoring_rate, select_processing, time_folds)
+from identify.estimation.raw_folds import RawFactors, RawSpan, raw_span, window_factors
+from identify.io.blocks import BlockSource, block_source
+from identify.observation.cross_validation import (DEFAULT_BLOCKS, DEFAULT_ROW_CAP, RAW, SCORED_REST, Budget, Candidate,
+                                                   ProcessingChoice, clearly_better, grid_around, score_candidates,
+                                                   select_processing)
 from identify.observation.matrix import DECIMATION_PASSBAND, DEFAULT_MIN_VELOCITY, presliding_base
 from identify.observation.defaults import DEFAULT_DECIMATE_TO
 from identify.observation.processing import RestPolicy, drops_rest
-from identify.observation.stream import (DEFAULT_BLOCK, Plan, Scan, StreamSettings, in_order, piece, plan_windows,
-                                         scan, scanned_cutoff, windows_in_order)
+from identify.observation.stream import (DEFAULT_BLOCK, Scan, StreamSettings, in_order, plan_windows, scan,
+                                         scanned_cutoff, windows_in_order)
 from identify.signal.filtering import EDGE_PERIODS
 
-__all__ = ["choose_processing_streamed", "grid_of_scans", "scans_for_choice"]
+__all__ = ["choose_processing", "choose_processing_streamed", "grid_of_scans", "scans_for_choice"]
 
-#: Lowest cut-off of the grid [Hz] (candidate_grid's floor): the scan keeps each segment's first and
+#: Lowest cut-off of the grid [Hz] (the knee's floor): the scan keeps each segment's first and
 #: last 2 x EDGE_PERIODS / LOWEST_CUTOFF seconds of times, beyond the filters' longest edge.
 LOWEST_CUTOFF = 2.0
 KEEP_SECONDS = 2.0 * EDGE_PERIODS / LOWEST_CUTOFF
 
 
 def grid_of_scans(scans: Sequence[Scan], default_decimate: float | None) -> tuple[float, list[Candidate]]:
-    """(knee [Hz], candidates) of :func:`~identify.observation.cross_validation.candidate_grid` from scans
+    """(knee [Hz], candidates of :func:`~identify.observation.cross_validation.grid_around`) from scans
     made with the 2 Hz floor: the knee the largest segment cut-off over segments of 64 samples or more,
     the rate the lowest segment rate, the default cut-off the automatic one with ``default_decimate``."""
     segments = [g for s in scans for g in s.segments]
@@ -65,6 +69,36 @@ def grid_of_scans(scans: Sequence[Scan], default_decimate: float | None) -> tupl
     return knee, grid_around(knee, rate, scanned_cutoff(scans, floor), default_decimate)
 
 
+def choose_processing(robot: rx90sym.Robot, recordings: Sequence[Any], base: Any = None,
+                      min_velocity: float | None = DEFAULT_MIN_VELOCITY, rest: RestPolicy | None = None,
+                      spring: bool = True, blocks: int = DEFAULT_BLOCKS, row_cap: int | None = DEFAULT_ROW_CAP,
+                      time_cap: float | None = None, default_decimate: float | None = DEFAULT_DECIMATE_TO,
+                      candidates: Sequence[Candidate] | None = None, policies: Sequence[str] = SCORED_REST,
+                      delay: float = 0.0, offsets: Sequence[int] = ()) -> ProcessingChoice:
+    """Score the candidate processings of recordings in memory and choose the lowest held-back error
+    (:mod:`identify.observation.cross_validation`): :func:`choose_processing_streamed` with each
+    recording one block.
+
+    min_velocity [rad/s], spring: the fit's rest threshold (None: no rest handling) and spring (the
+    rows of W); rest: the fit's rest policy, one or one per joint, or None (open: chosen per joint
+    among ``policies``, default :data:`~identify.observation.cross_validation.SCORED_REST`); blocks:
+    contiguous blocks (>= 2); row_cap: no cut-off is started once the candidates scored have processed
+    that many observation rows (None: no cap; the first is always scored); time_cap [s]: the same on
+    the wall clock, on request (None: off, the default: the choice then never depends on the machine's
+    speed); candidates: another grid (default: the knee's, :func:`grid_of_scans`); delay [s]: the torque
+    lag the fit compensates (every candidate is scored with it, as the fit will use it); offsets: the
+    joints (0-based) that may get a torque offset (:func:`identify.observation.offsets.offset_joints`):
+    the chosen processing is scored again with an offset on each of them, and a joint keeps its offset
+    where it clearly lowers that joint's held-back error (``ProcessingChoice.offsets``).
+    """
+    recordings = list(recordings) if isinstance(recordings, (list, tuple)) else [recordings]
+    block = max(int(r.n_samples) for r in recordings)
+    sources = [block_source(r, robot) for r in recordings]
+    scans = [scan(src, block, LOWEST_CUTOFF, math.inf) for src in sources]  # every time kept: in memory already
+    return choose_processing_streamed(robot, sources, base, min_velocity, rest, spring, blocks, row_cap, time_cap,
+                                      default_decimate, block, None, policies, scans, candidates, delay, offsets)
+
+
 def choose_processing_streamed(robot: rx90sym.Robot, sources: Sequence[BlockSource], base: Any = None,
                                min_velocity: float | None = DEFAULT_MIN_VELOCITY, rest: RestPolicy | None = None,
                                spring: bool = True, blocks: int = DEFAULT_BLOCKS,
@@ -72,22 +106,53 @@ def choose_processing_streamed(robot: rx90sym.Robot, sources: Sequence[BlockSour
                                default_decimate: float | None = DEFAULT_DECIMATE_TO,
                                block: int = DEFAULT_BLOCK, client: Any = None,
                                policies: Sequence[str] = SCORED_REST,
-                               scans: Sequence[Scan] | None = None) -> ProcessingChoice:
-    """:func:`identify.observation.cross_validation.choose_processing` on recordings read block by block
-    (module docstring). sources: the recordings (:func:`identify.io.blocks.block_source`); block: raw
-    samples per block core; client: a ``dask.distributed.Client`` running the blocks (None: here);
-    scans: the sources' :func:`scans_for_choice` when already made (the fit that follows reuses them).
-    The other arguments are those of ``choose_processing``."""
+                               scans: Sequence[Scan] | None = None, candidates: Sequence[Candidate] | None = None,
+                               delay: float = 0.0, offsets: Sequence[int] = ()) -> ProcessingChoice:
+    """The cross-validated processing of recordings read block by block (module docstring). sources:
+    the recordings (:func:`identify.io.blocks.block_source`); block: raw samples per block core; client:
+    a ``dask.distributed.Client`` running the blocks (None: here); scans: the sources'
+    :func:`scans_for_choice` when already made (the fit that follows reuses them). The other arguments
+    are those of :func:`choose_processing`."""
     if blocks < 2:
         raise ValueError(f"cross-validation needs at least 2 blocks, got {blocks}")
     base = base if base is not None else rx90sym.base_parameters(robot)
     scans = scans if scans is not None else scans_for_choice(sources, block)
     knee, grid = grid_of_scans(scans, default_decimate)
-    reference = scoring_rate(grid)
-    context = (robot, sources, scans, base, reference, blocks, min_velocity, spring, block, client)
+    grid = list(candidates) if candidates is not None else grid
+    span = raw_span(scans, grid, blocks, delay)
+    kept: dict = {}  # (cut-off, decimation, rest) -> RawFactors: the offsets are scored on the chosen one's
+    context = _Context(robot, sources, scans, base, span, min_velocity, spring, delay, block, client, kept)
     budget = Budget(robot.n * sum(g.samples for s in scans for g in s.segments), row_cap, time_cap)
-    return select_processing(lambda cand: _score(cand, *context), knee, grid, reference, blocks, min_velocity,
-                             rest, budget, policies)
+    choice = select_processing(lambda cand: _score(cand, context), knee, grid, RAW, blocks, min_velocity,
+                               rest, budget, policies)
+    chosen = kept.get(_key(choice.chosen))
+    if not offsets or chosen is None:
+        return choice
+    return _with_offsets(choice, chosen, tuple(offsets), budget)
+
+
+def _with_offsets(choice: ProcessingChoice, factors: RawFactors, offsets: tuple[int, ...],
+                  budget: Budget) -> ProcessingChoice:
+    """The choice with the torque offsets that clearly lower their joint's held-back error (the chosen
+    processing scored with an offset on each joint allowed one, from its factors: no pass)."""
+    free = Budget(budget.rows, None)
+    with_offsets = score_candidates(lambda c: factors.scores(offsets), [replace(choice.chosen, label="offsets")],
+                                    time.perf_counter(), free)[0]
+    if not with_offsets.per_block:
+        return replace(choice, offset_candidate=with_offsets)
+    kept = tuple(j for j in offsets if clearly_better(with_offsets, choice.chosen, j))
+    if kept and kept != offsets:
+        # The joints share the other parameters: the offsets kept are scored together, and dropped unless
+        # that lowers the mean held-back error and stays clearly better on each of them.
+        alone = score_candidates(lambda c: factors.scores(kept), [replace(choice.chosen, label="offsets kept")],
+                                 time.perf_counter(), free)[0]
+        if not (alone.per_block and alone.score < choice.chosen.score
+                and all(clearly_better(alone, choice.chosen, j) for j in kept)):
+            kept = ()
+        with_offsets = alone
+    elif kept and with_offsets.score >= choice.chosen.score:
+        kept = ()
+    return replace(choice, offsets=kept, offset_candidate=with_offsets)
 
 
 def scans_for_choice(sources: Sequence[BlockSource], block: int) -> list[Scan]:
@@ -96,75 +161,58 @@ def scans_for_choice(sources: Sequence[BlockSource], block: int) -> list[Scan]:
     return [scan(src, block, LOWEST_CUTOFF, KEEP_SECONDS) for src in sources]
 
 
-def _time_span(scans: Sequence[Scan], plans: Sequence[Sequence[Plan]]) -> tuple[float, float]:
-    """(first, last) time [s] of the decimated rows of every segment planned: samples ``edge`` and
-    ``edge + (samples - 1) factor`` of each (the rows :func:`filtered_motion` keeps)."""
-    firsts, lasts = [], []
-    for s, src_plans in zip(scans, plans):
-        by_start = {g.start: g for g in s.segments}
-        for p in src_plans:
-            g = by_start[p.start]
-            firsts.append(g.time_at(p.edge))
-            lasts.append(g.time_at(p.edge + (p.samples - 1) * p.factor))
-    return min(firsts), max(lasts)
+class _Context:
+    """What every candidate's pass reads: the recordings, their scans, the columns, the raw samples
+    scored, the fit's options, and the factors kept per candidate."""
+
+    def __init__(self, robot: rx90sym.Robot, sources: Sequence[BlockSource], scans: Sequence[Scan], base: Any,
+                 span: RawSpan, min_velocity: float | None, spring: bool, delay: float, block: int, client: Any,
+                 kept: dict) -> None:
+        self.robot, self.sources, self.scans, self.base, self.span = robot, sources, scans, base, span
+        self.min_velocity, self.spring, self.delay, self.block, self.client = min_velocity, spring, delay, block, client
+        self.kept = kept
 
 
-def _fold_task(robot: rx90sym.Robot, rec: Any, window: Any, plan: Plan, settings: StreamSettings, columns: Any,
-               span: tuple[float, float, int], drop: bool) -> list[tuple[int, int, np.ndarray, int, Any]]:
-    """One block's rows (the streamed fit's :func:`piece`), per (time block, joint): the factor of the
-    fitted rows, their number and, when rest rows are dropped, the factor and number of the scored
-    (measured) rows (None otherwise: the same rows)."""
-    m = piece(robot, rec, window, plan, settings.cutoff, settings, columns.regressor_batch, columns.names, 0).motion
-    ids = time_folds(m.t, *span)
-    fitted, measured = m.rows(drop), m.rows(False)
-    out = []
-    for b in np.unique(ids):
-        here = ids == b
-        for j in range(m.Phi.shape[1]):
-            rows = stacked_rows(m.Phi, [m.Y], j, fitted[:, j] & here)
-            held = None
-            if drop:
-                scored = stacked_rows(m.Phi, [m.Y], j, measured[:, j] & here)
-                held = (JointFactors.block_factor(scored), scored.shape[0])
-            out.append((int(b), j, JointFactors.block_factor(rows), rows.shape[0], held))
-    return out
+def _key(cand: Candidate) -> tuple:
+    return cand.cutoff, cand.decimate_to, cand.rest
 
 
-def _score(cand: Candidate, robot: rx90sym.Robot, sources: Sequence[BlockSource], scans: Sequence[Scan], base: Any,
-           reference: float | None, blocks: int, min_velocity: float | None, spring: bool, block: int,
-           client: Any) -> tuple[float, tuple[float, ...], tuple[tuple[float, ...], ...]]:
-    """(score, per joint, per held-back block and joint) of one candidate, relative errors in %, its
-    rows decimated to the common rate ``reference`` [Hz], from one pass over the recordings."""
-    threshold = min_velocity if cand.rest is not None else None
+def _score(cand: Candidate, ctx: _Context) -> tuple[float, tuple[float, ...], tuple[tuple[float, ...], ...]]:
+    """(score, per joint, per held-back block and joint) of one candidate, relative errors in % against
+    the raw measured torques, from one pass over the recordings; its factors kept in ``ctx.kept``."""
+    robot, client = ctx.robot, ctx.client
+    threshold = ctx.min_velocity if cand.rest is not None else None
     rest = cand.rest or "zero-coulomb"
-    columns = presliding_base(robot, base, rest if threshold is not None else None)  # FPj with presliding
-    settings = StreamSettings(cand.cutoff, reference, threshold, rest, 0.0, spring, block)
-    plans = [plan_windows(s, cand.cutoff, settings)[0] for s in scans]
-    first, last = _time_span(scans, plans)
-    span = (first, last - first + 1e-9, blocks)  # as choose_processing's blocks in time
+    columns = presliding_base(robot, ctx.base, rest if threshold is not None else None)  # FPj with presliding
+    settings = StreamSettings(cand.cutoff, cand.decimate_to, threshold, rest, float(ctx.delay), ctx.spring, ctx.block)
+    plans, notes = [], []
+    for s in ctx.scans:  # a recording too short for this cut-off's edges is left out, as on whole recordings
+        try:
+            plans.append(plan_windows(s, cand.cutoff, settings)[0])
+        except ValueError as exc:
+            plans.append([])
+            notes.append(str(exc))
+    if not any(plans):
+        raise ValueError(notes[0])
     drop = threshold is not None and drops_rest(rest)
-    n, c = robot.n, len(columns.names)
-    fitted = [JointFactors(n, c) for _ in range(blocks)]
-    held = [JointFactors(n, c) for _ in range(blocks)] if drop else fitted
+    names = tuple(columns.names)
+    factors = RawFactors(robot.n, len(names), ctx.span)
     if client is not None:  # the robot and its compiled columns sent once to each worker
         robot, columns = client.scatter([robot, columns], broadcast=True, hash=False)
-    tasks = ((robot, rec, window, plan, settings, columns, span, drop)
-             for plan, window, rec, _ in windows_in_order(sources, plans))
-    for parts in in_order(_fold_task, tasks, client, 4 if client is not None else 1):
-        for b, j, factor, count, scored in parts:
-            fitted[b].add_factor(j, factor, count)
-            if scored is not None:
-                held[b].add_factor(j, *scored)
-    factors = {(b, j): (f.R[j], int(f.rows[j])) for b, f in enumerate(fitted) for j in range(n) if f.rows[j]}
-    err2, ref2 = np.zeros((blocks, n)), np.zeros((blocks, n))
-    for b in range(blocks):
-        beta = fold_wls(factors, b, n)
-        if beta is None:
-            continue
-        x = np.r_[beta, -1.0]
-        for j in range(n):
-            R = held[b].R[j]
-            err2[b, j], ref2[b, j] = np.sum((R @ x) ** 2), np.sum(R[:, -1] ** 2)  # ||W b - Y||², ||Y||²
-    if not np.any(ref2 > 0):
-        raise ValueError("no fold could be fitted and scored (too few rows left after the filters' edges)")
-    return block_scores(err2, ref2)
+    elif hasattr(columns, "regressor_workspace"):  # one reused buffer for the full-rate regressor, as in memory
+        columns = SimpleNamespace(regressor_batch=columns.regressor_workspace().evaluate)
+    index = {id(src): k for k, src in enumerate(ctx.sources)}
+    tasks = ((robot, rec, window, plan, settings, columns, names, ctx.span,
+              ctx.span.bounds.get((index[id(src)], plan.start)), drop)
+             for src, (plan, window, rec, _) in _with_source(ctx.sources, plans))
+    for parts in in_order(window_factors, tasks, client, 4 if client is not None else 1):
+        factors.add(*parts)
+    ctx.kept[_key(cand)] = factors
+    return factors.scores()
+
+
+def _with_source(sources: Sequence[BlockSource], plans: Sequence[Sequence[Any]]) -> Any:
+    """(source, (plan, window, raw samples, first)) of :func:`windows_in_order`, per source in order."""
+    for src, src_plans in zip(sources, plans):
+        for item in windows_in_order([src], [src_plans]):
+            yield src, item

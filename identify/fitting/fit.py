@@ -108,7 +108,7 @@ def fit(robot: rx90sym.Robot, recordings: Sequence[Any], processing: Processing 
     options = p.observation_options()
     choice = None
     if p.cross_validates and observation is None:
-        from identify.observation.cross_validation import choose_processing
+        from identify.estimation.stream_cv import choose_processing
 
         # Scored at the lag the fit compensates; "auto": the lag estimated on the default processing
         # (W and Y filtered alike, it hardly depends on the cut-off; one delay search).
@@ -207,17 +207,21 @@ def fit_in_blocks(robot: rx90sym.Robot, recordings: Sequence[Any], processing: A
 
     p = processing if processing is not None else Processing()
     block = DEFAULT_BLOCK if block is None else int(block)
+    columns_given = base is not None
     base = base if base is not None else rx90sym.base_parameters(robot)
     recordings = list(recordings) if isinstance(recordings, (list, tuple)) else [recordings]
     spec = BootstrapSpec(BOOTSTRAP_BLOCK_S, BOOTSTRAP_DRAWS, bootstrap_seed)
+    eligible = (offset_joints(robot, base) if method != "consistent" and not columns_given
+                and isinstance(base, BaseParameters) else ())  # as the whole-signal fit's torque offsets
     sf = fit_streamed(robot, recordings, method, base, p.cutoff, p.decimate_to, p.min_velocity, p.rest, p.delay,
                       p.spring, p.estimate_delay, block, client, spec, convention, gains, p.cross_validates,
-                      **consistent_options)
+                      offsets=eligible, **consistent_options)
+    base = offset_base(base, sf.choice.offsets) if sf.choice is not None else base
     rest = sf.settings.rest  # the policy given, or chosen by the cross-validation
     model = FitModel.of(robot, convention=convention, gains=gains.to_dict() if gains is not None else None,
                         rest=rest, min_velocity=p.min_velocity, spring=spring_source or _spring_label(robot, base),
                         cutoff_hz=sf.cutoff, decimate_to_hz=sf.settings.decimate_to, rate_hz=sf.rate,
-                        delay_s=sf.delay)
+                        delay_s=sf.delay, offset_joints=_offset_record(base))
     angles = [SimpleNamespace(q=sf.q_range)]  # what the spring summary reads: the range visited
     spring = spring_summary(robot, base if isinstance(base, BaseWithSpring) else None, sf.result, angles)[0]
     boot = Bootstrap(sf.bootstrap_std, sf.bootstrap_block / sf.rate, spec.draws, spec.seed)

@@ -30,6 +30,7 @@ from identify.io.blocks import BlockSource, block_source
 from identify.observation.cross_validation import ProcessingChoice
 from identify.observation.matrix import DEFAULT_MIN_VELOCITY, DEFAULT_REST, Observation, presliding_base
 from identify.observation.defaults import DEFAULT_DECIMATE_TO
+from identify.observation.offsets import offset_base
 from identify.observation.processing import RestPolicy, drops_rest
 from identify.observation.row_store import RowStore, keeps_rows
 from identify.observation.stream import (DEFAULT_BLOCK, Piece, Plan, Scan, StreamSettings, in_order, piece,
@@ -165,7 +166,7 @@ def _plans(scans: Sequence[Any], cutoff: float, settings: StreamSettings) -> tup
 
 def _choose(robot: rx90sym.Robot, sources: Sequence[BlockSource], base: Any, cutoff: float | None,
             decimate_to: float | None, min_velocity: float | None, rest: RestPolicy | None, spring: bool, block: int,
-            client: Any) -> tuple[ProcessingChoice, list[Scan]]:
+            client: Any, delay: float, offsets: Sequence[int]) -> tuple[ProcessingChoice, list[Scan]]:
     """(the processing chosen by blocked cross-validation block by block, the scans it made: the fit
     that follows reuses that pass)."""
     if cutoff is not None:
@@ -173,7 +174,7 @@ def _choose(robot: rx90sym.Robot, sources: Sequence[BlockSource], base: Any, cut
     scans = scans_for_choice(sources, block)
     return choose_processing_streamed(robot, sources, base, min_velocity or None, rest, spring,
                                       default_decimate=decimate_to or None, block=block, client=client,
-                                      scans=scans), scans
+                                      scans=scans, delay=delay, offsets=offsets), scans
 
 
 def fit_streamed(robot: rx90sym.Robot, recordings: Sequence[Any], method: str = "wls", base: Any = None,
@@ -182,7 +183,7 @@ def fit_streamed(robot: rx90sym.Robot, recordings: Sequence[Any], method: str = 
                  delay: float | str = 0.0, spring: bool = True, estimate: bool = False,
                  block: int = DEFAULT_BLOCK, client: Any = None, bootstrap: BootstrapSpec | None = None,
                  convention: str | None = None, gains: Any = None, cross_validate: bool | None = None,
-                 **consistent_options: Any) -> StreamedFit:
+                 offsets: Sequence[int] = (), **consistent_options: Any) -> StreamedFit:
     """:func:`identify.fit` on recordings of any length, block by block.
 
     recordings: CSV paths (streamed), :class:`~identify.Recording` objects or
@@ -193,8 +194,10 @@ def fit_streamed(robot: rx90sym.Robot, recordings: Sequence[Any], method: str = 
     joint by blocked cross-validation, block by block
     (:func:`identify.estimation.stream_cv.choose_processing_streamed`); None: whenever ``cutoff`` is
     None, as :class:`identify.Processing`; ``decimate_to`` is then the default candidate's. rest: None
-    is open (chosen by the cross-validation, else zero-coulomb). The other arguments are those of
-    :func:`identify.fit`.
+    is open (chosen by the cross-validation, else zero-coulomb); offsets: the joints (0-based) the
+    cross-validation may give a torque offset (the columns OFFj of those it keeps are fitted:
+    :class:`identify.observation.offsets.OffsetBase`); the candidates are scored at ``delay`` (0 when
+    "auto": the lag is searched after the choice). The other arguments are those of :func:`identify.fit`.
     """
     from identify.estimation.consistent_fit import consistent_fit
 
@@ -211,8 +214,10 @@ def fit_streamed(robot: rx90sym.Robot, recordings: Sequence[Any], method: str = 
     choice = scans = None
     if (cutoff is None) if cross_validate is None else cross_validate:
         choice, scans = _choose(robot, sources, base, cutoff, decimate_to, min_velocity, rest, spring, int(block),
-                                client)
+                                client, 0.0 if delay == "auto" else float(delay), offsets)
         cutoff, decimate_to, rest = choice.chosen.cutoff, choice.chosen.decimate_to, choice.chosen.rest or rest
+        if choice.offsets:  # the torque offsets kept, as the whole-signal fit's columns
+            base = offset_base(base if base is not None else rx90sym.base_parameters(robot), choice.offsets)
     rest = DEFAULT_REST if rest is None else rest
     base = presliding_base(robot, base, rest if min_velocity else None)  # FPj columns with "presliding"
     settings = StreamSettings(cutoff, decimate_to or None, min_velocity or None, rest,

@@ -8,7 +8,7 @@ the position filter, with the decimation to about 2.5 fc so that the parallel fi
 1. the recordings' time span is cut into ``blocks`` contiguous blocks of equal duration;
 2. for each block, the base parameters are fitted (WLS) on the rows of the other blocks and the
    torques of the held-back block are predicted;
-3. every candidate is scored against the **raw measured torques** (:mod:`identify.observation.cv_scoring`):
+3. every candidate is scored against the **raw measured torques** (:mod:`identify.estimation.raw_folds`):
    its held-back prediction, at its own cut-off and decimation, is interpolated (linearly) onto the
    recordings' own time stamps and compared with the torques the log holds, unfiltered, on the same
    samples for every candidate (measured, beyond the edges of the grid's lowest cut-off): no
@@ -16,9 +16,9 @@ the position filter, with the decimation to about 2.5 fc so that the parallel fi
    noise a cut-off lets into the prediction counts. The score of joint j is 100 ||tau_j - tau^_j|| /
    ||tau_j|| over every held-back block, the candidate's score the mean over joints. (Before, every
    candidate's rows were decimated to the grid's highest decimated rate and scored against torques
-   filtered like them: ``choose_processing(raw=False)``, what the block-by-block choice still does.
-   An earlier version low-passed prediction and torque at the lowest cut-off: it hid the prediction
-   noise of the high cut-offs, and on the Panda twin kept 20 Hz where 5 Hz was 5x better.)
+   filtered like them. An earlier version low-passed prediction and torque at the lowest cut-off: it
+   hid the prediction noise of the high cut-offs, and on the Panda twin kept 20 Hz where 5 Hz was 5x
+   better.)
 
 The grid is small: the knee times (0.5, 1, 2), within [10 Hz (:data:`MIN_GRID_CUTOFF`, the plain
 baseline's cut-off: a knee is the fitted motion's, and a prediction of another motion filtered below
@@ -46,8 +46,9 @@ not scored): a cap on the work, not on the clock, so that the same log gets the 
 machine under any load (a 60 s wall-clock cap scored 5 of 5 cut-offs of one 10.5 min log in one run
 and 4 of 5 in another). ``time_cap`` adds a wall-clock cap on request. The rest policies and the
 first cut-off are always scored. Bridged samples and rest rows follow the fit's rules (the
-same rows as W). :func:`select_processing` is this selection whatever scores the candidates (in
-memory here; block by block in :mod:`identify.estimation.stream_cv`).
+same rows as W). :func:`select_processing` is this selection whatever scores the candidates; the
+choice itself, on recordings in memory or read block by block (one implementation), is
+:mod:`identify.estimation.stream_cv` (``choose_processing``, ``choose_processing_streamed``).
 """
 from __future__ import annotations
 
@@ -60,17 +61,14 @@ import numpy as np
 
 import rx90sym
 
-from identify.observation.matrix import DECIMATION_PASSBAND, DEFAULT_MIN_VELOCITY, automatic_cutoff
-from identify.observation.defaults import DEFAULT_DECIMATE_TO
+from identify.observation.matrix import DECIMATION_PASSBAND
 from identify.observation.processing import DEFAULT_REST, REST_POLICIES, RestPolicy
-from identify.signal.filtering import choose_cutoff
 from identify.observation.candidates import CLEAR_MARGIN, DEFAULT_LABEL, Candidate, ProcessingChoice
-# The scores (and the fold helpers other choices import from here).
-from identify.observation.cv_scoring import (block_factors, block_scores, fold_wls, raw_targets,  # noqa: F401
-                                             score_common_rate, score_raw, time_blocks, time_folds)
+# The fold helpers (other choices import them from here).
+from identify.observation.cv_scoring import block_factors, block_scores, fold_wls, time_blocks, time_folds
 
-__all__ = ["Candidate", "ProcessingChoice", "GRID_FACTORS", "DEFAULT_BLOCKS", "SCORED_REST",
-           "candidate_grid", "grid_around", "choose_processing", "select_processing", "scoring_rate", "time_folds",
+__all__ = ["Candidate", "ProcessingChoice", "GRID_FACTORS", "DEFAULT_BLOCKS", "SCORED_REST", "RAW", "NO_DECIMATION",
+           "grid_around", "select_processing", "score_candidates", "time_folds",
            "time_blocks", "fold_wls", "clearly_better", "block_factors", "block_scores", "DEFAULT_ROW_CAP", "Budget",
            "observation_rows"]
 
@@ -83,11 +81,9 @@ GRID_FACTORS = (0.5, 1.0, 2.0)
 #: acceleration (twin trial, tests/twin_logs.py: a chirp up to 1 Hz fitted, knee 2.1 Hz, chosen in 2 of 5
 #: seeds; the trapezoidal motion predicted 1.46-1.67x the baseline's error while moving on joints 1-3).
 MIN_GRID_CUTOFF = 10.0
-#: The scorer of the in-memory choice (a name tests can replace).
-_score = score_raw
 #: ``reference`` of a choice scored against the raw measured torques (ProcessingChoice.reference_hz).
 RAW = "raw"
-#: Label of the candidate without decimation (candidate_grid).
+#: Label of the candidate without decimation (grid_around).
 NO_DECIMATION = "no decimation"
 #: Contiguous blocks of the cross-validation.
 DEFAULT_BLOCKS = 5
@@ -108,25 +104,11 @@ SCORED_REST = tuple(r for r in REST_POLICIES if r not in ("drop", "none", "presl
 
 
 
-def candidate_grid(recordings: Sequence[Any], default_decimate: float | None = DEFAULT_DECIMATE_TO) -> tuple[float, list[Candidate]]:
-    """(knee [Hz], candidates in scoring order: the knee first, the default (labelled, the
-    automatic cut-off with ``default_decimate``), then outwards from the knee)."""
-    rate = min(1.0 / float(np.median(np.diff(np.asarray(p.t)))) for r in recordings for p in r.pieces())
-    knee = max(choose_cutoff(np.asarray(p.q), rate) for r in recordings for p in r.pieces()
-               if p.n_samples >= 64)
-    grid = grid_around(knee, rate, automatic_cutoff(recordings, default_decimate), default_decimate)
-    # No decimation, at the knee: the rows at the recordings' own rate (scored against the raw torques like the
-    # others). Third, after the knee and the default.
-    if grid[0].decimate_to is not None:
-        grid.insert(2, Candidate(grid[0].cutoff, None, label=NO_DECIMATION))
-    return knee, grid
-
-
 def grid_around(knee: float, rate: float, default_cutoff: float, default_decimate: float | None) -> list[Candidate]:
     """The candidates around the position-spectrum ``knee`` [Hz] at the recordings' ``rate`` [Hz]
-    (the knee first, the default processing (``default_cutoff`` [Hz], raised to the grid's floor
-    :data:`MIN_GRID_CUTOFF`, ``default_decimate`` [Hz]),
-    then outwards): what :func:`candidate_grid` returns, from numbers a streamed scan also gives."""
+    (lowest segment rate) in scoring order: the knee first, the default processing (``default_cutoff``
+    [Hz], the automatic cut-off raised to the grid's floor :data:`MIN_GRID_CUTOFF`, ``default_decimate``
+    [Hz]), the knee without decimation (:data:`NO_DECIMATION`), then outwards from the knee."""
     top = 0.4 * rate / 2.0
     floor = min(MIN_GRID_CUTOFF, top)
     cuts = sorted({min(max(floor, f * knee), top) for f in GRID_FACTORS}, key=lambda c: abs(math.log(c / knee)))
@@ -138,85 +120,12 @@ def grid_around(knee: float, rate: float, default_cutoff: float, default_decimat
         out.append(Candidate(fc, rate / factor if factor > 1 else None))
     default = Candidate(default_cutoff, default_decimate, label=DEFAULT_LABEL)
     out = [c for c in out if abs(c.cutoff - default_cutoff) > 1e-9 * default_cutoff or c.decimate_to != default_decimate]
-    return out[:1] + [default] + out[1:]
-
-
-def scoring_rate(grid: Sequence[Candidate]) -> float | None:
-    """The common rate every candidate is scored at [Hz]: the highest decimated rate of the grid
-    (None: one candidate is not decimated), so that every held-back torque is the same signal."""
-    return None if any(c.decimate_to is None for c in grid) else max(c.decimate_to for c in grid)
-
-
-def choose_processing(robot: rx90sym.Robot, recordings: Sequence[Any], base: Any = None,
-                      min_velocity: float | None = DEFAULT_MIN_VELOCITY, rest: RestPolicy | None = None,
-                      spring: bool = True, blocks: int = DEFAULT_BLOCKS, row_cap: int | None = DEFAULT_ROW_CAP,
-                      time_cap: float | None = None, default_decimate: float | None = DEFAULT_DECIMATE_TO,
-                      candidates: Sequence[Candidate] | None = None, policies: Sequence[str] = SCORED_REST,
-                      delay: float = 0.0, raw: bool = True, offsets: Sequence[int] = ()) -> ProcessingChoice:
-    """Score the candidate processings (module docstring) and choose the lowest held-back error.
-
-    min_velocity [rad/s], spring: the fit's rest threshold (None: no rest handling) and spring (the
-    rows of W); rest: the fit's rest policy, one or one per joint, or None (open: chosen per joint
-    among ``policies``, default :data:`SCORED_REST`); blocks: contiguous blocks (>= 2); row_cap: no cut-off is
-    started once the candidates scored have processed that many observation rows (None: no cap; the
-    first is always scored); time_cap [s]: the same on the wall clock, on request (None: off, the
-    default: the choice then never depends on the machine's speed); candidates: another grid (default
-    :func:`candidate_grid`); delay [s]: the torque lag the fit compensates (every candidate is scored
-    with it, as the fit will use it); raw: score against the raw measured torques (the default);
-    False: the former scoring, every candidate's rows decimated to the grid's common rate against
-    the torques filtered alike (what the block-by-block choice, :mod:`identify.estimation.stream_cv`,
-    still does; no "no decimation" candidate then); offsets: the joints (0-based) that may get a
-    torque offset (:func:`identify.observation.offsets.offset_joints`): the chosen processing is
-    scored again with an offset on each of them, and a joint keeps its offset where it clearly
-    lowers that joint's held-back error (``ProcessingChoice.offsets``).
-    """
-    if blocks < 2:
-        raise ValueError(f"cross-validation needs at least 2 blocks, got {blocks}")
-    base = base if base is not None else rx90sym.base_parameters(robot)
-    knee, grid = candidate_grid(recordings, default_decimate)
-    grid = list(candidates) if candidates is not None else grid
-    options = {"min_velocity": min_velocity, "spring": spring, "delay": delay}
-    budget = Budget(observation_rows(robot, recordings), row_cap, time_cap)
-    if not raw:
-        grid = [c for c in grid if c.label != NO_DECIMATION]  # the former grid: every candidate decimated
-        reference = scoring_rate(grid)
-        return select_processing(lambda c: score_common_rate(robot, recordings, c, base, reference, blocks, options),
-                                 knee, grid, reference, blocks, min_velocity, rest, budget, policies)
-    targets = raw_targets(recordings, grid, blocks, delay)
-    # The filtered rows of the best candidates and the default kept: the offsets' pass reuses the chosen one's.
-    cache: dict = {}
-    kept_scores: dict = {}
-
-    def scored(cand: Candidate) -> Any:
-        out = _score(robot, recordings, cand, base, targets, blocks, {**options, "cache": cache})
-        kept_scores[(cand.cutoff, cand.decimate_to, cand.rest)] = (cand.label == DEFAULT_LABEL, out[0])
-        best = sorted((k for k, (_, v) in kept_scores.items() if not math.isnan(v)), key=lambda k: kept_scores[k][1])
-        keep = set(best[:2]) | {k for k, (default, _) in kept_scores.items() if default}
-        for k in [k for k in cache if k not in keep]:
-            del cache[k]
-        return out
-
-    choice = select_processing(scored, knee, grid, RAW, blocks, min_velocity, rest, budget, policies)
-    if not offsets:
-        return choice
-    extra = {**options, "cache": cache, "offsets": tuple(offsets)}
-    with_offsets = _run(lambda c: _score(robot, recordings, c, base, targets, blocks, extra),
-                        [replace(choice.chosen, label="offsets")], time.perf_counter(), Budget(budget.rows, None))[0]
-    if not with_offsets.per_block:
-        return replace(choice, offset_candidate=with_offsets)
-    kept = tuple(j for j in offsets if clearly_better(with_offsets, choice.chosen, j))
-    if kept and kept != tuple(offsets):
-        # The joints share the other parameters: the offsets kept are scored together (the rows reused),
-        # and dropped unless that lowers the mean held-back error and stays clearly better on each of them.
-        alone = _run(lambda c: _score(robot, recordings, c, base, targets, blocks, {**extra, "offsets": kept}),
-                     [replace(choice.chosen, label="offsets kept")], time.perf_counter(), Budget(budget.rows, None))[0]
-        if not (alone.per_block and alone.score < choice.chosen.score
-                and all(clearly_better(alone, choice.chosen, j) for j in kept)):
-            kept = ()
-        with_offsets = alone
-    elif kept and with_offsets.score >= choice.chosen.score:
-        kept = ()
-    return replace(choice, offsets=kept, offset_candidate=with_offsets)
+    out = out[:1] + [default] + out[1:]
+    # No decimation, at the knee: the rows at the recordings' own rate (scored against the raw torques like the
+    # others). Third, after the knee and the default.
+    if out[0].decimate_to is not None:
+        out.insert(2, Candidate(out[0].cutoff, None, label=NO_DECIMATION))
+    return out
 
 
 def observation_rows(robot: rx90sym.Robot, recordings: Sequence[Any]) -> int:
@@ -245,17 +154,17 @@ class Budget:
         return None
 
 
-Scorer = Callable[[Candidate], tuple[float, tuple[float, ...], tuple[tuple[float, ...], ...]]]  # as score_raw's
+Scorer = Callable[[Candidate], tuple[float, tuple[float, ...], tuple[tuple[float, ...], ...]]]  # (score, per joint, per held-back block)
 
 
 def select_processing(score: Scorer, knee: float, grid: Sequence[Candidate], reference: float | None, blocks: int,
                       min_velocity: float | None, rest: RestPolicy | None, budget: Budget,
                       policies: Sequence[str] = SCORED_REST) -> ProcessingChoice:
-    """The selection of :func:`choose_processing` (and of the block-by-block choice,
-    :mod:`identify.estimation.stream_cv`) whatever computes the scores: the rest policy per joint at
-    the knee where it is open, the cut-offs from the knee outwards within the ``budget``, the
-    default unless clearly beaten. ``grid``: the knee's candidate first, the default among them;
-    ``reference``: the common scoring rate [Hz] (None: not decimated)."""
+    """The selection of the cross-validated choice (:mod:`identify.estimation.stream_cv`) whatever
+    computes the scores: the rest policy per joint at the knee where it is open, the cut-offs from
+    the knee outwards within the ``budget``, the default unless clearly beaten. ``grid``: the knee's
+    candidate first, the default among them; ``reference``: what the candidates were scored against
+    (:data:`RAW`: the raw measured torques; a rate [Hz]: rows decimated to it; None: not decimated)."""
     start = time.perf_counter()
     first: list[Candidate] = []
     rest_scores: tuple[tuple[str, tuple[float, ...]], ...] = ()
@@ -263,13 +172,13 @@ def select_processing(score: Scorer, knee: float, grid: Sequence[Candidate], ref
         rest = None
     elif rest is None:
         # First stage, at the knee: every policy that keeps the rest rows; each joint takes its best.
-        first = _run(score, [replace(grid[0], rest=r) for r in policies], start, Budget(budget.rows, None, None))
+        first = score_candidates(score, [replace(grid[0], rest=r) for r in policies], start, Budget(budget.rows, None, None))
         valid = [c for c in first if c.per_joint]
         rest_scores = tuple((str(c.rest), c.per_joint) for c in valid)
         rest = _per_joint_rest(valid) if valid else DEFAULT_REST
     done = {(f.cutoff, f.decimate_to, f.rest) for f in first}
     todo = [replace(c, rest=rest) for c in grid if (c.cutoff, c.decimate_to, rest) not in done]
-    second = _run(score, todo, start, budget, always_first=True, scored_before=len(first))
+    second = score_candidates(score, todo, start, budget, always_first=True, scored_before=len(first))
     scored = first + second
     # Only candidates with the rest policy chosen above: a first-stage candidate (one policy for all
     # joints) must not override the per-joint rule that kept zero-coulomb where it was not beaten.
@@ -319,7 +228,7 @@ def _best(scored: Sequence[Candidate]) -> Candidate:
     return min(valid, key=lambda c: c.score)
 
 
-def _run(score: Scorer, grid: Sequence[Candidate], start: float, budget: Budget, always_first: bool = False,
+def score_candidates(score: Scorer, grid: Sequence[Candidate], start: float, budget: Budget, always_first: bool = False,
          scored_before: int = 0) -> list[Candidate]:
     """Score ``grid`` in order; none is started once the ``budget`` is spent (counting the passes
     ``scored_before``), but the first with ``always_first``; ``start``: time.perf_counter() of the choice."""

@@ -65,7 +65,8 @@ class SegmentScan:
     sample ``start`` in the recording, ``samples``, ``rate`` [Hz] (1 / its median step, as
     :func:`filtered_motions` takes it), its automatic cut-off [Hz] (None when a cut-off is given) and,
     when the scan was asked to keep them, the times [s] of its first and last samples (``head``,
-    ``tail``: where the filters' edges end, for the time blocks of a cross-validation)."""
+    ``tail``: where the filters' edges end, for the time blocks of a cross-validation) and whether each
+    was measured (``head_measured``, ``tail_measured``: not bridged over lost packets)."""
 
     start: int
     samples: int
@@ -73,6 +74,8 @@ class SegmentScan:
     cutoff: float | None
     head: np.ndarray = field(default_factory=lambda: np.empty(0), compare=False, repr=False)
     tail: np.ndarray = field(default_factory=lambda: np.empty(0), compare=False, repr=False)
+    head_measured: np.ndarray = field(default_factory=lambda: np.empty(0, bool), compare=False, repr=False)
+    tail_measured: np.ndarray = field(default_factory=lambda: np.empty(0, bool), compare=False, repr=False)
 
     def time_at(self, index: int) -> float:
         """The time [s] of the segment's sample ``index`` (0 .. samples-1), from its head or tail kept."""
@@ -121,6 +124,7 @@ class _SegmentPass:
     def __init__(self, start: int, hold: int, floor: float | None, keep_s: float = 0.0) -> None:
         self.start, self.hold, self.floor, self.keep_s = start, hold, floor, keep_s
         self.head, self.tail = np.empty(0), np.empty(0)
+        self.head_measured, self.tail_measured = np.empty(0, bool), np.empty(0, bool)
         self.samples, self.steps = 0, StepCounts()
         self.t: list[np.ndarray] = []
         self.q: list[np.ndarray] = []
@@ -129,13 +133,16 @@ class _SegmentPass:
         self.welch: WelchAccumulator | None = None
         self.rate = float("nan")
 
-    def feed(self, t: np.ndarray, q: np.ndarray) -> None:
-        if self.keep_s > 0:  # the times within keep_s of either end
+    def feed(self, t: np.ndarray, q: np.ndarray, measured: np.ndarray) -> None:
+        if self.keep_s > 0:  # the times within keep_s of either end, and whether they were measured
             first = self.head[0] if self.head.size else t[0]
             if self.head.size == self.samples:
-                self.head = np.concatenate([self.head, t[t <= first + self.keep_s]])
-            tail = np.concatenate([self.tail, t])
-            self.tail = tail[tail >= t[-1] - self.keep_s]
+                near = t <= first + self.keep_s
+                self.head = np.concatenate([self.head, t[near]])
+                self.head_measured = np.concatenate([self.head_measured, measured[near]])
+            tail, tail_measured = np.concatenate([self.tail, t]), np.concatenate([self.tail_measured, measured])
+            near = tail >= t[-1] - self.keep_s
+            self.tail, self.tail_measured = tail[near], tail_measured[near]
         if self.tail_t is not None:
             self.steps.add(np.diff(np.r_[self.tail_t, t]))
         else:
@@ -171,7 +178,8 @@ class _SegmentPass:
         elif self.floor is not None and self.samples > 2:
             t_all, q_all = np.concatenate(self.t), np.concatenate(self.q)
             cut = choose_cutoff(q_all, 1.0 / float(np.median(np.diff(t_all))), min_cutoff=self.floor)
-        return SegmentScan(self.start, self.samples, rate, cut, self.head, self.tail)
+        return SegmentScan(self.start, self.samples, rate, cut, self.head, self.tail, self.head_measured,
+                           self.tail_measured)
 
 
 def scan(src: BlockSource, block: int, floor: float | None, keep_s: float = 0.0) -> Scan:
@@ -187,10 +195,10 @@ def scan(src: BlockSource, block: int, floor: float | None, keep_s: float = 0.0)
         new = int(rec.meta.get("new_from", 0))
         lo = rec.q.min(axis=0) if lo is None else np.minimum(lo, rec.q.min(axis=0))
         hi = rec.q.max(axis=0) if hi is None else np.maximum(hi, rec.q.max(axis=0))
-        t, q = rec.t[new:], rec.q[new:]
+        t, q, measured = rec.t[new:], rec.q[new:], rec.measured_mask[new:]
         steps.add(np.diff(t if last_t is None else np.r_[last_t, t]))
         last_t = t[-1:]
-        bridged += int(np.sum(~rec.measured_mask[new:]))
+        bridged += int(np.sum(~measured))
         seg = int(rec.meta.get("segment0", 0)) + (rec.segment[new:] if rec.segment is not None
                                                   else np.zeros(t.size, np.int64))
         for number in np.unique(seg):
@@ -199,7 +207,7 @@ def scan(src: BlockSource, block: int, floor: float | None, keep_s: float = 0.0)
                 if current is not None:
                     done.append(current.result())
                 current = _SegmentPass(at + int(rows[0]), block, floor, keep_s)
-            current.feed(t[rows], q[rows])
+            current.feed(t[rows], q[rows], measured[rows])
         at += t.size
     done.append(current.result())
     return Scan(src.source, int(src.n_samples), 1.0 / steps.median(), tuple(done), np.vstack([lo, hi]), bridged,
