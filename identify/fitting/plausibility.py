@@ -278,34 +278,15 @@ def static_gravity_flags(recordings: Sequence, robot: rx90sym.Robot, nominal: di
     """
     if not nominal or not recordings:
         return []
-    chi = robot.parameter_vector({k: v for k, v in nominal.items() if k in robot.parameter_names
-                                  and not k.startswith(("FS", "FV", "OFF"))}, strict=False)
-    Qs, Ts = [], []
+    from identify.fitting.torque_checks import GravityAtRest  # the sums, fed block by block on long logs
+
+    gravity = GravityAtRest(robot, nominal)
     for rec in recordings:
         if rec.tau is None or len(rec.t) < 3:
             continue
         dq = rec.dq if rec.dq is not None else np.gradient(np.asarray(rec.q), np.asarray(rec.t), axis=0)
-        rest = np.all(np.abs(dq) < REST_SPEED, axis=1)
-        Qs.append(np.asarray(rec.q)[rest])
-        Ts.append(np.asarray(rec.tau)[rest])
-    Q = np.concatenate(Qs) if Qs else np.zeros((0, robot.n))
-    if len(Q) < REST_SAMPLES:
-        return []
-    Z = np.zeros_like(Q)
-    g = robot.regressor_batch(Q, Z, Z) @ chi
-    if robot.spring is not None:  # the motor holds gravity minus the spring (Y = tau + spring, eq. 7)
-        g = g - robot.spring_torque_batch(Q)[:, :, 0]
-    tau = np.concatenate(Ts)
-    judged = np.sqrt(np.mean(g ** 2, axis=0)) >= GRAVITY_SHARE * np.asarray(robot.limits.tau_max, dtype=float)
-    flags = []
-    for j in np.flatnonzero(judged):
-        s = float(tau[:, j] @ g[:, j] / (g[:, j] @ g[:, j]))
-        if not 1 / GRAVITY_RATIO <= s <= GRAVITY_RATIO:
-            cause = "the torque sign" if s < 0 else "the robot, the units or the gains"
-            flags.append(Flag("static_gravity", "error", f"at rest, joint {j + 1}'s torque is {s:.3g} x the gravity of "
-                              f"robot {robot.name}'s nominal parameters ({len(Q)} samples at rest; expected "
-                              f"{1 / GRAVITY_RATIO:.2g}..{GRAVITY_RATIO:g})", f"check {cause}", joint=int(j) + 1))
-    return flags
+        gravity.add(np.asarray(rec.q), np.asarray(rec.tau), dq)
+    return gravity.flags()
 
 
 def prior_flags(standard: Mapping[str, float], prior: Mapping[str, float], cost_increase_pct: float,

@@ -145,7 +145,7 @@ class Fit:
 
             return predict_streamed(self.robot, result or self.result, recording, base=self.base, block=self.block,
                                     convention=self.model.convention, gains=self.gains, prediction=True,
-                                    **self.filtering())
+                                    baseline=self.baseline, **self.filtering())
         # At 20 x the cut-off (identify.fitting.validation.prediction_rate), not at the fit's decimated rate.
         options = dict(self.filtering(), decimate_to=prediction_rate(self.cutoff, recording.rate),
                        filtered_at=self.decimate_to)

@@ -22,7 +22,8 @@ import numpy as np
 
 import rx90sym
 
-from identify.estimation.bootstrap import SegmentBootstrap
+from identify.estimation.bootstrap import BLOCK_S, DRAWS, SegmentBootstrap
+from identify.estimation.honest_covariance import HONEST_SEED, Fanout, honest_covariance, needs_honest_covariance
 from identify.estimation.incremental_qr import JointFactors, stacked_rows
 from identify.estimation.least_squares import solve_joint_systems
 from identify.estimation.results import METHODS, IdentificationResult
@@ -79,6 +80,7 @@ class StreamedFit:
     q_range: np.ndarray | None = None
     recordings: tuple[dict, ...] = ()
     choice: ProcessingChoice | None = None
+    scans: tuple[Scan, ...] = ()  # the first pass over each recording (the baseline's and checks' passes reuse it)
 
     def summary(self) -> str:
         """What was fitted, in the manner of :meth:`identify.Observation.summary`."""
@@ -220,19 +222,28 @@ def fit_streamed(robot: rx90sym.Robot, recordings: Sequence[Any], method: str = 
     lags = tuple(grid) if search else ()
     total = sum(p.samples for p in flat)
     bblock = max(1, int(round(bootstrap.block_s * flat[0].rate))) if bootstrap else 0
-    make_boot = (lambda: SegmentBootstrap(total, bblock, robot.n, len(base.names), bootstrap.draws, bootstrap.seed)
-                 if bootstrap else None)
-    boot = make_boot()
-    factors, moving, count = _accumulate(robot, sources, plans, fc, settings, base, lags, client, boot)
+
+    def make_boot(spec: BootstrapSpec | None) -> SegmentBootstrap | None:
+        return (SegmentBootstrap(total, max(1, int(round(spec.block_s * flat[0].rate))), robot.n, len(base.names),
+                                 spec.draws, spec.seed) if spec else None)
+    # The consistent fit's prior is measured in eq. 13's covariance inflated by the toolkit's bootstrap (seed 0),
+    # as on whole recordings (identify.estimation.honest_covariance): fed the same rows, unless it is the one asked.
+    honest = BootstrapSpec(BLOCK_S, DRAWS, HONEST_SEED) if needs_honest_covariance(method, consistent_options) else None
+    boot, hboot = make_boot(bootstrap), make_boot(honest if honest != bootstrap else None)
+    factors, moving, count = _accumulate(robot, sources, plans, fc, settings, base, lags, client, Fanout(boot, hboot))
     found = None
     if lags:
         found = refined_delay(grid, np.array([joint_log_rms(factors.systems(k + 1)) for k in range(len(lags))]), step)
     if delay == "auto":  # a second pass with the torques put back in step
         settings = replace(settings, delay=found.delay)
-        boot = make_boot()
-        factors, moving, count = _accumulate(robot, sources, plans, fc, settings, base, (), client, boot)
+        boot, hboot = make_boot(bootstrap), make_boot(honest if honest != bootstrap else None)
+        factors, moving, count = _accumulate(robot, sources, plans, fc, settings, base, (), client,
+                                             Fanout(boot, hboot))
     result = solve_joint_systems(factors.systems(0), base.names, weighted=method != "ols")
     if method == "consistent":
+        if honest is not None:
+            std = (hboot or boot).std(result.weights)
+            consistent_options = {**consistent_options, "covariance": honest_covariance(result, std)}
         result = consistent_fit(robot, result, base, **consistent_options)
     notes = tuple(p.note for p in flat) + skipped
     return StreamedFit(result, fc, flat[0].rate, notes, tuple(s.source for s in scans), total,
@@ -240,4 +251,4 @@ def fit_streamed(robot: rx90sym.Robot, recordings: Sequence[Any], method: str = 
                        boot.std(result.weights) if boot is not None else None, bblock, settings, count,
                        np.vstack([np.min([s.q_range[0] for s in scans], axis=0),
                                   np.max([s.q_range[1] for s in scans], axis=0)]),
-                       tuple(s.layout() for s in scans), choice)
+                       tuple(s.layout() for s in scans), choice, tuple(scans))

@@ -242,10 +242,11 @@ def predict_streamed(robot: rx90sym.Robot, result: IdentificationResult, recordi
                      cutoff: float | None = None, decimate_to: float | None = DEFAULT_DECIMATE_TO, spring: bool = True,
                      min_velocity: float | None = None, delay: float = 0.0, block: int = DEFAULT_BLOCK,
                      convention: str | None = None, gains: Any = None, rest: RestPolicy = "zero-coulomb",
-                     prediction: bool = False) -> Validation:
+                     prediction: bool = False, baseline: Any = None) -> Validation:
     """:func:`identify.predict` on a recording of any length: predicted and measured torques block by block
     (only the decimated torques are held, n columns at the decimated rate). prediction: predict at
-    :func:`prediction_rate` of the cut-off (``decimate_to`` then only serves the automatic cut-off)."""
+    :func:`prediction_rate` of the cut-off (``decimate_to`` then only serves the automatic cut-off);
+    baseline: the fit's plain OLS baseline, predicted block by block and scored on the same raw samples."""
     base = presliding_base(robot, base, rest if min_velocity else None)
     beta = base_vector(result, base, robot)
     src = block_source(recording, robot, convention, gains)
@@ -257,6 +258,11 @@ def predict_streamed(robot: rx90sym.Robot, result: IdentificationResult, recordi
         settings = replace(settings, decimate_to=prediction_rate(fc, scans[0].rate))
     plans, _ = plan_windows(scans[0], fc, settings)
     names, regressor = column_regressor(robot, base)
+    bp = None
+    if baseline is not None:  # its own pass over the log, block by block (its own filter and margins)
+        from identify.fitting.baseline_blocks import baseline_at, streamed_baseline_prediction
+
+        bp = streamed_baseline_prediction(robot, baseline, src, scans[0], int(block))
     length = {g.start: g.samples for g in scans[0].segments}
     groups: dict[int, list] = {}
     for plan, window, rec, _ in windows_in_order([src], [plans]):
@@ -279,8 +285,15 @@ def predict_streamed(robot: rx90sym.Robot, result: IdentificationResult, recordi
         tol = 1e-9 * max(1.0, abs(tp[-1]))
         # As identify.predict: SCORE_TRIM_S from the segment's ends, inside the prediction.
         inside = (t <= tp[-1] + tol) & (t >= first + SCORE_TRIM_S - tol) & (t <= last - SCORE_TRIM_S + tol)
+        b = None
+        if bp is not None:  # as identify.predict: only where the baseline predicts too
+            scored, b = baseline_at(bp, t)
+            inside &= scored
+            b = b[inside]
         t, tau = t[inside], tau[inside]
         nearest = np.clip(np.searchsorted(tp, t - 0.5 * (tp[1] - tp[0] if tp.size > 1 else 0.0)), 0, tp.size - 1)
-        parts.append((t, tau, onto(t, tp, pr), mv[nearest]))
-    t, Y, pred, mov = (np.concatenate(a) for a in zip(*parts))
-    return scored_validation(RawScores(t, Y, pred, mov), src.source, settings.min_velocity, fc, plans[0].rate)
+        parts.append((t, tau, onto(t, tp, pr), mv[nearest], b))
+    t, Y, pred, mov = (np.concatenate([p[k] for p in parts]) for k in range(4))
+    base_pred = None if bp is None else np.concatenate([p[4] for p in parts])
+    return scored_validation(RawScores(t, Y, pred, mov, base_pred), src.source, settings.min_velocity, fc,
+                             plans[0].rate)

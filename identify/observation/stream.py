@@ -73,6 +73,8 @@ class SegmentScan:
     cutoff: float | None
     head: np.ndarray = field(default_factory=lambda: np.empty(0), compare=False, repr=False)
     tail: np.ndarray = field(default_factory=lambda: np.empty(0), compare=False, repr=False)
+    first_t: float = field(default=float("nan"), compare=False)  # times [s] of its first and last samples
+    last_t: float = field(default=float("nan"), compare=False)
 
     def time_at(self, index: int) -> float:
         """The time [s] of the segment's sample ``index`` (0 .. samples-1), from its head or tail kept."""
@@ -125,6 +127,7 @@ class _SegmentPass:
         self.t: list[np.ndarray] = []
         self.q: list[np.ndarray] = []
         self.tail_t: np.ndarray | None = None
+        self.first_t = float("nan")
         self.tail_q = np.empty((0, 0))
         self.welch: WelchAccumulator | None = None
         self.rate = float("nan")
@@ -140,6 +143,7 @@ class _SegmentPass:
             self.steps.add(np.diff(np.r_[self.tail_t, t]))
         else:
             self.steps.add(np.diff(t))
+            self.first_t = float(t[0])
         self.tail_t = t[-1:]
         self.samples += t.size
         if self.floor is None:
@@ -171,7 +175,8 @@ class _SegmentPass:
         elif self.floor is not None and self.samples > 2:
             t_all, q_all = np.concatenate(self.t), np.concatenate(self.q)
             cut = choose_cutoff(q_all, 1.0 / float(np.median(np.diff(t_all))), min_cutoff=self.floor)
-        return SegmentScan(self.start, self.samples, rate, cut, self.head, self.tail)
+        return SegmentScan(self.start, self.samples, rate, cut, self.head, self.tail, self.first_t,
+                           float(self.tail_t[0]) if self.tail_t is not None else float("nan"))
 
 
 def scan(src: BlockSource, block: int, floor: float | None, keep_s: float = 0.0) -> Scan:
