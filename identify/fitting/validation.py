@@ -254,6 +254,7 @@ def predict_streamed(robot: rx90sym.Robot, result: IdentificationResult, recordi
     settings = StreamSettings(cutoff, decimate_to or None, min_velocity or None, predicted_rest(rest), float(delay),
                               spring, int(block))
     scans, fc = scan_all([src], settings)
+    fit_settings = settings  # the rows of the filtered figures: at the fit's rate, as Fit.predict in memory
     if prediction:  # as identify.Fit.predict in memory: at 20 x the cut-off (or the recording's own rate)
         settings = replace(settings, decimate_to=prediction_rate(fc, scans[0].rate))
     plans, _ = plan_windows(scans[0], fc, settings)
@@ -263,10 +264,15 @@ def predict_streamed(robot: rx90sym.Robot, result: IdentificationResult, recordi
         from identify.fitting.baseline_blocks import baseline_at, streamed_baseline_prediction
 
         bp = streamed_baseline_prediction(robot, baseline, src, scans[0], int(block))
+    from identify.fitting.streamed_filtered import FilteredSums, streamed_filtered_rms
+
+    sums = FilteredSums(beta, robot.n) if settings == fit_settings else None
     length = {g.start: g.samples for g in scans[0].segments}
     groups: dict[int, list] = {}
     for plan, window, rec, _ in windows_in_order([src], [plans]):
         m = piece(robot, rec, window, plan, fc, settings, regressor, names, 0).motion
+        if sums is not None:
+            sums.add(m)
         pred = m.Phi @ beta
         if spring and robot.spring is not None:
             pred = pred - robot.spring_torque_batch(m.q)[:, :, 0]
@@ -295,5 +301,8 @@ def predict_streamed(robot: rx90sym.Robot, result: IdentificationResult, recordi
         parts.append((t, tau, onto(t, tp, pr), mv[nearest], b))
     t, Y, pred, mov = (np.concatenate([p[k] for p in parts]) for k in range(4))
     base_pred = None if bp is None else np.concatenate([p[4] for p in parts])
-    return scored_validation(RawScores(t, Y, pred, mov, base_pred), src.source, settings.min_velocity, fc,
-                             plans[0].rate)
+    # The filtered figures on the fit's rows: from this pass when they are the prediction's, else a pass of their own.
+    filtered = (sums.result() if sums is not None else
+                streamed_filtered_rms(robot, src, scans[0], fc, fit_settings, regressor, names, beta))
+    return replace(scored_validation(RawScores(t, Y, pred, mov, base_pred), src.source, settings.min_velocity, fc,
+                                     plans[0].rate), **filtered, t0_s=float((src.log or {}).get("t0_s") or 0.0))
