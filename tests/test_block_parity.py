@@ -169,3 +169,18 @@ def test_the_recorded_torque_checks_block_by_block(rx90):
             fit = identify.fit(rx90, [bad], GIVEN, block=block)
             assert [(f.code, f.joint, f.message) for f in fit.flags if f.code in CODES] == ref, block
     assert recorded_torque_flags(rx90, [rec]) == [] and streamed_torque_flags(rx90, [src], [sc], 333) == []
+
+
+def test_rx90_identify_checks_the_recorded_torques_of_a_long_log(rx90, tmp_path, capsys):
+    """A log longer than --block with torques in the wrong unit: the check block by block stops the run
+    (exit 2, nothing written), as for a log read whole."""
+    from identify.app.cli import main
+
+    rec = _still_then_moving(rx90)
+    path, out = tmp_path / "bad.csv", tmp_path / "fit.json"
+    identify.write_recording(path, dataclasses.replace(rec, tau=rec.tau * 100), rx90)
+    for block in ("1000", "100000"):  # block by block, and read whole
+        code = main(["identify", str(path), "--block", block, "--no-cross-validate", "--json", str(out)])
+        err = capsys.readouterr().err
+        assert code == 2 and "far above robot rx90's torque limits" in err and not out.exists(), block
+        assert "not checked" not in err

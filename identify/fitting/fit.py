@@ -74,7 +74,11 @@ def fit(robot: rx90sym.Robot, recordings: Sequence[Any], processing: Processing 
     samples: memory bounded by the block whatever the logs' length (docs/long-logs.md), the
     segment bootstrap computed on the way with ``bootstrap_seed``; client: a
     ``dask.distributed.Client`` running the blocks (block by default 60,000 samples); the processing
-    is cross-validated block by block as on whole recordings (the friction form stays coulomb).
+    is cross-validated block by block as on whole recordings (the friction form stays coulomb); the
+    consistent fit's prior, the plain baseline and the recorded-torque checks are those of whole
+    recordings, computed block by block.
+    The fit's flags hold the recorded-torque checks (identify.fitting.torque_checks: torque scale, gravity
+    at rest; errors that rx90 identify stops on) and a rank that depends on the threshold.
     """
     if method == "consistent" and isinstance(consistent_options.get("physical_prior", "default"), str):
         from identify.estimation.consistency.prior import nominal_prior
