@@ -41,12 +41,14 @@ def log(twin_empty, rx90, tmp_path_factory):
 
 @pytest.fixture(scope="module")
 def consistent(rx90, log):
-    """The consistent fit with the default prior: whole, in three blocks, and the CSV file in one block."""
+    """The consistent fit with the default prior: whole, in three blocks, and the CSV file in one block (the block
+path, its bootstrap with another seed)."""
     rec, path = log
     n = rec.n_samples
     return {"whole": identify.fit(rx90, [rec], GIVEN, "consistent"),
             "blocks": identify.fit(rx90, [rec], GIVEN, "consistent", block=n // 3),
-            "one block": identify.fit(rx90, [path], GIVEN, "consistent", block=n + 1)}
+            # Another bootstrap seed: the prior's covariance still from the seed-0 bootstrap, as on whole recordings.
+            "one block": identify.fit(rx90, [path], GIVEN, "consistent", block=n + 1, bootstrap_seed=3)}
 
 
 def test_the_consistent_fit_takes_the_default_prior_block_by_block(consistent, log):
@@ -60,7 +62,9 @@ def test_the_consistent_fit_takes_the_default_prior_block_by_block(consistent, l
         got = consistent[key]
         assert got.block is not None and got.result.prior == whole.result.prior, key
         assert _rel([got.result.standard[k] for k in names], ref) < 1e-7, key
-        assert _rel(got.bootstrap.std, whole.bootstrap.std) < 1e-8, key
+    assert _rel(consistent["blocks"].bootstrap.std, whole.bootstrap.std) < 1e-8
+    assert consistent["one block"].bootstrap.seed == 3 and _rel(consistent["one block"].bootstrap.std,
+                                                                 whole.bootstrap.std) > 1e-3
     # Without the prior the split of what the data cannot see is another one: the comparison can fail.
     free = identify.fit(whole.robot, [log[0]], GIVEN, "consistent", physical_prior=None)
     assert _rel([free.result.standard[k] for k in names], ref) > 1e-4
