@@ -22,7 +22,7 @@ block being the whole segment in memory, so a long log read block by block
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Any, Iterable, Iterator, Sequence
+from typing import Any, Callable, Iterable, Iterator, Sequence
 
 import numpy as np
 from scipy.signal import butter, filtfilt
@@ -35,7 +35,7 @@ from identify.signal.blocks import Window, lowpass_margin, motion_windows
 
 __all__ = ["BASELINE_CUTOFF_HZ", "BASELINE_ORDER", "BASELINE_TRIM_S", "BASELINE_RCOND", "PlainBaseline",
            "BaselinePrediction", "BaselineSegment", "baseline_names", "baseline_regressor", "baseline_signals",
-           "fit_baseline", "fit_baseline_windows", "memory_windows", "segment_of", "window_signals", "baseline_rms",
+           "fit_baseline", "fit_baseline_windows", "memory_windows", "window_factors", "segment_of", "window_signals", "baseline_rms",
            "plain_baseline"]
 
 #: Cut-off [Hz] and order of the baseline's zero-phase Butterworth on q.
@@ -225,25 +225,39 @@ def fit_baseline(robot: rx90sym.Robot, recordings: Sequence[Any], spring: bool =
     return fit_baseline_windows(robot, memory_windows(recordings, block), spring)
 
 
-def fit_baseline_windows(robot: rx90sym.Robot, windows: Iterable[tuple], spring: bool = True) -> PlainBaseline:
+def window_factors(robot: rx90sym.Robot, segment: BaselineSegment, window: Window, rec: Any,
+                   spring: bool = True) -> tuple[list[np.ndarray], int]:
+    """(per joint the triangular factor of [W_j | y_j] on the fitted samples of the core of ``window``, their
+    number): the rows compressed chunk by chunk (a Dask task when the blocks are spread)."""
+    c, n = len(baseline_names(robot)), robot.n
+    s = window_signals(robot, segment, window, rec, spring)
+    kept = np.flatnonzero(s.kept)
+    R = [np.zeros((0, c + 1)) for _ in range(n)]
+    for start in range(0, kept.size, _CHUNK):
+        idx = kept[start:start + _CHUNK]
+        Phi = baseline_regressor(robot, s.q[idx], s.dq[idx], s.ddq[idx])
+        y = s.tau[idx] + s.spring[idx]
+        R = [np.linalg.qr(np.vstack([R[j], np.column_stack([Phi[:, j, :], y[:, j]])]), mode="r") for j in range(n)]
+    return R, int(kept.size)
+
+
+def fit_baseline_windows(robot: rx90sym.Robot, windows: Iterable[tuple], spring: bool = True,
+                         run: Callable[..., Iterable[tuple]] | None = None) -> PlainBaseline:
     """The plain OLS baseline on the cores of ``windows`` ((segment, window, raw samples):
     :func:`memory_windows`, or :func:`identify.fitting.baseline_blocks.source_windows` for a long log).
     The rows of each joint are compressed apart ([W_j | y_j] -> R_j, stacked: the same singular values
-    as W), which gives each joint's residual on the fitted samples without a second pass."""
+    as W), which gives each joint's residual on the fitted samples without a second pass. run: how the
+    windows' :func:`window_factors` run (``run(task, arguments)`` yielding the results in order, e.g.
+    identify.observation.stream.in_order on Dask; None: here)."""
     names = baseline_names(robot)
     c, n = len(names), robot.n
+    tasks = ((robot, segment, window, rec, spring) for segment, window, rec in windows)
     R = [np.zeros((0, c + 1)) for _ in range(n)]
     rows = 0
-    for segment, window, rec in windows:
-        s = window_signals(robot, segment, window, rec, spring)
-        kept = np.flatnonzero(s.kept)
-        for start in range(0, kept.size, _CHUNK):
-            idx = kept[start:start + _CHUNK]
-            Phi = baseline_regressor(robot, s.q[idx], s.dq[idx], s.ddq[idx])
-            y = s.tau[idx] + s.spring[idx]
-            R = [np.linalg.qr(np.vstack([R[j], np.column_stack([Phi[:, j, :], y[:, j]])]), mode="r")
-                 for j in range(n)]
-            rows += idx.size
+    for factors, count in (window_factors(*a) for a in tasks) if run is None else run(window_factors, tasks):
+        R = [f if not r.shape[0] else np.linalg.qr(np.vstack([r, f]), mode="r") if f.shape[0] else r
+             for r, f in zip(R, factors)]
+        rows += count
     if rows == 0:
         raise ValueError(f"the plain baseline has no sample to fit (every segment shorter than "
                          f"{2 * BASELINE_TRIM_S:g} s)")

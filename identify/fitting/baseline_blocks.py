@@ -42,11 +42,20 @@ def source_windows(sources: Sequence[Any], scans: Sequence[Any], block: int) -> 
 
 
 def streamed_baseline(robot: rx90sym.Robot, sources: Sequence[Any], scans: Sequence[Any], spring: bool,
-                      block: int) -> PlainBaseline | None:
+                      block: int, client: Any = None) -> PlainBaseline | None:
     """:func:`identify.fitting.baseline.plain_baseline` of logs read block by block (None where it cannot be
-    fitted: a rate of 20 Hz or less, every segment shorter than 1 s)."""
+    fitted: a rate of 20 Hz or less, every segment shorter than 1 s); client: a ``dask.distributed.Client``
+    running the windows (read here, filtered and compressed on the workers, folded here in order)."""
+    run = None
+    if client is not None:
+        from identify.observation.stream import in_order
+
+        shared = client.scatter(robot, broadcast=True, hash=False)  # sent once to each worker
+
+        def run(task: Any, arguments: Any) -> Any:
+            return in_order(task, ((shared, *a[1:]) for a in arguments), client, 4)
     try:
-        return fit_baseline_windows(robot, source_windows(sources, scans, block), spring)
+        return fit_baseline_windows(robot, source_windows(sources, scans, block), spring, run)
     except ValueError:
         return None
 

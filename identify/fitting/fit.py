@@ -235,7 +235,7 @@ def fit_in_blocks(robot: rx90sym.Robot, recordings: Sequence[Any], processing: A
     return Fit(robot, sf.result, p, model, base, None, found, found.delay if found is not None else None, spring,
                boot, block=block, streamed=sf, recordings=sf.recordings, choice=_choice_record(sf.choice, p),
                flags=tuple(streamed_torque_flags(robot, sources, sf.scans, block)),
-               baseline=streamed_baseline(robot, sources, sf.scans, p.spring, block))
+               baseline=streamed_baseline(robot, sources, sf.scans, p.spring, block, client))
 
 
 #: Why the friction form is not chosen on the block path (its velocity-scale search reads whole recordings).
