@@ -13,7 +13,8 @@ import identify
 import rx90sym
 from identify.fitting.baseline import fit_baseline, fit_baseline_windows
 from identify.fitting.baseline_blocks import source_windows
-from identify.fitting.torque_checks import (CODES, GravityAtRest, _source_blocks, recorded_torque_flags,
+from identify.fitting.plausibility import GravityAtRest
+from identify.fitting.torque_checks import (CODES, _source_blocks, recorded_torque_flags,
                                            streamed_torque_flags)
 from identify.fitting.validation import predict_streamed
 from identify.io.blocks import MemorySource

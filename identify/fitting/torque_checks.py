@@ -5,7 +5,7 @@
 joint (g: the nominal parameters' gravity torque): both are sums over samples, so a log read block by
 block gives the figures of the same log held whole (the velocity that says "at rest", the recorded one
 or ``numpy.gradient`` of q, from windows one sample wider on each side, as on the whole log):
-:class:`GravityAtRest` holds the sums for both (a recording in memory is one block), and
+:class:`identify.fitting.plausibility.GravityAtRest` holds the sums for both (a recording in memory is one block), and
 :func:`identify.fit` flags alike on whole recordings and in blocks.
 """
 from __future__ import annotations
@@ -16,58 +16,12 @@ import numpy as np
 
 import rx90sym
 
-from identify.fitting.plausibility import (GRAVITY_RATIO, GRAVITY_SHARE, REST_SAMPLES, REST_SPEED, Flag,
-                                           static_gravity_flags, torque_scale_flags)
+from identify.fitting.plausibility import GravityAtRest, Flag, static_gravity_flags, torque_scale_flags
 
-__all__ = ["CODES", "GravityAtRest", "recorded_torque_flags", "streamed_torque_flags"]
+__all__ = ["CODES", "recorded_torque_flags", "streamed_torque_flags"]
 
 #: The codes of the recorded-torque checks (errors: ``rx90 identify`` exits 2 on them, nothing written).
 CODES = ("torque_scale", "static_gravity")
-
-
-class GravityAtRest:
-    """Sums over the samples at rest (every joint slower than REST_SPEED) of the torque times the nominal
-    gravity torque and of its square, per joint; fed block by block."""
-
-    def __init__(self, robot: rx90sym.Robot, nominal: dict) -> None:
-        self.robot = robot
-        self.chi = robot.parameter_vector({k: v for k, v in nominal.items() if k in robot.parameter_names
-                                           and not k.startswith(("FS", "FV", "OFF"))}, strict=False)
-        self.count = 0
-        self.tau_g = np.zeros(robot.n)
-        self.g_g = np.zeros(robot.n)
-
-    def add(self, q: np.ndarray, tau: np.ndarray, dq: np.ndarray) -> None:
-        """Samples (S, n): positions [rad], torques [N m], velocities [rad/s]."""
-        rest = np.all(np.abs(dq) < REST_SPEED, axis=1)
-        if not rest.any():
-            return
-        Q = np.asarray(q)[rest]
-        Z = np.zeros_like(Q)
-        g = self.robot.regressor_batch(Q, Z, Z) @ self.chi
-        if self.robot.spring is not None:  # the motor holds gravity minus the spring (Y = tau + spring, eq. 7)
-            g = g - self.robot.spring_torque_batch(Q)[:, :, 0]
-        self.count += Q.shape[0]
-        self.tau_g += np.einsum("sj,sj->j", np.asarray(tau)[rest], g)
-        self.g_g += np.einsum("sj,sj->j", g, g)
-
-    def flags(self) -> list[Flag]:
-        """static_gravity errors: on each joint whose nominal gravity RMS is at least GRAVITY_SHARE of its
-        limit, the least-squares scale of measured on nominal outside [1/GRAVITY_RATIO, GRAVITY_RATIO]."""
-        if self.count < REST_SAMPLES:
-            return []
-        robot = self.robot
-        judged = np.sqrt(self.g_g / self.count) >= GRAVITY_SHARE * np.asarray(robot.limits.tau_max, dtype=float)
-        flags = []
-        for j in np.flatnonzero(judged):
-            s = float(self.tau_g[j] / self.g_g[j])
-            if not 1 / GRAVITY_RATIO <= s <= GRAVITY_RATIO:
-                cause = "the torque sign" if s < 0 else "the robot, the units or the gains"
-                flags.append(Flag("static_gravity", "error", f"at rest, joint {j + 1}'s torque is {s:.3g} x the "
-                                  f"gravity of robot {robot.name}'s nominal parameters ({self.count} samples at rest; "
-                                  f"expected {1 / GRAVITY_RATIO:.2g}..{GRAVITY_RATIO:g})", f"check {cause}",
-                                  joint=int(j) + 1))
-        return flags
 
 
 def _checked(robot: rx90sym.Robot, blocks: Iterator[tuple], nominal: dict | None) -> list[Flag]:
