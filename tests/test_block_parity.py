@@ -189,3 +189,21 @@ def test_rx90_identify_checks_the_recorded_torques_of_a_long_log(rx90, tmp_path,
         err = capsys.readouterr().err
         assert code == 2 and "far above robot rx90's torque limits" in err and not out.exists(), block
         assert "not checked" not in err
+
+
+def test_rx90_predict_on_a_long_log_is_the_fits_prediction(rx90, consistent, twin_empty, tmp_path):
+    """rx90 predict on a log longer than --block (read block by block) gives Fit.predict's figures on the log
+    held whole, the plain baseline's among them."""
+    import json
+
+    from identify.app.cli import main
+
+    f = consistent["whole"]
+    other = twin_empty[1]
+    fit_file, path, out = tmp_path / "fit.json", tmp_path / "other.csv", tmp_path / "pred.json"
+    f.save(fit_file)
+    identify.write_recording(path, other, rx90)
+    assert main(["predict", str(path), "--identification", str(fit_file), "--block", "1000", "--json", str(out)]) == 0
+    got, ref = json.loads(out.read_text()), f.predict(other)
+    for name in ("rms_error", "rms_error_filtered", "rms_error_filtered_moving", "baseline_rms_error"):
+        assert _rel(np.array(got[name]), getattr(ref, name)) < 1e-8, name

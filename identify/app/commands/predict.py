@@ -58,9 +58,10 @@ def run(args: argparse.Namespace) -> int:
     if streamed([args.recording], args.block, None):  # a long log: predicted block by block
         from identify.fitting.validation import predict_streamed
 
+        # As Fit.predict on the log held whole: at 20 x the cut-off, the plain baseline beside it.
         val = predict_streamed(f.robot, f.result, args.recording, base=f.base,
                                block=args.block, convention=args.convention or f.model.convention, gains=f.gains,
-                               **f.filtering())
+                               prediction=True, baseline=f.baseline, **f.filtering())
     else:
         rec = read_recordings([args.recording], f.robot, args.convention or f.model.convention, f.gains)[0]
         val = f.predict(rec)
