@@ -207,3 +207,13 @@ def test_rx90_predict_on_a_long_log_is_the_fits_prediction(rx90, consistent, twi
     got, ref = json.loads(out.read_text()), f.predict(other)
     for name in ("rms_error", "rms_error_filtered", "rms_error_filtered_moving", "baseline_rms_error"):
         assert _rel(np.array(got[name]), getattr(ref, name)) < 1e-8, name
+
+
+def test_the_consistent_fit_refuses_presliding_rest_on_both_paths(rx90, log):
+    """Its standard parameters are what a URDF holds (Coulomb and viscous friction): the presliding rest
+    policy is refused block by block as on the whole log."""
+    rec, path = log
+    for recordings, block in (([rec], None), ([rec], 1000), ([path], 1000)):
+        with pytest.raises(ValueError, match="rest policy 'presliding'"):
+            identify.fit(rx90, recordings, Processing(cross_validate=False, rest="presliding"), "consistent",
+                         block=block)

@@ -87,6 +87,14 @@ def fit(robot: rx90sym.Robot, recordings: Sequence[Any], processing: Processing 
         # on whole recordings and block by block alike.
         consistent_options["physical_prior"] = nominal_prior(robot, None if consistent_options.get(
             "physical_prior", "default") == "default" else consistent_options["physical_prior"])
+    p = processing if processing is not None else Processing()
+    if method == "consistent" and (has_smooth_friction(p.friction) or has_policy(p.rest, "presliding")):
+        # Its standard parameters are what a URDF/MJCF holds: Coulomb (FS) and viscous (FV) friction (any path).
+        what = " and ".join(([f"friction form {friction_label(p.friction)!r}"] if has_smooth_friction(p.friction) else [])
+                            + (["rest policy 'presliding'"] if has_policy(p.rest, "presliding") else []))
+        raise ValueError(f"fit: the consistent method fits bodies with Coulomb + viscous friction (what a URDF or "
+                         f"MJCF holds), not {what}: use friction 'coulomb' and a rest policy other than "
+                         f"'presliding', or method 'wls'")
     if block is not None and client is None and _within_one_block(recordings, block):
         block = None  # a log within one block is one block: the whole-signal fit, as rx90 identify does
     if block is not None or client is not None:
@@ -99,14 +107,6 @@ def fit(robot: rx90sym.Robot, recordings: Sequence[Any], processing: Processing 
         return done.with_flags([*rank_flags(done.base), *done.flags])  # a rank that depends on the threshold
     if method not in METHODS:
         raise ValueError(f"fit: method must be one of {METHODS}, got {method!r}")
-    p = processing if processing is not None else Processing()
-    if method == "consistent" and (has_smooth_friction(p.friction) or has_policy(p.rest, "presliding")):
-        # Its standard parameters are what a URDF/MJCF holds: Coulomb (FS) and viscous (FV) friction.
-        what = " and ".join(([f"friction form {friction_label(p.friction)!r}"] if has_smooth_friction(p.friction) else [])
-                            + (["rest policy 'presliding'"] if has_policy(p.rest, "presliding") else []))
-        raise ValueError(f"fit: the consistent method fits bodies with Coulomb + viscous friction (what a URDF or "
-                         f"MJCF holds), not {what}: use friction 'coulomb' and a rest policy other than "
-                         f"'presliding', or method 'wls'")
     recordings = list(recordings) if isinstance(recordings, (list, tuple)) else [recordings]
     for rec in recordings if observation is None else ():
         rec.torques  # currents without gains: refused once, here, not by every candidate processing
