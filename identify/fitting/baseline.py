@@ -14,12 +14,15 @@ Exactly as the project's issue notes define it (what a user writes in 40 lines):
 A robot whose description has a spring gets its known spring torque added to the measured torque
 (as the toolkit does; none of the real arms has one). Rows are compressed chunk by chunk with a QR
 factorisation ([W | y] -> R, same singular values, so lstsq on R with the same rcond solves the same
-problem) so that a long log never holds the whole W.
+problem) so that a long log never holds the whole W; a segment is filtered in blocks with margins
+(:meth:`BaselineSegment.windows`: the Butterworth's settling, two samples for the two gradients), one
+block being the whole segment in memory, so a long log read block by block
+(:mod:`identify.fitting.baseline_blocks`) gets the same baseline in bounded memory.
 """
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Any, Sequence
+from typing import Any, Callable, Iterable, Iterator, Sequence
 
 import numpy as np
 from scipy.signal import butter, filtfilt
@@ -28,10 +31,12 @@ import rx90sym
 from rx90sym.pinocchio_bridge import PINOCCHIO_ORDER, pinocchio_columns
 
 from identify.estimation.results import json_number
+from identify.signal.blocks import Window, lowpass_margin, motion_windows
 
 __all__ = ["BASELINE_CUTOFF_HZ", "BASELINE_ORDER", "BASELINE_TRIM_S", "BASELINE_RCOND", "PlainBaseline",
-           "BaselinePrediction", "baseline_names", "baseline_regressor", "baseline_signals", "fit_baseline",
-           "baseline_rms", "plain_baseline"]
+           "BaselinePrediction", "BaselineSegment", "baseline_names", "baseline_regressor", "baseline_signals",
+           "fit_baseline", "fit_baseline_windows", "memory_windows", "window_factors", "segment_of", "window_signals", "baseline_rms",
+           "plain_baseline"]
 
 #: Cut-off [Hz] and order of the baseline's zero-phase Butterworth on q.
 BASELINE_CUTOFF_HZ = 10.0
@@ -65,10 +70,10 @@ def baseline_regressor(robot: rx90sym.Robot, q: np.ndarray, dq: np.ndarray, ddq:
 
 @dataclass(frozen=True, eq=False)
 class BaselineSignals:
-    """One segment through the baseline's filter: t (N,) [s]; q, dq, ddq (N, n) filtered and
+    """Samples of one segment through the baseline's filter: t (N,) [s]; q, dq, ddq (N, n) filtered and
     differentiated; tau (N, n) the raw measured torques [N m]; spring (N, n) the known spring torque
-    at the filtered q (0 without); kept (N,) the samples fitted or scored (0.5 s from each end,
-    measured)."""
+    at the filtered q (0 without); kept (N,) the samples fitted or scored (0.5 s from each end of the
+    segment, measured)."""
 
     t: np.ndarray
     q: np.ndarray
@@ -79,24 +84,73 @@ class BaselineSignals:
     kept: np.ndarray
 
 
-def baseline_signals(robot: rx90sym.Robot, piece: Any, spring: bool = True) -> BaselineSignals:
-    """The baseline's derivatives of one segment (a recording without gaps too long to bridge)."""
+@dataclass(frozen=True)
+class BaselineSegment:
+    """One segment as the baseline filters it: step [s] (its median time step), the times [s] of its
+    first and last samples, its samples, and its source (for messages)."""
+
+    step: float
+    first: float
+    last: float
+    samples: int
+    source: str = "<memory>"
+
+    def windows(self, block: int | None = None) -> list[Window]:
+        """Blocks of at most ``block`` samples (None: the whole segment, one block), each with the margins
+        the zero-phase Butterworth (:func:`identify.signal.blocks.lowpass_margin`) and the two
+        ``numpy.gradient`` need: its core then equals the whole segment's to ~1e-12 relative."""
+        margin = lowpass_margin(1.0 / self.step, BASELINE_CUTOFF_HZ, BASELINE_ORDER)
+        return motion_windows(self.samples, 0, 1, self.samples if block is None else int(block), margin, 0)
+
+    def check(self) -> None:
+        if self.samples < 2:
+            raise ValueError(f"{self.source}: {self.samples} sample(s): the plain baseline needs a motion")
+        if BASELINE_CUTOFF_HZ >= 0.5 / self.step:
+            raise ValueError(f"{self.source}: recorded at {1 / self.step:g} Hz: the plain baseline's "
+                             f"{BASELINE_CUTOFF_HZ:g} Hz filter needs a rate above {2 * BASELINE_CUTOFF_HZ:g} Hz")
+
+
+def segment_of(piece: Any) -> BaselineSegment:
+    """The :class:`BaselineSegment` of a segment held in memory (a recording without long gaps)."""
     t = np.asarray(piece.t, dtype=float)
-    if t.size < 2:
-        raise ValueError(f"{piece.source}: {t.size} sample(s): the plain baseline needs a motion")
-    step = float(np.median(np.diff(t)))
-    rate = 1.0 / step
-    if BASELINE_CUTOFF_HZ >= rate / 2:
-        raise ValueError(f"{piece.source}: recorded at {rate:g} Hz: the plain baseline's {BASELINE_CUTOFF_HZ:g} Hz "
-                         f"filter needs a rate above {2 * BASELINE_CUTOFF_HZ:g} Hz")
-    b, a = butter(BASELINE_ORDER, BASELINE_CUTOFF_HZ, fs=rate)
-    q = filtfilt(b, a, np.asarray(piece.q, dtype=float), axis=0)
-    dq = np.gradient(q, step, axis=0)
-    ddq = np.gradient(dq, step, axis=0)
-    kept = (t >= t[0] + BASELINE_TRIM_S - 1e-9 * step) & (t <= t[-1] - BASELINE_TRIM_S + 1e-9 * step)
-    kept &= np.asarray(piece.measured_mask, dtype=bool)
+    step = float(np.median(np.diff(t))) if t.size > 1 else float("nan")
+    return BaselineSegment(step, float(t[0]) if t.size else float("nan"), float(t[-1]) if t.size else float("nan"),
+                           int(t.size), str(getattr(piece, "source", "<memory>")))
+
+
+def window_signals(robot: rx90sym.Robot, segment: BaselineSegment, window: Window, rec: Any,
+                   spring: bool = True) -> BaselineSignals:
+    """The baseline's derivatives on the core of ``window`` of ``segment``, ``rec`` holding the window's raw
+    samples (``window.raw``; the whole segment for the window of a whole segment)."""
+    b, a = butter(BASELINE_ORDER, BASELINE_CUTOFF_HZ, fs=1.0 / segment.step)
+    q = filtfilt(b, a, np.asarray(rec.q, dtype=float), axis=0)
+    dq = np.gradient(q, segment.step, axis=0)
+    ddq = np.gradient(dq, segment.step, axis=0)
+    core = slice(window.core[0] - window.raw[0], window.core[1] - window.raw[0])
+    t, q, dq, ddq = np.asarray(rec.t, dtype=float)[core], q[core], dq[core], ddq[core]
+    tol = 1e-9 * segment.step
+    kept = (t >= segment.first + BASELINE_TRIM_S - tol) & (t <= segment.last - BASELINE_TRIM_S + tol)
+    kept &= np.asarray(rec.measured_mask, dtype=bool)[core]
     extra = robot.spring_torque_batch(q)[:, :, 0] if spring and robot.spring is not None else np.zeros_like(q)
-    return BaselineSignals(t, q, dq, ddq, np.asarray(piece.torques, dtype=float), extra, kept)
+    return BaselineSignals(t, q, dq, ddq, np.asarray(rec.torques, dtype=float)[core], extra, kept)
+
+
+def baseline_signals(robot: rx90sym.Robot, piece: Any, spring: bool = True) -> BaselineSignals:
+    """The baseline's derivatives of one whole segment (a recording without gaps too long to bridge)."""
+    segment = segment_of(piece)
+    segment.check()
+    return window_signals(robot, segment, segment.windows()[0], piece, spring)
+
+
+def memory_windows(recordings: Sequence[Any], block: int | None = None) -> Iterator[tuple]:
+    """(segment, window, its raw samples) of every segment of recordings held in memory, blocks of at most
+    ``block`` samples (None: each segment whole)."""
+    for rec in recordings:
+        for piece in rec.pieces():
+            segment = segment_of(piece)
+            segment.check()
+            for w in segment.windows(block):
+                yield segment, w, piece if w.raw == (0, segment.samples) else piece.select(slice(*w.raw))
 
 
 @dataclass(frozen=True, eq=False)
@@ -124,18 +178,24 @@ class PlainBaseline:
     spring: bool
     residual_rms: np.ndarray
 
-    def predict(self, robot: rx90sym.Robot, recording: Any) -> BaselinePrediction:
-        """The baseline's prediction of ``recording`` (every segment on its own)."""
+    def predict(self, robot: rx90sym.Robot, recording: Any, block: int | None = None) -> BaselinePrediction:
+        """The baseline's prediction of ``recording`` (every segment on its own; filtered in blocks of at most
+        ``block`` samples, None: each segment whole)."""
+        return self.predict_windows(robot, memory_windows([recording], block))
+
+    def predict_windows(self, robot: rx90sym.Robot, windows: Iterable[tuple]) -> BaselinePrediction:
+        """The prediction on the cores of ``windows`` ((segment, window, raw samples), in time order:
+        :func:`memory_windows`, or :func:`identify.fitting.baseline_blocks.source_windows` for a long log)."""
         if tuple(baseline_names(robot)) != self.names:
             raise ValueError(f"the plain baseline was fitted with other columns than robot {robot.name!r}'s")
         parts = []
-        for piece in recording.pieces():
-            s = baseline_signals(robot, piece, self.spring)
+        for segment, window, rec in windows:
+            s = window_signals(robot, segment, window, rec, self.spring)
             pred = np.full(s.tau.shape, np.nan)
             rows = np.flatnonzero(s.kept)
-            if rows.size:
-                Phi = baseline_regressor(robot, s.q[rows], s.dq[rows], s.ddq[rows])
-                pred[rows] = Phi @ self.values - s.spring[rows]
+            for start in range(0, rows.size, _CHUNK):
+                idx = rows[start:start + _CHUNK]
+                pred[idx] = baseline_regressor(robot, s.q[idx], s.dq[idx], s.ddq[idx]) @ self.values - s.spring[idx]
             parts.append((s.t, pred, s.tau, s.kept))
         t, pred, tau, kept = (np.concatenate(a) for a in zip(*parts))
         return BaselinePrediction(t, pred, tau, kept)
@@ -158,25 +218,46 @@ class PlainBaseline:
         return cls(tuple(d["names"]), values, int(d["samples"]), int(d["rank"]), bool(d["spring"]), rms)
 
 
-def fit_baseline(robot: rx90sym.Robot, recordings: Sequence[Any], spring: bool = True) -> PlainBaseline:
-    """The plain OLS baseline (module docstring) on every segment of ``recordings``. The rows of each joint
-    are compressed apart ([W_j | y_j] -> R_j, stacked: the same singular values as W), which gives each
-    joint's residual on the fitted samples without a second pass."""
+def fit_baseline(robot: rx90sym.Robot, recordings: Sequence[Any], spring: bool = True,
+                 block: int | None = None) -> PlainBaseline:
+    """The plain OLS baseline (module docstring) on every segment of ``recordings`` (held in memory), each
+    filtered in blocks of at most ``block`` samples (None: whole; the result is the same to ~1e-12)."""
+    return fit_baseline_windows(robot, memory_windows(recordings, block), spring)
+
+
+def window_factors(robot: rx90sym.Robot, segment: BaselineSegment, window: Window, rec: Any,
+                   spring: bool = True) -> tuple[list[np.ndarray], int]:
+    """(per joint the triangular factor of [W_j | y_j] on the fitted samples of the core of ``window``, their
+    number): the rows compressed chunk by chunk (a Dask task when the blocks are spread)."""
+    c, n = len(baseline_names(robot)), robot.n
+    s = window_signals(robot, segment, window, rec, spring)
+    kept = np.flatnonzero(s.kept)
+    R = [np.zeros((0, c + 1)) for _ in range(n)]
+    for start in range(0, kept.size, _CHUNK):
+        idx = kept[start:start + _CHUNK]
+        Phi = baseline_regressor(robot, s.q[idx], s.dq[idx], s.ddq[idx])
+        y = s.tau[idx] + s.spring[idx]
+        R = [np.linalg.qr(np.vstack([R[j], np.column_stack([Phi[:, j, :], y[:, j]])]), mode="r") for j in range(n)]
+    return R, int(kept.size)
+
+
+def fit_baseline_windows(robot: rx90sym.Robot, windows: Iterable[tuple], spring: bool = True,
+                         run: Callable[..., Iterable[tuple]] | None = None) -> PlainBaseline:
+    """The plain OLS baseline on the cores of ``windows`` ((segment, window, raw samples):
+    :func:`memory_windows`, or :func:`identify.fitting.baseline_blocks.source_windows` for a long log).
+    The rows of each joint are compressed apart ([W_j | y_j] -> R_j, stacked: the same singular values
+    as W), which gives each joint's residual on the fitted samples without a second pass. run: how the
+    windows' :func:`window_factors` run (``run(task, arguments)`` yielding the results in order, e.g.
+    identify.observation.stream.in_order on Dask; None: here)."""
     names = baseline_names(robot)
     c, n = len(names), robot.n
+    tasks = ((robot, segment, window, rec, spring) for segment, window, rec in windows)
     R = [np.zeros((0, c + 1)) for _ in range(n)]
     rows = 0
-    for rec in recordings:
-        for piece in rec.pieces():
-            s = baseline_signals(robot, piece, spring)
-            kept = np.flatnonzero(s.kept)
-            for start in range(0, kept.size, _CHUNK):
-                idx = kept[start:start + _CHUNK]
-                Phi = baseline_regressor(robot, s.q[idx], s.dq[idx], s.ddq[idx])
-                y = s.tau[idx] + s.spring[idx]
-                R = [np.linalg.qr(np.vstack([R[j], np.column_stack([Phi[:, j, :], y[:, j]])]), mode="r")
-                     for j in range(n)]
-                rows += idx.size
+    for factors, count in (window_factors(*a) for a in tasks) if run is None else run(window_factors, tasks):
+        R = [f if not r.shape[0] else np.linalg.qr(np.vstack([r, f]), mode="r") if f.shape[0] else r
+             for r, f in zip(R, factors)]
+        rows += count
     if rows == 0:
         raise ValueError(f"the plain baseline has no sample to fit (every segment shorter than "
                          f"{2 * BASELINE_TRIM_S:g} s)")
@@ -194,12 +275,14 @@ def baseline_rms(err: np.ndarray, mask: np.ndarray) -> np.ndarray:
                      for j in range(err.shape[1])])
 
 
-def plain_baseline(robot: rx90sym.Robot, recordings: Sequence[Any], spring: bool = True) -> PlainBaseline | None:
-    """:func:`fit_baseline`, or None where it cannot be fitted (no recordings, a rate of 20 Hz or
-    less, every segment shorter than 1 s): the validation then shows no baseline."""
+def plain_baseline(robot: rx90sym.Robot, recordings: Sequence[Any], spring: bool = True,
+                   windows: Iterable[tuple] | None = None) -> PlainBaseline | None:
+    """:func:`fit_baseline` (on ``windows`` when given: a long log's, block by block), or None where it
+    cannot be fitted (no recordings, a rate of 20 Hz or less, every segment shorter than 1 s): the
+    validation then shows no baseline."""
     if not recordings:
         return None
     try:
-        return fit_baseline(robot, recordings, spring)
+        return fit_baseline_windows(robot, memory_windows(recordings) if windows is None else windows, spring)
     except ValueError:
         return None

@@ -16,6 +16,7 @@ import numpy as np
 import rx90sym
 
 from identify.estimation.bootstrap import bootstrap_std
+from identify.estimation.honest_covariance import HONEST_SEED, honest_covariance, needs_honest_covariance
 from identify.estimation.results import METHODS, IdentificationResult
 from identify.fitting.file import FitModel
 from identify.io.gains import DriveGains
@@ -30,6 +31,7 @@ from identify.fitting.friction import chosen_friction, friction_columns
 from identify.estimation.delay import estimate_delay
 from identify.fitting.record import BOOTSTRAP_BLOCK_S, BOOTSTRAP_DRAWS, Bootstrap, Fit
 from identify.fitting.rank_flags import rank_flags
+from identify.fitting.torque_checks import recorded_torque_flags
 
 if TYPE_CHECKING:
     from identify.fitting.streamed import ProcessingChoice
@@ -72,8 +74,27 @@ def fit(robot: rx90sym.Robot, recordings: Sequence[Any], processing: Processing 
     samples: memory bounded by the block whatever the logs' length (docs/long-logs.md), the
     segment bootstrap computed on the way with ``bootstrap_seed``; client: a
     ``dask.distributed.Client`` running the blocks (block by default 60,000 samples); the processing
-    is cross-validated block by block as on whole recordings (the friction form stays coulomb).
+    is cross-validated block by block as on whole recordings (the friction form stays coulomb); the
+    consistent fit's prior, the plain baseline and the recorded-torque checks are those of whole
+    recordings, computed block by block.
+    The fit's flags hold the recorded-torque checks (identify.fitting.torque_checks: torque scale, gravity
+    at rest; errors that rx90 identify stops on) and a rank that depends on the threshold.
     """
+    if method == "consistent" and isinstance(consistent_options.get("physical_prior", "default"), str):
+        from identify.estimation.consistency.prior import nominal_prior
+
+        # The default prior is rx90 identify's: the robot's nominal parameters (None: said, arbitrary split);
+        # on whole recordings and block by block alike.
+        consistent_options["physical_prior"] = nominal_prior(robot, None if consistent_options.get(
+            "physical_prior", "default") == "default" else consistent_options["physical_prior"])
+    p = processing if processing is not None else Processing()
+    if method == "consistent" and (has_smooth_friction(p.friction) or has_policy(p.rest, "presliding")):
+        # Its standard parameters are what a URDF/MJCF holds: Coulomb (FS) and viscous (FV) friction (any path).
+        what = " and ".join(([f"friction form {friction_label(p.friction)!r}"] if has_smooth_friction(p.friction) else [])
+                            + (["rest policy 'presliding'"] if has_policy(p.rest, "presliding") else []))
+        raise ValueError(f"fit: the consistent method fits bodies with Coulomb + viscous friction (what a URDF or "
+                         f"MJCF holds), not {what}: use friction 'coulomb' and a rest policy other than "
+                         f"'presliding', or method 'wls'")
     if block is not None and client is None and _within_one_block(recordings, block):
         block = None  # a log within one block is one block: the whole-signal fit, as rx90 identify does
     if block is not None or client is not None:
@@ -83,23 +104,9 @@ def fit(robot: rx90sym.Robot, recordings: Sequence[Any], processing: Processing 
         done = fit_in_blocks(robot, recordings, processing, method, base=base, gains=gains, convention=convention,
                              spring_source=spring_source, block=block, client=client, bootstrap_seed=bootstrap_seed,
                              **consistent_options)
-        return done.with_flags([*done.flags, *rank_flags(done.base)])  # a rank that depends on the threshold
+        return done.with_flags([*rank_flags(done.base), *done.flags])  # a rank that depends on the threshold
     if method not in METHODS:
         raise ValueError(f"fit: method must be one of {METHODS}, got {method!r}")
-    if method == "consistent" and isinstance(consistent_options.get("physical_prior", "default"), str):
-        from identify.estimation.consistency.prior import nominal_prior
-
-        # The default prior is rx90 identify's: the robot's nominal parameters (None: said, arbitrary split).
-        consistent_options["physical_prior"] = nominal_prior(robot, None if consistent_options.get(
-            "physical_prior", "default") == "default" else consistent_options["physical_prior"])
-    p = processing if processing is not None else Processing()
-    if method == "consistent" and (has_smooth_friction(p.friction) or has_policy(p.rest, "presliding")):
-        # Its standard parameters are what a URDF/MJCF holds: Coulomb (FS) and viscous (FV) friction.
-        what = " and ".join(([f"friction form {friction_label(p.friction)!r}"] if has_smooth_friction(p.friction) else [])
-                            + (["rest policy 'presliding'"] if has_policy(p.rest, "presliding") else []))
-        raise ValueError(f"fit: the consistent method fits bodies with Coulomb + viscous friction (what a URDF or "
-                         f"MJCF holds), not {what}: use friction 'coulomb' and a rest policy other than "
-                         f"'presliding', or method 'wls'")
     recordings = list(recordings) if isinstance(recordings, (list, tuple)) else [recordings]
     for rec in recordings if observation is None else ():
         rec.torques  # currents without gains: refused once, here, not by every candidate processing
@@ -153,7 +160,8 @@ def fit(robot: rx90sym.Robot, recordings: Sequence[Any], processing: Processing 
     spring = spring_summary(robot, base if isinstance(base, BaseWithSpring) else None, result, recordings)[0]
     done = Fit(robot, result, p, model, base, obs, found, found.delay if found is not None else None, spring,
                recordings=tuple(layout_summary(r) for r in recordings if hasattr(r, "measured_mask")),
-               choice=choice, flags=tuple(rank_flags(base)),
+               choice=choice, flags=(*rank_flags(base), *(recorded_torque_flags(robot, recordings)
+                                                          if observation is None else ())),
                baseline=plain_baseline(robot, recordings if observation is None else [], p.spring))
     return done if bootstrap_seed is None else done.bootstrapped(bootstrap_seed)  # rx90 identify's σ, alike
 
@@ -171,13 +179,10 @@ def _offset_record(base: Any) -> tuple[int, ...] | None:
 
 
 def _honest_covariance(obs: Observation, result: IdentificationResult) -> np.ndarray:
-    """Eq. 13's covariance of the base parameters, inflated by the median ratio of the segment
-    bootstrap's σ to eq. 13's when above 1 (coloured residuals: eq. 13 is optimistic; white
-    ones leave it as it is). The budget of the prior fit is measured in it."""
-    std = bootstrap_std(obs.W, obs.Y, obs.joint, obs.samples, result.weights, obs.rate)
-    ratios = std / np.where(result.std > 0, result.std, np.nan)
-    ratios = ratios[np.isfinite(ratios)]  # a recording too short for two blocks has none: eq. 13's
-    return result.covariance * max(1.0, float(np.median(ratios)) if ratios.size else 1.0) ** 2
+    """Eq. 13's covariance inflated by the segment bootstrap (identify.estimation.honest_covariance): the
+    budget of the prior fit is measured in it."""
+    std = bootstrap_std(obs.W, obs.Y, obs.joint, obs.samples, result.weights, obs.rate, seed=HONEST_SEED)
+    return honest_covariance(result, std)
 
 
 def _solve(robot: rx90sym.Robot, obs: Observation, base: Any, method: str,
@@ -191,7 +196,7 @@ def _solve(robot: rx90sym.Robot, obs: Observation, base: Any, method: str,
         return result
     from identify.estimation.consistent_fit import consistent_fit
 
-    if consistent_options.get("physical_prior") is not None and "covariance" not in consistent_options:
+    if needs_honest_covariance(method, consistent_options):
         consistent_options = {**consistent_options, "covariance": _honest_covariance(obs, result)}
     return consistent_fit(robot, result, base, **consistent_options)
 
@@ -204,6 +209,9 @@ def fit_in_blocks(robot: rx90sym.Robot, recordings: Sequence[Any], processing: A
     :class:`identify.Fit` without an observation matrix, its bootstrap computed on the way."""
     from identify.fitting.streamed import DEFAULT_BLOCK, BootstrapSpec, fit_streamed  # the block path's modules
     from identify.observation.spring_fit import BaseWithSpring, spring_summary
+    from identify.io.blocks import block_source
+    from identify.fitting.baseline_blocks import streamed_baseline
+    from identify.fitting.torque_checks import streamed_torque_flags
 
     p = processing if processing is not None else Processing()
     block = DEFAULT_BLOCK if block is None else int(block)
@@ -226,8 +234,12 @@ def fit_in_blocks(robot: rx90sym.Robot, recordings: Sequence[Any], processing: A
     spring = spring_summary(robot, base if isinstance(base, BaseWithSpring) else None, sf.result, angles)[0]
     boot = Bootstrap(sf.bootstrap_std, sf.bootstrap_block / sf.rate, spec.draws, spec.seed)
     found = sf.delay_estimate
+    # The baseline and the recorded-torque checks: a pass each over the logs, block by block, as on whole ones.
+    sources = [block_source(r, robot, convention, gains) for r in recordings]
     return Fit(robot, sf.result, p, model, base, sf.observation, found, found.delay if found is not None else None, spring,
-               boot, block=block, streamed=sf, recordings=sf.recordings, choice=_choice_record(sf.choice, p))
+               boot, block=block, streamed=sf, recordings=sf.recordings, choice=_choice_record(sf.choice, p),
+               flags=tuple(streamed_torque_flags(robot, sources, sf.scans, block)),
+               baseline=streamed_baseline(robot, sources, sf.scans, p.spring, block, client))
 
 
 #: Why the friction form is not chosen on the block path (its velocity-scale search reads whole recordings).

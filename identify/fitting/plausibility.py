@@ -56,7 +56,7 @@ import numpy as np
 import rx90sym
 
 __all__ = ["Flag", "PlausibilityError", "raise_errors", "gain_flags", "payload_flags", "torque_scale_flags",
-           "residual_flags", "estimate_flags", "mass_bound_flags", "margin_flags", "static_gravity_flags",
+           "residual_flags", "estimate_flags", "mass_bound_flags", "margin_flags", "static_gravity_flags", "GravityAtRest",
            "prior_flags", "PRIOR_MASS_RATIO", "CONSISTENT_COST_PCT", "TORQUE_LOW", "TORQUE_HIGH", "RESIDUAL_SHARE", "RESIDUAL_FLOOR",
            "SIGMAS"]
 
@@ -266,6 +266,51 @@ def margin_flags(margin: float) -> list[Flag]:
                  f"estimate (consistency margin {margin:.3g})", "use the physically consistent fit")]
 
 
+class GravityAtRest:
+    """Sums over the samples at rest (every joint slower than REST_SPEED) of the torque times the nominal
+    gravity torque and of its square, per joint; fed block by block."""
+
+    def __init__(self, robot: rx90sym.Robot, nominal: dict) -> None:
+        self.robot = robot
+        self.chi = robot.parameter_vector({k: v for k, v in nominal.items() if k in robot.parameter_names
+                                           and not k.startswith(("FS", "FV", "OFF"))}, strict=False)
+        self.count = 0
+        self.tau_g = np.zeros(robot.n)
+        self.g_g = np.zeros(robot.n)
+
+    def add(self, q: np.ndarray, tau: np.ndarray, dq: np.ndarray) -> None:
+        """Samples (S, n): positions [rad], torques [N m], velocities [rad/s]."""
+        rest = np.all(np.abs(dq) < REST_SPEED, axis=1)
+        if not rest.any():
+            return
+        Q = np.asarray(q)[rest]
+        Z = np.zeros_like(Q)
+        g = self.robot.regressor_batch(Q, Z, Z) @ self.chi
+        if self.robot.spring is not None:  # the motor holds gravity minus the spring (Y = tau + spring, eq. 7)
+            g = g - self.robot.spring_torque_batch(Q)[:, :, 0]
+        self.count += Q.shape[0]
+        self.tau_g += np.einsum("sj,sj->j", np.asarray(tau)[rest], g)
+        self.g_g += np.einsum("sj,sj->j", g, g)
+
+    def flags(self) -> list[Flag]:
+        """static_gravity errors: on each joint whose nominal gravity RMS is at least GRAVITY_SHARE of its
+        limit, the least-squares scale of measured on nominal outside [1/GRAVITY_RATIO, GRAVITY_RATIO]."""
+        if self.count < REST_SAMPLES:
+            return []
+        robot = self.robot
+        judged = np.sqrt(self.g_g / self.count) >= GRAVITY_SHARE * np.asarray(robot.limits.tau_max, dtype=float)
+        flags = []
+        for j in np.flatnonzero(judged):
+            s = float(self.tau_g[j] / self.g_g[j])
+            if not 1 / GRAVITY_RATIO <= s <= GRAVITY_RATIO:
+                cause = "the torque sign" if s < 0 else "the robot, the units or the gains"
+                flags.append(Flag("static_gravity", "error", f"at rest, joint {j + 1}'s torque is {s:.3g} x the "
+                                  f"gravity of robot {robot.name}'s nominal parameters ({self.count} samples at rest; "
+                                  f"expected {1 / GRAVITY_RATIO:.2g}..{GRAVITY_RATIO:g})", f"check {cause}",
+                                  joint=int(j) + 1))
+        return flags
+
+
 def static_gravity_flags(recordings: Sequence, robot: rx90sym.Robot, nominal: dict | None) -> list[Flag]:
     """Torques at rest against the gravity of the robot's nominal parameters ([nominal] table).
 
@@ -278,34 +323,13 @@ def static_gravity_flags(recordings: Sequence, robot: rx90sym.Robot, nominal: di
     """
     if not nominal or not recordings:
         return []
-    chi = robot.parameter_vector({k: v for k, v in nominal.items() if k in robot.parameter_names
-                                  and not k.startswith(("FS", "FV", "OFF"))}, strict=False)
-    Qs, Ts = [], []
+    gravity = GravityAtRest(robot, nominal)
     for rec in recordings:
         if rec.tau is None or len(rec.t) < 3:
             continue
         dq = rec.dq if rec.dq is not None else np.gradient(np.asarray(rec.q), np.asarray(rec.t), axis=0)
-        rest = np.all(np.abs(dq) < REST_SPEED, axis=1)
-        Qs.append(np.asarray(rec.q)[rest])
-        Ts.append(np.asarray(rec.tau)[rest])
-    Q = np.concatenate(Qs) if Qs else np.zeros((0, robot.n))
-    if len(Q) < REST_SAMPLES:
-        return []
-    Z = np.zeros_like(Q)
-    g = robot.regressor_batch(Q, Z, Z) @ chi
-    if robot.spring is not None:  # the motor holds gravity minus the spring (Y = tau + spring, eq. 7)
-        g = g - robot.spring_torque_batch(Q)[:, :, 0]
-    tau = np.concatenate(Ts)
-    judged = np.sqrt(np.mean(g ** 2, axis=0)) >= GRAVITY_SHARE * np.asarray(robot.limits.tau_max, dtype=float)
-    flags = []
-    for j in np.flatnonzero(judged):
-        s = float(tau[:, j] @ g[:, j] / (g[:, j] @ g[:, j]))
-        if not 1 / GRAVITY_RATIO <= s <= GRAVITY_RATIO:
-            cause = "the torque sign" if s < 0 else "the robot, the units or the gains"
-            flags.append(Flag("static_gravity", "error", f"at rest, joint {j + 1}'s torque is {s:.3g} x the gravity of "
-                              f"robot {robot.name}'s nominal parameters ({len(Q)} samples at rest; expected "
-                              f"{1 / GRAVITY_RATIO:.2g}..{GRAVITY_RATIO:g})", f"check {cause}", joint=int(j) + 1))
-    return flags
+        gravity.add(np.asarray(rec.q), np.asarray(rec.tau), dq)
+    return gravity.flags()
 
 
 def prior_flags(standard: Mapping[str, float], prior: Mapping[str, float], cost_increase_pct: float,

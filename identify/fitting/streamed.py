@@ -22,7 +22,8 @@ import numpy as np
 
 import rx90sym
 
-from identify.estimation.bootstrap import SegmentBootstrap
+from identify.estimation.bootstrap import BLOCK_S, DRAWS, SegmentBootstrap
+from identify.estimation.honest_covariance import HONEST_SEED, Fanout, honest_covariance, needs_honest_covariance
 from identify.estimation.incremental_qr import JointFactors, stacked_rows
 from identify.estimation.least_squares import solve_joint_systems
 from identify.estimation.results import METHODS, IdentificationResult
@@ -82,6 +83,7 @@ class StreamedFit:
     recordings: tuple[dict, ...] = ()
     choice: ProcessingChoice | None = None
     observation: Observation | None = None  # the decimated rows, when kept (identify.observation.row_store)
+    scans: tuple[Scan, ...] = ()  # the first pass over each recording (the baseline's and checks' passes reuse it)
 
     def summary(self) -> str:
         """What was fitted, in the manner of :meth:`identify.Observation.summary`."""
@@ -94,7 +96,7 @@ class StreamedFit:
         return "\n".join(lines + [f"  note: {n}" for n in self.notes if n])
 
     def filtering(self, spring: bool = True) -> dict[str, Any]:
-        """Keyword arguments of :func:`identify.predict` / :func:`predict_streamed` that reuse this processing."""
+        """Keyword arguments of :func:`identify.predict` that reuse this processing."""
         s = self.settings
         return {"cutoff": self.cutoff, "decimate_to": s.decimate_to, "min_velocity": s.min_velocity,
                 "delay": self.delay, "spring": spring}
@@ -230,21 +232,31 @@ def fit_streamed(robot: rx90sym.Robot, recordings: Sequence[Any], method: str = 
     lags = tuple(grid) if search else ()
     total = sum(p.samples for p in flat)
     bblock = max(1, int(round(bootstrap.block_s * flat[0].rate))) if bootstrap else 0
-    make_boot = (lambda: SegmentBootstrap(total, bblock, robot.n, len(base.names), bootstrap.draws, bootstrap.seed)
-                 if bootstrap else None)
+
+    def make_boot(spec: BootstrapSpec | None) -> SegmentBootstrap | None:
+        return (SegmentBootstrap(total, max(1, int(round(spec.block_s * flat[0].rate))), robot.n, len(base.names),
+                                 spec.draws, spec.seed) if spec else None)
+    # The consistent fit's prior is measured in eq. 13's covariance inflated by the toolkit's bootstrap (seed 0),
+    # as on whole recordings (identify.estimation.honest_covariance): fed the same rows, unless it is the one asked.
+    honest = BootstrapSpec(BLOCK_S, DRAWS, HONEST_SEED) if needs_honest_covariance(method, consistent_options) else None
     drop = settings.min_velocity is not None and drops_rest(settings.rest)
     make_store = (lambda: RowStore(base.names, drop)) if keeps_rows(total, robot.n, len(base.names)) else (lambda: None)
-    boot, store = make_boot(), make_store()
-    factors, moving, count = _accumulate(robot, sources, plans, fc, settings, base, lags, client, boot, store)
+    boot, hboot, store = make_boot(bootstrap), make_boot(honest if honest != bootstrap else None), make_store()
+    factors, moving, count = _accumulate(robot, sources, plans, fc, settings, base, lags, client, Fanout(boot, hboot),
+                                         store)
     found = None
     if lags:
         found = refined_delay(grid, np.array([joint_log_rms(factors.systems(k + 1)) for k in range(len(lags))]), step)
     if delay == "auto":  # a second pass with the torques put back in step
         settings = replace(settings, delay=found.delay)
-        boot, store = make_boot(), make_store()
-        factors, moving, count = _accumulate(robot, sources, plans, fc, settings, base, (), client, boot, store)
+        boot, hboot, store = make_boot(bootstrap), make_boot(honest if honest != bootstrap else None), make_store()
+        factors, moving, count = _accumulate(robot, sources, plans, fc, settings, base, (), client,
+                                             Fanout(boot, hboot), store)
     result = solve_joint_systems(factors.systems(0), base.names, weighted=method != "ols")
     if method == "consistent":
+        if honest is not None:
+            std = (hboot or boot).std(result.weights)
+            consistent_options = {**consistent_options, "covariance": honest_covariance(result, std)}
         result = consistent_fit(robot, result, base, **consistent_options)
     notes = tuple(p.note for p in flat) + skipped
     observation = None if store is None else store.observation(
@@ -254,4 +266,4 @@ def fit_streamed(robot: rx90sym.Robot, recordings: Sequence[Any], method: str = 
                        boot.std(result.weights) if boot is not None else None, bblock, settings, count,
                        np.vstack([np.min([s.q_range[0] for s in scans], axis=0),
                                   np.max([s.q_range[1] for s in scans], axis=0)]),
-                       tuple(s.layout() for s in scans), choice, observation)
+                       tuple(s.layout() for s in scans), choice, observation, tuple(scans))

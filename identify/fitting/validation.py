@@ -10,7 +10,7 @@ errors are reported on all samples and on the samples where each joint moves.
 from __future__ import annotations
 
 from dataclasses import dataclass, replace
-from typing import Any, Sequence
+from typing import Any
 
 import numpy as np
 
@@ -21,7 +21,10 @@ from identify.observation.matrix import presliding_base
 from identify.observation.processing import RestPolicy, has_policy, predicted_rest
 from identify.estimation.results import IdentificationResult, json_number
 from identify.io.blocks import block_source
-from identify.fitting.raw_scoring import RawScores, SegmentPrediction, raw_scores
+from identify.fitting.baseline_blocks import baseline_at, streamed_baseline_prediction
+from identify.fitting.raw_scoring import SCORE_TRIM_S, RawScores
+from identify.fitting.streamed_filtered import FilteredSums, streamed_filtered_rms
+from identify.signal.interpolate import onto
 from identify.observation.matrix import column_regressor
 from identify.observation.offsets import offset_base, result_offsets
 from identify.observation.stream import DEFAULT_BLOCK, StreamSettings, piece, plan_windows, scan_all, windows_in_order
@@ -173,8 +176,8 @@ def predict(robot: rx90sym.Robot, result: IdentificationResult, recording: Any, 
             min_velocity: float | None = None, delay: float = 0.0, rest: RestPolicy = "zero-coulomb",
             baseline: Any = None, filtered_at: float | None | str = "prediction", block: int = DEFAULT_BLOCK,
             convention: str | None = None, gains: Any = None) -> Validation:
-    """Predicted vs measured torques of ``recording`` (a recording, or a CSV path read block by block)
-    with the parameters of ``result``.
+    """Predicted vs measured torques of ``recording`` (a recording, or a recording file) with the parameters
+    of ``result``, block by block whatever its length.
 
     cutoff [Hz], decimate_to [Hz]: give those of the fit (None: chosen on this recording; decimate_to
     "prediction": :func:`prediction_rate` of the cut-off, what :meth:`identify.Fit.predict` does);
@@ -182,12 +185,12 @@ def predict(robot: rx90sym.Robot, result: IdentificationResult, recording: Any, 
     delay [s]: torque lag compensated as in the fit; rest: the fit's rest policy, one or one per joint
     (every sample is predicted: "drop" takes Coulomb 0 at rest; "presliding" the presliding state
     times FPj; the others as in the fit); baseline: the fit's plain OLS baseline
-    (identify.fitting.baseline.PlainBaseline), scored on the same raw samples (None: none).
-    Scored against the raw measured torques at the recording's own time stamps; the filtered figures
-    (``rms_error_filtered``) on rows decimated to ``filtered_at`` [Hz] (None: not decimated;
-    "prediction": the prediction's rate; :meth:`identify.Fit.predict` gives the fit's own).
-    block: raw samples per block (the recording is read, filtered and predicted block by block: memory
-    that of a block and of the scored samples); convention, gains: how a CSV path is read.
+    (identify.fitting.baseline.PlainBaseline), predicted block by block and scored on the same raw
+    samples (None: none). Scored against the raw measured torques at the recording's own time stamps;
+    the filtered figures (``rms_error_filtered``) on rows decimated to ``filtered_at`` [Hz] (None: not
+    decimated; "prediction": the prediction's rate; :meth:`identify.Fit.predict` gives the fit's own).
+    block: raw samples read, filtered and predicted at a time (memory: a block, the decimated
+    prediction and the samples scored); convention, gains: how a recording file is read.
     """
     if base is None:  # the symbolic base, with the torque offsets the fit chose (OFFj in the result)
         base = offset_base(rx90sym.base_parameters(robot), result_offsets(result, robot))
@@ -195,60 +198,68 @@ def predict(robot: rx90sym.Robot, result: IdentificationResult, recording: Any, 
     beta = base_vector(result, base, robot)
     src = block_source(recording, robot, convention, gains)
     at_prediction = decimate_to == "prediction"
+    # As the fit: every sample predicted (a dropped joint's rest with Coulomb 0).
     settings = StreamSettings(cutoff, None if at_prediction else (decimate_to or None), min_velocity or None,
                               predicted_rest(rest), float(delay), spring, int(block))
     scans, fc = scan_all([src], settings)
-    if at_prediction:
+    if at_prediction:  # at 20 x the cut-off (or the recording's own rate), not at the fit's decimated rate
         settings = replace(settings, decimate_to=prediction_rate(fc, scans[0].rate))
+    filtered_settings = (settings if filtered_at == "prediction"
+                         else replace(settings, decimate_to=filtered_at or None))  # the fit's own rows
+    plans, _ = plan_windows(scans[0], fc, settings)
     names, regressor = column_regressor(robot, base)
-    predictions, errors, plans = _predicted(robot, src, scans[0], fc, settings, regressor, names, beta, spring)
-    segments = list(src.windows([(p.start, p.start + _length(scans[0], p)) for p in plans]))
-    raw = raw_scores(robot, predictions, segments, settings.delay, baseline)
-    scored = scored_validation(raw, src.source, settings.min_velocity, fc, plans[0].rate)
-    filtered_at = settings.decimate_to if filtered_at == "prediction" else filtered_at
-    if filtered_at != settings.decimate_to:  # the fit's own rows (FIGAROH's scoring)
-        errors = _predicted(robot, src, scans[0], fc, replace(settings, decimate_to=filtered_at or None), regressor,
-                            names, beta, spring)[1]
-    return replace(scored, **_filtered_rms(errors), t0_s=log_clock(recording) or float((src.log or {}).get("t0_s") or 0.0))
-
-
-def _length(scan: Any, plan: Any) -> int:
-    """Raw samples of the segment ``plan`` cuts."""
-    return next(g.samples for g in scan.segments if g.start == plan.start)
-
-
-def _predicted(robot: rx90sym.Robot, src: Any, scan: Any, fc: float, settings: StreamSettings, regressor: Any,
-               names: Sequence[str], beta: np.ndarray, spring: bool
-               ) -> tuple[list[SegmentPrediction], list[tuple[np.ndarray, np.ndarray]], list[Any]]:
-    """(the prediction of each segment, block by block; per block the errors against the filtered
-    torques and the moving mask on its measured rows; the segments' plans)."""
-    plans, _ = plan_windows(scan, fc, settings)
+    bp = None
+    if baseline is not None:  # its own pass over the log, block by block (its own filter and margins)
+        bp = streamed_baseline_prediction(robot, baseline, src, scans[0], int(block))
+    sums = FilteredSums(beta, robot.n) if filtered_settings == settings else None
+    length = {g.start: g.samples for g in scans[0].segments}
     groups: dict[int, list] = {}
-    errors = []
     for plan, window, rec, _ in windows_in_order([src], [plans]):
         m = piece(robot, rec, window, plan, fc, settings, regressor, names, 0).motion
-        fitted = m.Phi @ beta
-        rows = m.measured if m.measured is not None else slice(None)
-        errors.append(((m.Y - fitted)[rows], np.asarray(m.moving)[rows]))
+        if sums is not None:
+            sums.add(m)
+        pred = m.Phi @ beta
         if spring and robot.spring is not None:
-            fitted = fitted - robot.spring_torque_batch(m.q)[:, :, 0]
-        groups.setdefault(id(plan), []).append((m.t, fitted, m.moving))
-    predictions = [SegmentPrediction(*(np.concatenate(a) for a in zip(*group))) for group in groups.values()]
-    return predictions, errors, plans
+            pred = pred - robot.spring_torque_batch(m.q)[:, :, 0]
+        # The raw samples this core owns: from its first prediction to the next core's (scored on raw torques).
+        t_pred, t = m.t + settings.delay, np.asarray(rec.t, dtype=float)
+        step = float(np.median(np.diff(t)))
+        own = ((t >= t_pred[0] - 1e-6 * step) & (t < t_pred[0] + (m.t.size * m.factor - 1e-6) * step)
+               & rec.measured_mask)
+        # The segment's first and last times (the windows' raw samples lie on its regular grid).
+        ends = (t[0] - window.raw[0] * step, t[-1] + (length[plan.start] - window.raw[1]) * step)
+        groups.setdefault(id(plan), []).append((t_pred, pred, m.moving, t[own], np.asarray(rec.torques)[own], ends))
+    parts = []
+    for group in groups.values():  # one segment: its predictions interpolated onto its raw samples
+        first, last = group[0][5][0], group[-1][5][1]
+        tp, pr, mv, t, tau = (np.concatenate(a) for a in list(zip(*group))[:5])
+        tol = 1e-9 * max(1.0, abs(tp[-1]))
+        # SCORE_TRIM_S from the segment's ends (the baseline's trim), inside the prediction.
+        inside = (t <= tp[-1] + tol) & (t >= first + SCORE_TRIM_S - tol) & (t <= last - SCORE_TRIM_S + tol)
+        b = None
+        if bp is not None:  # only where the baseline predicts too
+            scored, b = baseline_at(bp, t)
+            inside &= scored
+            b = b[inside]
+        t, tau = t[inside], tau[inside]
+        nearest = np.clip(np.searchsorted(tp, t - 0.5 * (tp[1] - tp[0] if tp.size > 1 else 0.0)), 0, tp.size - 1)
+        parts.append((t, tau, onto(t, tp, pr), mv[nearest], b))
+    if not any(p[0].size for p in parts):
+        raise ValueError(f"{src.source}: no recorded sample lies inside the prediction"
+                         + (" and 0.5 s from the segments' ends (the plain baseline's trim)" if bp is not None else ""))
+    t, Y, pred, mov = (np.concatenate([p[k] for p in parts]) for k in range(4))
+    base_pred = None if bp is None else np.concatenate([p[4] for p in parts])
+    # The filtered figures on the fit's rows: from this pass when they are the prediction's, else a pass of their own.
+    filtered = (sums.result() if sums is not None else
+                streamed_filtered_rms(robot, src, scans[0], fc, filtered_settings, regressor, names, beta))
+    clock = log_clock(recording) or float((src.log or {}).get("t0_s") or 0.0)
+    return replace(scored_validation(RawScores(t, Y, pred, mov, base_pred), src.source, settings.min_velocity, fc,
+                                     plans[0].rate), **filtered, t0_s=clock)
 
 
 def log_clock(recording: Any) -> float:
     """The log's own clock [s] at ``recording``'s first sample (0 when it was not read from a log)."""
     return float(((getattr(recording, "meta", None) or {}).get("log") or {}).get("t0_s") or 0.0)
-
-
-def _filtered_rms(errors: Sequence[tuple[np.ndarray, np.ndarray]]) -> dict[str, np.ndarray]:
-    """RMS error [N m] per joint against the torques filtered like the rows (per block: errors and
-    moving mask on its measured rows), all and while moving: ``rms_error_filtered`` and
-    ``rms_error_filtered_moving``."""
-    err = np.concatenate([e for e, _ in errors])
-    moving = np.concatenate([m for _, m in errors])
-    return {"rms_error_filtered": _rms(err, np.ones_like(moving)), "rms_error_filtered_moving": _rms(err, moving)}
 
 
 def scored_validation(raw: RawScores, source: str, min_velocity: float | None, cutoff: float,

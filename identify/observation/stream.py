@@ -76,6 +76,8 @@ class SegmentScan:
     tail: np.ndarray = field(default_factory=lambda: np.empty(0), compare=False, repr=False)
     head_measured: np.ndarray = field(default_factory=lambda: np.empty(0, bool), compare=False, repr=False)
     tail_measured: np.ndarray = field(default_factory=lambda: np.empty(0, bool), compare=False, repr=False)
+    first_t: float = field(default=float("nan"), compare=False)  # times [s] of its first and last samples
+    last_t: float = field(default=float("nan"), compare=False)
 
     def time_at(self, index: int) -> float:
         """The time [s] of the segment's sample ``index`` (0 .. samples-1), from its head or tail kept."""
@@ -129,6 +131,7 @@ class _SegmentPass:
         self.t: list[np.ndarray] = []
         self.q: list[np.ndarray] = []
         self.tail_t: np.ndarray | None = None
+        self.first_t = float("nan")
         self.tail_q = np.empty((0, 0))
         self.welch: WelchAccumulator | None = None
         self.rate = float("nan")
@@ -147,6 +150,7 @@ class _SegmentPass:
             self.steps.add(np.diff(np.r_[self.tail_t, t]))
         else:
             self.steps.add(np.diff(t))
+            self.first_t = float(t[0])
         self.tail_t = t[-1:]
         self.samples += t.size
         if self.floor is None:
@@ -179,7 +183,8 @@ class _SegmentPass:
             t_all, q_all = np.concatenate(self.t), np.concatenate(self.q)
             cut = choose_cutoff(q_all, 1.0 / float(np.median(np.diff(t_all))), min_cutoff=self.floor)
         return SegmentScan(self.start, self.samples, rate, cut, self.head, self.tail, self.head_measured,
-                           self.tail_measured)
+                           self.tail_measured, self.first_t,
+                           float(self.tail_t[0]) if self.tail_t is not None else float("nan"))
 
 
 def scan(src: BlockSource, block: int, floor: float | None, keep_s: float = 0.0) -> Scan:

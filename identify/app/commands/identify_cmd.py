@@ -190,9 +190,8 @@ def processing_of(args: argparse.Namespace, spring: bool) -> Processing:
 
 
 def run(args: argparse.Namespace) -> int:
-    import rx90sym
     from identify.fitting.fit import fit
-    from identify.fitting.plausibility import static_gravity_flags, torque_scale_flags
+    from identify.fitting.torque_checks import CODES as TORQUE_CODES
     from identify.io.gains import read_gains
 
     from ..spring_output import attach_spring
@@ -207,29 +206,26 @@ def run(args: argparse.Namespace) -> int:
     sb = attach_spring(robot, spring_model, args.validate, args.method)
     gains = read_gains(args.gains, robot) if args.gains else None
     flags = given_gain_flags(gains) if gains is not None else []
-    prior = None
+    # The consistent fit's prior, on whole logs and block by block alike.
+    prior = physical_prior(args, robot) if args.method == "consistent" else None
+    options = {"physical_prior": prior} if args.method == "consistent" else {}
     if streamed(args.recordings + ([args.validate] if args.validate else []), args.block, args.scheduler):
-        progress("plausibility of the recorded torques (scale, static gravity) not checked: it reads the whole "
-                 "recordings, long logs are read block by block")
-        if args.method == "consistent":
-            progress("long logs: the consistent fit takes no prior yet: the split of what the data cannot see "
-                     "is arbitrary")
         recs, val_rec = [], args.validate  # long logs: read block by block (docs/long-logs.md)
-        result = fit_long(args, robot, processing_of(args, sb is None), sb, gains)
+        result = fit_long(args, robot, processing_of(args, sb is None), sb, gains, **options)
     else:
         progress(f"reading {len(args.recordings)} recording(s)")
         recs = read_recordings(args.recordings, robot, args.convention, gains)
-        flags += settle(torque_scale_flags([r.tau for r in recs if r.tau is not None], robot))
-        flags += settle(static_gravity_flags(recs, robot, rx90sym.nominal_parameters(robot)))
         val_rec = read_recordings([args.validate], robot, args.convention, gains)[0] if args.validate else None
         progress(f"identifying ({args.method}) on {sum(len(r.t) for r in recs)} samples")
-        prior = physical_prior(args, robot) if args.method == "consistent" else None
-        options = {"physical_prior": prior} if args.method == "consistent" else {}
         result = fit(robot, recs, processing_of(args, sb is None), args.method, base=sb, gains=gains,
                      convention=args.convention, spring_source=args.spring, bootstrap_seed=args.bootstrap_seed,
                      **options)
+    # The recorded torques' scale and gravity at rest, checked by the fit (every log, block by block when long):
+    # an error stops the run (exit 2, nothing written).
+    settle([f for f in result.flags if f.code in TORQUE_CODES])
     for f in result.flags:  # the fit's own errors (a rank that depends on the threshold): fitted, never silent
-        progress(f"error: {with_hint(f)}")
+        if f.code not in TORQUE_CODES:
+            progress(f"error: {with_hint(f)}")
     result = result.with_flags([*result.flags, *flags, *_fit_flags(result, args.method, prior)])
     if args.essential:
         result = result.with_essential()

@@ -27,8 +27,10 @@ def streamed(paths: list[str], block: int, scheduler: str | None) -> bool:
     return any(p.lower().endswith(".csv") and count_rows(p) > block for p in paths)
 
 
-def fit_long(args: argparse.Namespace, robot: rx90sym.Robot, processing: Processing, base: Any, gains: Any) -> Fit:
-    """The fit of ``args.recordings`` block by block (on Dask with ``--scheduler``)."""
+def fit_long(args: argparse.Namespace, robot: rx90sym.Robot, processing: Processing, base: Any, gains: Any,
+             **consistent_options: Any) -> Fit:
+    """The fit of ``args.recordings`` block by block (on Dask with ``--scheduler``); ``consistent_options``:
+    those of the consistent fit (its physical prior)."""
     from identify.fitting.fit import fit
 
     progress(f"identifying ({args.method}) block by block ({args.block} samples per block"
@@ -36,7 +38,7 @@ def fit_long(args: argparse.Namespace, robot: rx90sym.Robot, processing: Process
              + ("; the processing chosen first by cross-validation, one pass over the logs per candidate"
                 if processing.cross_validates else ""))
     options = dict(base=base, gains=gains, convention=args.convention, spring_source=args.spring,
-                   block=args.block, bootstrap_seed=args.bootstrap_seed)
+                   block=args.block, bootstrap_seed=args.bootstrap_seed, **consistent_options)
     if args.scheduler is None:
         return fit(robot, args.recordings, processing, args.method, **options)
     from excitation.multistart import dask_client
