@@ -10,7 +10,7 @@ common span):
    decimated driver speed v (:class:`~identify.observation.friction_model.FrictionBase` form
    "probe"), built once: the speeds the scale search needs;
 2. for each held-back block, the velocity scales of a smooth form are searched **on the other
-   blocks only** (separable least squares, :func:`identify.estimation.separable.scales_from_observation`),
+   blocks only** (separable least squares, :func:`identify.estimation.separable.fold_scales`),
    the base parameters fitted (WLS, eq. 11's weights, the processing's fold solver) on those rows,
    the held-back torques predicted;
 3. every form is scored with the fit's **exact** columns (its own observation matrix: one for
@@ -180,19 +180,19 @@ def _score_form(robot: rx90sym.Robot, recordings: Sequence[Any], base: Any, opti
     """``form`` (one, or one per joint) scored on the folds; ``obs`` the probe observation, ``exact``
     the Coulomb form's (the same rows)."""
     n = robot.n
-    from identify.estimation.separable import SCALE_BOUNDS, scales_from_observation
+    from identify.estimation.separable import SCALE_BOUNDS, fold_scales
 
     err2, ref2 = np.zeros((blocks, n)), np.zeros((blocks, n))
     bound, failed, floor = set(), set(), set()
     smooth = has_smooth_friction(form)
+    # Each fold's scales searched on its fitting blocks only (the held-back block unseen), all from one pair of tables.
+    per_fold = fold_scales(obs, terms, form, n, ids, blocks) if smooth else [None] * blocks
     W = None
     for b in range(blocks):
-        fit_rows, held = ids != b, ids == b
+        held = ids == b
         scales = None
-        if smooth:  # searched on the fitting blocks only: the held-back block is unseen
-            sub = replace(obs, W=obs.W[fit_rows], Y=obs.Y[fit_rows], joint=obs.joint[fit_rows],
-                          samples=obs.samples[fit_rows])
-            found = scales_from_observation(sub, terms, form, n, std=False)
+        if smooth:
+            found = per_fold[b]
             scales = found.scales
             # The upper bound: the form is a second viscous term there, its scale not identified; on
             # the lower one it is a sign on that joint, Coulomb's own column: Coulomb is kept there.

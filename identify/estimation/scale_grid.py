@@ -1,0 +1,377 @@
+"""Velocity scales of smooth friction from per-joint factors tabulated on grids of scales.
+
+The smooth Coulomb FS·tanh(q̇/vs) and Stribeck (FS + (FST − FS)·exp(−(q̇/vs)²))·sign(q̇)
+(identify.observation.friction) are linear in every parameter but each joint's velocity scale vs
+[rad/s]. Their columns are evaluated on the filtered, decimated driver speed v of every row (the
+"probe" observation's own Coulomb columns, :class:`~identify.observation.friction_model.FrictionBase`),
+at a list of scales per joint, as extra columns of the per-joint triangular factor
+``R_j = qr([W_j | F_j(s_1) … F_j(s_K) | Y_j])`` (incremental QR, block after block, per
+cross-validation time block when asked: :class:`ScaleTable`), W_j's own Coulomb column holding
+sign(v). Any choice of one tabulated scale per joint then gives the projected cost
+F(s) = ½‖D(Y − W(s)·β̂(s))‖² (variable projection, Golub & Pereyra; D eq. 11's weights of a first
+fit at a middle scale) from the factors' Gram matrices alone: nothing of the rows is kept, so the
+search reads a log of any length block by block and its result does not depend on the block.
+
+The search (:func:`search_scales`): on a log grid of 1/8 decade (:data:`COARSE_GRID`) over
+:data:`SCALE_BOUNDS`, each joint starts at the scale its own rows prefer (a common scale), then
+coordinate descent (two sweeps); a parabola in log s through the best point and its neighbours
+gives each joint the centre of a fine grid of 1/64 decade (:func:`fine_grids`, a second table);
+coordinate descent on it and a parabola again. The scale is then rounded to a lattice of 1/4096
+decade (0.06 %), far below its σ: two tables equal to rounding (another block size) give the same
+scale. σ of each scale: the Gauss-Newton variance σ²/κ of log s, κ the parabola's curvature of F
+in log s, σ² = 2F / (rows − parameters).
+
+Lower bound of each joint's scale: half the :data:`LOW_SPEED_SHARE` quantile of its moving speeds
+(below it a column fits a handful of rows), the quantile read from a histogram of |v| on fixed
+bins of 1/100 decade (counts: the same whatever the blocks).
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Any, Callable, Sequence
+
+import numpy as np
+
+from identify.estimation.compression import _from_augmented_rows, _qr_r
+from identify.observation.friction import friction_columns
+
+__all__ = ["COARSE_GRID", "LOW_SPEED_SHARE", "SCALE_BOUNDS", "ScaleSearch", "ScaleTable", "coarse_search",
+           "find_scales", "fine_grids", "fine_search", "lower_bounds"]
+
+#: Velocity scales searched [rad/s]: below 1e-4 the form is sign(q̇) on any logged speed; above
+#: 2 rad/s it is a second viscous term on the speeds of an arm.
+SCALE_BOUNDS = (1e-4, 2.0)
+#: The first table's scales [rad/s]: 1/8 decade apart from the lower bound, and the upper bound.
+COARSE_GRID = np.r_[10.0 ** (-4 + np.arange(35) / 8), SCALE_BOUNDS[1]]
+#: The scale of the first fit, whose residuals give eq. 11's weights [rad/s].
+MIDDLE_SCALE = 10.0 ** -1.5
+#: Share of a joint's moving rows that must lie below its velocity scale (see :func:`lower_bounds`).
+LOW_SPEED_SHARE = 0.02
+#: Fine grid: points and spacing [decades]; the lattice the scales are rounded to [decades].
+FINE_POINTS, FINE_STEP, LATTICE = 9, 1.0 / 64, 1.0 / 4096
+#: Histogram of |v| per joint: bin edges [rad/s], 1/100 decade apart.
+SPEED_EDGES = 10.0 ** (-8 + np.arange(1101) / 100)
+
+
+def _columns_per_scale(forms: dict[int, str]) -> int:
+    return 2 if "stribeck" in forms.values() else 1
+
+
+@dataclass(eq=False)
+class ScaleTable:
+    """Per (fold, joint) the triangular factor of ``[W_j (own Coulomb column = sign v) | F_j(scales_j) | Y_j]``
+    and the histogram of the joint's |v|, filled row block after row block.
+
+    c: probe columns; own: joint (0-based) -> column of its own Coulomb term (holding v in the probe);
+    forms: joint -> "tanh" | "stribeck" for the joints whose scale is searched; scales: joint -> the
+    scales [rad/s] tabulated (the same count for every joint); folds: time blocks (1: no folds)."""
+
+    n: int
+    c: int
+    own: dict[int, int]
+    forms: dict[int, str]
+    scales: dict[int, np.ndarray]
+    folds: int = 1
+    R: dict[tuple[int, int], np.ndarray] = field(default_factory=dict)
+    rows: dict[tuple[int, int], int] = field(default_factory=dict)
+    counts: np.ndarray | None = None
+
+    def __post_init__(self) -> None:
+        sizes = {len(s) for s in self.scales.values()}
+        if len(sizes) > 1:
+            raise ValueError(f"scale table: every joint needs as many scales, got {sorted(sizes)}")
+        self.K = sizes.pop() if sizes else 0
+        self.m = _columns_per_scale(self.forms)
+        self.width = self.c + self.K * self.m + 1
+        if self.counts is None:
+            self.counts = np.zeros((self.folds, self.n, SPEED_EDGES.size + 1), dtype=np.int64)
+
+    def rows_of(self, joint: int, W: np.ndarray, Y: np.ndarray) -> np.ndarray:
+        """The table's rows (m, width) of joint ``joint`` from probe rows W (m, c) and torques Y (m,)."""
+        out = np.zeros((W.shape[0], self.width))
+        out[:, :self.c] = W
+        out[:, -1] = Y
+        col = self.own.get(joint)
+        if col is None:
+            return out
+        v = W[:, col]
+        out[:, col] = np.sign(v)
+        form = self.forms.get(joint)
+        if form is not None:
+            for k, s in enumerate(self.scales[joint]):
+                cols, _ = friction_columns(form, v, float(s))
+                out[:, self.c + k * self.m:self.c + k * self.m + cols.shape[1]] = cols
+        return out
+
+    def add(self, joint: int, W: np.ndarray, Y: np.ndarray, fold: np.ndarray | int = 0) -> None:
+        """Fold in probe rows W (m, c), Y (m,) of joint ``joint`` falling in time block(s) ``fold``."""
+        rows = self.rows_of(joint, np.asarray(W, dtype=float), np.asarray(Y, dtype=float))
+        ids = np.broadcast_to(np.asarray(fold), (rows.shape[0],))
+        for b in np.unique(ids):
+            self.add_factor(int(b), joint, *self.block_part(joint, rows[ids == b], W[ids == b]))
+
+    def block_part(self, joint: int, rows: np.ndarray, W: np.ndarray) -> tuple[np.ndarray, int, np.ndarray]:
+        """(factor, row count, |v| histogram) of one block's rows of ``joint`` (a Dask task's result)."""
+        col = self.own.get(joint)
+        hist = np.zeros(SPEED_EDGES.size + 1, dtype=np.int64)
+        if col is not None:
+            v = np.abs(W[:, col])
+            hist += np.bincount(np.searchsorted(SPEED_EDGES, v[v > 0], side="right"), minlength=hist.size)
+        return _qr_r(np.array(rows, order="F")), rows.shape[0], hist
+
+    def add_factor(self, fold: int, joint: int, factor: np.ndarray, count: int, hist: np.ndarray) -> None:
+        """Fold in a block's factor of ``count`` rows and its histogram (TSQR: R ← qr([R; R_block]))."""
+        self.counts[fold, joint] += hist
+        if count == 0:
+            return
+        key = (fold, joint)
+        self.R[key] = factor if key not in self.R else _qr_r(np.vstack([self.R[key], factor]))
+        self.rows[key] = self.rows.get(key, 0) + int(count)
+
+    def merged(self, folds: Sequence[int]) -> tuple[dict[int, np.ndarray], dict[int, int], np.ndarray]:
+        """(per joint the factor over ``folds``, its rows, the joints' histograms (n, bins))."""
+        R, rows = {}, {}
+        for j in range(self.n):
+            parts = [self.R[(b, j)] for b in folds if (b, j) in self.R]
+            if parts:
+                R[j] = parts[0] if len(parts) == 1 else _qr_r(np.vstack(parts))
+                rows[j] = sum(self.rows[(b, j)] for b in folds if (b, j) in self.R)
+        return R, rows, self.counts[list(folds)].sum(axis=0)
+
+
+def lower_bounds(counts: np.ndarray, joints: Sequence[int]) -> np.ndarray:
+    """ln of each joint's lowest scale: :data:`SCALE_BOUNDS`, raised to half the :data:`LOW_SPEED_SHARE`
+    quantile of its moving speeds (the upper edge of the histogram bin where the share is reached),
+    at most a tenth of the upper bound."""
+    lo = []
+    for j in joints:
+        h = counts[j]
+        total = h.sum()
+        if total == 0:
+            lo.append(SCALE_BOUNDS[0])
+            continue
+        k = int(np.searchsorted(np.cumsum(h), LOW_SPEED_SHARE * total))   # first bin reaching the share
+        edge = SPEED_EDGES[min(k, SPEED_EDGES.size - 1)]
+        lo.append(max(SCALE_BOUNDS[0], edge / 2))
+    return np.log(np.minimum(np.array(lo), SCALE_BOUNDS[1] / 10))
+
+
+@dataclass(frozen=True)
+class ScaleSearch:
+    """The scales found: per searched joint (``joints``, 0-based) the scale [rad/s], its σ [rad/s], whether
+    it stopped on a bound; cost: the weighted cost F at them; weights (n,): eq. 11's of the first fit;
+    lo: ln lower bound per searched joint; curvature: κ (F'' in ln s) per joint."""
+
+    joints: tuple[int, ...]
+    scales: np.ndarray
+    std: np.ndarray
+    at_bound: tuple[bool, ...]
+    cost: float
+    weights: np.ndarray
+    lo: np.ndarray
+
+
+class _Gram:
+    """The weighted projected cost of any choice of tabulated scale per joint, from the factors' Gram matrices."""
+
+    def __init__(self, table: ScaleTable, R: dict[int, np.ndarray], rows: dict[int, int], weights: np.ndarray) -> None:
+        self.table, self.rows = table, rows
+        self.G = {j: (weights[j] ** 2) * (Rj.T @ Rj) for j, Rj in R.items()}
+        stribeck = sorted(j for j, f in table.forms.items() if f == "stribeck")
+        self.fst = {j: table.c + i for i, j in enumerate(stribeck)}
+        self.C = table.c + len(stribeck)
+
+    def indices(self, j: int, k: int | None) -> tuple[np.ndarray, np.ndarray]:
+        """(columns of joint j's table rows, their place among the C + 1 global columns) at its scale index k."""
+        t, c = self.table, self.table.c
+        src, dst = list(range(c)), list(range(c))
+        if k is not None and j in t.forms:
+            src[t.own[j]] = c + k * t.m
+            if t.forms[j] == "stribeck":
+                src.append(c + k * t.m + 1)
+                dst.append(self.fst[j])
+        return np.array(src + [t.width - 1]), np.array(dst + [self.C])
+
+    def part(self, j: int, k: int | None) -> np.ndarray:
+        src, dst = self.indices(j, k)
+        out = np.zeros((self.C + 1, self.C + 1))
+        out[np.ix_(dst, dst)] = self.G[j][np.ix_(src, src)]
+        return out
+
+    def cost(self, parts: dict[int, np.ndarray]) -> float:
+        """½ of the weighted residual's squared norm of the system summed from ``parts``."""
+        A = sum(parts.values())
+        C = self.C
+        live = np.flatnonzero(np.diag(A)[:C] > 0)
+        G, g = A[np.ix_(live, live)], A[live, C]
+        try:
+            L = np.linalg.cholesky(G)
+            z = np.linalg.solve(L, g)
+        except np.linalg.LinAlgError:   # rank deficient at this scale: the least-norm solution
+            x = np.linalg.lstsq(G, g, rcond=None)[0]
+            return 0.5 * float(A[C, C] - g @ x)
+        return 0.5 * float(A[C, C] - z @ z)
+
+
+def _weights(table: ScaleTable, R: dict[int, np.ndarray], rows: dict[int, int], middle: dict[int, int]) -> np.ndarray:
+    """eq. 11's weights (1/σ_j of each joint's own residual) of the fit at the tabulated scale ``middle[j]``."""
+    from identify.estimation.least_squares import solve_joint_systems
+
+    gram = _Gram(table, R, rows, np.ones(table.n))
+    systems = []
+    for j in range(table.n):
+        src, dst = gram.indices(j, middle.get(j))
+        M = np.zeros((R[j].shape[0], gram.C + 1))
+        M[:, dst] = R[j][:, src]
+        systems.append(_from_augmented_rows(M, rows[j]))
+    return np.asarray(solve_joint_systems(systems, [f"c{k}" for k in range(gram.C)]).weights)
+
+
+def _parabola(u: np.ndarray, f: np.ndarray, k: int) -> tuple[float, float]:
+    """(vertex, curvature F'' in u) of the parabola through points k-1, k, k+1 (equally spaced); at an
+    end: u[k] and the curvature of the nearest three points; where not convex: (u[k], nan)."""
+    if len(u) < 3:
+        return float(u[k]), float("nan")
+    if k == 0 or k == len(u) - 1:
+        i = min(max(k, 1), len(u) - 2)
+        h = u[i + 1] - u[i]
+        den = f[i - 1] - 2 * f[i] + f[i + 1]
+        return float(u[k]), float(den / h ** 2) if den > 0 and h > 0 else float("nan")
+    h = u[k + 1] - u[k]
+    den = f[k - 1] - 2 * f[k] + f[k + 1]
+    if not (den > 0 and h > 0):
+        return float(u[k]), float("nan")
+    shift = 0.5 * h * (f[k - 1] - f[k + 1]) / den
+    return float(u[k] + np.clip(shift, -h, h)), float(den / h ** 2)
+
+
+def _descend(gram: _Gram, joints: Sequence[int], allowed: dict[int, np.ndarray],
+             start: dict[int, int]) -> tuple[dict[int, int], dict[int, np.ndarray]]:
+    """Coordinate descent over each joint's allowed scale indices (two sweeps): (choice, per joint the
+    costs along its allowed indices at the others' final choice)."""
+    pick = dict(start)
+    parts = {j: gram.part(j, pick.get(j)) for j in gram.G}
+    profile = {}
+    for _ in range(2):
+        for j in joints:
+            costs = []
+            for k in allowed[j]:
+                parts[j] = gram.part(j, int(k))
+                costs.append(gram.cost(parts))
+            profile[j] = np.array(costs)
+            pick[j] = int(allowed[j][int(np.argmin(costs))])
+            parts[j] = gram.part(j, pick[j])
+    return pick, profile
+
+
+def coarse_search(table: ScaleTable, folds: Sequence[int] | None = None,
+                  weights: np.ndarray | None = None) -> ScaleSearch:
+    """The first stage on the rows of ``folds`` (None: every fold) of a table of :data:`COARSE_GRID`:
+    scales the parabolas' vertices (the centres of the fine grids), σ not computed; weights: eq. 11's
+    (None: of the first fit at :data:`MIDDLE_SCALE`)."""
+    folds = list(range(table.folds)) if folds is None else list(folds)
+    joints = tuple(sorted(table.forms))
+    R, rows, counts = table.merged(folds)
+    if not joints or any(j not in R for j in range(table.n)):
+        raise ValueError("velocity-scale search: a joint has no rows")
+    lo = lower_bounds(counts, joints)
+    if weights is None:
+        middle = {j: int(np.argmin(np.abs(np.log(table.scales[j] / MIDDLE_SCALE)))) for j in joints}
+        weights = _weights(table, R, rows, middle)
+    gram = _Gram(table, R, rows, weights)
+    allowed = _allowed(table, joints, lo, np.arange(table.K))
+    pick, profile = _descend(gram, joints, allowed, _common_start(gram, joints, allowed))
+    centre = [_parabola(np.log(table.scales[j][allowed[j]]), profile[j],
+                        int(np.flatnonzero(allowed[j] == pick[j])[0]))[0] for j in joints]
+    return ScaleSearch(joints, np.exp(centre), np.full(len(joints), np.nan), tuple(False for _ in joints),
+                       gram.cost({j: gram.part(j, pick.get(j)) for j in gram.G}), weights, lo)
+
+
+def _allowed(table: ScaleTable, joints: Sequence[int], lo: np.ndarray, indices: np.ndarray) -> dict[int, np.ndarray]:
+    """Per joint the table's scale ``indices`` within its bounds."""
+    hi = np.log(SCALE_BOUNDS[1])
+    out = {}
+    for i, j in enumerate(joints):
+        u = np.log(table.scales[j][indices])
+        out[j] = indices[(u >= lo[i] - 1e-12) & (u <= hi + 1e-12)]
+    return out
+
+
+def fine_search(table: ScaleTable, first: ScaleSearch, folds: Sequence[int] | None = None,
+                group: int = 0) -> ScaleSearch:
+    """The second stage on the rows of ``folds`` of a table whose scales ``group`` (the group-th run of
+    :data:`FINE_POINTS` per joint) are :func:`fine_grids` of the ``first`` stage: coordinate descent from
+    the points nearest its centres, parabolas, the scales rounded to the :data:`LATTICE`, σ."""
+    folds = list(range(table.folds)) if folds is None else list(folds)
+    joints, lo, hi = first.joints, first.lo, np.log(SCALE_BOUNDS[1])
+    R, rows, _ = table.merged(folds)
+    gram = _Gram(table, R, rows, first.weights)
+    allowed = _allowed(table, joints, lo, np.arange(group * FINE_POINTS, (group + 1) * FINE_POINTS))
+    start = {j: int(allowed[j][np.argmin(np.abs(np.log(table.scales[j][allowed[j]] / first.scales[i])))])
+             for i, j in enumerate(joints)}
+    pick, profile = _descend(gram, joints, allowed, start)
+    step = LATTICE * np.log(10.0)
+    out_u, kappa = [], []
+    for i, j in enumerate(joints):
+        v, curv = _parabola(np.log(table.scales[j][allowed[j]]), profile[j],
+                            int(np.flatnonzero(allowed[j] == pick[j])[0]))
+        out_u.append(float(np.clip(np.round(v / step) * step, lo[i], hi)))
+        kappa.append(curv)
+    f = gram.cost({j: gram.part(j, pick.get(j)) for j in gram.G})
+    sigma2 = 2.0 * f / max(1, sum(rows.values()) - gram.C - len(joints))
+    u = np.array(out_u)
+    std = np.exp(u) * np.sqrt(sigma2 / np.array(kappa))
+    bound = tuple(bool(min(x - a, hi - x) < 1e-3) for x, a in zip(u, lo))
+    return ScaleSearch(joints, np.exp(u), std, bound, f, first.weights, lo)
+
+
+def find_scales(feed: Callable[[ScaleTable], None], n: int, c: int, own: dict[int, int], forms: dict[int, str],
+                fold_sets: Sequence[Sequence[int] | None] = (None,), folds: int = 1) -> list[ScaleSearch]:
+    """The scales of the joints ``forms`` on each set of folds of ``fold_sets`` (None: all), from two passes
+    over the rows: ``feed(table)`` adds every probe row to the table (``ScaleTable.add``, rows of ``c``
+    columns, ``own`` the own Coulomb column of each joint, ``folds`` time blocks). The coarse table,
+    then one fine table holding every set's fine grid."""
+    coarse = ScaleTable(n, c, own, forms, {j: COARSE_GRID for j in forms}, folds)
+    feed(coarse)
+    first = [coarse_search(coarse, fs) for fs in fold_sets]
+    grids = [fine_grids(x) for x in first]
+    fine = ScaleTable(n, c, own, forms, {j: np.concatenate([g[j] for g in grids]) for j in forms}, folds)
+    feed(fine)
+    return [fine_search(fine, x, fs, i) for i, (x, fs) in enumerate(zip(first, fold_sets))]
+
+
+def _common_start(gram: _Gram, joints: Sequence[int], allowed: dict[int, np.ndarray]) -> dict[int, int]:
+    """Each joint's index of lowest own residual when every smooth joint takes the same tabulated scale."""
+    K = gram.table.K
+    best = {}
+    own = np.full((K, len(joints)), np.inf)
+    for k in range(K):
+        parts = {j: gram.part(j, k if j in joints else None) for j in gram.G}
+        A = sum(parts.values())
+        C = gram.C
+        live = np.flatnonzero(np.diag(A)[:C] > 0)
+        beta = np.zeros(C)
+        beta[live] = np.linalg.lstsq(A[np.ix_(live, live)], A[live, C], rcond=None)[0]
+        x = np.r_[beta, -1.0]
+        for i, j in enumerate(joints):
+            own[k, i] = float(x @ parts[j] @ x)    # the joint's own weighted residual
+    for i, j in enumerate(joints):
+        ok = allowed[j]
+        best[j] = int(ok[np.argmin(own[ok, i])]) if ok.size else int(np.argmin(own[:, i]))
+    return best
+
+
+def fine_grids(coarse: ScaleSearch) -> dict[int, np.ndarray]:
+    """Per searched joint the fine table's scales [rad/s]: :data:`FINE_POINTS` points :data:`FINE_STEP`
+    decades apart centred on the coarse result, shifted inside the bounds, the lower bound itself the
+    first point when it is reached."""
+    step = FINE_STEP * np.log(10.0)
+    half = (FINE_POINTS - 1) // 2
+    out = {}
+    for i, j in enumerate(coarse.joints):
+        c = float(np.log(coarse.scales[i]))
+        a = max(coarse.lo[i], c - half * step)
+        b = min(np.log(SCALE_BOUNDS[1]), a + 2 * half * step)
+        a = b - 2 * half * step if b - 2 * half * step >= coarse.lo[i] else a
+        out[j] = np.exp(np.linspace(a, b, FINE_POINTS)) if b > a else np.exp(np.full(FINE_POINTS, a))
+    return out
