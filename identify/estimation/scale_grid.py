@@ -12,7 +12,7 @@ F(s) = ½‖D(Y − W(s)·β̂(s))‖² (variable projection, Golub & Pereyra; D
 fit at a middle scale) from the factors' Gram matrices alone: nothing of the rows is kept, so the
 search reads a log of any length block by block and its result does not depend on the block.
 
-The search (:func:`search_scales`): on a log grid of 1/8 decade (:data:`COARSE_GRID`) over
+The search (:func:`find_scales`): on a log grid of 1/8 decade (:data:`COARSE_GRID`) over
 :data:`SCALE_BOUNDS`, each joint starts at the scale its own rows prefer (a common scale), then
 coordinate descent (two sweeps); a parabola in log s through the best point and its neighbours
 gives each joint the centre of a fine grid of 1/64 decade (:func:`fine_grids`, a second table);
@@ -85,6 +85,10 @@ class ScaleTable:
         self.width = self.c + self.K * self.m + 1
         if self.counts is None:
             self.counts = np.zeros((self.folds, self.n, SPEED_EDGES.size + 1), dtype=np.int64)
+
+    def empty(self) -> "ScaleTable":
+        """A table of the same columns without rows (what a block's task fills)."""
+        return ScaleTable(self.n, self.c, self.own, self.forms, self.scales, self.folds)
 
     def rows_of(self, joint: int, W: np.ndarray, Y: np.ndarray) -> np.ndarray:
         """The table's rows (m, width) of joint ``joint`` from probe rows W (m, c) and torques Y (m,)."""

@@ -77,9 +77,6 @@ def fit(robot: rx90sym.Robot, recordings: Sequence[Any], processing: Processing 
     if block is not None and client is None and _within_one_block(recordings, block):
         block = None  # a log within one block is one block: the whole-signal fit, as rx90 identify does
     if block is not None or client is not None:
-        if processing is not None and has_smooth_friction(processing.friction):
-            raise ValueError(f"fit: friction form {processing.friction!r} searches its velocity scales on whole "
-                             f"recordings, not block by block: give friction 'coulomb', or no block")
         done = fit_in_blocks(robot, recordings, processing, method, base=base, gains=gains, convention=convention,
                              spring_source=spring_source, block=block, client=client, bootstrap_seed=bootstrap_seed,
                              **consistent_options)
@@ -205,19 +202,27 @@ def fit_in_blocks(robot: rx90sym.Robot, recordings: Sequence[Any], processing: A
     from identify.fitting.streamed import DEFAULT_BLOCK, BootstrapSpec, fit_streamed  # the block path's modules
     from identify.observation.spring_fit import BaseWithSpring, spring_summary
 
+    from identify.fitting.streamed_friction import friction_hook
+
     p = processing if processing is not None else Processing()
+    smooth = has_smooth_friction(p.friction_form)
+    if method == "consistent" and smooth:
+        raise ValueError(f"fit: the consistent method fits bodies with Coulomb + viscous friction (what a URDF or "
+                         f"MJCF holds), not friction form {friction_label(p.friction_form)!r}: use friction "
+                         f"'coulomb', or method 'wls'")
     block = DEFAULT_BLOCK if block is None else int(block)
     base = base if base is not None else rx90sym.base_parameters(robot)
     recordings = list(recordings) if isinstance(recordings, (list, tuple)) else [recordings]
     spec = BootstrapSpec(BOOTSTRAP_BLOCK_S, BOOTSTRAP_DRAWS, bootstrap_seed)
     sf = fit_streamed(robot, recordings, method, base, p.cutoff, p.decimate_to, p.min_velocity, p.rest, p.delay,
                       p.spring, p.estimate_delay, block, client, spec, convention, gains, p.cross_validates,
-                      **consistent_options)
+                      friction=friction_hook(p.friction_form) if smooth else None, **consistent_options)
+    base = sf.columns
     rest = sf.settings.rest  # the policy given, or chosen by the cross-validation
     model = FitModel.of(robot, convention=convention, gains=gains.to_dict() if gains is not None else None,
                         rest=rest, min_velocity=p.min_velocity, spring=spring_source or _spring_label(robot, base),
                         cutoff_hz=sf.cutoff, decimate_to_hz=sf.settings.decimate_to, rate_hz=sf.rate,
-                        delay_s=sf.delay)
+                        delay_s=sf.delay, friction=sf.friction)
     angles = [SimpleNamespace(q=sf.q_range)]  # what the spring summary reads: the range visited
     spring = spring_summary(robot, base if isinstance(base, BaseWithSpring) else None, sf.result, angles)[0]
     boot = Bootstrap(sf.bootstrap_std, sf.bootstrap_block / sf.rate, spec.draws, spec.seed)

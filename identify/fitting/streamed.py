@@ -60,7 +60,8 @@ class StreamedFit:
     smallest and largest position of each joint over the recordings [rad]; recordings: per recording
     its samples, segments, bridged samples and stale rows (:meth:`identify.observation.stream.Scan.layout`);
     choice: the cross-validated processing (a :class:`~identify.observation.cross_validation.ProcessingChoice`;
-    None when the processing was given).
+    None when the processing was given); columns: the base fitted; friction: the fit file's
+    ``model.friction`` of the friction columns searched (None: none).
     """
 
     result: IdentificationResult
@@ -79,6 +80,8 @@ class StreamedFit:
     q_range: np.ndarray | None = None
     recordings: tuple[dict, ...] = ()
     choice: ProcessingChoice | None = None
+    columns: Any = None
+    friction: dict | None = None
 
     def summary(self) -> str:
         """What was fitted, in the manner of :meth:`identify.Observation.summary`."""
@@ -177,7 +180,7 @@ def fit_streamed(robot: rx90sym.Robot, recordings: Sequence[Any], method: str = 
                  delay: float | str = 0.0, spring: bool = True, estimate: bool = False,
                  block: int = DEFAULT_BLOCK, client: Any = None, bootstrap: BootstrapSpec | None = None,
                  convention: str | None = None, gains: Any = None, cross_validate: bool | None = None,
-                 **consistent_options: Any) -> StreamedFit:
+                 friction: Any = None, **consistent_options: Any) -> StreamedFit:
     """:func:`identify.fit` on recordings of any length, block by block.
 
     recordings: CSV paths (streamed), :class:`~identify.Recording` objects or
@@ -189,7 +192,9 @@ def fit_streamed(robot: rx90sym.Robot, recordings: Sequence[Any], method: str = 
     (:func:`identify.estimation.stream_cv.choose_processing_streamed`); None: whenever ``cutoff`` is
     None, as :class:`identify.Processing`; ``decimate_to`` is then the default candidate's. rest: None
     is open (chosen by the cross-validation, else zero-coulomb). The other arguments are those of
-    :func:`identify.fit`.
+    :func:`identify.fit`. friction: ``friction(robot, sources, scans, cutoff, settings, base, client)`` ->
+    (columns, record) called once the torques are in step (the delay known): the friction columns
+    searched block by block (:mod:`identify.fitting.streamed_friction`), then fitted.
     """
     from identify.estimation.consistent_fit import consistent_fit
 
@@ -222,13 +227,17 @@ def fit_streamed(robot: rx90sym.Robot, recordings: Sequence[Any], method: str = 
     bblock = max(1, int(round(bootstrap.block_s * flat[0].rate))) if bootstrap else 0
     make_boot = (lambda: SegmentBootstrap(total, bblock, robot.n, len(base.names), bootstrap.draws, bootstrap.seed)
                  if bootstrap else None)
-    boot = make_boot()
-    factors, moving, count = _accumulate(robot, sources, plans, fc, settings, base, lags, client, boot)
-    found = None
+    found = record = None
+    if lags or friction is None:
+        boot = make_boot()
+        factors, moving, count = _accumulate(robot, sources, plans, fc, settings, base, lags, client, boot)
     if lags:
         found = refined_delay(grid, np.array([joint_log_rms(factors.systems(k + 1)) for k in range(len(lags))]), step)
-    if delay == "auto":  # a second pass with the torques put back in step
+    if delay == "auto":  # the torques put back in step
         settings = replace(settings, delay=found.delay)
+    if friction is not None:
+        base, record = friction(robot, sources, scans, fc, settings, base, client)
+    if delay == "auto" or friction is not None:  # a second pass with the torques in step, the friction columns
         boot = make_boot()
         factors, moving, count = _accumulate(robot, sources, plans, fc, settings, base, (), client, boot)
     result = solve_joint_systems(factors.systems(0), base.names, weighted=method != "ols")
@@ -240,4 +249,4 @@ def fit_streamed(robot: rx90sym.Robot, recordings: Sequence[Any], method: str = 
                        boot.std(result.weights) if boot is not None else None, bblock, settings, count,
                        np.vstack([np.min([s.q_range[0] for s in scans], axis=0),
                                   np.max([s.q_range[1] for s in scans], axis=0)]),
-                       tuple(s.layout() for s in scans), choice)
+                       tuple(s.layout() for s in scans), choice, base, record)

@@ -1,0 +1,85 @@
+"""The friction forms on a log read block by block: velocity scales searched from per-joint factors.
+
+:func:`friction_hook` gives :func:`identify.fitting.streamed.fit_streamed` the friction columns of a
+smooth form (tanh, Stribeck, or one per joint) once the torques are in step: the probe observation's
+rows (each own Coulomb column the filtered, decimated driver speed,
+:class:`~identify.observation.friction_model.FrictionBase` form "probe") are made block by block by
+the streamed fit's own row code (:func:`identify.observation.stream.piece`) and folded into the
+tables of :mod:`identify.estimation.scale_grid` (two passes: the coarse grid, then the fine one);
+the scales are those the whole-signal fit finds (the same search on the same rows, the factors equal
+to rounding), and the fit then uses the form's exact columns at them. Memory: the tables, per joint
+(c + 37)² doubles, whatever the log's length.
+"""
+from __future__ import annotations
+
+from typing import Any, Callable, Sequence
+
+import numpy as np
+
+import rx90sym
+
+from identify.estimation.consistency.errors import SolverError
+from identify.estimation.scale_grid import ScaleTable, find_scales
+from identify.estimation.separable import as_velocity_scales, smooth_joints
+from identify.observation.friction_model import coulomb_terms, friction_base, friction_probe
+from identify.observation.processing import FrictionForm, drops_rest, friction_label
+from identify.observation.stream import StreamSettings, in_order, piece, plan_windows, windows_in_order
+
+__all__ = ["friction_hook", "streamed_feed"]
+
+
+def _probe_task(robot: rx90sym.Robot, rec: Any, window: Any, plan: Any, cutoff: float, settings: StreamSettings,
+                probe: Any, table: ScaleTable, folds: tuple[float, float, int] | None) -> list[tuple]:
+    """One block of probe rows: per (time block, joint) the table's factor, row count and |v| histogram."""
+    from identify.observation.cv_scoring import time_folds
+
+    m = piece(robot, rec, window, plan, cutoff, settings, probe.regressor_batch, probe.names, 0).motion
+    keep = m.rows(settings.min_velocity is not None and drops_rest(settings.rest))
+    ids = np.zeros(m.t.size, dtype=int) if folds is None else time_folds(m.t, *folds)
+    out = []
+    for b in np.unique(ids):
+        for j in range(m.Phi.shape[1]):
+            rows = keep[:, j] & (ids == b)
+            W = m.Phi[rows, j, :]
+            out.append((int(b), j, *table.block_part(j, table.rows_of(j, W, m.Y[rows, j]), W)))
+    return out
+
+
+def streamed_feed(robot: rx90sym.Robot, sources: Sequence[Any], plans: Sequence[Any], cutoff: float,
+                  settings: StreamSettings, probe: Any, client: Any = None,
+                  folds: tuple[float, float, int] | None = None) -> Callable[[ScaleTable], None]:
+    """``feed(table)``: one pass over the recordings adding every probe row to the table (folds: the time
+    span (start, length [s], blocks) of the cross-validation's time blocks; None: one block)."""
+    def feed(table: ScaleTable) -> None:
+        empty = table.empty()
+        shared = client.scatter([robot, probe], broadcast=True, hash=False) if client is not None else (robot, probe)
+        tasks = ((shared[0], rec, window, plan, cutoff, settings, shared[1], empty, folds)
+                 for plan, window, rec, _ in windows_in_order(sources, plans))
+        for parts in in_order(_probe_task, tasks, client, 4 if client is not None else 1):
+            for b, j, factor, count, hist in parts:
+                table.add_factor(b, j, factor, count, hist)
+    return feed
+
+
+def friction_hook(form: FrictionForm) -> Callable[..., tuple[Any, dict]]:
+    """The ``friction`` argument of :func:`~identify.fitting.streamed.fit_streamed` for the smooth ``form``
+    (one, or one per joint): (the form's columns at the scales found, the fit file's ``model.friction``)."""
+    def hook(robot: rx90sym.Robot, sources: Sequence[Any], scans: Sequence[Any], cutoff: float,
+             settings: StreamSettings, base: Any, client: Any) -> tuple[Any, dict]:
+        _, probe, terms, asymmetric = friction_probe(robot, base)
+        if not terms:
+            raise ValueError(f"friction form {form!r}: robot {robot.name!r} has no Coulomb parameter in its columns")
+        if asymmetric:
+            raise ValueError(f"friction form {form!r}: asymmetric Coulomb (FS+, FS-) on joint(s) "
+                             f"{', '.join(map(str, asymmetric))} of {robot.name!r}: a smooth form has one magnitude "
+                             f"per joint; give friction 'coulomb', or symmetric Coulomb on those joints")
+        own, forms = smooth_joints(terms, form)
+        plans = [plan_windows(s, cutoff, settings)[0] for s in scans]
+        feed = streamed_feed(robot, sources, plans, cutoff, settings, probe, client)
+        scales = as_velocity_scales(find_scales(feed, robot.n, len(probe.names), own, forms)[0], form, robot.n)
+        if not scales.converged:  # a failed search is reported, never fitted with
+            raise SolverError(f"fit: the velocity-scale search of friction form {friction_label(form)!r} did not "
+                              f"converge; use friction 'coulomb'", status="not_converged", solver="grid")
+        columns = friction_base(base, coulomb_terms(robot, probe.base.names), form, scales.scales)
+        return columns, {"form": form if isinstance(form, str) else list(form), **scales.to_json()}
+    return hook
