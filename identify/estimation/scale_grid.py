@@ -28,7 +28,7 @@ bins of 1/100 decade (counts: the same whatever the blocks).
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import Any, Callable, Sequence
+from typing import Callable, Sequence
 
 import numpy as np
 
