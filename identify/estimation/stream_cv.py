@@ -46,7 +46,7 @@ from identify.observation.stream import (DEFAULT_BLOCK, Plan, Scan, StreamSettin
                                          scan, scanned_cutoff, windows_in_order)
 from identify.signal.filtering import EDGE_PERIODS
 
-__all__ = ["choose_processing_streamed", "grid_of_scans", "scans_for_choice"]
+__all__ = ["choose_processing_streamed", "grid_of_scans", "scans_for_choice", "time_span"]
 
 #: Lowest cut-off of the grid [Hz] (candidate_grid's floor): the scan keeps each segment's first and
 #: last 2 x EDGE_PERIODS / LOWEST_CUTOFF seconds of times, beyond the filters' longest edge.
@@ -96,7 +96,7 @@ def scans_for_choice(sources: Sequence[BlockSource], block: int) -> list[Scan]:
     return [scan(src, block, LOWEST_CUTOFF, KEEP_SECONDS) for src in sources]
 
 
-def _time_span(scans: Sequence[Scan], plans: Sequence[Sequence[Plan]]) -> tuple[float, float]:
+def time_span(scans: Sequence[Scan], plans: Sequence[Sequence[Plan]]) -> tuple[float, float]:
     """(first, last) time [s] of the decimated rows of every segment planned: samples ``edge`` and
     ``edge + (samples - 1) factor`` of each (the rows :func:`filtered_motion` keeps)."""
     firsts, lasts = [], []
@@ -140,7 +140,7 @@ def _score(cand: Candidate, robot: rx90sym.Robot, sources: Sequence[BlockSource]
     columns = presliding_base(robot, base, rest if threshold is not None else None)  # FPj with presliding
     settings = StreamSettings(cand.cutoff, reference, threshold, rest, 0.0, spring, block)
     plans = [plan_windows(s, cand.cutoff, settings)[0] for s in scans]
-    first, last = _time_span(scans, plans)
+    first, last = time_span(scans, plans)
     span = (first, last - first + 1e-9, blocks)  # as choose_processing's blocks in time
     drop = threshold is not None and drops_rest(rest)
     n, c = robot.n, len(columns.names)

@@ -72,7 +72,8 @@ def fit(robot: rx90sym.Robot, recordings: Sequence[Any], processing: Processing 
     samples: memory bounded by the block whatever the logs' length (docs/long-logs.md), the
     segment bootstrap computed on the way with ``bootstrap_seed``; client: a
     ``dask.distributed.Client`` running the blocks (block by default 60,000 samples); the processing
-    is cross-validated block by block as on whole recordings (the friction form stays coulomb).
+    is cross-validated block by block as on whole recordings, the friction form too (a smooth form's
+    velocity scales searched block by block, identify.fitting.streamed_friction).
     """
     if block is not None and client is None and _within_one_block(recordings, block):
         block = None  # a log within one block is one block: the whole-signal fit, as rx90 identify does
@@ -202,7 +203,7 @@ def fit_in_blocks(robot: rx90sym.Robot, recordings: Sequence[Any], processing: A
     from identify.fitting.streamed import DEFAULT_BLOCK, BootstrapSpec, fit_streamed  # the block path's modules
     from identify.observation.spring_fit import BaseWithSpring, spring_summary
 
-    from identify.fitting.streamed_friction import friction_hook
+    from identify.fitting.streamed_friction import ChoiceHook, friction_hook
 
     p = processing if processing is not None else Processing()
     smooth = has_smooth_friction(p.friction_form)
@@ -211,12 +212,16 @@ def fit_in_blocks(robot: rx90sym.Robot, recordings: Sequence[Any], processing: A
                          f"MJCF holds), not friction form {friction_label(p.friction_form)!r}: use friction "
                          f"'coulomb', or method 'wls'")
     block = DEFAULT_BLOCK if block is None else int(block)
+    # The form given, or chosen per joint by the cross-validation where left open (as in memory: not for the
+    # consistent method, whose URDF holds Coulomb + viscous).
+    choose = p.friction is None and p.cross_validates and method != "consistent"
+    hook = friction_hook(p.friction_form) if smooth else ChoiceHook() if choose else None
     base = base if base is not None else rx90sym.base_parameters(robot)
     recordings = list(recordings) if isinstance(recordings, (list, tuple)) else [recordings]
     spec = BootstrapSpec(BOOTSTRAP_BLOCK_S, BOOTSTRAP_DRAWS, bootstrap_seed)
     sf = fit_streamed(robot, recordings, method, base, p.cutoff, p.decimate_to, p.min_velocity, p.rest, p.delay,
                       p.spring, p.estimate_delay, block, client, spec, convention, gains, p.cross_validates,
-                      friction=friction_hook(p.friction_form) if smooth else None, **consistent_options)
+                      friction=hook, **consistent_options)
     base = sf.columns
     rest = sf.settings.rest  # the policy given, or chosen by the cross-validation
     model = FitModel.of(robot, convention=convention, gains=gains.to_dict() if gains is not None else None,
@@ -228,21 +233,16 @@ def fit_in_blocks(robot: rx90sym.Robot, recordings: Sequence[Any], processing: A
     boot = Bootstrap(sf.bootstrap_std, sf.bootstrap_block / sf.rate, spec.draws, spec.seed)
     found = sf.delay_estimate
     return Fit(robot, sf.result, p, model, base, None, found, found.delay if found is not None else None, spring,
-               boot, block=block, streamed=sf, recordings=sf.recordings, choice=_choice_record(sf.choice, p))
+               boot, block=block, streamed=sf, recordings=sf.recordings,
+               choice=_choice_record(sf.choice, getattr(hook, "choice", None)))
 
 
-#: Why the friction form is not chosen on the block path (its velocity-scale search reads whole recordings).
-FRICTION_NOTE = ("friction form: coulomb (not chosen block by block: the smooth forms' velocity-scale search "
-                 "needs the whole recordings)")
-
-
-def _choice_record(choice: ProcessingChoice | None, p: Any) -> dict | None:
-    """The fit file's ``processing_choice`` of a block-by-block fit: the in-memory fit's record, with a
-    line saying the friction form was left at coulomb where it was open."""
+def _choice_record(choice: ProcessingChoice | None, friction: Any) -> dict | None:
+    """The fit file's ``processing_choice`` of a block-by-block fit, as the in-memory fit's: the friction
+    form's choice (a FrictionChoice, None when the form was given) after the processing's."""
     if choice is None:
         return None
     record = choice.to_dict()
-    if p.friction is None:
-        record.update(friction={"form": "coulomb", "chosen": False, "reason": FRICTION_NOTE},
-                      table=record["table"] + "\n  " + FRICTION_NOTE)
-    return record
+    if friction is None:
+        return record
+    return dict(record, friction=friction.to_dict(), table=record["table"] + "\n" + friction.table())

@@ -12,6 +12,7 @@ to rounding), and the fit then uses the form's exact columns at them. Memory: th
 """
 from __future__ import annotations
 
+from dataclasses import dataclass
 from typing import Any, Callable, Sequence
 
 import numpy as np
@@ -22,10 +23,10 @@ from identify.estimation.consistency.errors import SolverError
 from identify.estimation.scale_grid import ScaleTable, find_scales
 from identify.estimation.separable import as_velocity_scales, smooth_joints
 from identify.observation.friction_model import coulomb_terms, friction_base, friction_probe
-from identify.observation.processing import FrictionForm, drops_rest, friction_label
+from identify.observation.processing import FrictionForm, drops_rest, friction_label, has_smooth_friction
 from identify.observation.stream import StreamSettings, in_order, piece, plan_windows, windows_in_order
 
-__all__ = ["friction_hook", "streamed_feed"]
+__all__ = ["ChoiceHook", "friction_hook", "streamed_feed"]
 
 
 def _probe_task(robot: rx90sym.Robot, rec: Any, window: Any, plan: Any, cutoff: float, settings: StreamSettings,
@@ -61,25 +62,57 @@ def streamed_feed(robot: rx90sym.Robot, sources: Sequence[Any], plans: Sequence[
     return feed
 
 
+def _columns(robot: rx90sym.Robot, sources: Sequence[Any], scans: Sequence[Any], cutoff: float,
+             settings: StreamSettings, base: Any, client: Any, form: FrictionForm) -> tuple[Any, dict]:
+    """(the columns of the smooth ``form`` at the scales found on every row, the fit file's ``model.friction``)."""
+    _, probe, terms, asymmetric = friction_probe(robot, base)
+    if not terms:
+        raise ValueError(f"friction form {form!r}: robot {robot.name!r} has no Coulomb parameter in its columns")
+    if asymmetric:
+        raise ValueError(f"friction form {form!r}: asymmetric Coulomb (FS+, FS-) on joint(s) "
+                         f"{', '.join(map(str, asymmetric))} of {robot.name!r}: a smooth form has one magnitude "
+                         f"per joint; give friction 'coulomb', or symmetric Coulomb on those joints")
+    own, forms = smooth_joints(terms, form)
+    plans = [plan_windows(s, cutoff, settings)[0] for s in scans]
+    feed = streamed_feed(robot, sources, plans, cutoff, settings, probe, client)
+    scales = as_velocity_scales(find_scales(feed, robot.n, len(probe.names), own, forms)[0], form, robot.n)
+    if not scales.converged:  # a failed search is reported, never fitted with
+        raise SolverError(f"fit: the velocity-scale search of friction form {friction_label(form)!r} did not "
+                          f"converge; use friction 'coulomb'", status="not_converged", solver="grid")
+    columns = friction_base(base, coulomb_terms(robot, probe.base.names), form, scales.scales)
+    return columns, {"form": form if isinstance(form, str) else list(form), **scales.to_json()}
+
+
 def friction_hook(form: FrictionForm) -> Callable[..., tuple[Any, dict]]:
     """The ``friction`` argument of :func:`~identify.fitting.streamed.fit_streamed` for the smooth ``form``
     (one, or one per joint): (the form's columns at the scales found, the fit file's ``model.friction``)."""
     def hook(robot: rx90sym.Robot, sources: Sequence[Any], scans: Sequence[Any], cutoff: float,
              settings: StreamSettings, base: Any, client: Any) -> tuple[Any, dict]:
-        _, probe, terms, asymmetric = friction_probe(robot, base)
-        if not terms:
-            raise ValueError(f"friction form {form!r}: robot {robot.name!r} has no Coulomb parameter in its columns")
-        if asymmetric:
-            raise ValueError(f"friction form {form!r}: asymmetric Coulomb (FS+, FS-) on joint(s) "
-                             f"{', '.join(map(str, asymmetric))} of {robot.name!r}: a smooth form has one magnitude "
-                             f"per joint; give friction 'coulomb', or symmetric Coulomb on those joints")
-        own, forms = smooth_joints(terms, form)
-        plans = [plan_windows(s, cutoff, settings)[0] for s in scans]
-        feed = streamed_feed(robot, sources, plans, cutoff, settings, probe, client)
-        scales = as_velocity_scales(find_scales(feed, robot.n, len(probe.names), own, forms)[0], form, robot.n)
-        if not scales.converged:  # a failed search is reported, never fitted with
-            raise SolverError(f"fit: the velocity-scale search of friction form {friction_label(form)!r} did not "
-                              f"converge; use friction 'coulomb'", status="not_converged", solver="grid")
-        columns = friction_base(base, coulomb_terms(robot, probe.base.names), form, scales.scales)
-        return columns, {"form": form if isinstance(form, str) else list(form), **scales.to_json()}
+        return _columns(robot, sources, scans, cutoff, settings, base, client, form)
     return hook
+
+
+@dataclass(eq=False)
+class ChoiceHook:
+    """The ``friction`` argument of :func:`~identify.fitting.streamed.fit_streamed` where the form is left
+    open: the form chosen per joint by the cross-validation block by block
+    (:func:`identify.estimation.friction_choice.choose_friction_rows` on
+    :class:`~identify.estimation.friction_folds.StreamRows`: the in-memory choice's code and time blocks),
+    then its columns (:func:`friction_hook`'s). ``choice``: the :class:`FrictionChoice` once called."""
+
+    choice: Any = None
+
+    def __call__(self, robot: rx90sym.Robot, sources: Sequence[Any], scans: Sequence[Any], cutoff: float,
+                 settings: StreamSettings, base: Any, client: Any) -> tuple[Any, dict | None]:
+        from identify.estimation.friction_choice import choose_friction_rows
+        from identify.estimation.friction_folds import StreamRows
+        from identify.estimation.stream_cv import time_span
+        from identify.observation.cross_validation import DEFAULT_BLOCKS
+
+        plans = [plan_windows(s, cutoff, settings)[0] for s in scans]
+        first, last = time_span(scans, plans)
+        rows = StreamRows(robot, sources, plans, cutoff, settings, (first, last - first + 1e-9, DEFAULT_BLOCKS), client)
+        self.choice = choose_friction_rows(robot, rows, base, robot.n * sum(s.samples for s in scans))
+        if not has_smooth_friction(self.choice.chosen):
+            return base, None
+        return _columns(robot, sources, scans, cutoff, settings, base, client, self.choice.chosen)
