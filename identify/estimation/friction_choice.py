@@ -6,16 +6,20 @@ smooth tanh(q̇/vs); Stribeck on request) is scored the same way, on the same co
 (:func:`~identify.observation.cross_validation.time_blocks`: cut by time over the recordings'
 common span):
 
-1. one observation matrix of the fit's processing whose Coulomb columns hold the filtered,
-   decimated driver speed v (:class:`~identify.observation.friction_model.FrictionBase` form
-   "probe"), built once: the speeds the scale search needs;
+The rows are read in passes, from recordings in memory or block by block from a log of any length
+(:mod:`identify.estimation.friction_folds`: one implementation, everything from per-(time block,
+joint) triangular factors, so the choice does not depend on the blocks):
+
+1. the probe columns, whose own Coulomb columns hold the filtered, decimated driver speed v
+   (:class:`~identify.observation.friction_model.FrictionBase` form "probe"): the speeds the scale
+   search needs, tabulated on grids of scales (:mod:`identify.estimation.scale_grid`, two passes);
 2. for each held-back block, the velocity scales of a smooth form are searched **on the other
-   blocks only** (separable least squares, :func:`identify.estimation.separable.fold_scales`),
+   blocks only** (separable least squares, :func:`identify.estimation.friction_folds.fold_scales_of`),
    the base parameters fitted (WLS, eq. 11's weights, the processing's fold solver) on those rows,
    the held-back torques predicted;
-3. every form is scored with the fit's **exact** columns (its own observation matrix: one for
-   Coulomb, one per fold for a smooth form at that fold's scales, the Coulomb one with its friction
-   columns evaluated and filtered again, :mod:`identify.observation.friction_rows`). Evaluating the forms on the
+3. every form is scored with the fit's **exact** columns (one pass for Coulomb, one per smooth form
+   holding every fold's columns at that fold's scales,
+   :class:`~identify.estimation.friction_folds.FoldColumns`). Evaluating the forms on the
    probe's decimated speed (sign(Dv), tanh(Dv/vs)) handicapped Coulomb against the fit's smooth
    D·sign(v) (TX40: 10.655 % instead of 8.427 %) and chose tanh where the held-out errors got worse.
 
