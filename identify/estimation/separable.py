@@ -29,13 +29,12 @@ from typing import Any, Sequence
 import numpy as np
 
 import rx90sym
-from identify.estimation.least_squares import weighted_least_squares
 from identify.estimation.scale_grid import LOW_SPEED_SHARE, SCALE_BOUNDS, ScaleSearch, find_scales
 from identify.observation.friction_model import PRESLIDING_PREFIX, FrictionBase, friction_probe
 from identify.observation.matrix import Observation, observation_matrix
 
 __all__ = ["LOW_SPEED_SHARE", "SCALE_BOUNDS", "TRAVEL_CANDIDATES", "PreslidingTravels", "VelocityScales",
-           "fold_scales", "presliding_travels", "scales_from_observation", "smooth_joints", "velocity_scales"]
+           "fold_scales", "presliding_travels", "travel_columns", "travels_of", "scales_from_observation", "smooth_joints", "velocity_scales"]
 
 
 @dataclass(frozen=True)
@@ -169,47 +168,43 @@ class PreslidingTravels:
                 "presliding_cost": [[float(c) if np.isfinite(c) else None for c in row] for row in self.cost]}
 
 
+def travel_columns(robot: rx90sym.Robot, base: Any, candidates: Sequence[float] = TRAVEL_CANDIDATES) -> FrictionBase:
+    """The columns of the travel search: ``base``'s (its friction form and scales kept) with one column FPj_k
+    per joint with a Coulomb term and per candidate travel k [rad]."""
+    inner, _, terms, _ = friction_probe(robot, base)
+    form = base.form if isinstance(base, FrictionBase) else "coulomb"
+    scales = base.scales if isinstance(base, FrictionBase) else None
+    return FrictionBase(inner, tuple((t.row, t.column, t.driver) for t in terms), form, scales, True,
+                        None, tuple(float(d) for d in candidates))
+
+
+def travels_of(robot: rx90sym.Robot, R: Sequence[np.ndarray], rows: Sequence[int], names: Sequence[str],
+               candidates: Sequence[float] = TRAVEL_CANDIDATES) -> PreslidingTravels:
+    """The travels chosen from the per-joint factors of the :func:`travel_columns` rows (whatever read them)."""
+    from identify.estimation.travel_search import travels_from_factors
+
+    names = list(names)
+    columns = {j: [names.index(f"{PRESLIDING_PREFIX}{j + 1}_{k}") for k in range(len(candidates))]
+               for j in range(robot.n)
+               if all(f"{PRESLIDING_PREFIX}{j + 1}_{k}" in names for k in range(len(candidates)))}
+    choice, table = travels_from_factors(R, rows, names, columns, len(candidates))
+    travels = tuple(float(candidates[choice[j]]) if j in choice else np.nan for j in range(robot.n))
+    return PreslidingTravels(travels, tuple(float(c) for c in candidates),
+                             tuple(tuple(table.get(j, [np.nan] * len(candidates))) for j in range(robot.n)))
+
+
 def presliding_travels(robot: rx90sym.Robot, recordings: Sequence[Any], base: Any,
                        candidates: Sequence[float] = TRAVEL_CANDIDATES, **options: Any) -> PreslidingTravels:
     """The presliding travel per joint, separable like the velocity scales: FPj is linear, δ_j
     one of ``candidates`` [rad]. One observation matrix holds a column FPj_k per candidate (rest
-    policy "presliding" in ``options``, the fit's other observation options); the other columns
-    are projected out once and each joint's δ is chosen by coordinate descent on the weighted cost
-    (two sweeps; eq. 11's weights from the fit at the middle candidate)."""
-    inner, _, terms, _ = friction_probe(robot, base)
-    form = base.form if isinstance(base, FrictionBase) else "coulomb"
-    scales = base.scales if isinstance(base, FrictionBase) else None
-    probe = FrictionBase(inner, tuple((t.row, t.column, t.driver) for t in terms), form, scales, True,
-                         None, tuple(float(d) for d in candidates))
-    obs = observation_matrix(robot, recordings, base=probe, **options)
-    names = list(obs.names)
-    columns = {t.row: [names.index(f"{PRESLIDING_PREFIX}{t.row + 1}_{k}") if f"{PRESLIDING_PREFIX}{t.row + 1}_{k}"
-                       in names else None for k in range(len(candidates))] for t in terms}
-    columns = {j: c for j, c in columns.items() if all(x is not None for x in c)}
-    choice = {j: len(candidates) // 2 for j in columns}
-    chosen = sorted(c for j in columns for c in columns[j])
-    fixed = [c for c in range(len(names)) if c not in chosen]
-    first = weighted_least_squares(obs.W[:, fixed + [columns[j][choice[j]] for j in columns]], obs.Y, obs.joint,
-                                   [names[c] for c in fixed] + [f"FP{j + 1}" for j in columns])
-    d = np.asarray(first.weights)[obs.joint]
-    # The fixed columns projected out once; a choice's cost from the Gram matrix of the candidates.
-    Q = np.linalg.qr(obs.W[:, fixed] * d[:, None])[0]
-    A = obs.W[:, chosen] * d[:, None]
-    b = obs.Y * d
-    A, b = A - Q @ (Q.T @ A), b - Q @ (Q.T @ b)
-    G, g, bb = A.T @ A, A.T @ b, float(b @ b)
-    where = {c: k for k, c in enumerate(chosen)}
+    policy "presliding" in ``options``, the fit's other observation options); each joint's δ chosen by
+    coordinate descent on the weighted cost from its per-joint factors
+    (:func:`identify.estimation.travel_search.travels_from_factors`, as block by block)."""
+    from identify.estimation.incremental_qr import JointFactors
 
-    def cost(pick: dict[int, int]) -> float:
-        idx = [where[columns[j][pick[j]]] for j in columns]
-        x = np.linalg.lstsq(G[np.ix_(idx, idx)], g[idx], rcond=None)[0]
-        return 0.5 * (bb - float(g[idx] @ x))   # ½‖b − A x‖² at the least-squares x
-
-    table = {j: [np.nan] * len(candidates) for j in columns}
-    for _ in range(2):
-        for j in columns:
-            table[j] = [cost({**choice, j: k}) for k in range(len(candidates))]
-            choice[j] = int(np.argmin(table[j]))
-    travels = tuple(float(candidates[choice[j]]) if j in choice else np.nan for j in range(robot.n))
-    return PreslidingTravels(travels, tuple(float(c) for c in candidates),
-                             tuple(tuple(table.get(j, [np.nan] * len(candidates))) for j in range(robot.n)))
+    obs = observation_matrix(robot, recordings, base=travel_columns(robot, base, candidates), **options)
+    factors = JointFactors(robot.n, len(obs.names))
+    for j in range(robot.n):
+        rows = obs.joint == j
+        factors.add(j, np.column_stack([obs.W[rows], obs.Y[rows]]))
+    return travels_of(robot, factors.R, factors.rows, obs.names, candidates)
