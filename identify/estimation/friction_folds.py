@@ -49,6 +49,8 @@ class MemoryRows:
             self.options["cutoff"] = automatic_cutoff(self.recordings, self.options.get("decimate_to"))
         self.cutoff, self.rest = float(self.options["cutoff"]), self.options.get("rest", "drop")
         self.drop = self.options.get("min_velocity") is not None and drops_rest(self.rest)
+        # The rest policy that adds presliding magnitudes FPj (as observation_matrix's columns): None without a threshold.
+        self.presliding_rest = self.rest if self.options.get("min_velocity") is not None else None
         self._last: tuple[Any, list] | None = None
 
     def motions(self, columns: Any) -> Iterator[tuple[Any, np.ndarray]]:
@@ -88,6 +90,10 @@ class StreamRows:
         return self.settings.rest
 
     @property
+    def presliding_rest(self) -> Any:
+        return self.settings.rest if self.settings.min_velocity is not None else None
+
+    @property
     def drop(self) -> bool:
         return self.settings.min_velocity is not None and drops_rest(self.settings.rest)
 
@@ -104,8 +110,11 @@ def fold_scales_of(rows: Any, probe: Any, terms: Sequence[Any], form: FrictionFo
                    n: int) -> list[VelocityScales]:
     """Per held-back time block the scales of ``form`` searched on the other blocks only (probe columns
     ``probe``: own Coulomb columns holding the driver speed; ``terms`` its own Coulomb terms)."""
+    from identify.observation.friction_model import presliding_base
+
     own, forms = smooth_joints(terms, form)
     blocks = rows.blocks
+    probe = presliding_base(rows.robot, probe, rows.presliding_rest)   # FPj columns with "presliding", as in the fit
 
     def feed(table: Any) -> None:
         for m, ids in rows.motions(probe):
@@ -163,7 +172,10 @@ def held_back_errors(rows: Any, inner: Any, terms: Sequence[Any], form: Friction
     """(squared held-back errors, squared held-back torques) (blocks, n) of ``form`` with its exact
     columns at each fold's ``scales`` (None: the Coulomb form, ``inner``'s own columns): per fold the
     WLS on the other blocks (eq. 11's weights), the held-back block predicted; one pass."""
+    from identify.observation.friction_model import presliding_base
+
     blocks = rows.blocks
+    inner = presliding_base(rows.robot, inner, rows.presliding_rest)   # FPj columns with "presliding", as in the fit
     columns = inner if scales is None else FoldColumns(inner, tuple(terms), form, tuple(tuple(s) for s in scales))
     R: dict[tuple[int, int], np.ndarray] = {}
     count: dict[tuple[int, int], int] = {}

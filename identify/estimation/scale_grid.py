@@ -222,13 +222,15 @@ def _weights(table: ScaleTable, R: dict[int, np.ndarray], rows: dict[int, int], 
     from identify.estimation.least_squares import solve_joint_systems
 
     gram = _Gram(table, R, rows, np.ones(table.n))
-    systems = []
+    blocks = []
     for j in range(table.n):
         src, dst = gram.indices(j, middle.get(j))
         M = np.zeros((R[j].shape[0], gram.C + 1))
         M[:, dst] = R[j][:, src]
-        systems.append(_from_augmented_rows(M, rows[j]))
-    return np.asarray(solve_joint_systems(systems, [f"c{k}" for k in range(gram.C)]).weights)
+        blocks.append(M)
+    live = np.flatnonzero(np.any(np.vstack(blocks)[:, :gram.C] != 0.0, axis=0))   # e.g. an FPj that never rests
+    systems = [_from_augmented_rows(M[:, list(live) + [gram.C]], rows[j]) for j, M in enumerate(blocks)]
+    return np.asarray(solve_joint_systems(systems, [f"c{k}" for k in live]).weights)
 
 
 def _parabola(u: np.ndarray, f: np.ndarray, k: int) -> tuple[float, float]:

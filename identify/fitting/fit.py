@@ -203,7 +203,8 @@ def fit_in_blocks(robot: rx90sym.Robot, recordings: Sequence[Any], processing: A
     from identify.fitting.streamed import DEFAULT_BLOCK, BootstrapSpec, fit_streamed  # the block path's modules
     from identify.observation.spring_fit import BaseWithSpring, spring_summary
 
-    from identify.fitting.streamed_friction import ChoiceHook, friction_hook
+    from identify.fitting.streamed_friction import FrictionHook
+    from identify.observation.processing import has_policy
 
     p = processing if processing is not None else Processing()
     smooth = has_smooth_friction(p.friction_form)
@@ -215,7 +216,8 @@ def fit_in_blocks(robot: rx90sym.Robot, recordings: Sequence[Any], processing: A
     # The form given, or chosen per joint by the cross-validation where left open (as in memory: not for the
     # consistent method, whose URDF holds Coulomb + viscous).
     choose = p.friction is None and p.cross_validates and method != "consistent"
-    hook = friction_hook(p.friction_form) if smooth else ChoiceHook() if choose else None
+    presliding = p.min_velocity is not None and has_policy(p.rest, "presliding")   # its travels searched too
+    hook = FrictionHook(p.friction_form, choose) if smooth or choose or presliding else None
     base = base if base is not None else rx90sym.base_parameters(robot)
     recordings = list(recordings) if isinstance(recordings, (list, tuple)) else [recordings]
     spec = BootstrapSpec(BOOTSTRAP_BLOCK_S, BOOTSTRAP_DRAWS, bootstrap_seed)

@@ -1,7 +1,9 @@
 """The friction forms on a log read block by block: velocity scales searched from per-joint factors.
 
-:func:`friction_hook` gives :func:`identify.fitting.streamed.fit_streamed` the friction columns of a
-smooth form (tanh, Stribeck, or one per joint) once the torques are in step: the probe observation's
+:class:`FrictionHook` gives :func:`identify.fitting.streamed.fit_streamed` the friction columns once
+the torques are in step: the form chosen per joint by the cross-validation where it is left open
+(:mod:`identify.estimation.friction_folds`), a smooth form's (tanh, Stribeck, or one per joint)
+velocity scales, and the presliding travels (:mod:`identify.estimation.travel_search`). The probe observation's
 rows (each own Coulomb column the filtered, decimated driver speed,
 :class:`~identify.observation.friction_model.FrictionBase` form "probe") are made block by block by
 the streamed fit's own row code (:func:`identify.observation.stream.piece`) and folded into the
@@ -22,11 +24,11 @@ import rx90sym
 from identify.estimation.consistency.errors import SolverError
 from identify.estimation.scale_grid import ScaleTable, find_scales
 from identify.estimation.separable import as_velocity_scales, smooth_joints
-from identify.observation.friction_model import coulomb_terms, friction_base, friction_probe
+from identify.observation.friction_model import coulomb_terms, friction_base, friction_probe, presliding_base
 from identify.observation.processing import FrictionForm, drops_rest, friction_label, has_smooth_friction
 from identify.observation.stream import StreamSettings, in_order, piece, plan_windows, windows_in_order
 
-__all__ = ["ChoiceHook", "friction_hook", "streamed_feed"]
+__all__ = ["FrictionHook", "friction_hook", "streamed_feed"]
 
 
 def _probe_task(robot: rx90sym.Robot, rec: Any, window: Any, plan: Any, cutoff: float, settings: StreamSettings,
@@ -62,7 +64,7 @@ def streamed_feed(robot: rx90sym.Robot, sources: Sequence[Any], plans: Sequence[
     return feed
 
 
-def _columns(robot: rx90sym.Robot, sources: Sequence[Any], scans: Sequence[Any], cutoff: float,
+def _columns(robot: rx90sym.Robot, sources: Sequence[Any], plans: Sequence[Any], cutoff: float,
              settings: StreamSettings, base: Any, client: Any, form: FrictionForm) -> tuple[Any, dict]:
     """(the columns of the smooth ``form`` at the scales found on every row, the fit file's ``model.friction``)."""
     _, probe, terms, asymmetric = friction_probe(robot, base)
@@ -73,7 +75,8 @@ def _columns(robot: rx90sym.Robot, sources: Sequence[Any], scans: Sequence[Any],
                          f"{', '.join(map(str, asymmetric))} of {robot.name!r}: a smooth form has one magnitude "
                          f"per joint; give friction 'coulomb', or symmetric Coulomb on those joints")
     own, forms = smooth_joints(terms, form)
-    plans = [plan_windows(s, cutoff, settings)[0] for s in scans]
+    # The probe's FPj columns with "presliding", as observation_matrix adds them in memory.
+    probe = presliding_base(robot, probe, settings.rest if settings.min_velocity is not None else None)
     feed = streamed_feed(robot, sources, plans, cutoff, settings, probe, client)
     scales = as_velocity_scales(find_scales(feed, robot.n, len(probe.names), own, forms)[0], form, robot.n)
     if not scales.converged:  # a failed search is reported, never fitted with
@@ -83,36 +86,69 @@ def _columns(robot: rx90sym.Robot, sources: Sequence[Any], scans: Sequence[Any],
     return columns, {"form": form if isinstance(form, str) else list(form), **scales.to_json()}
 
 
-def friction_hook(form: FrictionForm) -> Callable[..., tuple[Any, dict]]:
-    """The ``friction`` argument of :func:`~identify.fitting.streamed.fit_streamed` for the smooth ``form``
-    (one, or one per joint): (the form's columns at the scales found, the fit file's ``model.friction``)."""
-    def hook(robot: rx90sym.Robot, sources: Sequence[Any], scans: Sequence[Any], cutoff: float,
+def _travels(robot: rx90sym.Robot, sources: Sequence[Any], plans: Sequence[Any], cutoff: float,
              settings: StreamSettings, base: Any, client: Any) -> tuple[Any, dict]:
-        return _columns(robot, sources, scans, cutoff, settings, base, client, form)
-    return hook
+    """(``base`` with the presliding travels chosen per joint, their record): one pass of the
+    :func:`~identify.estimation.separable.travel_columns` rows into per-joint factors."""
+    from identify.estimation.incremental_qr import JointFactors, stacked_rows
+    from identify.estimation.separable import travel_columns, travels_of
+    from identify.fitting.friction import defaulted_travels
+
+    columns = travel_columns(robot, base)
+    factors = JointFactors(robot.n, len(columns.names))
+    drop = settings.min_velocity is not None and drops_rest(settings.rest)
+    tasks = ((robot, rec, window, plan, cutoff, settings, columns.regressor_batch, columns.names, 0)
+             for plan, window, rec, _ in windows_in_order(sources, plans))
+    for p in in_order(piece, tasks, client, 4 if client is not None else 1):
+        m = p.motion
+        keep = m.rows(drop)
+        for j in range(robot.n):
+            factors.add(j, stacked_rows(m.Phi, [m.Y], j, keep[:, j]))
+    found = travels_of(robot, factors.R, factors.rows, columns.names)
+    terms = coulomb_terms(robot, friction_probe(robot, base)[0].names)
+    return friction_base(base, terms, presliding=True, travels=defaulted_travels(found.travels)), found.to_json()
 
 
 @dataclass(eq=False)
-class ChoiceHook:
-    """The ``friction`` argument of :func:`~identify.fitting.streamed.fit_streamed` where the form is left
-    open: the form chosen per joint by the cross-validation block by block
-    (:func:`identify.estimation.friction_choice.choose_friction_rows` on
-    :class:`~identify.estimation.friction_folds.StreamRows`: the in-memory choice's code and time blocks),
-    then its columns (:func:`friction_hook`'s). ``choice``: the :class:`FrictionChoice` once called."""
+class FrictionHook:
+    """The ``friction`` argument of :func:`~identify.fitting.streamed.fit_streamed`: the friction columns of a
+    fit read block by block, as :func:`identify.fitting.friction.friction_columns` makes them in memory.
+    form: the form given (one, or one per joint); choose: the form chosen per joint by the cross-validation
+    block by block instead (:func:`identify.estimation.friction_choice.choose_friction_rows` on
+    :class:`~identify.estimation.friction_folds.StreamRows`: the in-memory choice's code and time blocks);
+    then a smooth form's velocity scales, and with the rest policy "presliding" the travels.
+    ``choice``: the :class:`FrictionChoice` once called (None: the form was given)."""
 
+    form: FrictionForm = "coulomb"
+    choose: bool = False
     choice: Any = None
 
     def __call__(self, robot: rx90sym.Robot, sources: Sequence[Any], scans: Sequence[Any], cutoff: float,
                  settings: StreamSettings, base: Any, client: Any) -> tuple[Any, dict | None]:
-        from identify.estimation.friction_choice import choose_friction_rows
-        from identify.estimation.friction_folds import StreamRows
-        from identify.estimation.stream_cv import time_span
-        from identify.observation.cross_validation import DEFAULT_BLOCKS
+        from identify.observation.processing import has_policy
 
         plans = [plan_windows(s, cutoff, settings)[0] for s in scans]
-        first, last = time_span(scans, plans)
-        rows = StreamRows(robot, sources, plans, cutoff, settings, (first, last - first + 1e-9, DEFAULT_BLOCKS), client)
-        self.choice = choose_friction_rows(robot, rows, base, robot.n * sum(s.samples for s in scans))
-        if not has_smooth_friction(self.choice.chosen):
-            return base, None
-        return _columns(robot, sources, scans, cutoff, settings, base, client, self.choice.chosen)
+        form = self.form
+        if self.choose:
+            from identify.estimation.friction_choice import choose_friction_rows
+            from identify.estimation.friction_folds import StreamRows
+            from identify.estimation.stream_cv import time_span
+            from identify.observation.cross_validation import DEFAULT_BLOCKS
+
+            first, last = time_span(scans, plans)
+            rows = StreamRows(robot, sources, plans, cutoff, settings, (first, last - first + 1e-9, DEFAULT_BLOCKS),
+                              client)
+            self.choice = choose_friction_rows(robot, rows, base, robot.n * sum(s.samples for s in scans))
+            form = self.choice.chosen
+        record = None
+        if has_smooth_friction(form):
+            base, record = _columns(robot, sources, plans, cutoff, settings, base, client, form)
+        if settings.min_velocity is not None and has_policy(settings.rest, "presliding"):
+            base, travels = _travels(robot, sources, plans, cutoff, settings, base, client)
+            record = {**(record or {"form": form if isinstance(form, str) else list(form)}), **travels}
+        return base, record
+
+
+def friction_hook(form: FrictionForm) -> FrictionHook:
+    """The hook of a given ``form`` (one, or one per joint)."""
+    return FrictionHook(form)
