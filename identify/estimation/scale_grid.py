@@ -217,6 +217,41 @@ class _Gram:
         return 0.5 * float(A[C, C] - z @ z)
 
 
+    def profile(self, j: int, parts: dict[int, np.ndarray], ks: np.ndarray) -> np.ndarray:
+        """The cost at each of joint j's tabulated scales ``ks``, the other joints' parts as in ``parts``:
+        the columns that do not change with j's scale (X) factored once, each scale's column(s) f_k
+        (FSj, and FSTj for Stribeck; 0 in the other joints' rows) projected on them, cost =
+        ½(‖y − P_X y‖² − nᵀ D⁻¹ n), n = f_kᵀ(y − P_X y), D = f_kᵀ(I − P_X)f_k."""
+        t, C = self.table, self.C
+        varying = [t.own[j]] + ([self.fst[j]] if j in self.fst else [])
+        A = sum(parts.values())   # joint j's X-X block does not depend on its scale
+        X = np.array([x for x in range(C) if x not in varying and A[x, x] > 0])
+        L = np.linalg.cholesky(A[np.ix_(X, X)])
+        zy = np.linalg.solve(L, A[X, C])
+        rest = A[C, C] - zy @ zy
+        # Joint j's table columns behind the global X columns (an FSTi of another joint is 0 in its rows).
+        src, dst = self.indices(j, None)
+        where = dict(zip(dst[:-1].tolist(), src[:-1].tolist()))
+        rows = [i for i, x in enumerate(X) if x in where]
+        srcX = [where[X[i]] for i in rows]
+        m = 2 if t.forms[j] == "stribeck" else 1
+        tab = (t.c + np.asarray(ks)[:, None] * t.m + np.arange(m)).ravel()     # the columns of every scale, in order
+        Gj = self.G[j]
+        GXf = np.zeros((X.size, tab.size))
+        GXf[rows] = Gj[np.ix_(srcX, tab)]
+        Zf = np.linalg.solve(L, GXf).reshape(X.size, len(ks), m)
+        yc = t.width - 1
+        num = Gj[tab, yc].reshape(len(ks), m) - np.einsum("xkm,x->km", Zf, zy)
+        den = Gj[np.ix_(tab, tab)].reshape(len(ks), m, len(ks), m)[np.arange(len(ks)), :, np.arange(len(ks)), :] \
+            - np.einsum("xkm,xkn->kmn", Zf, Zf)
+        if m == 1:   # nᵀD⁻¹n of one column (0 where the column is 0: nothing gained)
+            d = den[:, 0, 0]
+            gain = np.where(d > 0, num[:, 0] ** 2 / np.where(d > 0, d, 1.0), 0.0)
+        else:
+            gain = np.array([n @ np.linalg.lstsq(d, n, rcond=None)[0] for n, d in zip(num, den)])
+        return 0.5 * (rest - gain)
+
+
 def _weights(table: ScaleTable, R: dict[int, np.ndarray], rows: dict[int, int], middle: dict[int, int]) -> np.ndarray:
     """eq. 11's weights (1/σ_j of each joint's own residual) of the fit at the tabulated scale ``middle[j]``."""
     from identify.estimation.least_squares import solve_joint_systems
@@ -260,12 +295,8 @@ def _descend(gram: _Gram, joints: Sequence[int], allowed: dict[int, np.ndarray],
     profile = {}
     for _ in range(2):
         for j in joints:
-            costs = []
-            for k in allowed[j]:
-                parts[j] = gram.part(j, int(k))
-                costs.append(gram.cost(parts))
-            profile[j] = np.array(costs)
-            pick[j] = int(allowed[j][int(np.argmin(costs))])
+            profile[j] = gram.profile(j, parts, allowed[j])
+            pick[j] = int(allowed[j][int(np.argmin(profile[j]))])
             parts[j] = gram.part(j, pick[j])
     return pick, profile
 
@@ -348,6 +379,7 @@ def find_scales(feed: Callable[[ScaleTable], None], n: int, c: int, own: dict[in
 
 def _common_start(gram: _Gram, joints: Sequence[int], allowed: dict[int, np.ndarray]) -> dict[int, int]:
     """Each joint's index of lowest own residual when every smooth joint takes the same tabulated scale."""
+    import scipy.linalg
     K = gram.table.K
     best = {}
     own = np.full((K, len(joints)), np.inf)
@@ -357,7 +389,10 @@ def _common_start(gram: _Gram, joints: Sequence[int], allowed: dict[int, np.ndar
         C = gram.C
         live = np.flatnonzero(np.diag(A)[:C] > 0)
         beta = np.zeros(C)
-        beta[live] = np.linalg.lstsq(A[np.ix_(live, live)], A[live, C], rcond=None)[0]
+        try:
+            beta[live] = scipy.linalg.cho_solve(scipy.linalg.cho_factor(A[np.ix_(live, live)]), A[live, C])
+        except np.linalg.LinAlgError:   # rank deficient at this scale: the least-norm solution
+            beta[live] = np.linalg.lstsq(A[np.ix_(live, live)], A[live, C], rcond=None)[0]
         x = np.r_[beta, -1.0]
         for i, j in enumerate(joints):
             own[k, i] = float(x @ parts[j] @ x)    # the joint's own weighted residual
