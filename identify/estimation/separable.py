@@ -34,7 +34,7 @@ from identify.observation.friction_model import PRESLIDING_PREFIX, FrictionBase,
 from identify.observation.matrix import Observation, observation_matrix
 
 __all__ = ["LOW_SPEED_SHARE", "SCALE_BOUNDS", "TRAVEL_CANDIDATES", "PreslidingTravels", "VelocityScales",
-           "fold_scales", "presliding_travels", "travel_columns", "travels_of", "scales_from_observation", "smooth_joints", "velocity_scales"]
+           "presliding_travels", "travel_columns", "travels_of", "scales_from_observation", "smooth_joints", "velocity_scales"]
 
 
 @dataclass(frozen=True)
@@ -116,16 +116,6 @@ def scales_from_observation(obs: Observation, terms: Sequence[Any], form: str | 
     own, forms = smooth_joints(terms, form)
     found = find_scales(observation_feed(obs), n, obs.W.shape[1], own, forms)[0]
     return as_velocity_scales(found, form, n)
-
-
-def fold_scales(obs: Observation, terms: Sequence[Any], form: str | Sequence[str], n: int, ids: np.ndarray,
-                blocks: int) -> list[VelocityScales]:
-    """Per held-back time block b (``ids``: each row's block) the scales of ``form`` searched on the
-    other blocks only, from one pair of tables (the cross-validation's folds)."""
-    own, forms = smooth_joints(terms, form)
-    sets = [[x for x in range(blocks) if x != b] for b in range(blocks)]
-    found = find_scales(observation_feed(obs, ids), n, obs.W.shape[1], own, forms, sets, blocks)
-    return [as_velocity_scales(x, form, n) for x in found]
 
 
 def velocity_scales(robot: rx90sym.Robot, recordings: Sequence[Any], base: Any, form: str | Sequence[str],
