@@ -34,7 +34,7 @@ from identify.observation.friction_model import PRESLIDING_PREFIX, FrictionBase,
 from identify.observation.matrix import Observation, observation_matrix
 
 __all__ = ["LOW_SPEED_SHARE", "SCALE_BOUNDS", "TRAVEL_CANDIDATES", "PreslidingTravels", "VelocityScales",
-           "presliding_travels", "travel_columns", "travels_of", "scales_from_observation", "smooth_joints", "velocity_scales"]
+           "presliding_travels", "smooth_probe", "travel_columns", "travels_of", "scales_from_observation", "smooth_joints", "velocity_scales"]
 
 
 @dataclass(frozen=True)
@@ -118,13 +118,9 @@ def scales_from_observation(obs: Observation, terms: Sequence[Any], form: str | 
     return as_velocity_scales(found, form, n)
 
 
-def velocity_scales(robot: rx90sym.Robot, recordings: Sequence[Any], base: Any, form: str | Sequence[str],
-                    **options: Any) -> VelocityScales:
-    """The velocity scale per joint of the smooth friction ``form`` ("tanh" | "stribeck", or one
-    form per joint, "coulomb" on the joints without a scale) on
-    ``recordings`` with the base columns ``base`` and the observation ``options`` of the fit
-    (cutoff, decimate_to, min_velocity, rest, spring, delay: :func:`identify.observation_matrix`)."""
-    base = base if base is not None else rx90sym.base_parameters(robot)
+def smooth_probe(robot: rx90sym.Robot, base: Any, form: str | Sequence[str]) -> tuple[FrictionBase, tuple[Any, ...]]:
+    """(the probe columns of ``base``, its own Coulomb terms) for the scale search of ``form``; refused
+    without a Coulomb term, or with asymmetric Coulomb (FS+, FS-: a smooth form has one magnitude)."""
     _, probe, terms, asymmetric = friction_probe(robot, base)
     if not terms:
         raise ValueError(f"friction form {form!r}: robot {robot.name!r} has no Coulomb parameter in its columns")
@@ -132,6 +128,17 @@ def velocity_scales(robot: rx90sym.Robot, recordings: Sequence[Any], base: Any, 
         raise ValueError(f"friction form {form!r}: asymmetric Coulomb (FS+, FS-) on joint(s) "
                          f"{', '.join(map(str, asymmetric))} of {robot.name!r}: a smooth form has one magnitude per "
                          f"joint; give friction 'coulomb', or symmetric Coulomb on those joints")
+    return probe, terms
+
+
+def velocity_scales(robot: rx90sym.Robot, recordings: Sequence[Any], base: Any, form: str | Sequence[str],
+                    **options: Any) -> VelocityScales:
+    """The velocity scale per joint of the smooth friction ``form`` ("tanh" | "stribeck", or one
+    form per joint, "coulomb" on the joints without a scale) on
+    ``recordings`` with the base columns ``base`` and the observation ``options`` of the fit
+    (cutoff, decimate_to, min_velocity, rest, spring, delay: :func:`identify.observation_matrix`)."""
+    base = base if base is not None else rx90sym.base_parameters(robot)
+    probe, terms = smooth_probe(robot, base, form)
     obs = observation_matrix(robot, recordings, base=probe, **options)
     return scales_from_observation(obs, terms, form, robot.n)
 

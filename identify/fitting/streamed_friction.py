@@ -23,7 +23,7 @@ import rx90sym
 
 from identify.estimation.consistency.errors import SolverError
 from identify.estimation.scale_grid import ScaleTable, find_scales
-from identify.estimation.separable import as_velocity_scales, smooth_joints
+from identify.estimation.separable import as_velocity_scales, smooth_joints, smooth_probe
 from identify.observation.friction_model import coulomb_terms, friction_base, friction_probe, presliding_base
 from identify.observation.processing import FrictionForm, drops_rest, friction_label, has_smooth_friction
 from identify.observation.stream import StreamSettings, in_order, piece, plan_windows, windows_in_order
@@ -67,13 +67,7 @@ def streamed_feed(robot: rx90sym.Robot, sources: Sequence[Any], plans: Sequence[
 def _columns(robot: rx90sym.Robot, sources: Sequence[Any], plans: Sequence[Any], cutoff: float,
              settings: StreamSettings, base: Any, client: Any, form: FrictionForm) -> tuple[Any, dict]:
     """(the columns of the smooth ``form`` at the scales found on every row, the fit file's ``model.friction``)."""
-    _, probe, terms, asymmetric = friction_probe(robot, base)
-    if not terms:
-        raise ValueError(f"friction form {form!r}: robot {robot.name!r} has no Coulomb parameter in its columns")
-    if asymmetric:
-        raise ValueError(f"friction form {form!r}: asymmetric Coulomb (FS+, FS-) on joint(s) "
-                         f"{', '.join(map(str, asymmetric))} of {robot.name!r}: a smooth form has one magnitude "
-                         f"per joint; give friction 'coulomb', or symmetric Coulomb on those joints")
+    probe, terms = smooth_probe(robot, base, form)
     own, forms = smooth_joints(terms, form)
     # The probe's FPj columns with "presliding", as observation_matrix adds them in memory.
     probe = presliding_base(robot, probe, settings.rest if settings.min_velocity is not None else None)
