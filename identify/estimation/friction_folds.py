@@ -124,7 +124,8 @@ def fold_scales_of(rows: Any, probe: Any, terms: Sequence[Any], form: FrictionFo
                 table.add(j, m.Phi[k, j, :], m.Y[k, j], ids[k])
 
     sets = [[x for x in range(blocks) if x != b] for b in range(blocks)]
-    return [as_velocity_scales(x, form, n) for x in find_scales(feed, n, len(probe.names), own, forms, sets, blocks)]
+    return [as_velocity_scales(x, form, n) for x in find_scales(feed, n, len(probe.names), own, forms, sets, blocks,
+                                                                   std=False)]
 
 
 @dataclass(frozen=True, eq=False)

@@ -15,15 +15,17 @@ search reads a log of any length block by block and its result does not depend o
 The search (:func:`find_scales`): on a log grid of 1/8 decade (:data:`COARSE_GRID`) over
 :data:`SCALE_BOUNDS`, each joint starts at the scale its own rows prefer (a common scale), then
 coordinate descent (two sweeps); a parabola in log s through the best point and its neighbours
-gives each joint the centre of a fine grid of 1/64 decade (:func:`fine_grids`, a second table);
+gives each joint the centre of a fine grid of 1/48 decade reaching a coarse step either side
+(:func:`fine_grids`, a second table);
 coordinate descent on it and a parabola again. The scale is then rounded to a lattice of 1/4096
 decade (0.06 %), far below its σ: two tables equal to rounding (another block size) give the same
-scale. σ of each scale: the Gauss-Newton variance σ²/κ of log s, κ the parabola's curvature of F
-in log s, σ² = 2F / (rows − parameters).
+scale. σ of the scales: the Gauss-Newton covariance σ²(JᵀJ)⁻¹ of the weighted residual in (β, ln s)
+at the fine grid's best point, the columns' derivatives in ln s tabulated beside them,
+σ² = 2F / (rows − parameters).
 
 Lower bound of each joint's scale: half the :data:`LOW_SPEED_SHARE` quantile of its moving speeds
 (below it a column fits a handful of rows), the quantile read from a histogram of |v| on fixed
-bins of 1/100 decade (counts: the same whatever the blocks).
+bins of 1/1000 decade (counts: the same whatever the blocks; the quantile to within a bin, 0.23 %).
 """
 from __future__ import annotations
 
@@ -48,9 +50,9 @@ MIDDLE_SCALE = 10.0 ** -1.5
 #: Share of a joint's moving rows that must lie below its velocity scale (see :func:`lower_bounds`).
 LOW_SPEED_SHARE = 0.02
 #: Fine grid: points and spacing [decades]; the lattice the scales are rounded to [decades].
-FINE_POINTS, FINE_STEP, LATTICE = 9, 1.0 / 64, 1.0 / 4096
-#: Histogram of |v| per joint: bin edges [rad/s], 1/100 decade apart.
-SPEED_EDGES = 10.0 ** (-8 + np.arange(1101) / 100)
+FINE_POINTS, FINE_STEP, LATTICE = 13, 1.0 / 48, 1.0 / 4096
+#: Histogram of |v| per joint: bin edges [rad/s], 1/1000 decade apart.
+SPEED_EDGES = 10.0 ** (-8 + np.arange(11001) / 1000)
 
 
 def _columns_per_scale(forms: dict[int, str]) -> int:
@@ -64,7 +66,8 @@ class ScaleTable:
 
     c: probe columns; own: joint (0-based) -> column of its own Coulomb term (holding v in the probe);
     forms: joint -> "tanh" | "stribeck" for the joints whose scale is searched; scales: joint -> the
-    scales [rad/s] tabulated (the same count for every joint); folds: time blocks (1: no folds)."""
+    scales [rad/s] tabulated (the same count for every joint); folds: time blocks (1: no folds);
+    derivatives: also each column's derivative in ln s (after the columns: the σ of the scales)."""
 
     n: int
     c: int
@@ -72,6 +75,7 @@ class ScaleTable:
     forms: dict[int, str]
     scales: dict[int, np.ndarray]
     folds: int = 1
+    derivatives: bool = False
     R: dict[tuple[int, int], np.ndarray] = field(default_factory=dict)
     rows: dict[tuple[int, int], int] = field(default_factory=dict)
     counts: np.ndarray | None = None
@@ -82,13 +86,13 @@ class ScaleTable:
             raise ValueError(f"scale table: every joint needs as many scales, got {sorted(sizes)}")
         self.K = sizes.pop() if sizes else 0
         self.m = _columns_per_scale(self.forms)
-        self.width = self.c + self.K * self.m + 1
+        self.width = self.c + (2 if self.derivatives else 1) * self.K * self.m + 1
         if self.counts is None:
             self.counts = np.zeros((self.folds, self.n, SPEED_EDGES.size + 1), dtype=np.int64)
 
     def empty(self) -> "ScaleTable":
         """A table of the same columns without rows (what a block's task fills)."""
-        return ScaleTable(self.n, self.c, self.own, self.forms, self.scales, self.folds)
+        return ScaleTable(self.n, self.c, self.own, self.forms, self.scales, self.folds, self.derivatives)
 
     def rows_of(self, joint: int, W: np.ndarray, Y: np.ndarray) -> np.ndarray:
         """The table's rows (m, width) of joint ``joint`` from probe rows W (m, c) and torques Y (m,)."""
@@ -102,9 +106,12 @@ class ScaleTable:
         out[:, col] = np.sign(v)
         form = self.forms.get(joint)
         if form is not None:
+            d0 = self.c + self.K * self.m   # the derivatives' columns, after the columns
             for k, s in enumerate(self.scales[joint]):
-                cols, _ = friction_columns(form, v, float(s))
+                cols, dcols = friction_columns(form, v, float(s))
                 out[:, self.c + k * self.m:self.c + k * self.m + cols.shape[1]] = cols
+                if self.derivatives:   # ∂/∂ln s = s ∂/∂s (Gauss-Newton's Jacobian in log s)
+                    out[:, d0 + k * self.m:d0 + k * self.m + cols.shape[1]] = float(s) * dcols
         return out
 
     def add(self, joint: int, W: np.ndarray, Y: np.ndarray, fold: np.ndarray | int = 0) -> None:
@@ -143,20 +150,31 @@ class ScaleTable:
         return R, rows, self.counts[list(folds)].sum(axis=0)
 
 
+def _order_statistic(cum: np.ndarray, i: int) -> float:
+    """The i-th smallest value (1-based) of a histogram on :data:`SPEED_EDGES` (``cum`` its cumulative
+    counts): the (geometric) centre of its bin."""
+    k = int(np.searchsorted(cum, i))          # its bin: [EDGES[k-1], EDGES[k])
+    if k == 0 or k >= SPEED_EDGES.size:
+        return float(SPEED_EDGES[min(k, SPEED_EDGES.size - 1)])
+    return float(np.sqrt(SPEED_EDGES[k - 1] * SPEED_EDGES[k]))
+
+
 def lower_bounds(counts: np.ndarray, joints: Sequence[int]) -> np.ndarray:
     """ln of each joint's lowest scale: :data:`SCALE_BOUNDS`, raised to half the :data:`LOW_SPEED_SHARE`
-    quantile of its moving speeds (the upper edge of the histogram bin where the share is reached),
-    at most a tenth of the upper bound."""
+    quantile of its moving speeds (``np.quantile``'s linear rule on the order statistics read from the
+    histogram, each to within its bin), at most a tenth of the upper bound."""
     lo = []
     for j in joints:
-        h = counts[j]
-        total = h.sum()
+        cum = np.cumsum(counts[j])
+        total = int(cum[-1])
         if total == 0:
             lo.append(SCALE_BOUNDS[0])
             continue
-        k = int(np.searchsorted(np.cumsum(h), LOW_SPEED_SHARE * total))   # first bin reaching the share
-        edge = SPEED_EDGES[min(k, SPEED_EDGES.size - 1)]
-        lo.append(max(SCALE_BOUNDS[0], edge / 2))
+        r = LOW_SPEED_SHARE * (total - 1)             # 0-based position, as np.quantile
+        i = int(np.floor(r))
+        a = _order_statistic(cum, i + 1)
+        b = _order_statistic(cum, min(i + 2, total))
+        lo.append(max(SCALE_BOUNDS[0], (a + (r - i) * (b - a)) / 2))
     return np.log(np.minimum(np.array(lo), SCALE_BOUNDS[1] / 10))
 
 
@@ -164,7 +182,7 @@ def lower_bounds(counts: np.ndarray, joints: Sequence[int]) -> np.ndarray:
 class ScaleSearch:
     """The scales found: per searched joint (``joints``, 0-based) the scale [rad/s], its σ [rad/s], whether
     it stopped on a bound; cost: the weighted cost F at them; weights (n,): eq. 11's of the first fit;
-    lo: ln lower bound per searched joint; curvature: κ (F'' in ln s) per joint."""
+    lo: ln lower bound per searched joint."""
 
     joints: tuple[int, ...]
     scales: np.ndarray
@@ -268,22 +286,16 @@ def _weights(table: ScaleTable, R: dict[int, np.ndarray], rows: dict[int, int], 
     return np.asarray(solve_joint_systems(systems, [f"c{k}" for k in live]).weights)
 
 
-def _parabola(u: np.ndarray, f: np.ndarray, k: int) -> tuple[float, float]:
-    """(vertex, curvature F'' in u) of the parabola through points k-1, k, k+1 (equally spaced); at an
-    end: u[k] and the curvature of the nearest three points; where not convex: (u[k], nan)."""
-    if len(u) < 3:
-        return float(u[k]), float("nan")
+def _parabola(u: np.ndarray, f: np.ndarray, k: int) -> float:
+    """The vertex of the parabola through points k-1, k, k+1 (equally spaced in u), within a step of u[k];
+    u[k] at an end or where not convex."""
     if k == 0 or k == len(u) - 1:
-        i = min(max(k, 1), len(u) - 2)
-        h = u[i + 1] - u[i]
-        den = f[i - 1] - 2 * f[i] + f[i + 1]
-        return float(u[k]), float(den / h ** 2) if den > 0 and h > 0 else float("nan")
+        return float(u[k])
     h = u[k + 1] - u[k]
     den = f[k - 1] - 2 * f[k] + f[k + 1]
     if not (den > 0 and h > 0):
-        return float(u[k]), float("nan")
-    shift = 0.5 * h * (f[k - 1] - f[k + 1]) / den
-    return float(u[k] + np.clip(shift, -h, h)), float(den / h ** 2)
+        return float(u[k])
+    return float(u[k] + np.clip(0.5 * h * (f[k - 1] - f[k + 1]) / den, -h, h))
 
 
 def _descend(gram: _Gram, joints: Sequence[int], allowed: dict[int, np.ndarray],
@@ -319,7 +331,7 @@ def coarse_search(table: ScaleTable, folds: Sequence[int] | None = None,
     allowed = _allowed(table, joints, lo, np.arange(table.K))
     pick, profile = _descend(gram, joints, allowed, _common_start(gram, joints, allowed))
     centre = [_parabola(np.log(table.scales[j][allowed[j]]), profile[j],
-                        int(np.flatnonzero(allowed[j] == pick[j])[0]))[0] for j in joints]
+                        int(np.flatnonzero(allowed[j] == pick[j])[0])) for j in joints]
     return ScaleSearch(joints, np.exp(centre), np.full(len(joints), np.nan), tuple(False for _ in joints),
                        gram.cost({j: gram.part(j, pick.get(j)) for j in gram.G}), weights, lo)
 
@@ -348,31 +360,58 @@ def fine_search(table: ScaleTable, first: ScaleSearch, folds: Sequence[int] | No
              for i, j in enumerate(joints)}
     pick, profile = _descend(gram, joints, allowed, start)
     step = LATTICE * np.log(10.0)
-    out_u, kappa = [], []
+    out_u = []
     for i, j in enumerate(joints):
-        v, curv = _parabola(np.log(table.scales[j][allowed[j]]), profile[j],
-                            int(np.flatnonzero(allowed[j] == pick[j])[0]))
+        v = _parabola(np.log(table.scales[j][allowed[j]]), profile[j], int(np.flatnonzero(allowed[j] == pick[j])[0]))
         out_u.append(float(np.clip(np.round(v / step) * step, lo[i], hi)))
-        kappa.append(curv)
     f = gram.cost({j: gram.part(j, pick.get(j)) for j in gram.G})
     sigma2 = 2.0 * f / max(1, sum(rows.values()) - gram.C - len(joints))
     u = np.array(out_u)
-    std = np.exp(u) * np.sqrt(sigma2 / np.array(kappa))
+    std = np.exp(u) * _gauss_newton_std(gram, joints, pick, sigma2) if table.derivatives else np.full(u.size, np.nan)
     bound = tuple(bool(min(x - a, hi - x) < 1e-3) for x, a in zip(u, lo))
     return ScaleSearch(joints, np.exp(u), std, bound, f, first.weights, lo)
 
 
+def _gauss_newton_std(gram: _Gram, joints: Sequence[int], pick: dict[int, int], sigma2: float) -> np.ndarray:
+    """σ of each joint's ln s: σ²(JᵀJ)⁻¹ of the weighted residual in (β, ln s) at the scales ``pick`` (the
+    scales together: their columns share the other parameters), J's column of joint j's ln s the
+    derivative of its friction columns times their coefficients β̂ (in joint j's rows only)."""
+    t, C = gram.table, gram.C
+    parts = {j: gram.part(j, pick.get(j)) for j in gram.G}
+    A = sum(parts.values())
+    live = np.flatnonzero(np.diag(A)[:C] > 0)
+    beta = np.zeros(C)
+    beta[live] = np.linalg.lstsq(A[np.ix_(live, live)], A[live, C], rcond=None)[0]
+    J = len(joints)
+    N = np.zeros((C + J, C + J))
+    d0 = t.c + t.K * t.m
+    for j, Gj in gram.G.items():
+        src, dst = gram.indices(j, pick.get(j))
+        P = np.zeros((t.width, C + J))
+        P[src[:-1], dst[:-1]] = 1.0
+        if j in joints:   # ∂(β_FS f + β_FST f_ST)/∂ln s_j
+            k = pick[j]
+            P[d0 + k * t.m, C + joints.index(j)] = beta[t.own[j]]
+            if j in gram.fst:
+                P[d0 + k * t.m + 1, C + joints.index(j)] = beta[gram.fst[j]]
+        N += P.T @ Gj @ P
+    keep = np.r_[live, C + np.arange(J)]
+    cov = sigma2 * np.linalg.pinv(N[np.ix_(keep, keep)])
+    return np.sqrt(np.maximum(np.diag(cov)[-J:], 0.0))
+
+
 def find_scales(feed: Callable[[ScaleTable], None], n: int, c: int, own: dict[int, int], forms: dict[int, str],
-                fold_sets: Sequence[Sequence[int] | None] = (None,), folds: int = 1) -> list[ScaleSearch]:
+                fold_sets: Sequence[Sequence[int] | None] = (None,), folds: int = 1, std: bool = True) -> list[ScaleSearch]:
     """The scales of the joints ``forms`` on each set of folds of ``fold_sets`` (None: all), from two passes
     over the rows: ``feed(table)`` adds every probe row to the table (``ScaleTable.add``, rows of ``c``
     columns, ``own`` the own Coulomb column of each joint, ``folds`` time blocks). The coarse table,
-    then one fine table holding every set's fine grid."""
+    then one fine table holding every set's fine grid (with the columns' derivatives when ``std``: the
+    scales' σ; without, σ is NaN)."""
     coarse = ScaleTable(n, c, own, forms, {j: COARSE_GRID for j in forms}, folds)
     feed(coarse)
     first = [coarse_search(coarse, fs) for fs in fold_sets]
     grids = [fine_grids(x) for x in first]
-    fine = ScaleTable(n, c, own, forms, {j: np.concatenate([g[j] for g in grids]) for j in forms}, folds)
+    fine = ScaleTable(n, c, own, forms, {j: np.concatenate([g[j] for g in grids]) for j in forms}, folds, std)
     feed(fine)
     return [fine_search(fine, x, fs, i) for i, (x, fs) in enumerate(zip(first, fold_sets))]
 
