@@ -29,7 +29,8 @@ from typing import Any, Sequence
 import numpy as np
 
 import rx90sym
-from identify.estimation.scale_grid import LOW_SPEED_SHARE, SCALE_BOUNDS, ScaleSearch, find_scales
+from identify.estimation.scale_grid import ScaleSearch, find_scales
+from identify.estimation.scale_table import LOW_SPEED_SHARE, SCALE_BOUNDS
 from identify.observation.friction_model import PRESLIDING_PREFIX, FrictionBase, friction_probe
 from identify.observation.matrix import Observation, observation_matrix
 

@@ -91,13 +91,7 @@ def fit(robot: rx90sym.Robot, recordings: Sequence[Any], processing: Processing 
         consistent_options["physical_prior"] = nominal_prior(robot, None if consistent_options.get(
             "physical_prior", "default") == "default" else consistent_options["physical_prior"])
     p = processing if processing is not None else Processing()
-    if method == "consistent" and (has_smooth_friction(p.friction) or has_policy(p.rest, "presliding")):
-        # Its standard parameters are what a URDF/MJCF holds: Coulomb (FS) and viscous (FV) friction.
-        what = " and ".join(([f"friction form {friction_label(p.friction)!r}"] if has_smooth_friction(p.friction) else [])
-                            + (["rest policy 'presliding'"] if has_policy(p.rest, "presliding") else []))
-        raise ValueError(f"fit: the consistent method fits bodies with Coulomb + viscous friction (what a URDF or "
-                         f"MJCF holds), not {what}: use friction 'coulomb' and a rest policy other than "
-                         f"'presliding', or method 'wls'")
+    _refuse_for_consistent(p, method)
     recordings = list(recordings) if isinstance(recordings, (list, tuple)) else [recordings]
     for rec in recordings if observation is None else ():
         rec.torques  # currents without gains: refused once, here, not by every candidate processing
@@ -156,6 +150,17 @@ def fit(robot: rx90sym.Robot, recordings: Sequence[Any], processing: Processing 
     return done if bootstrap_seed is None else done.bootstrapped(bootstrap_seed)  # rx90 identify's σ, alike
 
 
+def _refuse_for_consistent(p: Processing, method: str) -> None:
+    """The consistent method's standard parameters are what a URDF/MJCF holds: Coulomb (FS) and viscous (FV)
+    friction; a smooth form or the presliding rest policy is refused (on either path)."""
+    if method == "consistent" and (has_smooth_friction(p.friction) or has_policy(p.rest, "presliding")):
+        what = " and ".join(([f"friction form {friction_label(p.friction)!r}"] if has_smooth_friction(p.friction) else [])
+                            + (["rest policy 'presliding'"] if has_policy(p.rest, "presliding") else []))
+        raise ValueError(f"fit: the consistent method fits bodies with Coulomb + viscous friction (what a URDF or "
+                         f"MJCF holds), not {what}: use friction 'coulomb' and a rest policy other than "
+                         f"'presliding', or method 'wls'")
+
+
 def _within_one_block(recordings: Any, block: int) -> bool:
     """Every recording is in memory and holds at most ``block`` samples (a CSV path: read in blocks)."""
     recs = recordings if isinstance(recordings, (list, tuple)) else [recordings]
@@ -204,14 +209,10 @@ def fit_in_blocks(robot: rx90sym.Robot, recordings: Sequence[Any], processing: A
     from identify.observation.spring_fit import BaseWithSpring, spring_summary
 
     from identify.fitting.streamed_friction import FrictionHook
-    from identify.observation.processing import has_policy
 
     p = processing if processing is not None else Processing()
+    _refuse_for_consistent(p, method)
     smooth = has_smooth_friction(p.friction_form)
-    if method == "consistent" and smooth:
-        raise ValueError(f"fit: the consistent method fits bodies with Coulomb + viscous friction (what a URDF or "
-                         f"MJCF holds), not friction form {friction_label(p.friction_form)!r}: use friction "
-                         f"'coulomb', or method 'wls'")
     block = DEFAULT_BLOCK if block is None else int(block)
     # The form given, or chosen per joint by the cross-validation where left open (as in memory: not for the
     # consistent method, whose URDF holds Coulomb + viscous).

@@ -22,7 +22,8 @@ import numpy as np
 import rx90sym
 
 from identify.estimation.consistency.errors import SolverError
-from identify.estimation.scale_grid import ScaleTable, find_scales
+from identify.estimation.scale_grid import find_scales
+from identify.estimation.scale_table import ScaleTable
 from identify.estimation.separable import as_velocity_scales, smooth_joints, smooth_probe
 from identify.observation.friction_model import coulomb_terms, friction_base, friction_probe, presliding_base
 from identify.observation.processing import FrictionForm, drops_rest, friction_label, has_smooth_friction
