@@ -1,17 +1,17 @@
-"""The observation of another friction form built from the Coulomb form's by re-filtering its friction
-columns only (identify.observation.friction_rows, what the friction choice scores its folds with): the
-same numbers as the observation built whole from the form's FrictionBase, and the tanh columns within an
-ulp of CasADi's expression of the form."""
+"""The friction choice's columns of every fold in one pass (identify.estimation.friction_folds.FoldColumns:
+a column FSj_f per fold f, resting like FSj): the same numbers as the rows of the form's own FrictionBase
+at that fold's scales, whatever the rest policy; and the tanh columns within an ulp of CasADi's
+expression of the form."""
 from __future__ import annotations
 
 import numpy as np
 import pytest
 
 import rx90sym
+from identify.estimation.friction_folds import FoldColumns
 from identify.observation.friction import friction_columns, friction_function
-from identify.observation.friction_model import coulomb_terms, friction_base, friction_probe
-from identify.observation.friction_rows import with_friction_form
-from identify.observation.matrix import observation_matrix
+from identify.observation.friction_model import coulomb_terms, friction_base, own_terms
+from identify.observation.matrix import filtered_motions
 from rx90sym.twin import simulate
 
 from motions import multisine, stop_and_go
@@ -25,26 +25,47 @@ def ur10e_run():
     return robot, rec, rx90sym.base_parameters(robot)
 
 
+def _rows(robot, rec, columns, options):
+    """(Phi, usable) of the recording's motion with ``columns``."""
+    m = filtered_motions(robot, [rec], options["cutoff"], options["decimate_to"], True, columns.regressor_batch,
+                         columns.names, options["min_velocity"], options["rest"], options.get("delay", 0.0))[0][0]
+    return m.Phi, m.usable
+
+
 @pytest.mark.parametrize("options", [
-    {"cutoff": 3.0, "decimate_to": 50.0, "min_velocity": 0.05, "rest": "crossing", "spring": True},
-    {"cutoff": 5.0, "decimate_to": None, "min_velocity": 0.05, "rest": "drop", "spring": True, "delay": 0.004},
-    {"cutoff": 4.0, "decimate_to": 25.0, "min_velocity": None, "rest": "drop", "spring": True},
+    {"cutoff": 3.0, "decimate_to": 50.0, "min_velocity": 0.05, "rest": "crossing"},
+    {"cutoff": 5.0, "decimate_to": None, "min_velocity": 0.05, "rest": "zero-coulomb", "delay": 0.004},
+    {"cutoff": 4.0, "decimate_to": 25.0, "min_velocity": None, "rest": "drop"},
 ])
-def test_the_forms_built_from_the_coulomb_observation_equal_the_forms_built_whole(ur10e_run, options):
+def test_every_fold_s_columns_equal_the_form_s_own_columns_at_its_scales(ur10e_run, options):
     robot, rec, base = ur10e_run
-    terms = coulomb_terms(robot, base.names)
-    coulomb = observation_matrix(robot, [rec], base=base, **options)
-    scales = np.random.default_rng(0).uniform(0.005, 0.5, robot.n)
-    forms = ["probe", "tanh", ("tanh", "coulomb", "tanh", "coulomb", "coulomb", "tanh"), "stribeck"]
-    for form in forms:
-        columns = friction_probe(robot, base)[1] if form == "probe" else friction_base(base, terms, form, scales)
-        whole = observation_matrix(robot, [rec], base=columns, **options)
-        got = with_friction_form(robot, [rec], coulomb, base, form, None if form == "probe" else scales, **options)
-        assert got.names == whole.names
-        assert np.array_equal(got.joint, whole.joint) and np.array_equal(got.Y, whole.Y)
-        assert np.array_equal(got.W, whole.W), form   # the same numbers, not merely close
-        if form != "stribeck":   # the Coulomb columns did change
-            assert not np.array_equal(got.W, coulomb.W)
+    terms = own_terms(coulomb_terms(robot, base.names))
+    rng = np.random.default_rng(0)
+    scales = [tuple(rng.uniform(0.005, 0.5, robot.n)) for _ in range(2)]
+    for form in ["tanh", ("tanh", "coulomb", "tanh", "coulomb", "coulomb", "tanh"), "stribeck"]:
+        folds = FoldColumns(base, terms, form, tuple(scales))
+        Phi, usable = _rows(robot, rec, folds, options)
+        names = list(folds.names)
+        for f, s in enumerate(scales):
+            own = friction_base(base, terms, form, s)
+            ref, ref_usable = _rows(robot, rec, own, options)
+            assert np.array_equal(usable, ref_usable)
+            for t in terms:
+                smooth = (form if isinstance(form, str) else form[t.row]) != "coulomb"
+                got = Phi[:, t.row, names.index(f"FS{t.row + 1}_{f}") if smooth else t.column]
+                assert np.array_equal(got, ref[:, t.row, t.column]), (form, f, t.name)   # the same numbers
+                if smooth and form == "stribeck":
+                    fst = list(own.names).index(f"FST{t.row + 1}")
+                    assert np.array_equal(Phi[:, t.row, names.index(f"FST{t.row + 1}_{f}")], ref[:, t.row, fst])
+            # The other columns are the Coulomb form's, untouched.
+            c = len(base.names)
+            others = [k for k in range(c) if k not in {t.column for t in terms}]
+            assert np.array_equal(Phi[:, :, others], ref[:, :, others])
+        if options["min_velocity"] is not None and options["decimate_to"] is None:
+            # A smooth column rests like FSj: 0 where its joint rests (before any decimation filter).
+            j = terms[0]
+            column = Phi[:, j.row, names.index(f"FS{j.row + 1}_0")]
+            assert np.any(column == 0.0) and np.any(column != 0.0)
 
 
 def test_the_tanh_columns_are_casadi_s_expression_of_the_form():

@@ -143,7 +143,7 @@ def test_the_cli_cross_validates_a_long_log(rx90, lossy_rx90, in_memory, tmp_pat
     assert main(["identify", str(path), "--robot", "rx90", "--block", str(CLI_BLOCK), "--json", str(out)]) == 0
     printed = capsys.readouterr().out
     assert "processing chosen by 5-block cross-validation" in printed and "<- chosen" in printed
-    assert "friction form: coulomb (not chosen block by block" in printed
+    assert "friction form chosen per joint by 5-block cross-validation" in printed   # block by block too
     assert "not cross-validated" not in printed
     record = json.loads(out.read_text())
     choice, chosen = record["processing_choice"], in_memory.chosen

@@ -6,16 +6,20 @@ smooth tanh(q̇/vs); Stribeck on request) is scored the same way, on the same co
 (:func:`~identify.observation.cross_validation.time_blocks`: cut by time over the recordings'
 common span):
 
-1. one observation matrix of the fit's processing whose Coulomb columns hold the filtered,
-   decimated driver speed v (:class:`~identify.observation.friction_model.FrictionBase` form
-   "probe"), built once: the speeds the scale search needs;
+The rows are read in passes, from recordings in memory or block by block from a log of any length
+(:mod:`identify.estimation.friction_folds`: one implementation, everything from per-(time block,
+joint) triangular factors, so the choice does not depend on the blocks):
+
+1. the probe columns, whose own Coulomb columns hold the filtered, decimated driver speed v
+   (:class:`~identify.observation.friction_model.FrictionBase` form "probe"): the speeds the scale
+   search needs, tabulated on grids of scales (:mod:`identify.estimation.scale_grid`, two passes);
 2. for each held-back block, the velocity scales of a smooth form are searched **on the other
-   blocks only** (separable least squares, :func:`identify.estimation.separable.scales_from_observation`),
+   blocks only** (separable least squares, :func:`identify.estimation.friction_folds.fold_scales_of`),
    the base parameters fitted (WLS, eq. 11's weights, the processing's fold solver) on those rows,
    the held-back torques predicted;
-3. every form is scored with the fit's **exact** columns (its own observation matrix: one for
-   Coulomb, one per fold for a smooth form at that fold's scales, the Coulomb one with its friction
-   columns evaluated and filtered again, :mod:`identify.observation.friction_rows`). Evaluating the forms on the
+3. every form is scored with the fit's **exact** columns (one pass for Coulomb, one per smooth form
+   holding every fold's columns at that fold's scales,
+   :class:`~identify.estimation.friction_folds.FoldColumns`). Evaluating the forms on the
    probe's decimated speed (sign(Dv), tanh(Dv/vs)) handicapped Coulomb against the fit's smooth
    D·sign(v) (TX40: 10.655 % instead of 8.427 %) and chose tanh where the held-out errors got worse.
 
@@ -50,13 +54,10 @@ import numpy as np
 
 import rx90sym
 
-from identify.observation.cross_validation import (DEFAULT_BLOCKS, DEFAULT_ROW_CAP, Budget, Candidate, block_factors,
-                                                   block_scores, clearly_better, fold_wls, observation_rows,
-                                                   time_blocks)
+from identify.observation.cross_validation import (DEFAULT_BLOCKS, DEFAULT_ROW_CAP, Budget, Candidate, block_scores,
+                                                   clearly_better, observation_rows)
 from identify.observation.friction import DEFAULT_FRICTION, FRICTION_FORMS
 from identify.observation.friction_model import friction_probe
-from identify.observation.friction_rows import with_friction_form
-from identify.observation.matrix import Observation, observation_matrix
 from identify.observation.processing import FrictionForm, friction_label, has_smooth_friction, uniform
 
 __all__ = ["DEFAULT_FORMS", "FrictionChoice", "choose_friction"]
@@ -141,18 +142,6 @@ class FrictionChoice:
                 "candidates": [dict(c.to_dict(), form=c.label) for c in self.candidates], "table": self.table()}
 
 
-def _exact(robot: rx90sym.Robot, recordings: Sequence[Any], base: Any, options: dict[str, Any], exact: Observation,
-           form: FrictionForm, scales: Sequence[float] | None) -> np.ndarray:
-    """W of ``form`` (one, or one per joint) at ``scales`` with the fit's exact (parallel-filtered)
-    columns, on the rows of ``exact`` (the Coulomb form's observation): its friction columns replaced."""
-    if not has_smooth_friction(form):
-        return exact.W
-    obs = with_friction_form(robot, recordings, exact, base, form, scales, **options)
-    if obs.W.shape[0] != exact.W.shape[0] or not np.array_equal(obs.joint, exact.joint):
-        raise RuntimeError(f"friction choice: the observation of form {form!r} has other rows than the probe's")
-    return obs.W
-
-
 @dataclass(frozen=True)
 class _Scored:
     """One form scored: the candidate, the joints (1-based) whose scale reached the upper bound in
@@ -174,44 +163,27 @@ class _Scored:
         return "; ".join(why) or None
 
 
-def _score_form(robot: rx90sym.Robot, recordings: Sequence[Any], base: Any, options: dict[str, Any],
-                obs: Observation, terms: Sequence[Any], form: FrictionForm, ids: np.ndarray,
-                blocks: int, label: str, exact: Observation) -> _Scored:
-    """``form`` (one, or one per joint) scored on the folds; ``obs`` the probe observation, ``exact``
-    the Coulomb form's (the same rows)."""
-    n = robot.n
-    from identify.estimation.separable import SCALE_BOUNDS, scales_from_observation
+def _score_form(rows: Any, robot: rx90sym.Robot, inner: Any, probe: Any, terms: Sequence[Any], form: FrictionForm,
+                label: str) -> _Scored:
+    """``form`` (one, or one per joint) scored on the folds of ``rows`` (:mod:`identify.estimation.friction_folds`):
+    each fold's scales searched on its fitting blocks only (the held-back block unseen), the form's exact
+    columns at them, the held-back errors."""
+    from identify.estimation.friction_folds import fold_scales_of, held_back_errors
+    from identify.estimation.separable import SCALE_BOUNDS
 
-    err2, ref2 = np.zeros((blocks, n)), np.zeros((blocks, n))
+    n = robot.n
     bound, failed, floor = set(), set(), set()
-    smooth = has_smooth_friction(form)
-    W = None
-    for b in range(blocks):
-        fit_rows, held = ids != b, ids == b
-        scales = None
-        if smooth:  # searched on the fitting blocks only: the held-back block is unseen
-            sub = replace(obs, W=obs.W[fit_rows], Y=obs.Y[fit_rows], joint=obs.joint[fit_rows],
-                          samples=obs.samples[fit_rows])
-            found = scales_from_observation(sub, terms, form, n, std=False)
-            scales = found.scales
-            # The upper bound: the form is a second viscous term there, its scale not identified; on
-            # the lower one it is a sign on that joint, Coulomb's own column: Coulomb is kept there.
-            top = [v >= SCALE_BOUNDS[1] * (1 - 1e-3) for v in found.scales]
-            bound.update(j + 1 for j, high in enumerate(top) if high)
-            floor.update(j + 1 for j, (low, high) in enumerate(zip(found.at_bound, top)) if low and not high)
-            if not found.converged:
-                failed.add(b + 1)
-        if W is None or scales is not None:  # Coulomb's columns (and their factors) do not depend on the fold
-            W = _exact(robot, recordings, base, options, exact, form, scales)
-            # A smooth form's W holds this fold's scales: the fitting blocks' factors only.
-            factors = block_factors(W, obs.Y, obs.joint, ids, [x for x in range(blocks) if scales is None or x != b], n)
-        beta = fold_wls(factors, b, n)  # eq. 11's per-joint weights, as the processing's folds
-        if beta is None:
-            raise ValueError(f"friction choice: too few rows to fit without block {b + 1}")
-        res = obs.Y[held] - W[held] @ beta
-        np.add.at(err2[b], obs.joint[held], res ** 2)
-        np.add.at(ref2[b], obs.joint[held], obs.Y[held] ** 2)
-    cand = Candidate(obs.cutoffs[0], None, obs.rest, *block_scores(err2, ref2), label=label)
+    per_fold = fold_scales_of(rows, probe, terms, form, n) if has_smooth_friction(form) else None
+    for b, found in enumerate(per_fold or ()):
+        # The upper bound: the form is a second viscous term there, its scale not identified; on
+        # the lower one it is a sign on that joint, Coulomb's own column: Coulomb is kept there.
+        top = [v >= SCALE_BOUNDS[1] * (1 - 1e-3) for v in found.scales]
+        bound.update(j + 1 for j, high in enumerate(top) if high)
+        floor.update(j + 1 for j, (low, high) in enumerate(zip(found.at_bound, top)) if low and not high)
+        if not found.converged:
+            failed.add(b + 1)
+    err2, ref2 = held_back_errors(rows, inner, terms, form, None if per_fold is None else [f.scales for f in per_fold], n)
+    cand = Candidate(rows.cutoff, None, rows.rest, *block_scores(err2, ref2), label=label)
     return _Scored(cand, frozenset(bound), frozenset(failed), frozenset(floor))
 
 
@@ -246,43 +218,54 @@ def choose_friction(robot: rx90sym.Robot, recordings: Sequence[Any], base: Any, 
                          f"{FRICTION_FORMS}, got {tuple(forms)!r}")
     if blocks < 2:
         raise ValueError(f"cross-validation needs at least 2 blocks, got {blocks}")
+    from identify.estimation.friction_folds import MemoryRows
+
+    return choose_friction_rows(robot, MemoryRows(robot, recordings, options, blocks), base,
+                                observation_rows(robot, recordings), forms, row_cap, time_cap)
+
+
+def choose_friction_rows(robot: rx90sym.Robot, rows: Any, base: Any, total_rows: int,
+                         forms: Sequence[str] = DEFAULT_FORMS, row_cap: int | None = DEFAULT_ROW_CAP,
+                         time_cap: float | None = None) -> FrictionChoice:
+    """:func:`choose_friction` on the fit's ``rows`` (:class:`~identify.estimation.friction_folds.MemoryRows`,
+    or :class:`~identify.estimation.friction_folds.StreamRows` for a log read block by block: the same
+    choice); total_rows: the observation rows of one pass (the row cap's unit)."""
+    blocks = rows.blocks
     start = time.perf_counter()
-    budget, passes = Budget(observation_rows(robot, recordings), row_cap, time_cap), 0
+    budget, passes = Budget(total_rows, row_cap, time_cap), 0
     inner, probe, terms, asymmetric = friction_probe(robot, base)
     if not terms or asymmetric:
         why = "asymmetric Coulomb joints keep the Coulomb form" if terms else "no Coulomb parameter"
         return FrictionChoice((), DEFAULT_FRICTION, tuple((f, why) for f in forms if f != DEFAULT_FRICTION),
                               blocks, 0.0)
     try:
-        # The Coulomb form's observation built once; the probe's and the smooth forms' are it with their
-        # friction columns (identify.observation.friction_rows: the same numbers as built whole).
-        exact = observation_matrix(robot, recordings, base=inner, **options)
-        obs = with_friction_form(robot, recordings, exact, inner, probe.form, **options)
-    except ValueError as exc:  # the fit's own observation then says what is wrong, in its words
+        # Coulomb's rows first: a processing the fit cannot use is said by the fit's own observation, in its words.
+        coulomb = _score_form(rows, robot, inner, probe, terms, DEFAULT_FRICTION, DEFAULT_FRICTION)
+    except ValueError as exc:
         return FrictionChoice((), DEFAULT_FRICTION, tuple((f, f"not scored: {str(exc).splitlines()[0]}")
                                                           for f in forms if f != DEFAULT_FRICTION), blocks, 0.0)
-    ids = time_blocks([obs.t], blocks)[0][obs.samples]  # the processing choice's folds, by time
+    passes = 1
 
     def score(form: FrictionForm, label: str) -> tuple[_Scored, str | None]:
         """The form scored (or not: the budget spent, too few rows) and why it cannot be chosen (None: it can)."""
         nonlocal passes
         spent = budget.spent(passes, start)
         if label != DEFAULT_FRICTION and spent:
-            return _Scored(Candidate(obs.cutoffs[0], None, obs.rest, label=label)), f"not scored: {spent}"
+            return _Scored(Candidate(rows.cutoff, None, rows.rest, label=label)), f"not scored: {spent}"
         t0 = time.perf_counter()
         passes += 1
         try:
-            done = _score_form(robot, recordings, inner, options, obs, terms, form, ids, blocks, label, exact)
+            done = _score_form(rows, robot, inner, probe, terms, form, label)
         except ValueError as exc:  # too few rows in a fold, a form's columns rank deficient on the fitting blocks
-            return _Scored(Candidate(obs.cutoffs[0], None, obs.rest, label=label)), \
+            return _Scored(Candidate(rows.cutoff, None, rows.rest, label=label)), \
                 f"not scored: {str(exc).splitlines()[0]}"
-        cand = replace(done.candidate, decimate_to=options.get("decimate_to"), seconds=time.perf_counter() - t0)
-        return replace(done, candidate=cand), done.why()
+        return _with_rate(done, rows, time.perf_counter() - t0), done.why()
 
     ordered = [DEFAULT_FRICTION] + [f for f in forms if f != DEFAULT_FRICTION]
     scored, notes = {}, {}
     for form in ordered:
-        scored[form], why = score(form, form)
+        scored[form], why = (_with_rate(coulomb, rows, time.perf_counter() - start), None) \
+            if form == DEFAULT_FRICTION else score(form, form)
         if why:
             notes[form] = why
     single = _single_choice([x.candidate for x in scored.values()], notes)
@@ -290,6 +273,12 @@ def choose_friction(robot: rx90sym.Robot, recordings: Sequence[Any], base: Any, 
     chosen, combined, fallback = _check_mix(per_joint, single, scored, score)
     return FrictionChoice(tuple(x.candidate for x in scored.values()), chosen, tuple(notes.items()), blocks,
                           time.perf_counter() - start, per_joint, combined, fallback)
+
+
+def _with_rate(done: _Scored, rows: Any, seconds: float) -> _Scored:
+    """The scored form's candidate with the rows' decimated rate and the seconds it took."""
+    rate = rows.options.get("decimate_to") if hasattr(rows, "options") else rows.settings.decimate_to
+    return replace(done, candidate=replace(done.candidate, decimate_to=rate, seconds=seconds))
 
 
 def _single_choice(candidates: Sequence[Candidate], notes: dict[str, str]) -> Candidate:

@@ -46,11 +46,11 @@ from identify.observation.cross_validation import (DEFAULT_BLOCKS, DEFAULT_ROW_C
 from identify.observation.matrix import DECIMATION_PASSBAND, DEFAULT_MIN_VELOCITY, presliding_base
 from identify.observation.defaults import DEFAULT_DECIMATE_TO
 from identify.observation.processing import RestPolicy, drops_rest
-from identify.observation.stream import (DEFAULT_BLOCK, Scan, StreamSettings, in_order, plan_windows, scan,
+from identify.observation.stream import (DEFAULT_BLOCK, Plan, Scan, StreamSettings, in_order, plan_windows, scan,
                                          scanned_cutoff, windows_in_order)
 from identify.signal.filtering import EDGE_PERIODS
 
-__all__ = ["choose_processing", "choose_processing_streamed", "grid_of_scans", "scans_for_choice"]
+__all__ = ["choose_processing", "choose_processing_streamed", "grid_of_scans", "scans_for_choice", "time_span"]
 
 #: Lowest cut-off of the grid [Hz] (the knee's floor): the scan keeps each segment's first and
 #: last 2 x EDGE_PERIODS / LOWEST_CUTOFF seconds of times, beyond the filters' longest edge.
@@ -159,6 +159,19 @@ def scans_for_choice(sources: Sequence[BlockSource], block: int) -> list[Scan]:
     """The first pass the choice needs (:func:`identify.observation.stream.scan` with the 2 Hz floor and
     each segment's first and last :data:`KEEP_SECONDS` of times); a fit with a given cut-off reuses it."""
     return [scan(src, block, LOWEST_CUTOFF, KEEP_SECONDS) for src in sources]
+
+
+def time_span(scans: Sequence[Scan], plans: Sequence[Sequence[Plan]]) -> tuple[float, float]:
+    """(first, last) time [s] of the decimated rows of every segment planned: samples ``edge`` and
+    ``edge + (samples - 1) factor`` of each (the rows :func:`filtered_motion` keeps)."""
+    firsts, lasts = [], []
+    for s, src_plans in zip(scans, plans):
+        by_start = {g.start: g for g in s.segments}
+        for p in src_plans:
+            g = by_start[p.start]
+            firsts.append(g.time_at(p.edge))
+            lasts.append(g.time_at(p.edge + (p.samples - 1) * p.factor))
+    return min(firsts), max(lasts)
 
 
 class _Context:

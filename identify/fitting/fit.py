@@ -74,9 +74,10 @@ def fit(robot: rx90sym.Robot, recordings: Sequence[Any], processing: Processing 
     samples: memory bounded by the block whatever the logs' length (docs/long-logs.md), the
     segment bootstrap computed on the way with ``bootstrap_seed``; client: a
     ``dask.distributed.Client`` running the blocks (block by default 60,000 samples); the processing
-    is cross-validated block by block as on whole recordings (the friction form stays coulomb); the
-    consistent fit's prior, the plain baseline and the recorded-torque checks are those of whole
-    recordings, computed block by block.
+    is cross-validated block by block as on whole recordings, the friction form too (a smooth form's
+    velocity scales searched block by block, identify.fitting.streamed_friction); the consistent fit's
+    prior, the plain baseline and the recorded-torque checks are those of whole recordings, computed
+    block by block.
     The fit's flags hold the recorded-torque checks (identify.fitting.torque_checks: torque scale, gravity
     at rest; errors that rx90 identify stops on) and a rank that depends on the threshold.
     """
@@ -88,19 +89,10 @@ def fit(robot: rx90sym.Robot, recordings: Sequence[Any], processing: Processing 
         consistent_options["physical_prior"] = nominal_prior(robot, None if consistent_options.get(
             "physical_prior", "default") == "default" else consistent_options["physical_prior"])
     p = processing if processing is not None else Processing()
-    if method == "consistent" and (has_smooth_friction(p.friction) or has_policy(p.rest, "presliding")):
-        # Its standard parameters are what a URDF/MJCF holds: Coulomb (FS) and viscous (FV) friction (any path).
-        what = " and ".join(([f"friction form {friction_label(p.friction)!r}"] if has_smooth_friction(p.friction) else [])
-                            + (["rest policy 'presliding'"] if has_policy(p.rest, "presliding") else []))
-        raise ValueError(f"fit: the consistent method fits bodies with Coulomb + viscous friction (what a URDF or "
-                         f"MJCF holds), not {what}: use friction 'coulomb' and a rest policy other than "
-                         f"'presliding', or method 'wls'")
+    _refuse_for_consistent(p, method)
     if block is not None and client is None and _within_one_block(recordings, block):
         block = None  # a log within one block is one block: the whole-signal fit, as rx90 identify does
     if block is not None or client is not None:
-        if processing is not None and has_smooth_friction(processing.friction):
-            raise ValueError(f"fit: friction form {processing.friction!r} searches its velocity scales on whole "
-                             f"recordings, not block by block: give friction 'coulomb', or no block")
         done = fit_in_blocks(robot, recordings, processing, method, base=base, gains=gains, convention=convention,
                              spring_source=spring_source, block=block, client=client, bootstrap_seed=bootstrap_seed,
                              **consistent_options)
@@ -166,6 +158,17 @@ def fit(robot: rx90sym.Robot, recordings: Sequence[Any], processing: Processing 
     return done if bootstrap_seed is None else done.bootstrapped(bootstrap_seed)  # rx90 identify's σ, alike
 
 
+def _refuse_for_consistent(p: Processing, method: str) -> None:
+    """The consistent method's standard parameters are what a URDF/MJCF holds: Coulomb (FS) and viscous (FV)
+    friction; a smooth form or the presliding rest policy is refused (on either path)."""
+    if method == "consistent" and (has_smooth_friction(p.friction) or has_policy(p.rest, "presliding")):
+        what = " and ".join(([f"friction form {friction_label(p.friction)!r}"] if has_smooth_friction(p.friction) else [])
+                            + (["rest policy 'presliding'"] if has_policy(p.rest, "presliding") else []))
+        raise ValueError(f"fit: the consistent method fits bodies with Coulomb + viscous friction (what a URDF or "
+                         f"MJCF holds), not {what}: use friction 'coulomb' and a rest policy other than "
+                         f"'presliding', or method 'wls'")
+
+
 def _within_one_block(recordings: Any, block: int) -> bool:
     """Every recording is in memory and holds at most ``block`` samples (a CSV path: read in blocks)."""
     recs = recordings if isinstance(recordings, (list, tuple)) else [recordings]
@@ -213,9 +216,18 @@ def fit_in_blocks(robot: rx90sym.Robot, recordings: Sequence[Any], processing: A
     from identify.fitting.baseline_blocks import streamed_baseline
     from identify.fitting.torque_checks import streamed_torque_flags
 
+    from identify.fitting.streamed_friction import FrictionHook
+
     p = processing if processing is not None else Processing()
+    _refuse_for_consistent(p, method)
+    smooth = has_smooth_friction(p.friction_form)
     block = DEFAULT_BLOCK if block is None else int(block)
     columns_given = base is not None
+    # The form given, or chosen per joint by the cross-validation where left open (as in memory: not for the
+    # consistent method, whose URDF holds Coulomb + viscous).
+    choose = p.friction is None and p.cross_validates and method != "consistent"
+    presliding = p.min_velocity is not None and has_policy(p.rest, "presliding")   # its travels searched too
+    hook = FrictionHook(p.friction_form, choose) if smooth or choose or presliding else None
     base = base if base is not None else rx90sym.base_parameters(robot)
     recordings = list(recordings) if isinstance(recordings, (list, tuple)) else [recordings]
     spec = BootstrapSpec(BOOTSTRAP_BLOCK_S, BOOTSTRAP_DRAWS, bootstrap_seed)
@@ -223,13 +235,13 @@ def fit_in_blocks(robot: rx90sym.Robot, recordings: Sequence[Any], processing: A
                 and isinstance(base, BaseParameters) else ())  # as the whole-signal fit's torque offsets
     sf = fit_streamed(robot, recordings, method, base, p.cutoff, p.decimate_to, p.min_velocity, p.rest, p.delay,
                       p.spring, p.estimate_delay, block, client, spec, convention, gains, p.cross_validates,
-                      offsets=eligible, **consistent_options)
-    base = offset_base(base, sf.choice.offsets) if sf.choice is not None else base
+                      offsets=eligible, friction=hook, **consistent_options)
+    base = sf.columns  # with the offsets and the friction columns chosen
     rest = sf.settings.rest  # the policy given, or chosen by the cross-validation
     model = FitModel.of(robot, convention=convention, gains=gains.to_dict() if gains is not None else None,
                         rest=rest, min_velocity=p.min_velocity, spring=spring_source or _spring_label(robot, base),
                         cutoff_hz=sf.cutoff, decimate_to_hz=sf.settings.decimate_to, rate_hz=sf.rate,
-                        delay_s=sf.delay, offset_joints=_offset_record(base))
+                        delay_s=sf.delay, friction=sf.friction, offset_joints=_offset_record(base))
     angles = [SimpleNamespace(q=sf.q_range)]  # what the spring summary reads: the range visited
     spring = spring_summary(robot, base if isinstance(base, BaseWithSpring) else None, sf.result, angles)[0]
     boot = Bootstrap(sf.bootstrap_std, sf.bootstrap_block / sf.rate, spec.draws, spec.seed)
@@ -237,23 +249,18 @@ def fit_in_blocks(robot: rx90sym.Robot, recordings: Sequence[Any], processing: A
     # The baseline and the recorded-torque checks: a pass each over the logs, block by block, as on whole ones.
     sources = [block_source(r, robot, convention, gains) for r in recordings]
     return Fit(robot, sf.result, p, model, base, sf.observation, found, found.delay if found is not None else None, spring,
-               boot, block=block, streamed=sf, recordings=sf.recordings, choice=_choice_record(sf.choice, p),
+               boot, block=block, streamed=sf, recordings=sf.recordings,
+               choice=_choice_record(sf.choice, getattr(hook, "choice", None)),
                flags=tuple(streamed_torque_flags(robot, sources, sf.scans, block)),
                baseline=streamed_baseline(robot, sources, sf.scans, p.spring, block, client))
 
 
-#: Why the friction form is not chosen on the block path (its velocity-scale search reads whole recordings).
-FRICTION_NOTE = ("friction form: coulomb (not chosen block by block: the smooth forms' velocity-scale search "
-                 "needs the whole recordings)")
-
-
-def _choice_record(choice: ProcessingChoice | None, p: Any) -> dict | None:
-    """The fit file's ``processing_choice`` of a block-by-block fit: the in-memory fit's record, with a
-    line saying the friction form was left at coulomb where it was open."""
+def _choice_record(choice: ProcessingChoice | None, friction: Any) -> dict | None:
+    """The fit file's ``processing_choice`` of a block-by-block fit, as the in-memory fit's: the friction
+    form's choice (a FrictionChoice, None when the form was given) after the processing's."""
     if choice is None:
         return None
     record = choice.to_dict()
-    if p.friction is None:
-        record.update(friction={"form": "coulomb", "chosen": False, "reason": FRICTION_NOTE},
-                      table=record["table"] + "\n  " + FRICTION_NOTE)
-    return record
+    if friction is None:
+        return record
+    return dict(record, friction=friction.to_dict(), table=record["table"] + "\n" + friction.table())

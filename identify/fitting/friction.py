@@ -54,7 +54,7 @@ def friction_columns(robot: rx90sym.Robot, recordings: Sequence[Any], base: Any,
         scales = velocity_scales(robot, recordings, base, form, **options)
         if not scales.converged:  # a failed search is reported, never fitted with
             raise SolverError(f"fit: the velocity-scale search of friction form {friction_label(form)!r} did not converge "
-                              f"(L-BFGS-B); use friction 'coulomb'", status="not_converged", solver="L-BFGS-B")
+                              f"; use friction 'coulomb'", status="not_converged", solver="grid")
         base = friction_base(base, terms, form, scales.scales)
         record.update(scales.to_json())
     if presliding:

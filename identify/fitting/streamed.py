@@ -63,7 +63,8 @@ class StreamedFit:
     smallest and largest position of each joint over the recordings [rad]; recordings: per recording
     its samples, segments, bridged samples and stale rows (:meth:`identify.observation.stream.Scan.layout`);
     choice: the cross-validated processing (a :class:`~identify.observation.cross_validation.ProcessingChoice`;
-    None when the processing was given).
+    None when the processing was given); columns: the base fitted; friction: the fit file's
+    ``model.friction`` of the friction columns searched (None: none).
     """
 
     result: IdentificationResult
@@ -84,6 +85,8 @@ class StreamedFit:
     choice: ProcessingChoice | None = None
     observation: Observation | None = None  # the decimated rows, when kept (identify.observation.row_store)
     scans: tuple[Scan, ...] = ()  # the first pass over each recording (the baseline's and checks' passes reuse it)
+    columns: Any = None
+    friction: dict | None = None
 
     def summary(self) -> str:
         """What was fitted, in the manner of :meth:`identify.Observation.summary`."""
@@ -185,7 +188,8 @@ def fit_streamed(robot: rx90sym.Robot, recordings: Sequence[Any], method: str = 
                  delay: float | str = 0.0, spring: bool = True, estimate: bool = False,
                  block: int = DEFAULT_BLOCK, client: Any = None, bootstrap: BootstrapSpec | None = None,
                  convention: str | None = None, gains: Any = None, cross_validate: bool | None = None,
-                 offsets: Sequence[int] = (), **consistent_options: Any) -> StreamedFit:
+                 offsets: Sequence[int] = (), friction: Any = None,
+                 **consistent_options: Any) -> StreamedFit:
     """:func:`identify.fit` on recordings of any length, block by block.
 
     recordings: CSV paths (streamed), :class:`~identify.Recording` objects or
@@ -199,7 +203,10 @@ def fit_streamed(robot: rx90sym.Robot, recordings: Sequence[Any], method: str = 
     is open (chosen by the cross-validation, else zero-coulomb); offsets: the joints (0-based) the
     cross-validation may give a torque offset (the columns OFFj of those it keeps are fitted:
     :class:`identify.observation.offsets.OffsetBase`); the candidates are scored at ``delay`` (0 when
-    "auto": the lag is searched after the choice). The other arguments are those of :func:`identify.fit`.
+    "auto": the lag is searched after the choice); friction: ``friction(robot, sources, scans, cutoff,
+    settings, base, client)`` -> (columns, record) called once the torques are in step (the delay
+    known): the friction columns searched block by block (:mod:`identify.fitting.streamed_friction`),
+    then fitted. The other arguments are those of :func:`identify.fit`.
     """
     from identify.estimation.consistent_fit import consistent_fit
 
@@ -236,19 +243,25 @@ def fit_streamed(robot: rx90sym.Robot, recordings: Sequence[Any], method: str = 
     def make_boot(spec: BootstrapSpec | None) -> SegmentBootstrap | None:
         return (SegmentBootstrap(total, max(1, int(round(spec.block_s * flat[0].rate))), robot.n, len(base.names),
                                  spec.draws, spec.seed) if spec else None)
+
+    def make_store() -> RowStore | None:  # the decimated rows kept when few (of the columns fitted)
+        return RowStore(base.names, drop) if keeps_rows(total, robot.n, len(base.names)) else None
     # The consistent fit's prior is measured in eq. 13's covariance inflated by the toolkit's bootstrap (seed 0),
     # as on whole recordings (identify.estimation.honest_covariance): fed the same rows, unless it is the one asked.
     honest = BootstrapSpec(BLOCK_S, DRAWS, HONEST_SEED) if needs_honest_covariance(method, consistent_options) else None
     drop = settings.min_velocity is not None and drops_rest(settings.rest)
-    make_store = (lambda: RowStore(base.names, drop)) if keeps_rows(total, robot.n, len(base.names)) else (lambda: None)
-    boot, hboot, store = make_boot(bootstrap), make_boot(honest if honest != bootstrap else None), make_store()
-    factors, moving, count = _accumulate(robot, sources, plans, fc, settings, base, lags, client, Fanout(boot, hboot),
-                                         store)
-    found = None
+    found = record = None
+    if lags or friction is None:
+        boot, hboot, store = make_boot(bootstrap), make_boot(honest if honest != bootstrap else None), make_store()
+        factors, moving, count = _accumulate(robot, sources, plans, fc, settings, base, lags, client,
+                                             Fanout(boot, hboot), store)
     if lags:
         found = refined_delay(grid, np.array([joint_log_rms(factors.systems(k + 1)) for k in range(len(lags))]), step)
-    if delay == "auto":  # a second pass with the torques put back in step
+    if delay == "auto":  # the torques put back in step
         settings = replace(settings, delay=found.delay)
+    if friction is not None:
+        base, record = friction(robot, sources, scans, fc, settings, base, client)
+    if delay == "auto" or friction is not None:  # a second pass with the torques in step, the friction columns
         boot, hboot, store = make_boot(bootstrap), make_boot(honest if honest != bootstrap else None), make_store()
         factors, moving, count = _accumulate(robot, sources, plans, fc, settings, base, (), client,
                                              Fanout(boot, hboot), store)
@@ -266,4 +279,4 @@ def fit_streamed(robot: rx90sym.Robot, recordings: Sequence[Any], method: str = 
                        boot.std(result.weights) if boot is not None else None, bblock, settings, count,
                        np.vstack([np.min([s.q_range[0] for s in scans], axis=0),
                                   np.max([s.q_range[1] for s in scans], axis=0)]),
-                       tuple(s.layout() for s in scans), choice, observation, tuple(scans))
+                       tuple(s.layout() for s in scans), choice, observation, tuple(scans), base, record)

@@ -249,7 +249,9 @@ def _rest_rows(robot: rx90sym.Robot, names: Sequence[str] | None, speed: np.ndar
         else:
             still = ~driver_moving
         # The moving friction (Coulomb, smooth or Stribeck) says nothing at rest.
-        for column in [term.column] + _named(names, STRIBECK_PREFIX, term.row):
+        # A form's columns at several scales (FSj_k, the friction choice's folds) rest like FSj.
+        variants = [c for c in _named(names, "FS", term.row) if c != term.column] if own_terms([term]) else []
+        for column in [term.column] + variants + _named(names, STRIBECK_PREFIX, term.row):
             Phi[still, term.row, column] = 0.0
         own = _named(names, PRESLIDING_PREFIX, term.row) if own_terms([term]) else []
         if own:

@@ -1,0 +1,149 @@
+"""The friction forms on a log read block by block: velocity scales searched from per-joint factors.
+
+:class:`FrictionHook` gives :func:`identify.fitting.streamed.fit_streamed` the friction columns once
+the torques are in step: the form chosen per joint by the cross-validation where it is left open
+(:mod:`identify.estimation.friction_folds`), a smooth form's (tanh, Stribeck, or one per joint)
+velocity scales, and the presliding travels (:mod:`identify.estimation.travel_search`). The probe observation's
+rows (each own Coulomb column the filtered, decimated driver speed,
+:class:`~identify.observation.friction_model.FrictionBase` form "probe") are made block by block by
+the streamed fit's own row code (:func:`identify.observation.stream.piece`) and folded into the
+tables of :mod:`identify.estimation.scale_grid` (two passes: the coarse grid, then the fine one);
+the scales are those the whole-signal fit finds (the same search on the same rows, the factors equal
+to rounding), and the fit then uses the form's exact columns at them. Memory: the tables, per joint
+(c + 37)² doubles, whatever the log's length.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any, Callable, Sequence
+
+import numpy as np
+
+import rx90sym
+
+from identify.estimation.consistency.errors import SolverError
+from identify.estimation.scale_grid import find_scales
+from identify.estimation.scale_table import ScaleTable
+from identify.estimation.separable import as_velocity_scales, smooth_joints, smooth_probe
+from identify.observation.friction_model import coulomb_terms, friction_base, friction_probe, presliding_base
+from identify.observation.processing import FrictionForm, drops_rest, friction_label, has_smooth_friction
+from identify.observation.stream import StreamSettings, in_order, piece, plan_windows, windows_in_order
+
+__all__ = ["FrictionHook", "friction_hook", "streamed_feed"]
+
+
+def _probe_task(robot: rx90sym.Robot, rec: Any, window: Any, plan: Any, cutoff: float, settings: StreamSettings,
+                probe: Any, table: ScaleTable, folds: tuple[float, float, int] | None) -> list[tuple]:
+    """One block of probe rows: per (time block, joint) the table's factor, row count and |v| histogram."""
+    from identify.observation.cv_scoring import time_folds
+
+    m = piece(robot, rec, window, plan, cutoff, settings, probe.regressor_batch, probe.names, 0).motion
+    keep = m.rows(settings.min_velocity is not None and drops_rest(settings.rest))
+    ids = np.zeros(m.t.size, dtype=int) if folds is None else time_folds(m.t, *folds)
+    out = []
+    for b in np.unique(ids):
+        for j in range(m.Phi.shape[1]):
+            rows = keep[:, j] & (ids == b)
+            W = m.Phi[rows, j, :]
+            out.append((int(b), j, *table.block_part(j, table.rows_of(j, W, m.Y[rows, j]), W)))
+    return out
+
+
+def streamed_feed(robot: rx90sym.Robot, sources: Sequence[Any], plans: Sequence[Any], cutoff: float,
+                  settings: StreamSettings, probe: Any, client: Any = None,
+                  folds: tuple[float, float, int] | None = None) -> Callable[[ScaleTable], None]:
+    """``feed(table)``: one pass over the recordings adding every probe row to the table (folds: the time
+    span (start, length [s], blocks) of the cross-validation's time blocks; None: one block)."""
+    def feed(table: ScaleTable) -> None:
+        empty = table.empty()
+        shared = client.scatter([robot, probe], broadcast=True, hash=False) if client is not None else (robot, probe)
+        tasks = ((shared[0], rec, window, plan, cutoff, settings, shared[1], empty, folds)
+                 for plan, window, rec, _ in windows_in_order(sources, plans))
+        for parts in in_order(_probe_task, tasks, client, 4 if client is not None else 1):
+            for b, j, factor, count, hist in parts:
+                table.add_factor(b, j, factor, count, hist)
+    return feed
+
+
+def _columns(robot: rx90sym.Robot, sources: Sequence[Any], plans: Sequence[Any], cutoff: float,
+             settings: StreamSettings, base: Any, client: Any, form: FrictionForm) -> tuple[Any, dict]:
+    """(the columns of the smooth ``form`` at the scales found on every row, the fit file's ``model.friction``)."""
+    probe, terms = smooth_probe(robot, base, form)
+    own, forms = smooth_joints(terms, form)
+    # The probe's FPj columns with "presliding", as observation_matrix adds them in memory.
+    probe = presliding_base(robot, probe, settings.rest if settings.min_velocity is not None else None)
+    feed = streamed_feed(robot, sources, plans, cutoff, settings, probe, client)
+    scales = as_velocity_scales(find_scales(feed, robot.n, len(probe.names), own, forms)[0], form, robot.n)
+    if not scales.converged:  # a failed search is reported, never fitted with
+        raise SolverError(f"fit: the velocity-scale search of friction form {friction_label(form)!r} did not "
+                          f"converge; use friction 'coulomb'", status="not_converged", solver="grid")
+    columns = friction_base(base, coulomb_terms(robot, probe.base.names), form, scales.scales)
+    return columns, {"form": form if isinstance(form, str) else list(form), **scales.to_json()}
+
+
+def _travels(robot: rx90sym.Robot, sources: Sequence[Any], plans: Sequence[Any], cutoff: float,
+             settings: StreamSettings, base: Any, client: Any) -> tuple[Any, dict]:
+    """(``base`` with the presliding travels chosen per joint, their record): one pass of the
+    :func:`~identify.estimation.separable.travel_columns` rows into per-joint factors."""
+    from identify.estimation.incremental_qr import JointFactors, stacked_rows
+    from identify.estimation.separable import travel_columns, travels_of
+    from identify.fitting.friction import defaulted_travels
+
+    columns = travel_columns(robot, base)
+    factors = JointFactors(robot.n, len(columns.names))
+    drop = settings.min_velocity is not None and drops_rest(settings.rest)
+    tasks = ((robot, rec, window, plan, cutoff, settings, columns.regressor_batch, columns.names, 0)
+             for plan, window, rec, _ in windows_in_order(sources, plans))
+    for p in in_order(piece, tasks, client, 4 if client is not None else 1):
+        m = p.motion
+        keep = m.rows(drop)
+        for j in range(robot.n):
+            factors.add(j, stacked_rows(m.Phi, [m.Y], j, keep[:, j]))
+    found = travels_of(robot, factors.R, factors.rows, columns.names)
+    terms = coulomb_terms(robot, friction_probe(robot, base)[0].names)
+    return friction_base(base, terms, presliding=True, travels=defaulted_travels(found.travels)), found.to_json()
+
+
+@dataclass(eq=False)
+class FrictionHook:
+    """The ``friction`` argument of :func:`~identify.fitting.streamed.fit_streamed`: the friction columns of a
+    fit read block by block, as :func:`identify.fitting.friction.friction_columns` makes them in memory.
+    form: the form given (one, or one per joint); choose: the form chosen per joint by the cross-validation
+    block by block instead (:func:`identify.estimation.friction_choice.choose_friction_rows` on
+    :class:`~identify.estimation.friction_folds.StreamRows`: the in-memory choice's code and time blocks);
+    then a smooth form's velocity scales, and with the rest policy "presliding" the travels.
+    ``choice``: the :class:`FrictionChoice` once called (None: the form was given)."""
+
+    form: FrictionForm = "coulomb"
+    choose: bool = False
+    choice: Any = None
+
+    def __call__(self, robot: rx90sym.Robot, sources: Sequence[Any], scans: Sequence[Any], cutoff: float,
+                 settings: StreamSettings, base: Any, client: Any) -> tuple[Any, dict | None]:
+        from identify.observation.processing import has_policy
+
+        plans = [plan_windows(s, cutoff, settings)[0] for s in scans]
+        form = self.form
+        if self.choose:
+            from identify.estimation.friction_choice import choose_friction_rows
+            from identify.estimation.friction_folds import StreamRows
+            from identify.estimation.stream_cv import time_span
+            from identify.observation.cross_validation import DEFAULT_BLOCKS
+
+            first, last = time_span(scans, plans)
+            rows = StreamRows(robot, sources, plans, cutoff, settings, (first, last - first + 1e-9, DEFAULT_BLOCKS),
+                              client)
+            self.choice = choose_friction_rows(robot, rows, base, robot.n * sum(s.samples for s in scans))
+            form = self.choice.chosen
+        record = None
+        if has_smooth_friction(form):
+            base, record = _columns(robot, sources, plans, cutoff, settings, base, client, form)
+        if settings.min_velocity is not None and has_policy(settings.rest, "presliding"):
+            base, travels = _travels(robot, sources, plans, cutoff, settings, base, client)
+            record = {**(record or {"form": form if isinstance(form, str) else list(form)}), **travels}
+        return base, record
+
+
+def friction_hook(form: FrictionForm) -> FrictionHook:
+    """The hook of a given ``form`` (one, or one per joint)."""
+    return FrictionHook(form)
