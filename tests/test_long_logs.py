@@ -228,17 +228,24 @@ def test_fleet_fits_every_robot_on_its_own_logs(rx90, rx90_base, twin_empty, who
 
 
 def test_a_log_within_one_block_is_one_block(rx90, twin_empty):
-    """identify.fit(..., block=B) on a recording of at most B samples is the whole-signal fit (as rx90
-    identify, which streams only logs longer than --block): the defaults' choices and the estimates equal
-    for B = N and N + 1 and far larger; B = N - 1 goes block by block (its own path)."""
+    """One pipeline: identify.fit with the defaults (processing, offsets and friction form chosen on the
+    torques, delay, bootstrap, baseline) gives the same estimates to 1e-8 relative for a block of N / 3,
+    N - 1, N, N + 1 and 100 N samples of an N-sample recording, and the same choices."""
     rec = twin_empty[0]
     n = rec.n_samples
-    ref = identify.fit(rx90, [rec])
-    for block in (n, n + 1, 100 * n):
+    ref = identify.fit(rx90, [rec], block=n)
+    assert ref.choice is not None and ref.baseline is not None and ref.observation is not None
+    for block in (n // 3, n - 1, n + 1, 100 * n):
         got = identify.fit(rx90, [rec], block=block)
-        assert got.block is None and got.result.names == ref.result.names
-        np.testing.assert_array_equal(got.result.values, ref.result.values)
-    assert identify.fit(rx90, [rec], identify.Processing(friction="coulomb"), block=n - 1).block == n - 1
+        assert got.streamed.blocks >= (3 if block == n // 3 else 1)
+        a, b = got.choice["chosen"], ref.choice["chosen"]
+        assert got.result.names == ref.result.names
+        assert (a["cutoff_hz"], a["decimate_to_hz"], a["rest"]) == (b["cutoff_hz"], b["decimate_to_hz"], b["rest"])
+        assert a["score_pct"] == pytest.approx(b["score_pct"], rel=1e-8)
+        assert got.model.friction == ref.model.friction and got.model.offset_joints == ref.model.offset_joints
+        _close(got.result.values, ref.result.values, 1e-8)
+        _close(got.bootstrap.std, ref.bootstrap.std, 1e-8)
+        _close(got.baseline.values, ref.baseline.values, 1e-8)
 
 
 def test_a_fit_in_blocks_keeps_the_rows_of_the_whole_observation(rx90, rx90_base, twin_empty, whole_fit):

@@ -1,9 +1,11 @@
 """One identification, from recordings to a saved fit file (paper sections II-B and III).
 
-:func:`fit` chains the steps (torque-delay estimate, observation matrix with one
-:class:`~identify.observation.processing.Processing`, eqs. 6-8; (weighted) least squares,
-eqs. 9-15; optionally the physically consistent fit) and returns a :class:`Fit` that predicts
-and validates with its own processing, bootstraps its σ, and saves itself
+:func:`fit` chains the steps block by block for every log length (:mod:`identify.fitting.streamed`:
+the processing chosen on the torques, the torque-delay estimate, the observation rows of one
+:class:`~identify.observation.processing.Processing`, eqs. 6-8, folded into per-joint factors; the
+friction columns; (weighted) least squares, eqs. 9-15; optionally the physically consistent fit;
+the plain baseline and the recorded-torque checks) and returns a :class:`Fit` that predicts and
+validates with its own processing, carries its bootstrap σ, and saves itself
 (:mod:`identify.fitting.record`).
 """
 from __future__ import annotations
@@ -20,18 +22,13 @@ from identify.estimation.honest_covariance import HONEST_SEED, honest_covariance
 from identify.estimation.results import METHODS, IdentificationResult
 from identify.fitting.file import FitModel
 from identify.io.gains import DriveGains
-from identify.observation.matrix import DECIMATION_PASSBAND, Observation, observation_matrix
+from identify.observation.matrix import Observation
 from identify.observation.friction_model import FrictionBase
-from identify.observation.offsets import OffsetBase, offset_base, offset_joints
+from identify.observation.offsets import OffsetBase, offset_joints
 from rx90sym.base_parameters import BaseParameters
-from identify.fitting.baseline import plain_baseline
-from identify.io.recordings import layout_summary
 from identify.observation.processing import Processing, friction_label, has_policy, has_smooth_friction
-from identify.fitting.friction import chosen_friction, friction_columns
-from identify.estimation.delay import estimate_delay
 from identify.fitting.record import BOOTSTRAP_BLOCK_S, BOOTSTRAP_DRAWS, Bootstrap, Fit
 from identify.fitting.rank_flags import rank_flags
-from identify.fitting.torque_checks import recorded_torque_flags
 
 if TYPE_CHECKING:
     from identify.fitting.streamed import ProcessingChoice
@@ -52,9 +49,16 @@ def fit(robot: rx90sym.Robot, recordings: Sequence[Any], processing: Processing 
         convention: str | None = None, spring_source: str | None = None,
         observation: Observation | None = None, block: int | None = None, client: Any = None,
         bootstrap_seed: int | None = 0, **consistent_options: Any) -> Fit:
-    """Identify the base parameters of ``robot`` from ``recordings``.
+    """Identify the base parameters of ``robot`` from ``recordings`` (recordings, or recording files).
 
-    processing: the signal processing (None: the defaults, those of ``rx90 identify``);
+    One pipeline for every log length: the recordings are read, filtered and fitted block by block
+    (``block`` raw samples at a time, default 60,000: memory bounded by the block whatever the logs'
+    length, docs/long-logs.md); a log within one block is one block, and the estimates do not depend on
+    the block (to 1e-8 relative). client: a ``dask.distributed.Client`` running the blocks.
+
+    processing: the signal processing (None: the defaults, those of ``rx90 identify``): without a
+    cut-off it is chosen by blocked cross-validation against the raw torques (cut-off, decimation,
+    rest policy per joint, torque offsets), the friction form per joint too where it is left open;
     method: "ols", "wls" (paper: each joint's rows weighted by 1/σ of its own residual) or
     "consistent" (WLS data, physically consistent standard parameters through cvxpy; extra
     keyword arguments go to identify.estimation.consistent_fit.consistent_fit, e.g.
@@ -64,98 +68,57 @@ def fit(robot: rx90sym.Robot, recordings: Sequence[Any], processing: Processing 
     consistent_least_squares' prior, prior_weight, total_mass, mass_bounds, com_boxes, solver);
     base: the columns (default: the symbolic base parameters, plus the torque offsets the
     cross-validated processing chooses; columns given are fitted as they are; a BaseWithSpring
-    identifies the spring too, with processing.spring False). Recorded in the fit file for :func:`load_fit`: gains (already applied to current
-    recordings), convention (of the files; None: each file's header), spring_source ("default",
-    "none" or a table file; None: from the robot). observation: an already built observation
-    matrix (the recordings are then not read; no delay estimate).
-    bootstrap_seed: seed of the segment bootstrap whose σ the fit carries beside eq. 13's
-    (:meth:`Fit.bootstrapped`, as ``rx90 identify --bootstrap-seed``; None: none, on whole recordings).
-    block: read, filter and fit the recordings (CSV paths, recordings) in blocks of this many
-    samples: memory bounded by the block whatever the logs' length (docs/long-logs.md), the
-    segment bootstrap computed on the way with ``bootstrap_seed``; client: a
-    ``dask.distributed.Client`` running the blocks (block by default 60,000 samples); the processing
-    is cross-validated block by block as on whole recordings, the friction form too (a smooth form's
-    velocity scales searched block by block, identify.fitting.streamed_friction); the consistent fit's
-    prior, the plain baseline and the recorded-torque checks are those of whole recordings, computed
-    block by block.
-    The fit's flags hold the recorded-torque checks (identify.fitting.torque_checks: torque scale, gravity
-    at rest; errors that rx90 identify stops on) and a rank that depends on the threshold.
+    identifies the spring too, with processing.spring False). Recorded in the fit file for :func:`load_fit`:
+    gains (applied to current recordings), convention (of the files; None: each file's header),
+    spring_source ("default", "none" or a table file; None: from the robot).
+    bootstrap_seed: seed of the segment bootstrap whose σ the fit carries beside eq. 13's, computed
+    while the blocks stream by (as ``rx90 identify --bootstrap-seed``; None: none).
+    observation: an already built observation matrix, solved as it is (the recordings are not read: no
+    delay estimate, no baseline, no cross-validation).
+    The fit keeps its decimated rows (``Fit.observation``) when they are few (identify.observation.row_store);
+    its flags hold the recorded-torque checks (identify.fitting.torque_checks: torque scale, gravity at
+    rest; errors that rx90 identify stops on) and a rank that depends on the threshold.
     """
+    if method not in METHODS:
+        raise ValueError(f"fit: method must be one of {METHODS}, got {method!r}")
     if method == "consistent" and isinstance(consistent_options.get("physical_prior", "default"), str):
         from identify.estimation.consistency.prior import nominal_prior
 
-        # The default prior is rx90 identify's: the robot's nominal parameters (None: said, arbitrary split);
-        # on whole recordings and block by block alike.
+        # The default prior is rx90 identify's: the robot's nominal parameters (None: said, arbitrary split).
         consistent_options["physical_prior"] = nominal_prior(robot, None if consistent_options.get(
             "physical_prior", "default") == "default" else consistent_options["physical_prior"])
     p = processing if processing is not None else Processing()
     _refuse_for_consistent(p, method)
-    if block is not None and client is None and _within_one_block(recordings, block):
-        block = None  # a log within one block is one block: the whole-signal fit, as rx90 identify does
-    if block is not None or client is not None:
-        done = fit_in_blocks(robot, recordings, processing, method, base=base, gains=gains, convention=convention,
-                             spring_source=spring_source, block=block, client=client, bootstrap_seed=bootstrap_seed,
-                             **consistent_options)
-        return done.with_flags([*rank_flags(done.base), *done.flags])  # a rank that depends on the threshold
-    if method not in METHODS:
-        raise ValueError(f"fit: method must be one of {METHODS}, got {method!r}")
-    recordings = list(recordings) if isinstance(recordings, (list, tuple)) else [recordings]
-    for rec in recordings if observation is None else ():
-        rec.torques  # currents without gains: refused once, here, not by every candidate processing
-    columns_given = base is not None  # the caller's columns are fitted as they are (no offset added)
+    if method != "consistent" and consistent_options:
+        raise ValueError(f"fit: options {sorted(consistent_options)} are for method 'consistent'")
+    if observation is not None:
+        return _fit_observation(robot, recordings, observation, p, method, base, gains, convention, spring_source,
+                                bootstrap_seed, consistent_options)
+    done = _fit_blocks(robot, recordings, p, method, base=base, gains=gains, convention=convention,
+                       spring_source=spring_source, block=block, client=client, bootstrap_seed=bootstrap_seed,
+                       **consistent_options)
+    return done.with_flags([*rank_flags(done.base), *done.flags])  # a rank that depends on the threshold
+
+
+def _fit_observation(robot: rx90sym.Robot, recordings: Sequence[Any], obs: Observation, p: Processing, method: str,
+                     base: Any, gains: DriveGains | None, convention: str | None, spring_source: str | None,
+                     bootstrap_seed: int | None, consistent_options: dict[str, Any]) -> Fit:
+    """The fit of a given observation matrix (eqs. 9-15, optionally the consistent fit)."""
+    from identify.observation.spring_fit import BaseWithSpring, spring_summary
+
     base = base if base is not None else rx90sym.base_parameters(robot)
     options = p.observation_options()
-    choice = None
-    if p.cross_validates and observation is None:
-        from identify.estimation.stream_cv import choose_processing
-
-        # Scored at the lag the fit compensates; "auto": the lag estimated on the default processing
-        # (W and Y filtered alike, it hardly depends on the cut-off; one delay search).
-        scored_lag = (estimate_delay(robot, recordings, base=base, **options).delay if p.delay == "auto"
-                      else float(p.delay))
-        # Torque offsets are a candidate of the WLS fits on the default symbolic base (not of the consistent fit,
-        # whose columns map back to standard parameters, nor of columns the caller gave, nor beside a robot's own
-        # offsets or asymmetric Coulomb).
-        eligible = (offset_joints(robot, base) if method != "consistent" and not columns_given
-                    and isinstance(base, BaseParameters) else ())
-        choice = choose_processing(robot, recordings, base=base, min_velocity=p.min_velocity, rest=p.rest,
-                                   spring=p.spring, default_decimate=p.decimate_to, delay=scored_lag,
-                                   offsets=eligible)
-        c = choice.chosen
-        options.update(cutoff=c.cutoff, decimate_to=c.decimate_to, rest=c.rest or options["rest"])
-        base = offset_base(base, choice.offsets)
-    # The delay search, the friction forms and their scales on rows decimated as by default when the processing
-    # chosen keeps the full rate (the same cut-off, within the decimation's pass band): they then cost what they
-    # did before (the search shifts the raw torques: its resolution is the recording's rate either way).
-    light = dict(options)
-    if choice is not None and light["decimate_to"] is None and p.decimate_to and \
-            options["cutoff"] <= DECIMATION_PASSBAND * p.decimate_to and \
-            all(r.rate >= 2 * p.decimate_to for r in recordings):
-        light["decimate_to"] = p.decimate_to
-    found = None
-    if observation is None and (p.estimate_delay or p.delay == "auto"):
-        found = estimate_delay(robot, recordings, base=base, **light)
-    lag = found.delay if p.delay == "auto" else float(p.delay)
-    forms = dict(light, delay=lag)
-    form, choice = chosen_friction(robot, recordings, base, p, method, choice, forms)
-    base, friction = friction_columns(robot, recordings, base, form, observation, forms)
-    obs = observation if observation is not None else observation_matrix(robot, recordings, delay=lag,
-                                                                         base=base, **options)
     result = _solve(robot, obs, base, method, consistent_options)
     model = FitModel.of(robot, convention=convention, gains=gains.to_dict() if gains is not None else None,
                         rest=options["rest"], min_velocity=options["min_velocity"],
-                        spring=spring_source or _spring_label(robot, base),
-                        cutoff_hz=obs.cutoffs[0], decimate_to_hz=options["decimate_to"], rate_hz=obs.rate, delay_s=lag,
-                        friction=friction, offset_joints=_offset_record(base))
-    from identify.observation.spring_fit import BaseWithSpring, spring_summary
-
-    spring = spring_summary(robot, base if isinstance(base, BaseWithSpring) else None, result, recordings)[0]
-    done = Fit(robot, result, p, model, base, obs, found, found.delay if found is not None else None, spring,
-               recordings=tuple(layout_summary(r) for r in recordings if hasattr(r, "measured_mask")),
-               choice=choice, flags=(*rank_flags(base), *(recorded_torque_flags(robot, recordings)
-                                                          if observation is None else ())),
-               baseline=plain_baseline(robot, recordings if observation is None else [], p.spring))
-    return done if bootstrap_seed is None else done.bootstrapped(bootstrap_seed)  # rx90 identify's σ, alike
+                        spring=spring_source or _spring_label(robot, base), cutoff_hz=obs.cutoffs[0],
+                        decimate_to_hz=options["decimate_to"], rate_hz=obs.rate,
+                        delay_s=0.0 if p.delay == "auto" else float(p.delay), offset_joints=_offset_record(base))
+    recordings = list(recordings) if isinstance(recordings, (list, tuple)) else [recordings]
+    visited = [r for r in recordings if hasattr(r, "q")]
+    spring = spring_summary(robot, base if isinstance(base, BaseWithSpring) else None, result, visited)[0]
+    done = Fit(robot, result, p, model, base, obs, None, None, spring, flags=tuple(rank_flags(base)))
+    return done if bootstrap_seed is None else done.bootstrapped(bootstrap_seed)
 
 
 def _refuse_for_consistent(p: Processing, method: str) -> None:
@@ -167,12 +130,6 @@ def _refuse_for_consistent(p: Processing, method: str) -> None:
         raise ValueError(f"fit: the consistent method fits bodies with Coulomb + viscous friction (what a URDF or "
                          f"MJCF holds), not {what}: use friction 'coulomb' and a rest policy other than "
                          f"'presliding', or method 'wls'")
-
-
-def _within_one_block(recordings: Any, block: int) -> bool:
-    """Every recording is in memory and holds at most ``block`` samples (a CSV path: read in blocks)."""
-    recs = recordings if isinstance(recordings, (list, tuple)) else [recordings]
-    return all(isinstance(getattr(r, "n_samples", None), int) and r.n_samples <= block for r in recs)
 
 
 def _offset_record(base: Any) -> tuple[int, ...] | None:
@@ -194,8 +151,6 @@ def _solve(robot: rx90sym.Robot, obs: Observation, base: Any, method: str,
 
     result = weighted_least_squares(obs.W, obs.Y, obs.joint, obs.names, weighted=method != "ols")
     if method != "consistent":
-        if consistent_options:
-            raise ValueError(f"fit: options {sorted(consistent_options)} are for method 'consistent'")
         return result
     from identify.estimation.consistent_fit import consistent_fit
 
@@ -204,12 +159,11 @@ def _solve(robot: rx90sym.Robot, obs: Observation, base: Any, method: str,
     return consistent_fit(robot, result, base, **consistent_options)
 
 
-def fit_in_blocks(robot: rx90sym.Robot, recordings: Sequence[Any], processing: Any = None, method: str = "wls", *,
+def _fit_blocks(robot: rx90sym.Robot, recordings: Sequence[Any], processing: Any = None, method: str = "wls", *,
                   base: Any = None, gains: Any = None, convention: str | None = None, spring_source: str | None = None,
-                  block: int | None = None, client: Any = None, bootstrap_seed: int = 0,
-                  **consistent_options: Any) -> Any:
-    """:func:`identify.fit` block by block (``identify.fit(..., block=..., client=...)`` calls this): a
-    :class:`identify.Fit` without an observation matrix, its bootstrap computed on the way."""
+                  block: int | None = None, client: Any = None, bootstrap_seed: int | None = 0,
+                  **consistent_options: Any) -> Fit:
+    """:func:`identify.fit` of recordings, block by block: its bootstrap computed on the way."""
     from identify.fitting.streamed import DEFAULT_BLOCK, BootstrapSpec, fit_streamed  # the block path's modules
     from identify.observation.spring_fit import BaseWithSpring, spring_summary
     from identify.io.blocks import block_source
@@ -230,7 +184,7 @@ def fit_in_blocks(robot: rx90sym.Robot, recordings: Sequence[Any], processing: A
     hook = FrictionHook(p.friction_form, choose) if smooth or choose or presliding else None
     base = base if base is not None else rx90sym.base_parameters(robot)
     recordings = list(recordings) if isinstance(recordings, (list, tuple)) else [recordings]
-    spec = BootstrapSpec(BOOTSTRAP_BLOCK_S, BOOTSTRAP_DRAWS, bootstrap_seed)
+    spec = BootstrapSpec(BOOTSTRAP_BLOCK_S, BOOTSTRAP_DRAWS, bootstrap_seed) if bootstrap_seed is not None else None
     eligible = (offset_joints(robot, base) if method != "consistent" and not columns_given
                 and isinstance(base, BaseParameters) else ())  # as the whole-signal fit's torque offsets
     sf = fit_streamed(robot, recordings, method, base, p.cutoff, p.decimate_to, p.min_velocity, p.rest, p.delay,
@@ -244,7 +198,7 @@ def fit_in_blocks(robot: rx90sym.Robot, recordings: Sequence[Any], processing: A
                         delay_s=sf.delay, friction=sf.friction, offset_joints=_offset_record(base))
     angles = [SimpleNamespace(q=sf.q_range)]  # what the spring summary reads: the range visited
     spring = spring_summary(robot, base if isinstance(base, BaseWithSpring) else None, sf.result, angles)[0]
-    boot = Bootstrap(sf.bootstrap_std, sf.bootstrap_block / sf.rate, spec.draws, spec.seed)
+    boot = Bootstrap(sf.bootstrap_std, sf.bootstrap_block / sf.rate, spec.draws, spec.seed) if spec else None
     found = sf.delay_estimate
     # The baseline and the recorded-torque checks: a pass each over the logs, block by block, as on whole ones.
     sources = [block_source(r, robot, convention, gains) for r in recordings]
