@@ -97,12 +97,12 @@ def test_a_scale_search_that_did_not_converge_is_reported_not_fitted(rx90, rx90_
     with one line, writing nothing (the search's result is replaced by one that says it failed)."""
     from dataclasses import replace
 
-    import identify.estimation.separable as separable
+    import identify.fitting.streamed_friction as streamed_friction
     from identify.app.cli import main
     from identify.estimation.consistency.errors import SolverError
 
-    real = separable.velocity_scales
-    monkeypatch.setattr(separable, "velocity_scales", lambda *a, **k: replace(real(*a, **k), converged=False))
+    real = streamed_friction.as_velocity_scales
+    monkeypatch.setattr(streamed_friction, "as_velocity_scales", lambda *a, **k: replace(real(*a, **k), converged=False))
     rec = friction_twin(rx90, "tanh", 0, 6.0, 100.0)
     processing = Processing(friction="tanh", min_velocity=None, estimate_delay=False, cutoff=10.0, decimate_to=None)
     with pytest.raises(SolverError, match="did not converge"):

@@ -7,6 +7,8 @@ refit with the same joint weights, and take the spread of the estimates.
 """
 from __future__ import annotations
 
+from typing import Sequence
+
 import numpy as np
 
 __all__ = ["SegmentBootstrap", "segment_bootstrap_std", "segment_bootstrap_estimates", "bootstrap_std",
@@ -120,10 +122,15 @@ class SegmentBootstrap:
         self.M[:, joint] += (picked @ A.reshape(A.shape[0], -1)).reshape(self.M.shape[0], *A.shape[1:])
         self.g[:, joint] += picked @ g
 
-    def std(self, weights: np.ndarray) -> np.ndarray:
-        """(c,) standard deviations for the joint weights of the fit (1 for OLS)."""
+    def std(self, weights: np.ndarray, columns: Sequence[int] | None = None) -> np.ndarray:
+        """(c,) standard deviations for the joint weights of the fit (1 for OLS); ``columns``: those of the
+        parameters fitted only (None: all)."""
         w2 = np.asarray(weights, dtype=float) ** 2
-        return _spread(np.tensordot(self.M, w2, axes=([1], [0])), np.tensordot(self.g, w2, axes=([1], [0])))
+        M, g = np.tensordot(self.M, w2, axes=([1], [0])), np.tensordot(self.g, w2, axes=([1], [0]))
+        if columns is not None:
+            keep = np.asarray(columns, dtype=int)
+            M, g = M[:, keep][:, :, keep], g[:, keep]
+        return _spread(M, g)
 
 
 def bootstrap_std(W: np.ndarray, Y: np.ndarray, joint: np.ndarray, samples: np.ndarray, weights: np.ndarray,

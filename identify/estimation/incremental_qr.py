@@ -50,6 +50,18 @@ class JointFactors:
         """Fold in rows (m, p) of joint ``joint``."""
         self.add_factor(joint, self.block_factor(rows), rows.shape[0])
 
+    def subset(self, columns: Sequence[int]) -> "JointFactors":
+        """The factors of the parameters ``columns`` only (their order kept; every right-hand side kept)."""
+        out = JointFactors(len(self.R), len(columns), self.width - self.columns)
+        keep = list(columns) + list(range(self.columns, self.width))
+        out.R = [_qr_r(np.array(R[:, keep], order="F")) for R in self.R]  # RᵀR of the kept columns
+        out.rows = self.rows.copy()
+        return out
+
+    def nonzero_columns(self) -> np.ndarray:
+        """(c,) whether each parameter's column holds a nonzero value on some row of some joint."""
+        return np.any([np.any(R[:, :self.columns] != 0.0, axis=0) for R in self.R], axis=0)
+
     def system(self, joint: int, rhs: int = 0) -> CompressedSystem:
         """The compressed system ``‖W_i·x − Y‖²`` of joint ``joint`` for right-hand side ``rhs``."""
         c = self.columns

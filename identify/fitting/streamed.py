@@ -30,6 +30,7 @@ from identify.estimation.results import METHODS, IdentificationResult
 from identify.io.blocks import BlockSource, block_source
 from identify.observation.cross_validation import ProcessingChoice
 from identify.observation.matrix import DEFAULT_MIN_VELOCITY, DEFAULT_REST, Observation, presliding_base
+from identify.observation.friction_model import empty_presliding
 from identify.observation.defaults import DEFAULT_DECIMATE_TO
 from identify.observation.offsets import offset_base
 from identify.observation.processing import RestPolicy, drops_rest
@@ -182,6 +183,21 @@ def _choose(robot: rx90sym.Robot, sources: Sequence[BlockSource], base: Any, cut
                                       scans=scans, delay=delay, offsets=offsets), scans
 
 
+def _default_lag(robot: rx90sym.Robot, sources: Sequence[BlockSource], base: Any, decimate_to: float | None,
+                 min_velocity: float | None, rest: RestPolicy | None, spring: bool, block: int, client: Any) -> float:
+    """The torque lag [s] estimated on the default processing (the automatic cut-off, ``decimate_to``, the
+    rest policy given or the default): the lag the cross-validation scores its candidates at."""
+    rest = DEFAULT_REST if rest is None else rest
+    columns = presliding_base(robot, base if base is not None else rx90sym.base_parameters(robot),
+                              rest if min_velocity else None)
+    settings = StreamSettings(None, decimate_to or None, min_velocity or None, rest, 0.0, spring, block)
+    scans, fc = scan_all(sources, settings)
+    plans, _ = _plans(scans, fc, replace(settings, delay=0.02))
+    grid, step = delay_grid(max(1.0 / s.rate for s in scans))
+    factors = _accumulate(robot, sources, plans, fc, settings, columns, grid, client, None)[0]
+    return refined_delay(grid, np.array([joint_log_rms(factors.systems(k + 1)) for k in range(len(grid))]), step).delay
+
+
 def fit_streamed(robot: rx90sym.Robot, recordings: Sequence[Any], method: str = "wls", base: Any = None,
                  cutoff: float | None = None, decimate_to: float | None = DEFAULT_DECIMATE_TO,
                  min_velocity: float | None = DEFAULT_MIN_VELOCITY, rest: RestPolicy | None = None,
@@ -222,8 +238,12 @@ def fit_streamed(robot: rx90sym.Robot, recordings: Sequence[Any], method: str = 
                          f"({', '.join(s.source for s in sources)}: joint torques): the gains would not be used")
     choice = scans = None
     if (cutoff is None) if cross_validate is None else cross_validate:
+        # Scored at the lag the fit compensates; "auto": the lag estimated on the default processing first (W
+        # and Y filtered alike, it hardly depends on the cut-off; one delay search, one pass).
+        scored = (_default_lag(robot, sources, base, decimate_to, min_velocity, rest, spring, int(block), client)
+                  if delay == "auto" else float(delay))
         choice, scans = _choose(robot, sources, base, cutoff, decimate_to, min_velocity, rest, spring, int(block),
-                                client, 0.0 if delay == "auto" else float(delay), offsets)
+                                client, scored, offsets)
         cutoff, decimate_to, rest = choice.chosen.cutoff, choice.chosen.decimate_to, choice.chosen.rest or rest
         if choice.offsets:  # the torque offsets kept, as the whole-signal fit's columns
             base = offset_base(base if base is not None else rx90sym.base_parameters(robot), choice.offsets)
@@ -265,18 +285,23 @@ def fit_streamed(robot: rx90sym.Robot, recordings: Sequence[Any], method: str = 
         boot, hboot, store = make_boot(bootstrap), make_boot(honest if honest != bootstrap else None), make_store()
         factors, moving, count = _accumulate(robot, sources, plans, fc, settings, base, (), client,
                                              Fanout(boot, hboot), store)
-    result = solve_joint_systems(factors.systems(0), base.names, weighted=method != "ols")
+    # Presliding magnitudes FPj of joints that never rest after a motion: 0 on every row, left out (as in memory).
+    kept, empty = empty_presliding(factors.nonzero_columns(), base.names)
+    fitted = factors if kept is None else factors.subset(kept)
+    names = tuple(base.names) if kept is None else tuple(base.names[k] for k in kept)
+    result = solve_joint_systems(fitted.systems(0), names, weighted=method != "ols")
     if method == "consistent":
         if honest is not None:
-            std = (hboot or boot).std(result.weights)
+            std = (hboot or boot).std(result.weights, kept)
             consistent_options = {**consistent_options, "covariance": honest_covariance(result, std)}
         result = consistent_fit(robot, result, base, **consistent_options)
-    notes = tuple(p.note for p in flat) + skipped
+    notes = tuple(p.note for p in flat) + skipped + empty
     observation = None if store is None else store.observation(
-        [fc] * len(flat), [p.rate for p in flat], [p.source for p in flat], notes, settings.min_velocity, settings.rest)
+        [fc] * len(flat), [p.rate for p in flat], [p.source for p in flat], notes, settings.min_velocity, settings.rest,
+        kept)
     return StreamedFit(result, fc, flat[0].rate, notes, tuple(s.source for s in scans), total,
                        moving / total if settings.min_velocity is not None else None, found, settings.delay,
-                       boot.std(result.weights) if boot is not None else None, bblock, settings, count,
+                       boot.std(result.weights, kept) if boot is not None else None, bblock, settings, count,
                        np.vstack([np.min([s.q_range[0] for s in scans], axis=0),
                                   np.max([s.q_range[1] for s in scans], axis=0)]),
                        tuple(s.layout() for s in scans), choice, observation, tuple(scans), base, record)

@@ -85,9 +85,9 @@ def _parse_fast(lines: LogLines, cmap: ColumnMap) -> np.ndarray:
 
     n_cols = len(cmap.names)
     names = [f"c{k}" for k in range(n_cols)]
-    try:
+    try:  # one thread: a refused log ends the command while Arrow's pool may still run (once killed it, -6)
         table = csv.read_csv(io.BytesIO("\n".join(lines.text).encode()),
-                             read_options=csv.ReadOptions(column_names=names),
+                             read_options=csv.ReadOptions(column_names=names, use_threads=False),
                              convert_options=csv.ConvertOptions(column_types={c: pa.float64() for c in names}))
         values = np.column_stack([table.column(c).to_numpy(zero_copy_only=False) for c in names])
     except (pa.ArrowInvalid, ValueError):

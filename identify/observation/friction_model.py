@@ -29,7 +29,7 @@ from identify.observation.friction import (DEFAULT_FRICTION, FRICTION_FORMS, PRE
 from identify.observation.processing import uniform
 
 __all__ = ["CoulombTerm", "FrictionBase", "PRESLIDING_PREFIX", "STRIBECK_PREFIX", "coulomb_terms", "friction_base",
-           "friction_probe", "own_terms", "presliding_base", "without_empty_presliding"]
+           "friction_probe", "own_terms", "presliding_base", "empty_presliding", "without_empty_presliding"]
 
 #: Column names: FPj the presliding magnitude [N·m] of joint j, FSTj its Stribeck (breakaway) level [N·m].
 PRESLIDING_PREFIX = "FP"
@@ -224,16 +224,24 @@ def presliding_base(robot: rx90sym.Robot, base: Any = None, rest: Any = None) ->
     return friction_base(base, coulomb_terms(robot, base.names), presliding=True)
 
 
-def without_empty_presliding(W: np.ndarray, names: Sequence[str]) -> tuple[np.ndarray, tuple[str, ...], tuple[str, ...]]:
-    """W and names without the presliding columns FPj that are 0 on every row (joint j never rests
-    after a motion in these recordings: nothing identifies its magnitude, a prediction counts it as
-    0), and a note naming them."""
+def empty_presliding(nonzero: Sequence[bool], names: Sequence[str]) -> tuple[list[int] | None, tuple[str, ...]]:
+    """(the columns kept, None when all are; a note naming those left out): the presliding columns FPj
+    that are 0 on every row (``nonzero`` False: joint j never rests after a motion in these recordings,
+    nothing identifies its magnitude, a prediction counts it as 0)."""
     empty = [c for c, name in enumerate(names)
              if name.startswith(PRESLIDING_PREFIX) and name[len(PRESLIDING_PREFIX):].replace("_", "").isdigit()
-             and not np.any(W[:, c])]
+             and not nonzero[c]]
     if not empty:
-        return W, tuple(names), ()
-    keep = [c for c in range(len(names)) if c not in empty]
+        return None, ()
     note = (f"presliding magnitude(s) {', '.join(names[c] for c in empty)} left out: the joint never rests "
             f"after a motion in these recordings")
-    return W[:, keep], tuple(names[c] for c in keep), (note,)
+    return [c for c in range(len(names)) if c not in empty], (note,)
+
+
+def without_empty_presliding(W: np.ndarray, names: Sequence[str]) -> tuple[np.ndarray, tuple[str, ...], tuple[str, ...]]:
+    """W and names without the presliding columns FPj that are 0 on every row (:func:`empty_presliding`),
+    and a note naming them."""
+    keep, note = empty_presliding(np.any(W != 0.0, axis=0), names)
+    if keep is None:
+        return W, tuple(names), ()
+    return W[:, keep], tuple(names[c] for c in keep), note

@@ -51,11 +51,16 @@ class RowStore:
         self.moving.append(m.moving)
 
     def observation(self, cutoffs: Sequence[float], rates: Sequence[float], sources: Sequence[str],
-                    notes: Sequence[str], min_velocity: float | None, rest: RestPolicy) -> Observation:
+                    notes: Sequence[str], min_velocity: float | None, rest: RestPolicy,
+                    columns: Sequence[int] | None = None) -> Observation:
         """The rows kept as :func:`observation_matrix` stacks them (per joint, eqs. 7-8); ``cutoffs``,
-        ``rates``, ``sources``: per segment filtered [Hz, Hz, name]; ``notes``: the processing's notes."""
+        ``rates``, ``sources``: per segment filtered [Hz, Hz, name]; ``notes``: the processing's notes;
+        ``columns``: those of the parameters fitted (None: all)."""
         W, Y, joint, samples = stack_rows(self.Phi, self.Y, masks=self.keep)
+        names = self.names
+        if columns is not None:
+            W, names = W[:, list(columns)], tuple(self.names[c] for c in columns)
         moving = np.concatenate(self.moving)
-        return Observation(W, Y, joint, self.names, samples, tuple(cutoffs), tuple(rates), rates[0], tuple(sources),
+        return Observation(W, Y, joint, names, samples, tuple(cutoffs), tuple(rates), rates[0], tuple(sources),
                            int(moving.shape[0]), tuple(notes), min_velocity, rest,
                            moving.mean(axis=0) if min_velocity is not None else None, np.concatenate(self.t))

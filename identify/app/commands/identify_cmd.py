@@ -15,10 +15,10 @@ from identify.observation.defaults import (DEFAULT_DECIMATE_TO, DEFAULT_DELAY, D
                                            FRICTION_FORMS, REST_POLICIES)
 
 from ..flags import given_gain_flags, settle, with_hint
-from ..common import (UsageError, check_output, convention_option, progress, read_recordings, robot_option,
-                      robot_with_spring, spring_options)
+from ..common import (UsageError, check_output, convention_option, progress, robot_option, robot_with_spring,
+                      spring_options)
 
-from .identify_runs import block_option, fit_long, streamed
+from .identify_runs import block_option, fit_recordings
 
 if TYPE_CHECKING:  # the model and the method are imported when the command runs, not for its --help
     import rx90sym
@@ -190,7 +190,6 @@ def processing_of(args: argparse.Namespace, spring: bool) -> Processing:
 
 
 def run(args: argparse.Namespace) -> int:
-    from identify.fitting.fit import fit
     from identify.fitting.torque_checks import CODES as TORQUE_CODES
     from identify.io.gains import read_gains
 
@@ -209,17 +208,9 @@ def run(args: argparse.Namespace) -> int:
     # The consistent fit's prior, on whole logs and block by block alike.
     prior = physical_prior(args, robot) if args.method == "consistent" else None
     options = {"physical_prior": prior} if args.method == "consistent" else {}
-    if streamed(args.recordings + ([args.validate] if args.validate else []), args.block, args.scheduler):
-        recs, val_rec = [], args.validate  # long logs: read block by block (docs/long-logs.md)
-        result = fit_long(args, robot, processing_of(args, sb is None), sb, gains, **options)
-    else:
-        progress(f"reading {len(args.recordings)} recording(s)")
-        recs = read_recordings(args.recordings, robot, args.convention, gains)
-        val_rec = read_recordings([args.validate], robot, args.convention, gains)[0] if args.validate else None
-        progress(f"identifying ({args.method}) on {sum(len(r.t) for r in recs)} samples")
-        result = fit(robot, recs, processing_of(args, sb is None), args.method, base=sb, gains=gains,
-                     convention=args.convention, spring_source=args.spring, bootstrap_seed=args.bootstrap_seed,
-                     **options)
+    # Every log read, filtered and fitted block by block (a log within one block is one block: docs/long-logs.md).
+    val_rec = args.validate
+    result = fit_recordings(args, robot, processing_of(args, sb is None), sb, gains, **options)
     # The recorded torques' scale and gravity at rest, checked by the fit (every log, block by block when long):
     # an error stops the run (exit 2, nothing written).
     settle([f for f in result.flags if f.code in TORQUE_CODES])
@@ -233,16 +224,16 @@ def run(args: argparse.Namespace) -> int:
         result = result.validated(val_rec)
         if result.validation.still_message():
             progress(f"warning: {result.validation.still_message()}")
-    print_fit(result, recs, args.delay == "auto", prior)
+    print_fit(result, [], args.delay == "auto", prior)
     if args.json:
         from identify.monitor.thresholds import with_contact_thresholds
 
-        result, why = with_contact_thresholds(result, recs or args.recordings, val_rec)
+        result, why = with_contact_thresholds(result, args.recordings, val_rec)
         if why:
             progress(f"contact thresholds not stored ({why}): rx90 monitor will need --calibrate")
         result.save(args.json)
     if args.report:
-        write_report(args.report, result, recs or args.recordings, args.convention, args.block)
+        write_report(args.report, result, args.recordings, args.convention, args.block)
     if args.urdf_out:  # last: a refused (non-physical) link must not cost the fit's JSON and report
         _write_urdf(args, result)
     return 0

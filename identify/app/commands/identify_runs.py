@@ -1,8 +1,7 @@
-"""Long logs in ``rx90 identify``: when the recordings go block by block, and the call that does it.
+"""The fit of ``rx90 identify``: the recordings read, filtered and fitted block by block, here or on Dask.
 
-Logs no longer than ``--block`` samples are read whole (the figures of every earlier release);
-a longer log, or ``--scheduler``, goes through ``identify.fit(..., block=..., client=...)``, whose
-memory is bounded by the block (docs/long-logs.md).
+Every log goes through ``identify.fit(..., block=..., client=...)``, whose memory is bounded by the
+block (docs/long-logs.md); a log within one block is one block.
 """
 from __future__ import annotations
 
@@ -18,22 +17,14 @@ if TYPE_CHECKING:  # for annotations only: the method is imported when a fit run
 from ..common import progress
 
 
-def streamed(paths: list[str], block: int, scheduler: str | None) -> bool:
-    """Whether the recordings go block by block: one CSV has more than ``block`` lines, or Dask is asked."""
-    if scheduler is not None:
-        return True
-    from identify.io.blocks import count_rows
-
-    return any(p.lower().endswith(".csv") and count_rows(p) > block for p in paths)
-
-
-def fit_long(args: argparse.Namespace, robot: rx90sym.Robot, processing: Processing, base: Any, gains: Any,
-             **consistent_options: Any) -> Fit:
+def fit_recordings(args: argparse.Namespace, robot: rx90sym.Robot, processing: Processing, base: Any, gains: Any,
+                   **consistent_options: Any) -> Fit:
     """The fit of ``args.recordings`` block by block (on Dask with ``--scheduler``); ``consistent_options``:
     those of the consistent fit (its physical prior)."""
     from identify.fitting.fit import fit
 
-    progress(f"identifying ({args.method}) block by block ({args.block} samples per block"
+    progress(f"identifying ({args.method}) on {len(args.recordings)} recording(s) block by block ({args.block} "
+             f"samples per block"
              + (f", Dask scheduler {args.scheduler}" if args.scheduler else "") + ")"
              + ("; the processing chosen first by cross-validation, one pass over the logs per candidate"
                 if processing.cross_validates else ""))
