@@ -21,7 +21,7 @@ _EXPORTS = {
     "choose_cutoff": "identify.signal.filtering",
     "resample": "identify.io.resampling",
     "pair_runs": "identify.signal.pairing",
-    "estimate_delay": "identify.estimation.delay",
+    "estimate_delay": "identify.fitting.streamed",
     # observation: one processing record, W and Y (eqs. 6-8)
     "Processing": "identify.observation.processing",
     "Observation": "identify.observation.matrix",

@@ -232,26 +232,3 @@ def snap_options(args: argparse.Namespace, robot_spec: str) -> dict[str, float]:
     return out if length is None or snap == 0 else {**out, "snap_length": length}
 
 
-def read_recordings(paths: list[str], robot: rx90sym.Robot, convention: str | None, gains: Any) -> list:
-    """The recordings of ``paths``, current recordings turned into torques with ``gains``."""
-    from identify.io.gains import apply_gains
-    from identify.io.recordings import read_recording
-
-    from identify.io.units import check_units
-
-    recs = [read_recording(p, robot, convention=convention) for p in paths]
-    for r in recs:  # degrees, swapped q/qd groups, positions out of the robot's range
-        check_units(r.t, r.q, r.dq, robot, r.source)
-    if gains is None:
-        return recs
-    check_gains_used([(r.source, r.current is not None) for r in recs])
-    return [apply_gains(r, gains, robot) if r.current is not None else r for r in recs]
-
-
-def check_gains_used(recordings: Sequence[tuple[str, bool]]) -> None:
-    """Refuse ``--gains`` when no recording (name, holds motor currents) would use them: a fit on
-    joint torques would otherwise record gains it never applied."""
-    if recordings and not any(current for _, current in recordings):
-        names = ", ".join(name for name, _ in recordings)
-        raise UsageError(f"--gains given, but no recording holds motor currents ({names}: joint torques): "
-                         f"the gains would not be used; drop --gains")

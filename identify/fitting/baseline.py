@@ -34,8 +34,8 @@ from identify.estimation.results import json_number
 from identify.signal.blocks import Window, lowpass_margin, motion_windows
 
 __all__ = ["BASELINE_CUTOFF_HZ", "BASELINE_ORDER", "BASELINE_TRIM_S", "BASELINE_RCOND", "PlainBaseline",
-           "BaselinePrediction", "BaselineSegment", "baseline_names", "baseline_regressor", "baseline_signals",
-           "fit_baseline", "fit_baseline_windows", "memory_windows", "window_factors", "segment_of", "window_signals", "baseline_rms",
+           "BaselinePrediction", "BaselineSegment", "baseline_names", "baseline_regressor",
+           "fit_baseline", "fit_baseline_windows", "memory_windows", "window_factors", "segment_of", "window_signals",
            "plain_baseline"]
 
 #: Cut-off [Hz] and order of the baseline's zero-phase Butterworth on q.
@@ -133,13 +133,6 @@ def window_signals(robot: rx90sym.Robot, segment: BaselineSegment, window: Windo
     kept &= np.asarray(rec.measured_mask, dtype=bool)[core]
     extra = robot.spring_torque_batch(q)[:, :, 0] if spring and robot.spring is not None else np.zeros_like(q)
     return BaselineSignals(t, q, dq, ddq, np.asarray(rec.torques, dtype=float)[core], extra, kept)
-
-
-def baseline_signals(robot: rx90sym.Robot, piece: Any, spring: bool = True) -> BaselineSignals:
-    """The baseline's derivatives of one whole segment (a recording without gaps too long to bridge)."""
-    segment = segment_of(piece)
-    segment.check()
-    return window_signals(robot, segment, segment.windows()[0], piece, spring)
 
 
 def memory_windows(recordings: Sequence[Any], block: int | None = None) -> Iterator[tuple]:
@@ -266,13 +259,6 @@ def fit_baseline_windows(robot: rx90sym.Robot, windows: Iterable[tuple], spring:
     x = np.r_[values, -1.0]
     residual = np.array([np.linalg.norm(Rj @ x) / np.sqrt(rows) for Rj in R])
     return PlainBaseline(names, values, rows, int(rank), bool(spring), residual)
-
-
-def baseline_rms(err: np.ndarray, mask: np.ndarray) -> np.ndarray:
-    """Per joint RMS [N m] of ``err`` (S, n) over the rows of ``mask`` (S,) or (S, n) (nan: none)."""
-    m = np.broadcast_to(mask if np.ndim(mask) == 2 else np.asarray(mask)[:, None], err.shape)
-    return np.array([np.sqrt(np.mean(err[m[:, j], j] ** 2)) if m[:, j].any() else np.nan
-                     for j in range(err.shape[1])])
 
 
 def plain_baseline(robot: rx90sym.Robot, recordings: Sequence[Any], spring: bool = True,

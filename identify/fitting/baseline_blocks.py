@@ -52,8 +52,9 @@ def streamed_baseline(robot: rx90sym.Robot, sources: Sequence[Any], scans: Seque
 
         shared = client.scatter(robot, broadcast=True, hash=False)  # sent once to each worker
 
-        def runner(task: Any, arguments: Any) -> Any:
+        def on_dask(task: Any, arguments: Any) -> Any:
             return in_order(task, ((shared, *a[1:]) for a in arguments), client, 4)
+        runner = on_dask
     try:
         return fit_baseline_windows(robot, source_windows(sources, scans, block), spring, runner)
     except ValueError:

@@ -21,7 +21,7 @@ from identify.io.gains import DriveGains
 from identify.observation.friction_model import friction_base
 from identify.observation.matrix import Observation, coulomb_terms
 from identify.observation.processing import Processing
-from identify.fitting.friction import defaulted_travels
+from identify.observation.friction import defaulted_travels
 from identify.estimation.delay import DelayEstimate
 from identify.fitting.validation import Validation, predict
 from identify.io.blocks import DEFAULT_BLOCK

@@ -40,7 +40,7 @@ from identify.observation.stream import (DEFAULT_BLOCK, Piece, Plan, Scan, Strea
 from identify.estimation.stream_cv import choose_processing_streamed, scans_for_choice
 from identify.estimation.delay import DelayEstimate, delay_grid, joint_log_rms, refined_delay
 
-__all__ = ["BootstrapSpec", "StreamedFit", "fit_streamed"]
+__all__ = ["BootstrapSpec", "StreamedFit", "estimate_delay", "fit_streamed"]
 
 
 @dataclass(frozen=True)
@@ -183,19 +183,27 @@ def _choose(robot: rx90sym.Robot, sources: Sequence[BlockSource], base: Any, cut
                                       scans=scans, delay=delay, offsets=offsets), scans
 
 
-def _default_lag(robot: rx90sym.Robot, sources: Sequence[BlockSource], base: Any, decimate_to: float | None,
-                 min_velocity: float | None, rest: RestPolicy | None, spring: bool, block: int, client: Any) -> float:
-    """The torque lag [s] estimated on the default processing (the automatic cut-off, ``decimate_to``, the
-    rest policy given or the default): the lag the cross-validation scores its candidates at."""
-    rest = DEFAULT_REST if rest is None else rest
+def estimate_delay(robot: rx90sym.Robot, recordings: Sequence[Any], base: Any = None, cutoff: float | None = None,
+                   decimate_to: float | None = DEFAULT_DECIMATE_TO, spring: bool = True,
+                   min_velocity: float | None = None, rest: RestPolicy = "drop", max_delay: float = 0.02,
+                   steps: int = 41, block: int = DEFAULT_BLOCK, client: Any = None, convention: str | None = None,
+                   gains: Any = None) -> DelayEstimate:
+    """Torque-to-position lag [s] of ``recordings`` (recordings, files or block sources; one lag for all),
+    within ±``max_delay`` s, read block by block: the torques shifted by each lag of a grid of ``steps``
+    points (at least one sampling period apart) are extra right-hand sides of the per-joint factors, the
+    best refined by a parabola (:mod:`identify.estimation.delay`). The filtering options are those of
+    :func:`identify.observation_matrix` (cutoff None: the automatic cut-off)."""
+    if not (max_delay > 0 and np.isfinite(max_delay)):
+        raise ValueError(f"max_delay must be a positive duration in s, got {max_delay!r}")
+    sources = [block_source(r, robot, convention, gains) for r in recordings]
     columns = presliding_base(robot, base if base is not None else rx90sym.base_parameters(robot),
-                              rest if min_velocity else None)
-    settings = StreamSettings(None, decimate_to or None, min_velocity or None, rest, 0.0, spring, block)
+                              rest if min_velocity is not None else None)
+    settings = StreamSettings(cutoff, decimate_to or None, min_velocity, rest, 0.0, spring, int(block))
     scans, fc = scan_all(sources, settings)
-    plans, _ = _plans(scans, fc, replace(settings, delay=0.02))
-    grid, step = delay_grid(max(1.0 / s.rate for s in scans))
+    plans, _ = _plans(scans, fc, replace(settings, delay=max_delay))
+    grid, step = delay_grid(max(1.0 / s.rate for s in scans), max_delay, steps)
     factors = _accumulate(robot, sources, plans, fc, settings, columns, grid, client, None)[0]
-    return refined_delay(grid, np.array([joint_log_rms(factors.systems(k + 1)) for k in range(len(grid))]), step).delay
+    return refined_delay(grid, np.array([joint_log_rms(factors.systems(k + 1)) for k in range(len(grid))]), step)
 
 
 def fit_streamed(robot: rx90sym.Robot, recordings: Sequence[Any], method: str = "wls", base: Any = None,
@@ -240,7 +248,8 @@ def fit_streamed(robot: rx90sym.Robot, recordings: Sequence[Any], method: str = 
     if (cutoff is None) if cross_validate is None else cross_validate:
         # Scored at the lag the fit compensates; "auto": the lag estimated on the default processing first (W
         # and Y filtered alike, it hardly depends on the cut-off; one delay search, one pass).
-        scored = (_default_lag(robot, sources, base, decimate_to, min_velocity, rest, spring, int(block), client)
+        scored = (estimate_delay(robot, sources, base, None, decimate_to, spring, min_velocity or None,
+                                 DEFAULT_REST if rest is None else rest, block=int(block), client=client).delay
                   if delay == "auto" else float(delay))
         choice, scans = _choose(robot, sources, base, cutoff, decimate_to, min_velocity, rest, spring, int(block),
                                 client, scored, offsets)

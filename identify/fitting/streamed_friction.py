@@ -29,7 +29,7 @@ from identify.observation.friction_model import coulomb_terms, friction_base, fr
 from identify.observation.processing import FrictionForm, drops_rest, friction_label, has_smooth_friction
 from identify.observation.stream import StreamSettings, in_order, piece, plan_windows, windows_in_order
 
-__all__ = ["FrictionHook", "friction_hook", "streamed_feed"]
+__all__ = ["FrictionHook", "streamed_feed"]
 
 
 def _probe_task(robot: rx90sym.Robot, rec: Any, window: Any, plan: Any, cutoff: float, settings: StreamSettings,
@@ -87,7 +87,7 @@ def _travels(robot: rx90sym.Robot, sources: Sequence[Any], plans: Sequence[Any],
     :func:`~identify.estimation.separable.travel_columns` rows into per-joint factors."""
     from identify.estimation.incremental_qr import JointFactors, stacked_rows
     from identify.estimation.separable import travel_columns, travels_of
-    from identify.fitting.friction import defaulted_travels
+    from identify.observation.friction import defaulted_travels
 
     columns = travel_columns(robot, base)
     factors = JointFactors(robot.n, len(columns.names))
@@ -107,7 +107,7 @@ def _travels(robot: rx90sym.Robot, sources: Sequence[Any], plans: Sequence[Any],
 @dataclass(eq=False)
 class FrictionHook:
     """The ``friction`` argument of :func:`~identify.fitting.streamed.fit_streamed`: the friction columns of a
-    fit read block by block, as :func:`identify.fitting.friction.friction_columns` makes them in memory.
+    fit read block by block, as :class:`identify.observation.friction_model.FrictionBase` makes them.
     form: the form given (one, or one per joint); choose: the form chosen per joint by the cross-validation
     block by block instead (:func:`identify.estimation.friction_choice.choose_friction_rows` on
     :class:`~identify.estimation.friction_folds.StreamRows`: the in-memory choice's code and time blocks);
@@ -142,8 +142,3 @@ class FrictionHook:
             base, travels = _travels(robot, sources, plans, cutoff, settings, base, client)
             record = {**(record or {"form": form if isinstance(form, str) else list(form)}), **travels}
         return base, record
-
-
-def friction_hook(form: FrictionForm) -> FrictionHook:
-    """The hook of a given ``form`` (one, or one per joint)."""
-    return FrictionHook(form)

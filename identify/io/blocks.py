@@ -32,7 +32,7 @@ from identify.io.csv_tables import _column_index, _semicolon_hint, _Table
 from identify.io.gains import DriveGains, apply_gains
 from identify.io.log_fields import read_fields
 
-__all__ = ["BlockSource", "CsvSource", "MemorySource", "block_source", "count_rows", "CSV_BATCH_BYTES",
+__all__ = ["BlockSource", "CsvSource", "MemorySource", "block_source", "CSV_BATCH_BYTES",
            "DEFAULT_BLOCK", "DEFAULT_LOG_BLOCK"]
 
 #: Bytes of CSV text pyarrow parses per record batch (≈ 45,000 rows of a 7-joint recording).
@@ -258,12 +258,3 @@ def block_source(item: Any, robot: rx90sym.Robot, convention: str | None = None,
     from identify.io.recordings import read_recording  # NPZ: arrays are memory-mapped by numpy only whole
 
     return MemorySource(read_recording(path, robot, convention), robot, gains)
-
-
-def count_rows(path: str | os.PathLike[str]) -> int:
-    """Lines of a text file (an upper bound of its data rows), counted without parsing: ~1 s per GB."""
-    lines = 0
-    with open(path, "rb") as fh:
-        while chunk := fh.read(1 << 24):
-            lines += chunk.count(b"\n")
-    return lines

@@ -16,14 +16,14 @@ Coulomb entry unchanged.
 from __future__ import annotations
 
 from functools import lru_cache
-from typing import Any
+from typing import Any, Sequence
 
 import numpy as np
 from scipy.ndimage import maximum_filter1d, minimum_filter1d
 
 from identify.observation.defaults import DEFAULT_FRICTION, FRICTION_FORMS
 
-__all__ = ["DEFAULT_FRICTION", "FRICTION_FORMS", "PRESLIDING_TRAVEL", "crossing_passes", "friction_columns", "friction_function",
+__all__ = ["DEFAULT_FRICTION", "FRICTION_FORMS", "PRESLIDING_TRAVEL", "crossing_passes", "defaulted_travels", "friction_columns", "friction_function",
            "presliding_state"]
 
 #: Travel (rad) over which the presliding state goes from one sign to the other (docs/real-logs.md).
@@ -107,3 +107,8 @@ def crossing_passes(mask: np.ndarray, q: np.ndarray, longest: float, travel: flo
     np.add.at(out, starts[short], 1)
     np.add.at(out, ends[short], -1)
     return mask & ((np.cumsum(out[:-1]) > 0) | (span >= travel))
+
+
+def defaulted_travels(travels: Sequence[float | None]) -> list[float]:
+    """Travels [rad] with the default where none was chosen (the joint never rests: no FPj column)."""
+    return [PRESLIDING_TRAVEL if v is None or not np.isfinite(v) else float(v) for v in travels]
