@@ -288,9 +288,12 @@ def fit_streamed(robot: rx90sym.Robot, recordings: Sequence[Any], method: str = 
         found = refined_delay(grid, np.array([joint_log_rms(factors.systems(k + 1)) for k in range(len(lags))]), step)
     if delay == "auto":  # the torques put back in step
         settings = replace(settings, delay=found.delay)
+    searched = base
     if friction is not None:
         base, record = friction(robot, sources, scans, fc, settings, base, client)
-    if delay == "auto" or friction is not None:  # a second pass with the torques in step, the friction columns
+    # A second pass with the torques in step, the friction columns (none when the first pass fitted these columns
+    # at this delay: coulomb chosen, no presliding).
+    if delay == "auto" or base is not searched or not (lags or friction is None):
         boot, hboot, store = make_boot(bootstrap), make_boot(honest if honest != bootstrap else None), make_store()
         factors, moving, count = _accumulate(robot, sources, plans, fc, settings, base, (), client,
                                              Fanout(boot, hboot), store)
