@@ -399,3 +399,24 @@ def test_a_smooth_friction_on_an_asymmetric_joint_names_the_joint(files, tmp_pat
     msg = refused(capsys, out, "identify", files["empty.csv"], "--cutoff", 5, "--friction", "tanh",
                   "--asymmetric-coulomb", 2, "--json", out)
     assert "asymmetric Coulomb (FS+, FS-) on joint(s) 2 of 'rx90'" in msg, msg
+
+
+def test_a_corrupt_recording_is_named_by_line_and_column(files, tmp_path, capsys):
+    """Every recording is read block by block (one pipeline): a cell that is no number, a short row and a time
+    going back are named by the file's line (and column), as the whole-file reader named them."""
+    lines = Path(files["empty.csv"]).read_text().splitlines()
+    first = next(k for k, line in enumerate(lines) if not line.startswith("#")) + 2  # line of data row 1
+    header = lines[first - 2].split(",")
+    at = first + 40  # a data line, 1-based
+    out = tmp_path / "fit.json"
+    cases = {"abc": lambda cells: cells[:2] + ["abc"] + cells[3:], "short": lambda cells: cells[:3],
+             "back": lambda cells: ["0.0"] + cells[1:]}
+    for name, change in cases.items():
+        bad = list(lines)
+        bad[at - 1] = ",".join(change(bad[at - 1].split(",")))
+        path = tmp_path / f"{name}.csv"
+        path.write_text("\n".join(bad) + "\n")
+        msg = refused(capsys, out, "identify", path, "--cutoff", 5, "--json", out)
+        assert f"{name}.csv" in msg and f"line {at}" in msg, msg
+        if name == "abc":
+            assert f"column '{header[2]}'" in msg and "'abc' is not a number" in msg, msg

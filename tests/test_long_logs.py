@@ -264,3 +264,20 @@ def test_a_fit_in_blocks_keeps_the_rows_of_the_whole_observation(rx90, rx90_base
         assert np.max(np.abs(kept.W - obs.W) / scale) < 1e-9
         assert np.max(np.abs(kept.Y - obs.Y)) < 1e-9 * np.abs(obs.Y).max()
         np.testing.assert_allclose(kept.moving_fraction, obs.moving_fraction, rtol=1e-12)
+
+
+def test_a_bad_block_is_refused_alike_everywhere(rx90, twin_empty, whole_fit, tmp_path):
+    """fit, predict and the log reader refuse a block that is no whole number or too small, saying so."""
+    rec = twin_empty[1]
+    for bad in (0, -5, 2.5, 1000.5, "60000", True):
+        with pytest.raises(ValueError, match="block must be a whole number of samples >= 1000"):
+            identify.fit(rx90, [rec], WHOLE, block=bad)
+        with pytest.raises(ValueError, match="block must be a whole number of samples >= 1000"):
+            whole_fit.predict(rec, block=bad)
+    log = tmp_path / "log.csv"
+    log.write_text("\n".join(",".join(f"{v:.6f}" for v in [t, *q, *tau]) for t, q, tau in
+                             zip(rec.t[:50], rec.q[:50], rec.tau[:50])) + "\n")
+    for bad in (0, -1, 2.5):
+        with pytest.raises(ValueError, match="block must be a whole number of lines >= 1"):
+            identify.read_log(log, rx90, "t,q1..q6,tau1..tau6", convention="model", block=bad)
+    assert identify.read_log(log, rx90, "t,q1..q6,tau1..tau6", convention="model", block=7).n_samples == 50

@@ -118,3 +118,19 @@ def test_command_module_imports_nothing_heavy():
     proc = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120)
     assert proc.returncode == 0, proc.stderr
     assert proc.stdout.strip() == "[]"
+
+
+def test_a_held_out_run_at_rest_stores_no_zero_threshold(files, monkeypatch):
+    """A validation recording where the arm holds still (the UR10e p4 run) leaves the residual within the
+    friction slack: a threshold of 0 N·m would flag every sample; the fit keeps none and says why."""
+    import identify.monitor.thresholds as thresholds
+
+    d, _ = files
+    f = load_fit(d / "fit.json")
+    still = np.r_[0.0, np.ones(f.robot.n - 1)]
+    monkeypatch.setattr(thresholds, "calibrate", lambda fit, recs, *a, **k: still)
+    kept, why = thresholds.with_contact_thresholds(f, [d / "fit.csv"], d / "held.csv")
+    assert kept is f and "joint(s) 1" in why and "held.csv" in why, why
+    monkeypatch.setattr(thresholds, "calibrate", lambda fit, recs, *a, **k: still + 1.0)
+    kept, why = thresholds.with_contact_thresholds(f, [d / "fit.csv"], d / "held.csv")
+    assert why == "" and np.allclose(kept.contact_thresholds, still + 1.0)

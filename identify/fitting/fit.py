@@ -166,7 +166,7 @@ def _fit_blocks(robot: rx90sym.Robot, recordings: Sequence[Any], processing: Any
     """:func:`identify.fit` of recordings, block by block: its bootstrap computed on the way."""
     from identify.fitting.streamed import DEFAULT_BLOCK, BootstrapSpec, fit_streamed  # the block path's modules
     from identify.observation.spring_fit import BaseWithSpring, spring_summary
-    from identify.io.blocks import block_source
+    from identify.io.blocks import block_source, check_block
     from identify.fitting.baseline_blocks import streamed_baseline
     from identify.fitting.torque_checks import streamed_torque_flags
 
@@ -175,7 +175,7 @@ def _fit_blocks(robot: rx90sym.Robot, recordings: Sequence[Any], processing: Any
     p = processing if processing is not None else Processing()
     _refuse_for_consistent(p, method)
     smooth = has_smooth_friction(p.friction_form)
-    block = DEFAULT_BLOCK if block is None else int(block)
+    block = DEFAULT_BLOCK if block is None else check_block(block)
     columns_given = base is not None
     # The form given, or chosen per joint by the cross-validation where left open (as in memory: not for the
     # consistent method, whose URDF holds Coulomb + viscous).

@@ -147,7 +147,8 @@ class Fit:
         # At 20 x the cut-off (identify.fitting.validation.prediction_rate), not at the fit's decimated rate.
         options = dict(self.filtering(), decimate_to="prediction", filtered_at=self.decimate_to)
         return predict(self.robot, result or self.result, recording, base=self.base, baseline=self.baseline,
-                       block=block or self.block or DEFAULT_BLOCK, convention=convention or self.model.convention,
+                       block=block if block is not None else (self.block or DEFAULT_BLOCK),
+                       convention=convention or self.model.convention,
                        gains=self.gains, **options)
 
     def validate(self, recording: Any) -> Validation:

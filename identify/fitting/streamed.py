@@ -27,7 +27,7 @@ from identify.estimation.honest_covariance import HONEST_SEED, Fanout, honest_co
 from identify.estimation.incremental_qr import JointFactors, stacked_rows
 from identify.estimation.least_squares import solve_joint_systems
 from identify.estimation.results import METHODS, IdentificationResult
-from identify.io.blocks import BlockSource, block_source
+from identify.io.blocks import BlockSource, block_source, check_block
 from identify.observation.cross_validation import ProcessingChoice
 from identify.observation.matrix import DEFAULT_MIN_VELOCITY, DEFAULT_REST, Observation, presliding_base
 from identify.observation.friction_model import empty_presliding
@@ -238,8 +238,7 @@ def fit_streamed(robot: rx90sym.Robot, recordings: Sequence[Any], method: str = 
         raise ValueError(f"method must be one of {METHODS}, got {method!r}")
     if not (delay == "auto" or isinstance(delay, (int, float))):
         raise ValueError(f"delay must be 'auto' or a number of seconds, got {delay!r}")
-    if int(block) != block or block < 1000:
-        raise ValueError(f"block must be a whole number of samples >= 1000, got {block!r}")
+    block = check_block(block)
     sources = [block_source(r, robot, convention, gains) for r in recordings]
     if gains is not None and sources and not any(s.holds_current for s in sources):
         raise ValueError(f"drive gains given, but no recording holds motor currents "

@@ -20,7 +20,7 @@ from identify.observation.defaults import DEFAULT_DECIMATE_TO
 from identify.observation.matrix import presliding_base
 from identify.observation.processing import RestPolicy, has_policy, predicted_rest
 from identify.estimation.results import IdentificationResult, json_number
-from identify.io.blocks import block_source
+from identify.io.blocks import block_source, check_block
 from identify.fitting.baseline_blocks import baseline_at, streamed_baseline_prediction
 from identify.fitting.raw_scoring import SCORE_TRIM_S, RawScores
 from identify.fitting.streamed_filtered import FilteredSums, streamed_filtered_rms
@@ -196,6 +196,7 @@ def predict(robot: rx90sym.Robot, result: IdentificationResult, recording: Any, 
         base = offset_base(rx90sym.base_parameters(robot), result_offsets(result, robot))
     base = presliding_base(robot, base, rest if has_policy(rest, "presliding") and min_velocity is not None else None)
     beta = base_vector(result, base, robot)
+    block = check_block(block)
     src = block_source(recording, robot, convention, gains)
     at_prediction = decimate_to == "prediction"
     # As the fit: every sample predicted (a dropped joint's rest with Coulomb 0).

@@ -32,23 +32,36 @@ from identify.io.csv_tables import _column_index, _semicolon_hint, _Table
 from identify.io.gains import DriveGains, apply_gains
 from identify.io.log_fields import read_fields
 
-__all__ = ["BlockSource", "CsvSource", "MemorySource", "block_source", "CSV_BATCH_BYTES",
+__all__ = ["BlockSource", "CsvSource", "MemorySource", "block_source", "check_block", "CSV_BATCH_BYTES",
            "DEFAULT_BLOCK", "DEFAULT_LOG_BLOCK"]
 
 #: Bytes of CSV text pyarrow parses per record batch (≈ 45,000 rows of a 7-joint recording).
 CSV_BATCH_BYTES = 8 << 20
 
 
-def _shift_rows(exc: RecordingError, offset: int) -> RecordingError:
-    """The same message with its 1-based row numbers counted from the file's first data row."""
-    text = re.sub(r"row (\d+)", lambda m: f"row {int(m.group(1)) + offset}", str(exc))
-    return RecordingError(text)
+def check_block(block: Any, least: int = 1000, unit: str = "samples") -> int:
+    """``block`` as a whole number of ``unit`` of at least ``least``, or a ValueError saying so."""
+    if isinstance(block, bool) or not isinstance(block, (int, np.integer, float)) or int(block) != block \
+            or block < least:
+        raise ValueError(f"block must be a whole number of {unit} >= {least}, got {block!r}")
+    return int(block)
+
+
+def _shift_rows(exc: RecordingError, offset: int, first_line: int | None = None) -> RecordingError:
+    """The same message with its 1-based row numbers counted from the file's first data row, and the
+    line of the file beside each (``first_line``: the line of data row 1; None: a recording in memory)."""
+    def where(m: re.Match) -> str:
+        row = int(m.group(1)) + offset
+        return f"row {row}" + ("" if first_line is None else f" (line {row + first_line - 1})")
+
+    return RecordingError(re.sub(r"row (\d+)", where, str(exc)))
 
 
 class BlockSource:
     """Samples of one recording, served block by block (subclasses say where they come from)."""
 
     source: str = "<memory>"
+    first_line: int | None = None  # the file's line of data row 1 (None: no file)
     n_samples: int | None = None  # known after a scan
     log: dict | None = None  # what the file keeps of its log (identify.io.log_fields; None: nothing)
     holds_current: bool = False  # motor currents among its columns (drive gains turn them into torques)
@@ -103,7 +116,7 @@ class BlockSource:
             _validate(rec.t, rec.q, rec.tau, rec.dq, self.robot, labels, self.source, rec.current, rec.aux,
                       rec.segment)
         except RecordingError as exc:
-            raise _shift_rows(exc, offset) from None
+            raise _shift_rows(exc, offset, self.first_line) from None
         rec.meta["new_from"] = start - offset
         return self._finish(rec)
 
@@ -175,6 +188,7 @@ class CsvSource(BlockSource):
         super().__init__(robot, gains)
         self.path, self.source, self.batch_bytes = Path(path), Path(path).name, int(batch_bytes)
         meta, columns, self.skip = self._header()
+        self.first_line = self.skip + 2  # the header is line skip + 1
         _check_robot_name(meta.get("robot"), robot, self.source)
         n = robot.n
         self.names = {p: [f"{p}{j + 1}" for j in range(n)] for p in ("q", "tau", "dq", "i")}
@@ -220,7 +234,26 @@ class CsvSource(BlockSource):
                     yield np.column_stack([batch.column(k).to_numpy(zero_copy_only=False)
                                            for k in range(batch.num_columns)])
         except pa.ArrowInvalid as exc:
-            raise RecordingError(f"{self.source}: {_arrow_message(exc)}") from None
+            raise self._bad_line() or RecordingError(f"{self.source}: {_arrow_message(exc)}") from None
+
+    def _bad_line(self) -> RecordingError | None:
+        """The first data line that does not read (its cell count, or the cell that is no number), found
+        by reading the file again line by line (only once pyarrow refused it), or None."""
+        with open(self.path, encoding="utf-8-sig") as fh:
+            for k, line in enumerate(fh, start=1):
+                if k < self.first_line or not line.strip():
+                    continue
+                cells = line.rstrip("\r\n").split(",")
+                if len(cells) != len(self.columns):
+                    return RecordingError(f"{self.source}: line {k}: {len(cells)} cells, the header names "
+                                          f"{len(self.columns)}")
+                for cell, name in zip(cells, self.columns):
+                    try:
+                        float(cell)
+                    except ValueError:
+                        return RecordingError(f"{self.source}: line {k}, column '{name}': {cell.strip()[:40]!r} is "
+                                              f"not a number")
+        return None
 
     def _record(self, table: np.ndarray, first: bool = False) -> Recording:
         def take(prefix: str) -> np.ndarray | None:

@@ -26,7 +26,7 @@ import rx90sym
 from rx90sym.files import atomic_write
 from rx90sym.recording import Recording, RecordingError
 
-from identify.io.blocks import DEFAULT_LOG_BLOCK
+from identify.io.blocks import DEFAULT_LOG_BLOCK, check_block
 from identify.io.checks import check_period
 from identify.io.columns import ColumnMap, parse_columns, rtde_columns, rtde_refusal
 from identify.io.gains import DriveGains
@@ -179,6 +179,7 @@ def _log_blocks(p: Path, robot: rx90sym.Robot, columns: str | Sequence[str] | No
                 convention: str | None, period: float | None, block: int
                 ) -> tuple[ColumnMap, str, DriveGains | None, Iterator[tuple[np.ndarray, list[int]]]]:
     """(the column map of the rows yielded, the convention, the drive gains, the parsed blocks of the window)."""
+    block = check_block(block, 1, "lines")
     if period is not None:
         check_period(period)
         if t_from is not None or t_to is not None:

@@ -86,6 +86,12 @@ def with_contact_thresholds(fit: Any, recordings: Sequence[Any], validation: Any
             T = calibrate(fit, list(recordings))          # parameters, its own residual is what others' would be
         else:
             T = held_out_thresholds(fit, list(recordings))
+        zero = [j + 1 for j in np.flatnonzero(~(np.asarray(T) > 0))]
+        if zero:  # a recording at rest (e.g. a held pose): its residual stays within the friction slack
+            where = f"the validation recording {getattr(validation, 'source', validation)}" if validation is not None \
+                else "the fitted recordings"
+            return fit, (f"{where} give a threshold of 0 N·m on joint(s) {', '.join(map(str, zero))}: the residual "
+                         f"never leaves the friction slack there (does the arm move?)")
         return replace(fit, contact_thresholds=T), ""
     except (MonitorInputError, RuntimeError) as exc:  # RuntimeError: no C compiler for the observer
         return fit, str(exc)
