@@ -158,7 +158,8 @@ def filtered_motion(robot: rx90sym.Robot, rec: Any, cutoff: float | None = None,
                     decimate_to: float | None = None, spring: bool = True,
                     regressor_batch: Callable[..., np.ndarray] | None = None,
                     names: Sequence[str] | None = None, min_velocity: float | None = None,
-                    rest: RestPolicy = "drop", delay: float = 0.0, kept: slice | None = None) -> FilteredMotion:
+                    rest: RestPolicy = "drop", delay: float = 0.0, kept: slice | None = None,
+                    rest_span: slice | None = None) -> FilteredMotion:
     """Derivatives, regressor and torques of one recording, decimated together.
 
     regressor_batch: (Q, QD, QDD) -> (S, n, c) giving the columns wanted (default: all the
@@ -170,7 +171,8 @@ def filtered_motion(robot: rx90sym.Robot, rec: Any, cutoff: float | None = None,
     (Coulomb entries set to 0 where their driver rests, before the parallel filter).
     delay [s]: torques lag positions by this much (compensated by :func:`shifted_torques`).
     kept: the samples kept after differentiation (default: all but the filter's edges; a block of a
-    long recording keeps its core, :mod:`identify.observation.stream`).
+    long recording keeps its core, :mod:`identify.observation.stream`); rest_span: the samples, around
+    ``kept``, on which the rest runs of the "crossing" policy are measured (default: ``kept``).
     """
     policies = rest_per_joint(rest, robot.n)
     if any(r not in REST_POLICIES for r in policies):
@@ -201,7 +203,13 @@ def filtered_motion(robot: rx90sym.Robot, rec: Any, cutoff: float | None = None,
         moving = np.abs(speed) >= min_velocity
         if not (Phi.flags.owndata and Phi.flags.writeable):  # a reused workspace's view: not ours to change
             Phi = np.array(Phi, copy=True)
-        usable = _rest_rows(robot, names, speed, d.q, Phi, min_velocity, policies, d.rate)
+        context = None
+        if rest_span is not None and kept is not None:
+            w = derivatives(rec.t, rec.q, cutoff=cutoff, kept=rest_span)
+            w_speed = np.asarray(rec.dq, dtype=float)[w.kept] if getattr(rec, "dq", None) is not None else w.dq
+            start = d.kept.start - w.kept.start
+            context = (w_speed, w.q, slice(start, start + d.dq.shape[0]))
+        usable = _rest_rows(robot, names, speed, d.q, Phi, min_velocity, policies, d.rate, context)
         dropped = np.array([r == "drop" for r in policies])
         usable[:, dropped] &= moving[:, dropped]
     plan = decimation_plan(d.rate, decimate_to)
@@ -227,12 +235,14 @@ BRIDGED_SHARE = 0.25
 
 
 def _rest_rows(robot: rx90sym.Robot, names: Sequence[str] | None, speed: np.ndarray, q: np.ndarray,
-               Phi: np.ndarray, min_velocity: float, policies: tuple[str, ...], rate: float) -> np.ndarray:
+               Phi: np.ndarray, min_velocity: float, policies: tuple[str, ...], rate: float,
+               context: tuple[np.ndarray, np.ndarray, slice] | None = None) -> np.ndarray:
     """(S, n) rows kept: for a "drop" joint those whose Coulomb drivers all move, every row of the
     others; sets the Coulomb entries of ``Phi`` (in place) where their driver rests, after the
     policy of the row's joint: 0 ("zero-coulomb"), the presliding state of the filtered positions
     ``q`` ("presliding"; the position history, never the torque), 0 over rests longer than
-    CROSSING_SECONDS at ``rate`` [Hz] ("crossing"), unchanged ("none", "drop")."""
+    CROSSING_SECONDS at ``rate`` [Hz] ("crossing"; the runs measured on ``context``: (speed, q) of wider
+    samples and the slice of these rows in them), unchanged ("none", "drop")."""
     usable = np.ones(speed.shape, dtype=bool)
     names = tuple(names if names is not None else robot.parameter_names)
     for term in coulomb_terms(robot, names):
@@ -244,8 +254,10 @@ def _rest_rows(robot: rx90sym.Robot, names: Sequence[str] | None, speed: np.ndar
         elif rest == "none":
             still = np.zeros_like(driver_moving)
         elif rest == "crossing":
-            still = ~driver_moving & ~crossing_passes(~driver_moving, q @ np.asarray(term.driver), CROSSING_SECONDS * rate,
-                                                          CROSSING_TRAVEL)
+            c_speed, c_q, inner = context if context is not None else (speed, q, slice(None))
+            c_moving = np.abs(c_speed @ np.asarray(term.driver)) >= min_velocity
+            passes = crossing_passes(~c_moving, c_q @ np.asarray(term.driver), CROSSING_SECONDS * rate, CROSSING_TRAVEL)
+            still = ~driver_moving & ~passes[inner]
         else:
             still = ~driver_moving
         # The moving friction (Coulomb, smooth or Stribeck) says nothing at rest.

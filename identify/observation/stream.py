@@ -34,7 +34,7 @@ from identify.io.blocks import DEFAULT_BLOCK, BlockSource
 from identify.io.log_fields import layout_fields
 from identify.observation.matrix import DECIMATION_PASSBAND, SPECTRUM_SAMPLES, filtered_motion, shifted_torques
 from identify.observation.defaults import DEFAULT_DECIMATE_TO
-from identify.observation.processing import RestPolicy
+from identify.observation.processing import CROSSING_SECONDS, RestPolicy, has_policy
 from identify.signal.blocks import WelchAccumulator, decimation_margin, lowpass_margin, motion_windows
 from identify.signal.cutoff import choose_cutoff
 from identify.signal.filtering import EDGE_PERIODS, cutoff_from_spectrum, decimate, decimation_plan
@@ -252,6 +252,7 @@ class Plan:
     note: str
     windows: tuple
     samples: int  # decimated samples of the segment's motion
+    length: int = 0  # raw samples of the segment
 
     @property
     def spans(self) -> list[tuple[int, int]]:
@@ -275,8 +276,13 @@ def plan_windows(s: Scan, cutoff: float, settings: StreamSettings) -> tuple[list
         factor = dplan.factor
         delay_samples = int(math.ceil(abs(settings.delay) * g.rate)) + 1 if settings.delay else 0
         lp = lowpass_margin(g.rate, cutoff) + delay_samples + DELAY_MARGIN
+        if settings.min_velocity is not None and has_policy(settings.rest, "crossing"):
+            # A rest run is a crossing when shorter than CROSSING_SECONDS: a run cut by a window's edge is then at
+            # least that long inside it, and judged as the whole run is.
+            lp += int(math.ceil(CROSSING_SECONDS * g.rate)) + 1
         windows = motion_windows(g.samples, edge, factor, settings.block, lp, decimation_margin(factor))
-        plans.append(Plan(name, g.start, edge, factor, dplan.rate, dplan.note, tuple(windows), windows[-1].core[1]))
+        plans.append(Plan(name, g.start, edge, factor, dplan.rate, dplan.note, tuple(windows), windows[-1].core[1],
+                          g.samples))
     if not plans:
         raise ValueError("no segment is long enough to filter: " + "; ".join(notes))
     return plans, notes
@@ -303,8 +309,17 @@ def piece(robot: rx90sym.Robot, rec: Any, window: Any, plan: Plan, cutoff: float
     """One window through :func:`filtered_motion`, cut back to its core (a Dask task when distributed)."""
     r0 = window.raw[0]
     d0, d1 = window.span
-    m = filtered_motion(robot, rec, cutoff, settings.decimate_to, settings.spring, regressor, names,
-                        settings.min_velocity, settings.rest, settings.delay, kept=slice(d0 - r0, d1 - r0))
+    # The plan's factor for every window of a segment (its achieved rate: a window's own median step could round a
+    # ratio of 12.5 the other way, and its rows would then not tile the segment's).
+    rest_span = None
+    if settings.min_velocity is not None and has_policy(settings.rest, "crossing"):
+        # The rest runs of "crossing" measured beyond the window's core, up to the segment's own filter edges,
+        # as in one window (plan_windows gave the margin room for them).
+        context = int(math.ceil(CROSSING_SECONDS * rec.rate)) + 1 if rec.n_samples > 1 else 0
+        rest_span = slice(max(plan.edge, d0 - context) - r0, min(plan.length - plan.edge, d1 + context) - r0)
+    m = filtered_motion(robot, rec, cutoff, plan.rate if plan.factor > 1 else None, settings.spring, regressor, names,
+                        settings.min_velocity, settings.rest, settings.delay, kept=slice(d0 - r0, d1 - r0),
+                        rest_span=rest_span)
     j0 = (d0 - plan.edge) // plan.factor
     core = slice(window.core[0] - j0, window.core[1] - j0)
     extra = []

@@ -87,14 +87,15 @@ def register(sub: Any) -> None:
                     help=f"friction while moving: Coulomb sign(q̇), smooth tanh(q̇/vs) or Stribeck "
                          f"({', '.join(FRICTION_FORMS)}), the velocity scale vs per joint found by separable least "
                          f"squares; one, or one per joint separated by commas (default: coulomb or tanh chosen per "
-                         f"joint by the cross-validation, coulomb unless clearly beaten on that joint; else coulomb, "
-                         f"and for long logs fitted block by block)")
+                         f"joint by the cross-validation, coulomb unless clearly beaten on that joint; without "
+                         f"cross-validation coulomb)")
     sp.add_argument("--delay", type=_delay, default=DEFAULT_DELAY,
                     help=f"torque lag behind the positions: 'auto' (estimated) or seconds (default {DEFAULT_DELAY:g}; "
                          f"the estimate is always reported)")
     sp.add_argument("--block", type=block_option, default=DEFAULT_BLOCK,
-                    help=f"samples per block for long logs: a log longer than this is read, filtered and "
-                         f"fitted block by block, memory bounded by the block (default {DEFAULT_BLOCK})")
+                    help=f"samples read, filtered and fitted at a time, at least 1000: memory bounded by the block "
+                         f"whatever the logs' length, the estimates the same to 1e-8 whatever the block "
+                         f"(default {DEFAULT_BLOCK})")
     sp.add_argument("--scheduler", metavar="ADDR|local",
                     help="fit the blocks on Dask: a scheduler address (tcp://host:8786) or 'local' "
                          "(a local cluster, one worker per core)")

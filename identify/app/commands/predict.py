@@ -28,8 +28,9 @@ def register(sub: Any) -> None:
     sp.add_argument("--out", help="CSV: t, measured tau1..n, predicted pred1..n, moving1..n (1/0)")
     sp.add_argument("--json", help="prediction errors as JSON")
     sp.add_argument("--block", type=block_option, default=DEFAULT_BLOCK,
-                    help=f"samples read, filtered and predicted at a time (default {DEFAULT_BLOCK}; the figures do not "
-                         f"depend on it)")
+                    help=f"samples read, filtered and predicted at a time, at least 1000 (default {DEFAULT_BLOCK}; "
+                         f"the fit's figures do not depend on it, the plain baseline's sign(q̇) at rest is the sign "
+                         f"of round-off)")
 
 
 def write_prediction(path: str, val: Any) -> None:
