@@ -28,7 +28,7 @@ from rx90sym.recording import Recording, RecordingError
 from identify.io.arrays import _check_layout, _resolve_convention, _to_model
 from identify.io.checks import _check_robot_name, _default_labels, _validate, _warn_no_robot
 from identify.io.defaults import DEFAULT_BLOCK, DEFAULT_LOG_BLOCK
-from identify.io.csv_tables import _column_index, _semicolon_hint, _Table
+from identify.io.csv_tables import _column_index, _parse_cells, _semicolon_hint, _Table
 from identify.io.gains import DriveGains, apply_gains
 from identify.io.log_fields import read_fields
 
@@ -237,22 +237,17 @@ class CsvSource(BlockSource):
             raise self._bad_line() or RecordingError(f"{self.source}: {_arrow_message(exc)}") from None
 
     def _bad_line(self) -> RecordingError | None:
-        """The first data line that does not read (its cell count, or the cell that is no number), found
-        by reading the file again line by line (only once pyarrow refused it), or None."""
+        """The first data line that does not read (its cell count, or the cell that is no number: the
+        whole-file reader's message), found by reading the file again line by line (only once pyarrow
+        refused it), or None."""
         with open(self.path, encoding="utf-8-sig") as fh:
             for k, line in enumerate(fh, start=1):
                 if k < self.first_line or not line.strip():
                     continue
-                cells = line.rstrip("\r\n").split(",")
-                if len(cells) != len(self.columns):
-                    return RecordingError(f"{self.source}: line {k}: {len(cells)} cells, the header names "
-                                          f"{len(self.columns)}")
-                for cell, name in zip(cells, self.columns):
-                    try:
-                        float(cell)
-                    except ValueError:
-                        return RecordingError(f"{self.source}: line {k}, column '{name}': {cell.strip()[:40]!r} is "
-                                              f"not a number")
+                try:
+                    _parse_cells([line.rstrip("\r\n").split(",")], self.columns, self.source, k)
+                except RecordingError as exc:  # its row 1 is the file's data row k - first_line + 1
+                    return _shift_rows(exc, k - self.first_line)
         return None
 
     def _record(self, table: np.ndarray, first: bool = False) -> Recording:

@@ -32,7 +32,7 @@ from identify.io.log_block_report import BlockReport
 from identify.io.logs import (LISTED_ROWS, STILL, check_increasing, check_positions, check_velocities, gains_label,
                               irregular_refusal, log_drive, refuse_splits)
 from identify.io.recordings import RecordingWarning
-from identify.io.resampling import check_rate, interpolate
+from identify.io.resampling import check_rate, concatenate, interpolate
 from identify.io.units import check_units
 
 __all__ = ["SPLINE_MARGIN", "collected", "log_parts", "log_report", "rows_to_recording"]
@@ -261,17 +261,7 @@ def log_report(report: BlockReport, max_gap: float, resample: float | None, driv
 def collected(parts: Iterator[tuple[Recording, int]], resampled: bool) -> Recording:
     """The parts of :func:`log_parts` as one recording (``segment`` always, ``measured`` when ``resampled``)."""
     done = list(parts)
-    recs = [p for p, _ in done]
-    first = recs[0]
-
-    def cat(name: str) -> np.ndarray | None:
-        return None if getattr(first, name) is None else np.concatenate([getattr(r, name) for r in recs])
-
-    return Recording(t=cat("t"), q=cat("q"), tau=cat("tau"), dq=cat("dq"), source=first.source, robot=first.robot,
-                     meta=dict(first.meta), current=cat("current"),
-                     aux={k: np.concatenate([r.aux[k] for r in recs]) for k in first.aux},
-                     measured=np.concatenate([r.measured_mask for r in recs]) if resampled else None,
-                     segment=np.concatenate([np.full(r.n_samples, s, dtype=np.int64) for r, s in done]))
+    return concatenate([r for r, _ in done], done[0][0].source, [s for _, s in done], measured=resampled)
 
 
 def rows_to_recording(source: str, values: np.ndarray, numbers: Any, cmap: ColumnMap, robot: rx90sym.Robot,

@@ -17,7 +17,7 @@ from __future__ import annotations
 import math
 import numbers
 from dataclasses import replace
-from typing import Any
+from typing import Any, Sequence
 
 import numpy as np
 
@@ -101,15 +101,18 @@ def resample(rec: Recording, rate: float) -> Recording:
     return concatenate(parts, rec.source)
 
 
-def concatenate(parts: list[Recording], source: str) -> Recording:
-    """One recording made of ``parts`` as consecutive segments (each part one segment)."""
+def concatenate(parts: list[Recording], source: str, segments: Sequence[int] | None = None,
+                measured: bool = True) -> Recording:
+    """One recording made of ``parts``: consecutive segments, each part one (``segments``: the segment
+    number of each part instead); ``measured`` False: no ``measured`` mask (every sample measured)."""
     def cat(name: str) -> np.ndarray | None:
         arrays = [getattr(p, name) for p in parts]
         return None if arrays[0] is None else np.concatenate(arrays)
 
     first = parts[0]
-    segment = np.concatenate([np.full(p.n_samples, k) for k, p in enumerate(parts)])
+    numbers = range(len(parts)) if segments is None else segments
+    segment = np.concatenate([np.full(p.n_samples, k, dtype=np.int64) for k, p in zip(numbers, parts)])
     return replace(first, t=cat("t"), q=cat("q"), tau=cat("tau"), dq=cat("dq"), current=cat("current"),
                    aux={k: np.concatenate([p.aux[k] for p in parts]) for k in first.aux},
-                   measured=np.concatenate([p.measured_mask for p in parts]), segment=segment,
-                   source=source, meta=dict(first.meta))
+                   measured=np.concatenate([p.measured_mask for p in parts]) if measured else None,
+                   segment=segment, source=source, meta=dict(first.meta))
