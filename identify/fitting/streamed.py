@@ -198,11 +198,17 @@ def estimate_delay(robot: rx90sym.Robot, recordings: Sequence[Any], base: Any = 
     sources = [block_source(r, robot, convention, gains) for r in recordings]
     columns = presliding_base(robot, base if base is not None else rx90sym.base_parameters(robot),
                               rest if min_velocity is not None else None)
-    settings = StreamSettings(cutoff, decimate_to or None, min_velocity, rest, 0.0, spring, int(block))
+    settings = StreamSettings(cutoff, decimate_to or None, min_velocity, rest, 0.0, spring, check_block(block))
     scans, fc = scan_all(sources, settings)
     plans, _ = _plans(scans, fc, replace(settings, delay=max_delay))
     grid, step = delay_grid(max(1.0 / s.rate for s in scans), max_delay, steps)
     factors = _accumulate(robot, sources, plans, fc, settings, columns, grid, client, None)[0]
+    return _lag_estimate(factors, grid, step)
+
+
+def _lag_estimate(factors: JointFactors, grid: np.ndarray, step: float) -> DelayEstimate:
+    """The lag of least cost on ``grid`` [s] (the torques shifted by each: right-hand sides 1.. of the
+    factors), refined by a parabola."""
     return refined_delay(grid, np.array([joint_log_rms(factors.systems(k + 1)) for k in range(len(grid))]), step)
 
 
@@ -248,9 +254,9 @@ def fit_streamed(robot: rx90sym.Robot, recordings: Sequence[Any], method: str = 
         # Scored at the lag the fit compensates; "auto": the lag estimated on the default processing first (W
         # and Y filtered alike, it hardly depends on the cut-off; one delay search, one pass).
         scored = (estimate_delay(robot, sources, base, None, decimate_to, spring, min_velocity or None,
-                                 DEFAULT_REST if rest is None else rest, block=int(block), client=client).delay
+                                 DEFAULT_REST if rest is None else rest, block=block, client=client).delay
                   if delay == "auto" else float(delay))
-        choice, scans = _choose(robot, sources, base, cutoff, decimate_to, min_velocity, rest, spring, int(block),
+        choice, scans = _choose(robot, sources, base, cutoff, decimate_to, min_velocity, rest, spring, block,
                                 client, scored, offsets)
         cutoff, decimate_to, rest = choice.chosen.cutoff, choice.chosen.decimate_to, choice.chosen.rest or rest
         if choice.offsets:  # the torque offsets kept, as the whole-signal fit's columns
@@ -258,7 +264,7 @@ def fit_streamed(robot: rx90sym.Robot, recordings: Sequence[Any], method: str = 
     rest = DEFAULT_REST if rest is None else rest
     base = presliding_base(robot, base, rest if min_velocity else None)  # FPj columns with "presliding"
     settings = StreamSettings(cutoff, decimate_to or None, min_velocity or None, rest,
-                              0.0 if delay == "auto" else float(delay), spring, int(block))
+                              0.0 if delay == "auto" else float(delay), spring, block)
     scans, fc = (scans, float(cutoff)) if scans is not None else scan_all(sources, settings)
     search = estimate or delay == "auto"
     plans, skipped = _plans(scans, fc, replace(settings, delay=0.02 if search else settings.delay))
@@ -284,7 +290,7 @@ def fit_streamed(robot: rx90sym.Robot, recordings: Sequence[Any], method: str = 
         factors, moving, count = _accumulate(robot, sources, plans, fc, settings, base, lags, client,
                                              Fanout(boot, hboot), store)
     if lags:
-        found = refined_delay(grid, np.array([joint_log_rms(factors.systems(k + 1)) for k in range(len(lags))]), step)
+        found = _lag_estimate(factors, grid, step)
     if delay == "auto":  # the torques put back in step
         settings = replace(settings, delay=found.delay)
     searched = base

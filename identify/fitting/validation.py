@@ -201,7 +201,7 @@ def predict(robot: rx90sym.Robot, result: IdentificationResult, recording: Any, 
     at_prediction = decimate_to == "prediction"
     # As the fit: every sample predicted (a dropped joint's rest with Coulomb 0).
     settings = StreamSettings(cutoff, None if at_prediction else (decimate_to or None), min_velocity or None,
-                              predicted_rest(rest), float(delay), spring, int(block))
+                              predicted_rest(rest), float(delay), spring, block)
     scans, fc = scan_all([src], settings)
     if at_prediction:  # at 20 x the cut-off (or the recording's own rate), not at the fit's decimated rate
         settings = replace(settings, decimate_to=prediction_rate(fc, scans[0].rate))
@@ -211,7 +211,7 @@ def predict(robot: rx90sym.Robot, result: IdentificationResult, recording: Any, 
     names, regressor = column_regressor(robot, base)
     bp = None
     if baseline is not None:  # its own pass over the log, block by block (its own filter and margins)
-        bp = streamed_baseline_prediction(robot, baseline, src, scans[0], int(block))
+        bp = streamed_baseline_prediction(robot, baseline, src, scans[0], block)
     sums = FilteredSums(beta, robot.n) if filtered_settings == settings else None
     length = {g.start: g.samples for g in scans[0].segments}
     groups: dict[int, list] = {}
@@ -253,14 +253,15 @@ def predict(robot: rx90sym.Robot, result: IdentificationResult, recording: Any, 
     # The filtered figures on the fit's rows: from this pass when they are the prediction's, else a pass of their own.
     filtered = (sums.result() if sums is not None else
                 streamed_filtered_rms(robot, src, scans[0], fc, filtered_settings, regressor, names, beta))
-    clock = log_clock(recording) or float((src.log or {}).get("t0_s") or 0.0)
     return replace(scored_validation(RawScores(t, Y, pred, mov, base_pred), src.source, settings.min_velocity, fc,
-                                     plans[0].rate), **filtered, t0_s=clock)
+                                     plans[0].rate), **filtered, t0_s=log_clock(recording, src))
 
 
-def log_clock(recording: Any) -> float:
-    """The log's own clock [s] at ``recording``'s first sample (0 when it was not read from a log)."""
-    return float(((getattr(recording, "meta", None) or {}).get("log") or {}).get("t0_s") or 0.0)
+def log_clock(recording: Any, source: Any = None) -> float:
+    """The log's own clock [s] at ``recording``'s first sample: its ``meta["log"]``, else the ``t0_s`` field
+    of its file (``source``: its :class:`identify.io.blocks.BlockSource`); 0 when it was not read from a log."""
+    own = float(((getattr(recording, "meta", None) or {}).get("log") or {}).get("t0_s") or 0.0)
+    return own or float((getattr(source, "log", None) or {}).get("t0_s") or 0.0)
 
 
 def scored_validation(raw: RawScores, source: str, min_velocity: float | None, cutoff: float,

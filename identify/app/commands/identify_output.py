@@ -90,6 +90,7 @@ def write_report(path: str, f: Fit, recordings: list, convention: str | None, bl
     samples (positions), the predictions to as many (torques)."""
     from dataclasses import replace
 
+    from identify.fitting.validation import log_clock
     from identify.io.blocks import block_source
 
     from ..report.writers import write_identify_report
@@ -98,7 +99,7 @@ def write_report(path: str, f: Fit, recordings: list, convention: str | None, bl
     samples = [lay["samples"] for lay in f.recordings] if len(f.recordings) == len(sources) else None
     thin = [src.thinned(block, -(-(n or 1) // REPORT_POINTS))
             for src, n in zip(sources, samples or [getattr(src, "n_samples", None) for src in sources])]
-    clocks = [_clock(r, src) for r, src in zip(recordings, sources)]
+    clocks = [log_clock(r, src) for r, src in zip(recordings, sources)]
 
     def shown(v: Any) -> Any:  # the torques of the figures: every k-th sample scored
         every = slice(None, None, -(-v.t.size // REPORT_POINTS))
@@ -110,13 +111,6 @@ def write_report(path: str, f: Fit, recordings: list, convention: str | None, bl
     held = shown(f.validation) if f.validation is not None else None
     write_identify_report(path, f.robot, record, f.result, thin[0], held, shown(f.predict(recordings[0])),
                           spring_text(f, thin))
-
-
-def _clock(rec: Any, src: Any) -> float:
-    """The log's clock [s] at a recording's first sample (a recording's meta, or a file's ``t0_s`` field)."""
-    from identify.fitting.validation import log_clock
-
-    return log_clock(rec) or float((getattr(src, "log", None) or {}).get("t0_s") or 0.0)
 
 
 def data_record(recs: list, obs: Any, validation: Any = None, samples: list[int] | None = None,
