@@ -113,18 +113,19 @@ def _twin_runs(robot: Any, traj: Any, other: Any, out: Path) -> dict[str, Any]:
 def _robot_fits(robot: Any, bp: Any, recs: dict[str, Any], truth: dict[str, float]) -> dict[str, Any]:
     """WLS on the optimised and on the random motion, essential parameters, consistent LS,
     validation, and how the WLS estimates compare with the truth."""
-    from identify import Processing, consistent_fit, essential_parameters, fit, validate
+    from identify import Processing, essential_parameters, fit, validate
 
     _say("[4/6] identifying the robot: WLS, essential parameters, physically consistent LS...")
     # The demo validates with its own filtering (validate(...) below): a fixed processing, not chosen per fit.
     drop = Processing(min_velocity=REST_BELOW, rest="drop", estimate_delay=False, cross_validate=False)
-    res = fit(robot, [recs["empty"]], drop, base=bp).result
+    done = fit(robot, [recs["empty"]], drop, base=bp)
+    res = done.result
     # The same identification on the random trajectory (the validation motion): what the
     # criterion (predicted relative sigma) buys, measured per parameter group.
     res_random = fit(robot, [recs["validation"]], drop, base=bp).result
     return {"res": res, "groups": (group_medians(res, truth), group_medians(res_random, truth)),
             "ess": essential_parameters(res),
-            "con": consistent_fit(robot, res, bp),  # on the WLS fit's compressed system: no second pass
+            "con": done.identified,  # the identified model (no description bodies: the data's alone)
             "val": validate(robot, res, recs["validation"], base=bp),
             "errors": {n: abs(v - truth[n]) / abs(truth[n]) for n, v in zip(res.names, res.values)
                        if abs(truth[n]) > 1e-3},

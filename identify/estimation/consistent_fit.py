@@ -1,64 +1,90 @@
-"""The physically consistent refit of a (W)LS result (standard parameters through cvxpy's LMIs)."""
+"""The identified model: physically consistent standard parameters weighed between the description and the data.
+
+:func:`consistent_fit` solves the prior-weighted problem of
+:mod:`identify.estimation.consistency.weighted_fit` on the (W)LS fit's weighted compressed system,
+at the prior weight λ given or chosen by blocked cross-validation (:mod:`identify.estimation.prior_weight`),
+and returns a :class:`ConsistentResult`: the base parameters β = A x of a physical x, the standard
+parameters, and per base parameter the share the data determined (1 − posterior / prior variance of
+the quadratic approximation: 1 where the prior says nothing, 0 where it fixes the value).
+"""
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field, replace
-from typing import TYPE_CHECKING, Any
+from typing import Any, Mapping, Sequence
 
 import numpy as np
 
 import rx90sym
+from rx90sym.physical import DEFAULT_MARGIN
 
-from identify.estimation.results import IdentificationResult
+from identify.estimation.results import IdentificationResult, json_number
 
-if TYPE_CHECKING:  # cvxpy is imported by the consistent fit only, not by every fit that loads this module
-    from identify.estimation.consistency import ConsistentSolution
+__all__ = ["ConsistentResult", "check_prior_weight", "consistent_fit", "data_share"]
 
-__all__ = ["ConsistentResult", "consistent_fit"]
+#: A base parameter the data determine: least-squares relative σ under this [%] (eq. 15).
+DETERMINED_PCT = 10.0
+#: How far the prior may move a parameter the data determine from its least-squares estimate [σ]
+#: (or no further than the data alone move it, where physical consistency alone moves it more).
+DATA_BUDGET = 2.0
 
 
 @dataclass(frozen=True, eq=False)
 class ConsistentResult(IdentificationResult):
-    """A physically consistent identification: base values beta = K chi of a consistent chi.
+    """A physically consistent identification: base values β = A x of a physical x.
 
-    std / rel_std_pct are those of the unconstrained WLS fit (the constraints only shrink the
-    feasible set; they are reported as the data's information on each parameter).
-    standard: the standard parameters chi found (dict name -> value);
-    cost, wls_cost: weighted residual sum of squares of the consistent and of the WLS fit;
-    wls_was_consistent: whether the WLS estimate itself admits a consistent chi (then both costs
-    agree to the solver's accuracy).
+    std / rel_std_pct: σ of the least squares on the same columns (eqs. 13-15, inflated by the segment
+    bootstrap's ratio where the residuals are coloured): the data's information on each parameter;
+    least_squares: those estimates.
+    standard: the variables x (name -> value: the standard parameters, then the columns that are not
+    standard parameters, e.g. torque offsets); cost, wls_cost: weighted residual sum of squares of this
+    model and of the (W)LS fit; prior: the prior's record (source, divergence, weight λ and its choice;
+    None: no prior, the split of what the data cannot see is the tie-break's); data_share: per base
+    parameter the share the data determined (0..1); wls_was_consistent: whether the least-squares
+    estimate itself admits physical bodies (then the model differs from it only through the prior).
     """
 
     standard: dict = field(default_factory=dict)
     cost: float = float("nan")
     wls_cost: float = float("nan")
+    prior: dict | None = None
+    data_share: np.ndarray | None = None
     wls_was_consistent: bool = False
-    solution: ConsistentSolution | None = field(default=None, repr=False)
-    prior: dict | None = None   # where the unseen directions come from (None: arbitrary split)
+    least_squares: np.ndarray | None = None
 
     @property
     def cost_increase_pct(self) -> float:
-        """How much the constraints cost in residual, % of the WLS residual sum of squares."""
+        """How much the model costs in residual, % of the (W)LS residual sum of squares."""
         return 100.0 * (self.cost - self.wls_cost) / self.wls_cost
+
+    @property
+    def prior_weight(self) -> float | None:
+        """λ (inf: the description's bodies; None: no prior)."""
+        if self.prior is None:
+            return None
+        w = self.prior.get("weight")
+        return math.inf if w is None else float(w)
 
     def to_dict(self) -> dict[str, Any]:
         d = super().to_dict()
         d.update({"standard": {k: float(v) for k, v in self.standard.items()},
                   "cost": self.cost, "wls_cost": self.wls_cost,
                   "cost_increase_pct": self.cost_increase_pct,
-                  "wls_was_consistent": self.wls_was_consistent,
-                  "prior": self.prior, "split": self.split})
+                  "prior": self.prior, "split": self.split,
+                  "data_share": None if self.data_share is None else [json_number(v) for v in self.data_share],
+                  "least_squares": (None if self.least_squares is None
+                                    else [json_number(v) for v in self.least_squares]),
+                  "wls_was_consistent": self.wls_was_consistent})
         return d
 
     def table(self) -> str:
-        """The estimates without a spread: eq. 13's σ is the unconstrained fit's, not this one's
-        (the constraints and the prior change the estimator); the file keeps it as the data's
-        information on each parameter."""
+        """The estimates with the data's share of each (no σ: the model is not the least squares)."""
         width = max([len("Parameter")] + [len(n) for n in self.names])
-        lines = [f"{'Parameter':<{width}}  {'Estimate':>12}  {'2σ':>10}"]
-        lines += [f"{n:<{width}}  {v:12.6g}  {'—':>10}" for n, v in zip(self.names, self.values)]
-        lines.append(f"method consistent, {len(self.names)} parameters, {self.rows} equations, σρ = "
-                     f"{self.sigma_rho:.4g}; no σ is printed for a consistent estimate (eq. 13's is the "
-                     f"unconstrained fit's)")
+        share = self.data_share if self.data_share is not None else np.full(len(self.names), np.nan)
+        lines = [f"{'Parameter':<{width}}  {'Estimate':>12}  {'from data':>9}"]
+        lines += [f"{n:<{width}}  {v:12.6g}  {_pct(s):>9}" for n, v, s in zip(self.names, self.values, share)]
+        lines.append(f"identified model, {len(self.names)} parameters, {self.rows} equations, residual "
+                     f"{self.cost_increase_pct:+.2f} % of the least squares'; {self.split}")
         if self.residual_rms.size:
             lines.append("residual RMS per joint (N·m): " + "  ".join(f"{v:.4g}" for v in self.residual_rms))
         return "\n".join(lines)
@@ -67,69 +93,254 @@ class ConsistentResult(IdentificationResult):
     def split(self) -> str:
         """What decided the standard parameters the data cannot see (shown in every output)."""
         if self.prior is None:
-            return ("arbitrary: no prior; the standard parameters the data cannot see are one physical "
-                    "choice among many (give the robot's nominal parameters as a prior)")
-        return f"from the prior: {self.prior['source']}"
+            return ("no prior: the standard parameters the data cannot see are one physical choice among many "
+                    "(give the robot's description as a prior)")
+        return f"prior {self.prior['source']} ({self.prior['divergence']}), weight λ = {self.prior['weight_label']}"
 
     @classmethod
     def from_dict(cls, d: dict[str, Any]) -> "ConsistentResult":
-        """Inverse of :meth:`to_dict` (no compressed system, no solution: it cannot be re-solved)."""
-        result = super().from_dict(d)
+        """Inverse of :meth:`to_dict` (no compressed system: it cannot be re-solved)."""
+        result = IdentificationResult.from_dict(d)
         standard = d.get("standard")
         if not isinstance(standard, dict):
             raise ValueError("a consistent result without its 'standard' parameters")
-        return replace(result, standard={str(k): float(v) for k, v in standard.items()},
-                       cost=float(d.get("cost", float("nan"))), wls_cost=float(d.get("wls_cost", float("nan"))),
-                       wls_was_consistent=bool(d.get("wls_was_consistent", False)),
-                       prior=d.get("prior") if isinstance(d.get("prior"), dict) else None)
+        share, least = d.get("data_share"), d.get("least_squares")
+        base = {f: getattr(result, f) for f in result.__dataclass_fields__}
+        return cls(**base, standard={str(k): float(v) for k, v in standard.items()},
+                   cost=float(d.get("cost", float("nan"))), wls_cost=float(d.get("wls_cost", float("nan"))),
+                   prior=d.get("prior") if isinstance(d.get("prior"), dict) else None,
+                   data_share=None if share is None else np.array([np.nan if v is None else v for v in share]),
+                   least_squares=None if least is None else np.array([np.nan if v is None else v for v in least]),
+                   wls_was_consistent=bool(d.get("wls_was_consistent", False)))
 
 
+def _pct(v: float) -> str:
+    return "—" if not np.isfinite(v) else f"{100 * v:.0f} %"
 
-def consistent_fit(robot: rx90sym.Robot, wls: IdentificationResult, base: Any, physical_prior: Any = None,
-                   covariance: np.ndarray | None = None, **options: Any) -> ConsistentResult:
-    """Physically consistent refit of a (W)LS result on its compressed weighted system.
 
-    physical_prior: an identify.estimation.consistency.prior.PhysicalPrior: the directions the data
-    cannot see come from it (prior_fit: within PRIOR_BUDGET standard deviations of the best fit,
-    ``covariance`` of the base parameters, e.g. the segment bootstrap's; eq. 13's without);
-    without one the split is arbitrary (ConsistentResult.split says so). Other options go to
-    consistent_least_squares."""
-    system = wls.system
-    if system is None:
-        raise ValueError("consistent fit needs a result that still holds its compressed system "
-                         "(not one loaded from JSON)")
-    if tuple(wls.names) != tuple(base.names):
-        raise ValueError("consistent fit needs a result on the full base parameter set")
-    from identify.estimation.consistency import consistency_margin, consistent_least_squares
+def data_share(A: np.ndarray, information: np.ndarray, prior_precision: np.ndarray,
+               fixed: np.ndarray | None = None) -> np.ndarray:
+    """Per fit column β_i = a_iᵀ x the share the data determined: 1 − var_post / var_prior, with
+    var = a_iᵀ P⁻¹ a_i, P_post = ``information`` + ``prior_precision``, P_prior = ``prior_precision``
+    (the quadratic approximation of the cost around the model); ``fixed``: the variables the prior
+    holds exactly (λ = ∞: they vary in neither; a column of those alone is the prior's, share 0)."""
+    free = np.ones(A.shape[1], bool) if fixed is None else ~np.asarray(fixed, bool)
+    A = A[:, free]
 
-    prior_record = None
-    # A URDF link's lumped hand is written apart on export: the link minus it stays physical too.
+    def variances(P: np.ndarray) -> np.ndarray:
+        P = 0.5 * (P + P.T)[np.ix_(free, free)]
+        d = np.sqrt(np.maximum(np.diag(P), 1e-300))
+        lam, V = np.linalg.eigh(P / np.outer(d, d))  # Jacobi-scaled: the units of the variables do not matter
+        inv = (V / np.maximum(lam, lam.max() * 1e-15)) @ V.T / np.outer(d, d)
+        return np.einsum("ij,jk,ik->i", A, inv, A)
+
+    post, prior = variances(information + prior_precision), variances(prior_precision)
+    share = 1.0 - post / np.where(prior > 0, prior, np.inf)
+    return np.clip(np.where(np.any(A != 0, axis=1), share, 0.0), 0.0, 1.0)
+
+
+def consistent_fit(robot: rx90sym.Robot, wls: IdentificationResult, columns: Any, prior: Any = None,
+                   prior_weight: float | str = "auto", factors: Any = None, *, offsets: Sequence[int] = (),
+                   margin: float = DEFAULT_MARGIN, solver: str = "CLARABEL", bounds: Mapping[str, Any] | None = None,
+                   reference: Mapping[str, float] | None = None, spread: np.ndarray | None = None) -> ConsistentResult:
+    """The identified model of a (W)LS fit on ``columns`` (module docstring).
+
+    prior: a :class:`~identify.estimation.consistency.body_prior.BodyPrior` (None: the data alone, the
+    unseen directions by the tie-break); prior_weight: λ ≥ 0 (inf: the description's bodies) or "auto":
+    chosen by the blocked cross-validation on ``factors``; factors: the per-(time block, joint) factors of
+    ``columns`` (:class:`~identify.estimation.raw_folds.RawFactors`, or
+    :func:`~identify.estimation.prior_weight.observation_folds`): the model is fitted on them, with a
+    torque offset on each joint of ``offsets`` (0-based; its column after the fit's, named OFFj); None:
+    on ``wls``'s own weighted system (no offsets added, λ given). bounds: ``mass_bounds``,
+    ``total_mass``, ``com_boxes`` of :func:`identify.estimation.consistency.consistent_least_squares`;
+    reference: values the tie-break pulls unseen variables toward (e.g. the description's rotor inertias);
+    spread: σ of ``wls``'s estimates beside eq. 13's (the segment bootstrap's: their median ratio
+    inflates the σ of the least squares on the model's columns).
+    With "auto", no λ is chosen whose model moves a base parameter the data determine (relative σ of
+    the least squares on the same columns under :data:`DETERMINED_PCT` %) more than
+    :data:`DATA_BUDGET` σ from its estimate, or further than the data alone (λ = 0) move it.
+    The result's names are the fit's columns then the offsets added.
+    """
+    from identify.estimation.consistency.errors import ConsistencyError
+    from identify.estimation.consistency.weighted_fit import TIE_BREAK, PriorProblem, column_map
+    from identify.estimation.prior_weight import choose_prior_weight, fold_system
+    from identify.observation.offsets import offset_base
     from rx90sym.urdf_carried import carried_bodies
 
-    options.setdefault("carried", {body: p10 for body, (p10, _) in carried_bodies(robot).items()} or None)
-    if physical_prior is not None:
-        from identify.estimation.consistency.prior_fit import PRIOR_BUDGET, prior_fit
-
-        sol = prior_fit(system.R, system.z, base.K, robot.parameter_names, physical_prior,
-                        rss_outside=system.rss_outside, rows=system.rows, covariance=covariance, **options)[1]
-        prior_record = {"source": physical_prior.source, "budget_sigma": PRIOR_BUDGET,
-                        "covariance": "segment bootstrap" if covariance is not None else "eq. 13",
-                        "ellipsoid_scale": physical_prior.ellipsoid_scale, "mass_floor": physical_prior.mass_floor,
-                        "rotor_ratio": physical_prior.rotor_ratio}
+    check_prior_weight(prior_weight)
+    offsets = tuple(int(j) for j in offsets)
+    if factors is not None:
+        names = tuple(columns.names) + tuple(f"OFF{j + 1}" for j in offsets)
+        system = fold_system(factors.fitted, None, factors.n, factors.c, offsets)
+        if system is None:
+            raise ValueError("the identified model: too few rows to fit")
+        R, z, scale = system.R, system.z, system.scale
     else:
-        sol = consistent_least_squares(system.R, system.z, base.K, robot.parameter_names,
-                                       rss_outside=system.rss_outside, rows=system.rows, **options)
-    wls_cost = system.rss(wls.values)
-    c = len(wls.names)
-    sigma_rho = float(np.sqrt(sol.cost / max(system.rows - c, 1)))
-    residual_rms = np.array([np.sqrt(js.rss(sol.beta) / js.rows) for js in wls.joint_systems])
-    # Exact test: does some consistent chi reproduce the WLS beta? (margin > 0)
-    was_consistent = bool(consistency_margin(wls.values, base.K, robot.parameter_names)[0] > 0)
+        if wls.system is None:
+            raise ValueError("the identified model needs a result that still holds its compressed system "
+                             "(not one loaded from JSON), or the fit's factors")
+        if offsets:
+            raise ValueError("offsets need the fit's factors")
+        names, system = tuple(wls.names), None
+        R, z, scale = wls.system.R, wls.system.z, max(wls.system.rss(wls.values), 1e-300)
+    cmap = column_map(robot, offset_base(columns, offsets), names)
+    rows = int(sum(system.rows)) if system is not None else wls.rows
+    least, least_std = _least_squares(R, z, scale, rows, wls, spread)
+    carried = {body: p10 for body, (p10, _) in carried_bodies(robot).items()} or None
+    extra = _bounds(cmap, bounds)
+
+    def make(fixed: bool, at: float | None = None) -> PriorProblem:
+        return PriorProblem(cmap, prior, fixed=fixed, carried=carried, margin=margin, reference=reference,
+                            solver=solver, solve_margin=at, bounds=extra)
+
+    choice = None
+    if prior is None:
+        weight = 0.0
+    elif prior_weight == "auto":
+        if factors is None:
+            raise ValueError("prior_weight 'auto' needs the cross-validation's factors of the fit's columns")
+        free, fixed_problem = make(False), make(True)
+
+        def beta_at(w: float) -> np.ndarray:
+            problem = fixed_problem if math.isinf(w) else free
+            return cmap.beta(problem.solve(R, z, w, scale))
+
+        keeps = _data_budget(names, least, least_std, beta_at)
+        choice = choose_prior_weight(factors, free, fixed_problem, offsets, keeps=keeps)
+        weight = choice.chosen
+    else:
+        weight = float(prior_weight)
+    fixed = prior is not None and math.isinf(weight)
+    problem = make(fixed)
+    x = problem.solve(R, z, weight, scale)
+    report = problem.check(x)
+    at = problem.solve_margin
+    for attempt in (1, 2):  # the solver's error ate the margin: solve again further inside
+        if report.ok:
+            break
+        at *= 10.0 ** attempt
+        problem = make(fixed, at)
+        x = problem.solve(R, z, weight, scale)
+        report = problem.check(x)
+    if not report.ok:
+        raise ConsistencyError(f"the identified model fails the consistency check at margin {margin:.1e} even when "
+                               f"solved with margin {at:.1e}: {'; '.join(report.violations())}",
+                               status="external_check_failed", solver=solver)
+    beta = cmap.beta(x)
+    info = cmap.A.T @ (R.T @ R) @ cmap.A
+    tie = np.diag(scale * TIE_BREAK / problem.typical ** 2)
+    H = prior.hessian(cmap.names) if prior is not None else np.zeros_like(info)
+    held = np.isin(cmap.names, prior.names()) if fixed else None
+    share = data_share(cmap.A, info, 0.5 * (0.0 if fixed else weight) * H + tie, held)
+    residual_rms, weights, rows = _residuals(wls, system, beta)
+    record = None
+    if prior is not None:
+        record = {"source": prior.source, "divergence": prior.divergence,
+                  "weight": None if math.isinf(weight) else weight,
+                  "weight_label": "inf" if math.isinf(weight) else f"{weight:g}",
+                  "links": [int(b) for b in prior.links], "notes": list(prior.notes),
+                  "divergence_value": json_number(prior.value(dict(zip(cmap.names, x)))),
+                  "choice": None if choice is None else choice.to_dict()}
+    std = least_std
+    cost = float(np.sum((R @ beta - z) ** 2))
+    wls_cost = float(np.sum((R @ least - z) ** 2))
     return ConsistentResult(
-        names=wls.names, values=sol.beta, std=wls.std,
-        rel_std_pct=100 * wls.std / np.where(sol.beta == 0, np.nan, np.abs(sol.beta)),
-        sigma_rho=sigma_rho, cond=wls.cond, cond_unweighted=wls.cond_unweighted,
-        residual_rms=residual_rms, weights=wls.weights, rows=wls.rows, method="consistent",
-        covariance=wls.covariance, system=system, joint_systems=wls.joint_systems,
-        standard=dict(zip(robot.parameter_names, sol.chi)), cost=sol.cost, wls_cost=wls_cost,
-        wls_was_consistent=was_consistent, solution=sol, prior=prior_record)
+        names=names, values=beta, std=std,
+        rel_std_pct=100 * std / np.where(least == 0, np.nan, np.abs(least)),
+        sigma_rho=float(np.sqrt(max(cost + scale - wls_cost, 0.0) / max(rows - len(names), 1))), cond=wls.cond,
+        cond_unweighted=wls.cond_unweighted, residual_rms=residual_rms, weights=weights, rows=rows,
+        method="consistent", covariance=None, system=None, joint_systems=(),
+        standard=dict(zip(cmap.names, (float(v) for v in x))), cost=cost + scale - wls_cost, wls_cost=scale,
+        prior=record, data_share=share, least_squares=least, wls_was_consistent=_admits_bodies(robot, columns, names, least))
+
+
+def _least_squares(R: np.ndarray, z: np.ndarray, scale: float, rows: int, wls: IdentificationResult,
+                   spread: np.ndarray | None) -> tuple[np.ndarray, np.ndarray]:
+    """(estimates, σ) of the least squares on the model's own weighted system (eqs. 10-14: σρ² the
+    weighted residual over rows − c), σ inflated by the median ratio of ``spread`` (the segment
+    bootstrap's σ) to eq. 13's of the fit's ``wls`` where above 1 (coloured residuals)."""
+    import scipy.linalg as sla
+
+    c = R.shape[1]
+    beta = np.linalg.lstsq(R, z, rcond=None)[0]
+    r_inv = sla.pinv(R)
+    std = np.sqrt(np.maximum(np.einsum("ij,ij->i", r_inv, r_inv), 0.0) * scale / max(rows - c, 1))
+    if spread is not None:
+        ratios = np.asarray(spread, dtype=float) / np.where(wls.std > 0, wls.std, np.nan)
+        ratios = ratios[np.isfinite(ratios)]
+        std = std * max(1.0, float(np.median(ratios)) if ratios.size else 1.0)
+    return beta, std
+
+
+def _data_budget(names: Sequence[str], least: np.ndarray, std: np.ndarray, beta_at: Any) -> Any:
+    """``keeps(λ)`` of :func:`~identify.estimation.prior_weight.choose_prior_weight`: why the model at λ
+    overrides a base parameter the data determine (None: it does not)."""
+    with np.errstate(divide="ignore", invalid="ignore"):
+        rel = 100 * std / np.abs(least)
+    determined = [k for k in range(len(names)) if rel[k] < DETERMINED_PCT and std[k] > 0]
+    if not determined:
+        return None
+    alone = beta_at(0.0)
+    allowed = {k: max(DATA_BUDGET * std[k], abs(alone[k] - least[k])) for k in determined}
+
+    def keeps(weight: float) -> str | None:
+        beta = alone if weight == 0.0 else beta_at(weight)
+        k = max(determined, key=lambda i: (abs(beta[i] - least[i]) - allowed[i]) / std[i])
+        if abs(beta[k] - least[k]) <= allowed[k] * (1 + 1e-9):
+            return None
+        return (f"moves {names[k]} {abs(beta[k] - least[k]) / std[k]:.1f} σ from its least-squares estimate "
+                f"(at most {allowed[k] / std[k]:.1f} σ)")
+    return keeps
+
+
+def check_prior_weight(value: Any) -> None:
+    """A prior weight λ: "auto" or a number >= 0 (inf allowed); ValueError naming the value otherwise."""
+    if isinstance(value, str) and value == "auto":
+        return
+    try:
+        ok = not isinstance(value, bool) and float(value) >= 0
+    except (TypeError, ValueError):
+        ok = False
+    if not ok:
+        raise ValueError(f"prior_weight must be 'auto' or a number >= 0 (inf: the description's bodies), got {value!r}")
+
+
+def _admits_bodies(robot: rx90sym.Robot, columns: Any, names: Sequence[str], beta: np.ndarray) -> bool:
+    """Whether the base parameters of ``beta`` (over ``names``) admit physical bodies (a positive
+    consistency margin, identify.estimation.consistency.margin)."""
+    from identify.estimation.consistency.errors import ConsistencyError
+    from identify.estimation.consistency.margin import consistency_margin
+    from identify.estimation.consistency.weighted_fit import _base_of
+
+    base = _base_of(columns)
+    values = dict(zip(names, beta))
+    try:
+        return bool(consistency_margin(np.array([values[n] for n in base.names]), base.K,
+                                       robot.parameter_names)[0] > 0)
+    except ConsistencyError:  # the margin's solve failed: it says nothing either way (not claimed)
+        return False
+
+
+def _residuals(wls: IdentificationResult, system: Any, beta: np.ndarray) -> tuple[np.ndarray, np.ndarray, int]:
+    """(per joint residual RMS [N m], weights, rows) of ``beta`` on the system it was fitted on."""
+    if system is None:
+        rms = np.array([np.sqrt(js.rss(beta) / js.rows) if js.rows else np.nan for js in wls.joint_systems])
+        return rms, wls.weights, wls.rows
+    rms = np.array([np.nan if Rj is None else float(np.linalg.norm(Rj @ np.r_[beta, -1.0]) / np.sqrt(r))
+                    for Rj, r in zip(system.joints, system.rows)])
+    return rms, system.weights, int(sum(system.rows))
+
+
+def _bounds(cmap: Any, bounds: Mapping[str, Any] | None) -> list:
+    """The user's mass, total-mass and CoM-box bounds as builders of constraints on x."""
+    if not bounds:
+        return []
+    from identify.estimation.consistency.lmi import body_indices
+    from identify.estimation.consistency.problem import _com_box_constraints, _mass_constraints
+
+    unknown = sorted(set(bounds) - {"mass_bounds", "total_mass", "com_boxes"})
+    if unknown:
+        raise ValueError(f"bounds: unknown {unknown} (mass_bounds, total_mass, com_boxes)")
+    bodies = body_indices(cmap.names[:cmap.standard])
+    return [lambda x: _mass_constraints(x, bodies, bounds.get("mass_bounds"), bounds.get("total_mass"))
+            + _com_box_constraints(x, bodies, bounds.get("com_boxes"))]

@@ -39,7 +39,7 @@ from identify.observation.stream import Plan, Scan, StreamSettings, piece
 from identify.signal.filtering import EDGE_PERIODS
 from identify.signal.interpolate import onto, onto_weights
 
-__all__ = ["RawSpan", "RawFactors", "raw_span", "window_factors"]
+__all__ = ["RawSpan", "RawFactors", "offset_columns_of", "raw_span", "window_factors"]
 
 
 @dataclass(frozen=True)
@@ -220,8 +220,12 @@ class RawFactors:
         return block_scores(err2, ref2)
 
     def _columns(self, R: np.ndarray, joint: int, offsets: tuple[int, ...]) -> np.ndarray:
-        """A fitted factor's columns [W | one offset column per joint of ``offsets`` | Y]: the ones in
-        joint ``joint``'s own offset column, zeros in the others (the rows fold_wls stacks)."""
-        c = self.c
-        cols = [R[:, :c]] + [R[:, c:c + 1] if k == joint else np.zeros((R.shape[0], 1)) for k in offsets]
-        return np.hstack(cols + [R[:, c + 1:c + 2]])
+        return offset_columns_of(R, self.c, joint, offsets)
+
+
+def offset_columns_of(R: np.ndarray, c: int, joint: int, offsets: Sequence[int]) -> np.ndarray:
+    """A fitted factor's columns ``[W | 1 | Y | …]`` (``c`` columns of W) as ``[W | one offset column per
+    joint of offsets | Y]``: the ones in joint ``joint``'s own offset column, zeros in the others (the
+    rows of the joints stacked share the columns; the right-hand sides after Y are dropped)."""
+    cols = [R[:, :c]] + [R[:, c:c + 1] if k == joint else np.zeros((R.shape[0], 1)) for k in offsets]
+    return np.hstack(cols + [R[:, c + 1:c + 2]])

@@ -50,7 +50,7 @@ from identify.observation.stream import (DEFAULT_BLOCK, Plan, Scan, StreamSettin
                                          scanned_cutoff, windows_in_order)
 from identify.signal.filtering import EDGE_PERIODS
 
-__all__ = ["choose_processing", "choose_processing_streamed", "grid_of_scans", "scans_for_choice", "time_span"]
+__all__ = ["choose_processing", "choose_processing_streamed", "column_factors", "grid_of_scans", "scans_for_choice", "time_span"]
 
 #: Lowest cut-off of the grid [Hz] (the knee's floor): the scan keeps each segment's first and
 #: last 2 x EDGE_PERIODS / LOWEST_CUTOFF seconds of times, beyond the filters' longest edge.
@@ -193,35 +193,43 @@ def _key(cand: Candidate) -> tuple:
 def _score(cand: Candidate, ctx: _Context) -> tuple[float, tuple[float, ...], tuple[tuple[float, ...], ...]]:
     """(score, per joint, per held-back block and joint) of one candidate, relative errors in % against
     the raw measured torques, from one pass over the recordings; its factors kept in ``ctx.kept``."""
-    robot, client = ctx.robot, ctx.client
     threshold = ctx.min_velocity if cand.rest is not None else None
     rest = cand.rest or "zero-coulomb"
-    columns = presliding_base(robot, ctx.base, rest if threshold is not None else None)  # FPj with presliding
+    columns = presliding_base(ctx.robot, ctx.base, rest if threshold is not None else None)  # FPj with presliding
     settings = StreamSettings(cand.cutoff, cand.decimate_to, threshold, rest, float(ctx.delay), ctx.spring, ctx.block)
+    factors = column_factors(ctx.robot, ctx.sources, ctx.scans, columns, settings, ctx.span, ctx.client)
+    ctx.kept[_key(cand)] = factors
+    return factors.scores()
+
+
+def column_factors(robot: rx90sym.Robot, sources: Sequence[BlockSource], scans: Sequence[Scan], columns: Any,
+                   settings: StreamSettings, span: RawSpan, client: Any = None) -> RawFactors:
+    """The per-(time block, joint) factors of the fitted rows of ``columns`` processed with ``settings``
+    (its cut-off) and of the raw samples of ``span`` they predict, from one pass over the recordings
+    (a recording too short for the cut-off's edges left out)."""
     plans, notes = [], []
-    for s in ctx.scans:  # a recording too short for this cut-off's edges is left out, as on whole recordings
+    for s in scans:  # a recording too short for this cut-off's edges is left out, as on whole recordings
         try:
-            plans.append(plan_windows(s, cand.cutoff, settings)[0])
+            plans.append(plan_windows(s, settings.cutoff, settings)[0])
         except ValueError as exc:
             plans.append([])
             notes.append(str(exc))
     if not any(plans):
         raise ValueError(notes[0])
-    drop = threshold is not None and drops_rest(rest)
+    drop = settings.min_velocity is not None and drops_rest(settings.rest)
     names = tuple(columns.names)
-    factors = RawFactors(robot.n, len(names), ctx.span)
+    factors = RawFactors(robot.n, len(names), span)
     if client is not None:  # the robot and its compiled columns sent once to each worker
         robot, columns = client.scatter([robot, columns], broadcast=True, hash=False)
     elif hasattr(columns, "regressor_workspace"):  # one reused buffer for the full-rate regressor, as in memory
         columns = SimpleNamespace(regressor_batch=columns.regressor_workspace().evaluate)
-    index = {id(src): k for k, src in enumerate(ctx.sources)}
-    tasks = ((robot, rec, window, plan, settings, columns, names, ctx.span,
-              ctx.span.bounds.get((index[id(src)], plan.start)), drop)
-             for src, (plan, window, rec, _) in _with_source(ctx.sources, plans))
+    index = {id(src): k for k, src in enumerate(sources)}
+    tasks = ((robot, rec, window, plan, settings, columns, names, span,
+              span.bounds.get((index[id(src)], plan.start)), drop)
+             for src, (plan, window, rec, _) in _with_source(sources, plans))
     for parts in in_order(window_factors, tasks, client, 4 if client is not None else 1):
         factors.add(*parts)
-    ctx.kept[_key(cand)] = factors
-    return factors.scores()
+    return factors
 
 
 def _with_source(sources: Sequence[BlockSource], plans: Sequence[Sequence[Any]]) -> Any:

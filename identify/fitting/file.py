@@ -35,9 +35,12 @@ __all__ = ["SCHEMA_VERSION", "FitModel", "read_fit_file", "robot_file_hash", "to
 #: Also in 4: ``baseline`` (the plain OLS baseline's parameters and figures, identify.fitting.baseline),
 #: ``model.offset_joints`` (torque offsets chosen per joint) and the processing choice's ``offsets``,
 #: ``offset_candidate`` and ``scored_against``; a file without them reads None.
-SCHEMA_VERSION = 4
+#: 5: ``identified`` (the identified model: its standard parameters, the prior, its weight λ and its
+#: choice, the data's share of each base parameter); a file without it reads None (a consistent result
+#: is its own identified model).
+SCHEMA_VERSION = 5
 #: Older layouts read as they are.
-READABLE_VERSIONS = (2, 3, SCHEMA_VERSION)
+READABLE_VERSIONS = (2, 3, 4, SCHEMA_VERSION)
 
 
 def robot_file_hash(robot: rx90sym.Robot) -> str | None:

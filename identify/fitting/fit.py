@@ -17,8 +17,8 @@ import numpy as np
 
 import rx90sym
 
-from identify.estimation.bootstrap import bootstrap_std
-from identify.estimation.honest_covariance import HONEST_SEED, honest_covariance, needs_honest_covariance
+from identify.estimation.consistency.body_prior import DEFAULT_DIVERGENCE, BodyPrior, body_prior
+from identify.estimation.consistent_fit import check_prior_weight
 from identify.estimation.results import METHODS, IdentificationResult
 from identify.fitting.file import FitModel
 from identify.io.gains import DriveGains
@@ -26,7 +26,7 @@ from identify.observation.matrix import Observation
 from identify.observation.friction_model import FrictionBase
 from identify.observation.offsets import OffsetBase, offset_joints
 from rx90sym.base_parameters import BaseParameters
-from identify.observation.processing import Processing, friction_label, has_policy, has_smooth_friction
+from identify.observation.processing import Processing, has_policy, has_smooth_friction
 from identify.fitting.record import BOOTSTRAP_BLOCK_S, BOOTSTRAP_DRAWS, Bootstrap, Fit
 from identify.fitting.rank_flags import rank_flags
 
@@ -48,8 +48,10 @@ def fit(robot: rx90sym.Robot, recordings: Sequence[Any], processing: Processing 
         method: str = "wls", *, base: Any = None, gains: DriveGains | None = None,
         convention: str | None = None, spring_source: str | None = None,
         observation: Observation | None = None, block: int | None = None, client: Any = None,
-        bootstrap_seed: int | None = 0, **consistent_options: Any) -> Fit:
-    """Identify the base parameters of ``robot`` from ``recordings`` (recordings, or recording files).
+        bootstrap_seed: int | None = 0, physical_prior: Any = "description", prior_weight: float | str = "auto",
+        divergence: str = DEFAULT_DIVERGENCE, **bounds: Any) -> Fit:
+    """Identify the base parameters of ``robot`` from ``recordings`` (recordings, or recording files),
+    and the physically consistent model weighed between the robot's description and the data.
 
     One pipeline for every log length: the recordings are read, filtered and fitted block by block
     (``block`` raw samples at a time, default 60,000: memory bounded by the block whatever the logs'
@@ -59,13 +61,18 @@ def fit(robot: rx90sym.Robot, recordings: Sequence[Any], processing: Processing 
     processing: the signal processing (None: the defaults, those of ``rx90 identify``): without a
     cut-off it is chosen by blocked cross-validation against the raw torques (cut-off, decimation,
     rest policy per joint, torque offsets), the friction form per joint too where it is left open;
-    method: "ols", "wls" (paper: each joint's rows weighted by 1/σ of its own residual) or
-    "consistent" (WLS data, physically consistent standard parameters through cvxpy; extra
-    keyword arguments go to identify.estimation.consistent_fit.consistent_fit, e.g.
-    physical_prior (default "default": the robot's nominal parameters, as rx90 identify; a JSON
-    parameter file; None: no prior; or a PhysicalPrior: the unseen directions from nominal parameters,
-    within a covariance of the base parameters calibrated by the segment bootstrap) or
-    consistent_least_squares' prior, prior_weight, total_mass, mass_bounds, com_boxes, solver);
+    method: "ols" or "wls" (paper: each joint's rows weighted by 1/σ of its own residual): ``Fit.result``
+    holds those estimates with eq. 13's σ; "consistent": ``Fit.result`` is the identified model itself.
+    Every fit carries the identified model (``Fit.identified``, :mod:`identify.estimation.consistent_fit`):
+    physically consistent standard parameters minimising the weighted residual plus λ·D(θ ‖ θ₀), θ₀ the
+    prior's bodies: it is what :meth:`Fit.predict`, the exports, the monitor and the payload methods use.
+    physical_prior: "description" (the robot's URDF inertials or robot-file [nominal] bodies; a link
+    whose inertials are not physical gets no prior), "none" (the data alone), a JSON parameter file, a
+    name -> value mapping, or a :class:`~identify.estimation.consistency.body_prior.BodyPrior`;
+    prior_weight: λ ≥ 0 (math.inf: the description's bodies, the drives fitted) or "auto": chosen by
+    blocked cross-validation against the raw torques; divergence: D, "gaussian" or "entropic"
+    (:mod:`identify.estimation.consistency.body_prior`); bounds: ``mass_bounds``, ``total_mass``,
+    ``com_boxes`` (kg, m; :func:`identify.estimation.consistency.consistent_least_squares`) and ``solver``.
     base: the columns (default: the symbolic base parameters, plus the torque offsets the
     cross-validated processing chooses; columns given are fitted as they are; a BaseWithSpring
     identifies the spring too, with processing.spring False). Recorded in the fit file for :func:`load_fit`:
@@ -74,62 +81,101 @@ def fit(robot: rx90sym.Robot, recordings: Sequence[Any], processing: Processing 
     bootstrap_seed: seed of the segment bootstrap whose σ the fit carries beside eq. 13's, computed
     while the blocks stream by (as ``rx90 identify --bootstrap-seed``; None: none).
     observation: an already built observation matrix, solved as it is (the recordings are not read: no
-    delay estimate, no baseline, no cross-validation).
+    delay estimate, no baseline, no cross-validation; the prior weight is then chosen on the
+    observation's own filtered torques).
     The fit keeps its decimated rows (``Fit.observation``) when they are few (identify.observation.row_store);
     its flags hold the recorded-torque checks (identify.fitting.torque_checks: torque scale, gravity at
     rest; errors that rx90 identify stops on) and a rank that depends on the threshold.
     """
     if method not in METHODS:
         raise ValueError(f"fit: method must be one of {METHODS}, got {method!r}")
-    if method == "consistent" and isinstance(consistent_options.get("physical_prior", "default"), str):
-        from identify.estimation.consistency.prior import nominal_prior
-
-        # The default prior is rx90 identify's: the robot's nominal parameters (None: said, arbitrary split).
-        consistent_options["physical_prior"] = nominal_prior(robot, None if consistent_options.get(
-            "physical_prior", "default") == "default" else consistent_options["physical_prior"])
+    unknown = sorted(set(bounds) - {"mass_bounds", "total_mass", "com_boxes", "solver"})
+    if unknown:
+        raise TypeError(f"fit: unknown options {unknown} (the model's bounds: mass_bounds, total_mass, com_boxes, "
+                        f"solver)")
+    prior = model_prior(robot, physical_prior, divergence)
+    check_prior_weight(prior_weight)
+    options = {"prior": prior, "prior_weight": prior_weight, **bounds}
     p = processing if processing is not None else Processing()
-    _refuse_for_consistent(p, method)
-    if method != "consistent" and consistent_options:
-        raise ValueError(f"fit: options {sorted(consistent_options)} are for method 'consistent'")
     if observation is not None:
         return _fit_observation(robot, recordings, observation, p, method, base, gains, convention, spring_source,
-                                bootstrap_seed, consistent_options)
+                                bootstrap_seed, options)
     done = _fit_blocks(robot, recordings, p, method, base=base, gains=gains, convention=convention,
                        spring_source=spring_source, block=block, client=client, bootstrap_seed=bootstrap_seed,
-                       **consistent_options)
+                       options=options)
     return done.with_flags([*rank_flags(done.base), *done.flags])  # a rank that depends on the threshold
+
+
+def model_prior(robot: rx90sym.Robot, physical_prior: Any, divergence: str = DEFAULT_DIVERGENCE) -> BodyPrior | None:
+    """The :class:`BodyPrior` of ``physical_prior`` (see :func:`fit`); None for "none", or for
+    "description" when the description has no bodies."""
+    if isinstance(physical_prior, BodyPrior):
+        return physical_prior if physical_prior.divergence == divergence else physical_prior.with_divergence(divergence)
+    if physical_prior is None or (isinstance(physical_prior, str) and physical_prior == "none"):
+        return None
+    if isinstance(physical_prior, str) and physical_prior == "description":
+        values, label = rx90sym.nominal_parameters(robot), _description_label(robot)
+    else:
+        values = rx90sym.nominal_parameters(robot, physical_prior)
+        label = str(physical_prior) if not isinstance(physical_prior, dict) else "given parameters"
+    return body_prior(values, robot.n, label, divergence)
+
+
+def _description_label(robot: rx90sym.Robot) -> str:
+    if robot.urdf is not None:
+        return f"URDF inertials of {robot.source}"
+    return f"[nominal] of {robot.source or robot.name}"
 
 
 def _fit_observation(robot: rx90sym.Robot, recordings: Sequence[Any], obs: Observation, p: Processing, method: str,
                      base: Any, gains: DriveGains | None, convention: str | None, spring_source: str | None,
-                     bootstrap_seed: int | None, consistent_options: dict[str, Any]) -> Fit:
-    """The fit of a given observation matrix (eqs. 9-15, optionally the consistent fit)."""
+                     bootstrap_seed: int | None, options: dict[str, Any]) -> Fit:
+    """The fit of a given observation matrix (eqs. 9-15 and the identified model)."""
+    from identify.estimation.least_squares import weighted_least_squares
+    from identify.estimation.prior_weight import observation_folds
     from identify.observation.spring_fit import BaseWithSpring, spring_summary
 
     base = base if base is not None else rx90sym.base_parameters(robot)
-    options = p.observation_options()
-    result = _solve(robot, obs, base, method, consistent_options)
+    popts = p.observation_options()
+    wls = weighted_least_squares(obs.W, obs.Y, obs.joint, obs.names, weighted=method != "ols")
+    identified = _identified(robot, wls, base, observation_folds(obs), options, given=True)
+    result = identified if method == "consistent" else wls
     model = FitModel.of(robot, convention=convention, gains=gains.to_dict() if gains is not None else None,
-                        rest=options["rest"], min_velocity=options["min_velocity"],
+                        rest=popts["rest"], min_velocity=popts["min_velocity"],
                         spring=spring_source or _spring_label(robot, base), cutoff_hz=obs.cutoffs[0],
-                        decimate_to_hz=options["decimate_to"], rate_hz=obs.rate,
+                        decimate_to_hz=popts["decimate_to"], rate_hz=obs.rate,
                         delay_s=0.0 if p.delay == "auto" else float(p.delay), offset_joints=_offset_record(base))
     recordings = list(recordings) if isinstance(recordings, (list, tuple)) else [recordings]
     visited = [r for r in recordings if hasattr(r, "q")]
     spring = spring_summary(robot, base if isinstance(base, BaseWithSpring) else None, result, visited)[0]
-    done = Fit(robot, result, p, model, base, obs, None, None, spring, flags=tuple(rank_flags(base)))
+    done = Fit(robot, result, p, model, base, obs, None, None, spring, flags=tuple(rank_flags(base)),
+               identified=identified)
     return done if bootstrap_seed is None else done.bootstrapped(bootstrap_seed)
 
 
-def _refuse_for_consistent(p: Processing, method: str) -> None:
-    """The consistent method's standard parameters are what a URDF/MJCF holds: Coulomb (FS) and viscous (FV)
-    friction; a smooth form or the presliding rest policy is refused (on either path)."""
-    if method == "consistent" and (has_smooth_friction(p.friction) or has_policy(p.rest, "presliding")):
-        what = " and ".join(([f"friction form {friction_label(p.friction)!r}"] if has_smooth_friction(p.friction) else [])
-                            + (["rest policy 'presliding'"] if has_policy(p.rest, "presliding") else []))
-        raise ValueError(f"fit: the consistent method fits bodies with Coulomb + viscous friction (what a URDF or "
-                         f"MJCF holds), not {what}: use friction 'coulomb' and a rest policy other than "
-                         f"'presliding', or method 'wls'")
+def _identified(robot: rx90sym.Robot, wls: IdentificationResult, columns: Any, factors: Any,
+                options: dict[str, Any], given: bool = False, spread: np.ndarray | None = None) -> Any:
+    """The identified model of the least-squares fit ``wls`` (identify.estimation.consistent_fit), fitted
+    on ``factors`` with a torque offset on every joint that may have one (as the description's model:
+    the prior's bodies with each joint's friction and offset fitted), unless the columns were ``given``."""
+    from identify.estimation.consistent_fit import consistent_fit
+
+    bounds = {k: options[k] for k in ("mass_bounds", "total_mass", "com_boxes") if options.get(k) is not None}
+    reference = {f"IA{j + 1}": v for j in range(robot.n) if (v := _description_value(robot, f"IA{j + 1}"))}
+    offsets = [] if given else [j for j in offset_joints(robot, rx90sym.base_parameters(robot))
+                                if f"OFF{j + 1}" not in columns.names]
+    return consistent_fit(robot, wls, columns, options["prior"], options["prior_weight"], factors, offsets=offsets,
+                          solver=options.get("solver", "CLARABEL"), bounds=bounds or None, reference=reference,
+                          spread=spread)
+
+
+def _description_value(robot: rx90sym.Robot, name: str) -> float:
+    """A standard parameter of the robot's description (0 where it has none)."""
+    try:
+        values = rx90sym.nominal_parameters(robot)
+    except ValueError:
+        return 0.0
+    return float((values or {}).get(name, 0.0))
 
 
 def _offset_record(base: Any) -> tuple[int, ...] | None:
@@ -138,31 +184,10 @@ def _offset_record(base: Any) -> tuple[int, ...] | None:
     return tuple(j + 1 for j in inner.joints) if isinstance(inner, OffsetBase) else None
 
 
-def _honest_covariance(obs: Observation, result: IdentificationResult) -> np.ndarray:
-    """Eq. 13's covariance inflated by the segment bootstrap (identify.estimation.honest_covariance): the
-    budget of the prior fit is measured in it."""
-    std = bootstrap_std(obs.W, obs.Y, obs.joint, obs.samples, result.weights, obs.rate, seed=HONEST_SEED)
-    return honest_covariance(result, std)
-
-
-def _solve(robot: rx90sym.Robot, obs: Observation, base: Any, method: str,
-           consistent_options: dict[str, Any]) -> IdentificationResult:
-    from identify.estimation.least_squares import weighted_least_squares
-
-    result = weighted_least_squares(obs.W, obs.Y, obs.joint, obs.names, weighted=method != "ols")
-    if method != "consistent":
-        return result
-    from identify.estimation.consistent_fit import consistent_fit
-
-    if needs_honest_covariance(method, consistent_options):
-        consistent_options = {**consistent_options, "covariance": _honest_covariance(obs, result)}
-    return consistent_fit(robot, result, base, **consistent_options)
-
-
 def _fit_blocks(robot: rx90sym.Robot, recordings: Sequence[Any], processing: Any = None, method: str = "wls", *,
-                  base: Any = None, gains: Any = None, convention: str | None = None, spring_source: str | None = None,
-                  block: int | None = None, client: Any = None, bootstrap_seed: int | None = 0,
-                  **consistent_options: Any) -> Fit:
+                base: Any = None, gains: Any = None, convention: str | None = None, spring_source: str | None = None,
+                block: int | None = None, client: Any = None, bootstrap_seed: int | None = 0,
+                options: dict[str, Any]) -> Fit:
     """:func:`identify.fit` of recordings, block by block: its bootstrap computed on the way."""
     from identify.fitting.streamed import DEFAULT_BLOCK, BootstrapSpec, fit_streamed  # the block path's modules
     from identify.observation.spring_fit import BaseWithSpring, spring_summary
@@ -173,40 +198,57 @@ def _fit_blocks(robot: rx90sym.Robot, recordings: Sequence[Any], processing: Any
     from identify.fitting.streamed_friction import FrictionHook
 
     p = processing if processing is not None else Processing()
-    _refuse_for_consistent(p, method)
     smooth = has_smooth_friction(p.friction_form)
     block = DEFAULT_BLOCK if block is None else check_block(block)
     columns_given = base is not None
-    # The form given, or chosen per joint by the cross-validation where left open (as in memory: not for the
-    # consistent method, whose URDF holds Coulomb + viscous).
-    choose = p.friction is None and p.cross_validates and method != "consistent"
+    # The form given, or chosen per joint by the cross-validation where left open.
+    choose = p.friction is None and p.cross_validates
     presliding = p.min_velocity is not None and has_policy(p.rest, "presliding")   # its travels searched too
     hook = FrictionHook(p.friction_form, choose) if smooth or choose or presliding else None
     base = base if base is not None else rx90sym.base_parameters(robot)
     recordings = list(recordings) if isinstance(recordings, (list, tuple)) else [recordings]
     spec = BootstrapSpec(BOOTSTRAP_BLOCK_S, BOOTSTRAP_DRAWS, bootstrap_seed) if bootstrap_seed is not None else None
-    eligible = (offset_joints(robot, base) if method != "consistent" and not columns_given
+    eligible = (offset_joints(robot, base) if not columns_given
                 and isinstance(base, BaseParameters) else ())  # as the whole-signal fit's torque offsets
     sf = fit_streamed(robot, recordings, method, base, p.cutoff, p.decimate_to, p.min_velocity, p.rest, p.delay,
                       p.spring, p.estimate_delay, block, client, spec, convention, gains, p.cross_validates,
-                      offsets=eligible, friction=hook, **consistent_options)
+                      offsets=eligible, friction=hook)
     base = sf.columns  # with the offsets and the friction columns chosen
     rest = sf.settings.rest  # the policy given, or chosen by the cross-validation
+    sources = [block_source(r, robot, convention, gains) for r in recordings]
+    identified = _identified(robot, sf.result, base, _model_factors(robot, sources, sf, client), options,
+                             given=columns_given, spread=sf.bootstrap_std)
+    result = identified if method == "consistent" else sf.result
     model = FitModel.of(robot, convention=convention, gains=gains.to_dict() if gains is not None else None,
                         rest=rest, min_velocity=p.min_velocity, spring=spring_source or _spring_label(robot, base),
                         cutoff_hz=sf.cutoff, decimate_to_hz=sf.settings.decimate_to, rate_hz=sf.rate,
                         delay_s=sf.delay, friction=sf.friction, offset_joints=_offset_record(base))
     angles = [SimpleNamespace(q=sf.q_range)]  # what the spring summary reads: the range visited
-    spring = spring_summary(robot, base if isinstance(base, BaseWithSpring) else None, sf.result, angles)[0]
+    spring = spring_summary(robot, base if isinstance(base, BaseWithSpring) else None, result, angles)[0]
     boot = Bootstrap(sf.bootstrap_std, sf.bootstrap_block / sf.rate, spec.draws, spec.seed) if spec else None
     found = sf.delay_estimate
     # The baseline and the recorded-torque checks: a pass each over the logs, block by block, as on whole ones.
-    sources = [block_source(r, robot, convention, gains) for r in recordings]
-    return Fit(robot, sf.result, p, model, base, sf.observation, found, found.delay if found is not None else None, spring,
+    return Fit(robot, result, p, model, base, sf.observation, found, found.delay if found is not None else None, spring,
                boot, block=block, streamed=sf, recordings=sf.recordings,
                choice=_choice_record(sf.choice, getattr(hook, "choice", None)),
                flags=tuple(streamed_torque_flags(robot, sources, sf.scans, block)),
-               baseline=streamed_baseline(robot, sources, sf.scans, p.spring, block, client))
+               baseline=streamed_baseline(robot, sources, sf.scans, p.spring, block, client),
+               identified=identified)
+
+
+def _model_factors(robot: rx90sym.Robot, sources: Sequence[Any], sf: Any, client: Any) -> Any:
+    """The per-(time block, joint) factors of the fit's own columns and processing, and of the raw
+    samples they predict: what the prior weight's cross-validation scores (one pass over the logs)."""
+    from dataclasses import replace
+
+    from identify.estimation.raw_folds import raw_span
+    from identify.estimation.stream_cv import column_factors
+    from identify.observation.candidates import Candidate
+    from identify.observation.cross_validation import DEFAULT_BLOCKS
+
+    settings = replace(sf.settings, cutoff=sf.cutoff)
+    span = raw_span(sf.scans, [Candidate(sf.cutoff, settings.decimate_to)], DEFAULT_BLOCKS, settings.delay)
+    return column_factors(robot, sources, sf.scans, sf.columns, settings, span, client)
 
 
 def _choice_record(choice: ProcessingChoice | None, friction: Any) -> dict | None:

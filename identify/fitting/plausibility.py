@@ -332,14 +332,12 @@ def static_gravity_flags(recordings: Sequence, robot: rx90sym.Robot, nominal: di
     return gravity.flags()
 
 
-def prior_flags(standard: Mapping[str, float], prior: Mapping[str, float], cost_increase_pct: float,
-                robot_name: str = "") -> list[Flag]:
-    """A consistent fit against its prior (the robot's nominal parameters, SI).
+def prior_flags(standard: Mapping[str, float], prior: Mapping[str, float], robot_name: str = "") -> list[Flag]:
+    """The identified model against its prior (the robot's description, SI): a link whose identified mass
+    is more than PRIOR_MASS_RATIO away from the prior's.
 
     standard: the identified standard parameters (name -> value; masses ``M<j>`` in kg);
-    prior: the prior's values (same names); cost_increase_pct: the consistent fit's weighted
-    residual over WLS's, % (ConsistentResult.cost_increase_pct). Links whose prior mass is not
-    positive are not judged.
+    prior: the prior's values (same names). Links whose prior mass is not positive are not judged.
     """
     flags = []
     links = sorted((k[1:] for k in prior if re.fullmatch(r"M\d+", k) and prior[k] > 0 and k in standard), key=int)
@@ -349,12 +347,6 @@ def prior_flags(standard: Mapping[str, float], prior: Mapping[str, float], cost_
         if not 1 / PRIOR_MASS_RATIO <= ratio <= PRIOR_MASS_RATIO:
             flags.append(Flag("bodies_far_from_prior", "warning", f"link {j}'s identified mass {m:.3g} kg is "
                               f"{ratio:.3g} x its prior mass {m0:.3g} kg (expected {1 / PRIOR_MASS_RATIO:.2g}.."
-                              f"{PRIOR_MASS_RATIO:g})", "check the robot (is it the one recorded?), the drive "
-                              "gains and the units; or the link is poorly excited", parameter=f"M{j}"))
-    if np.isfinite(cost_increase_pct) and cost_increase_pct > CONSISTENT_COST_PCT:
-        robot = f"robot {robot_name}'s " if robot_name else "the "
-        flags.append(Flag("consistent_cost_high", "warning", f"the consistent fit costs {cost_increase_pct:.3g} % "
-                          f"more than WLS (at most {CONSISTENT_COST_PCT:g} %): no physical bodies near {robot}prior "
-                          "explain the data", "check the robot (is it the one recorded?), its model and the drive "
-                          "gains"))
+                              f"{PRIOR_MASS_RATIO:g})", "check the robot (is it the one recorded?) and the units; "
+                              "or the description's mass is wrong (the data weighed it down)", parameter=f"M{j}"))
     return flags

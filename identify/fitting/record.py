@@ -82,7 +82,10 @@ class Fit:
     plausibility warnings of the fit (identify.fitting.plausibility, :meth:`with_flags`); recordings: per
     recording its samples, segments, samples bridged over lost packets and stale rows dropped
     (:func:`identify.io.recordings.layout_summary`); choice: the cross-validated processing's
-    candidate table (:meth:`ProcessingChoice.to_dict`), None when the processing was given.
+    candidate table (:meth:`ProcessingChoice.to_dict`), None when the processing was given;
+    identified: the identified model — physically consistent bodies weighed between the description and
+    the data (:func:`identify.estimation.consistent_fit.consistent_fit`) — which predicts, exports and
+    monitors (``result`` keeps the paper's (W)LS estimates and σ unless the method was "consistent").
     """
 
     robot: rx90sym.Robot
@@ -104,6 +107,8 @@ class Fit:
     streamed: Any = None            # the block-wise fit's record (identify.fitting.streamed.StreamedFit)
     baseline: Any = None            # the plain OLS baseline (identify.fitting.baseline.PlainBaseline) or None
     contact_thresholds: np.ndarray | None = None  # contact monitor's per joint [N·m] (identify.monitor)
+    identified: ConsistentResult | None = None  # the identified model (identify.estimation.consistent_fit)
+    result_validation: Validation | None = None  # the (W)LS estimates' own validation, beside the model's
 
     # ------------------------------------------------------------ what the fit used
     @property
@@ -130,6 +135,17 @@ class Fit:
     def gains(self) -> DriveGains | None:
         return gains_of(self.model)
 
+    @property
+    def model_result(self) -> IdentificationResult:
+        """What predicts, exports and monitors: the identified model (the (W)LS result without one)."""
+        return self.identified if self.identified is not None else self.result
+
+    def columns_of(self, result: IdentificationResult) -> Any:
+        """The columns of ``result``: the fit's, with the torque offsets its identified model adds."""
+        names = set(self.base.names)
+        added = [int(n[3:]) - 1 for n in result.names if n.startswith("OFF") and n[3:].isdigit() and n not in names]
+        return offset_base(self.base, added)
+
     def filtering(self, spring: bool | None = None) -> dict[str, Any]:
         """Keyword arguments of :func:`identify.predict` that reuse this fit's processing."""
         return {"cutoff": self.cutoff, "decimate_to": self.decimate_to, "min_velocity": self.min_velocity,
@@ -141,12 +157,13 @@ class Fit:
                 convention: str | None = None) -> Validation:
         """Torques of ``recording`` (a recording, or a recording file read block by block: ``block`` raw
         samples at a time, default the fit's, its angles ``convention``, default the fit's) predicted with
-        this fit's parameters (or ``result``) and processing. Where a joint rests the Coulomb term is 0,
+        this fit's identified model (:attr:`model_result`; or ``result``) and processing. Where a joint rests the Coulomb term is 0,
         or the presliding state with that rest policy (every sample is predicted, whatever the rest
         policy)."""
         # At 20 x the cut-off (identify.fitting.validation.prediction_rate), not at the fit's decimated rate.
         options = dict(self.filtering(), decimate_to="prediction", filtered_at=self.decimate_to)
-        return predict(self.robot, result or self.result, recording, base=self.base, baseline=self.baseline,
+        result = result or self.model_result
+        return predict(self.robot, result, recording, base=self.columns_of(result), baseline=self.baseline,
                        block=block if block is not None else (self.block or DEFAULT_BLOCK),
                        convention=convention or self.model.convention,
                        gains=self.gains, **options)
@@ -157,8 +174,10 @@ class Fit:
         return self.predict(recording, self.essential)
 
     def validated(self, recording: Any) -> "Fit":
-        """This fit with its validation on ``recording`` recorded (saved in the file)."""
-        return replace(self, validation=self.validate(recording))
+        """This fit with its validation on ``recording`` recorded (saved in the file): the identified
+        model's (what predicts), and beside it the (W)LS estimates' when they are not the model."""
+        ls = self.predict(recording, self.result) if self.result is not self.model_result else None
+        return replace(self, validation=self.validate(recording), result_validation=ls)
 
     def with_flags(self, flags: Sequence[Flag]) -> "Fit":
         """This fit with its plausibility flags recorded (saved in the file's ``flags``)."""
@@ -196,12 +215,15 @@ class Fit:
                     "delay_estimate_s": self.delay_estimate_s, "model": self.model.to_json(),
                     "essential": self.essential.to_dict() if self.essential is not None else {},
                     "validation": self.validation.to_dict() if self.validation is not None else {},
+                    "validation_result": (self.result_validation.to_dict() if self.result_validation is not None
+                                          else None),
                     "schema_version": SCHEMA_VERSION, "processing": self.processing.to_json(),
                     "flags": [f.to_json() for f in self.flags], "recordings": list(self.recordings),
                     "processing_choice": self.choice,
                     "baseline": self.baseline.to_json() if self.baseline is not None else None,
                     "contact_thresholds_nm": (None if self.contact_thresholds is None
-                                              else [float(v) for v in self.contact_thresholds])})
+                                              else [float(v) for v in self.contact_thresholds]),
+                    "identified": self.identified.to_dict() if self.identified is not None else None})
         return out
 
     def save(self, path: str | Path) -> Path:
@@ -222,6 +244,8 @@ class Fit:
             bootstrap = Bootstrap.from_json(data)
             flags = tuple(Flag.from_json(f) for f in data.get("flags", []))
             baseline = PlainBaseline.from_json(data.get("baseline"))  # None in older files
+            identified = (ConsistentResult.from_dict(data["identified"]) if isinstance(data.get("identified"), dict)
+                          else result if isinstance(result, ConsistentResult) else None)
         except (KeyError, TypeError, ValueError) as exc:
             raise ValueError(f"{path}: {exc}".replace(f"{path}: {path}: ", f"{path}: ")) from None
         rob = robot if isinstance(robot, rx90sym.Robot) else robot_of(model, robot)
@@ -242,7 +266,8 @@ class Fit:
                    recordings=tuple(data.get("recordings", [])), choice=data.get("processing_choice"),
                    baseline=baseline,
                    contact_thresholds=(None if data.get("contact_thresholds_nm") is None
-                                       else np.asarray(data["contact_thresholds_nm"], dtype=float)))
+                                       else np.asarray(data["contact_thresholds_nm"], dtype=float)),
+                   identified=identified)
 
 
 def load_fit(path: str | Path, robot: rx90sym.Robot | str | None = None) -> Fit:

@@ -23,7 +23,6 @@ import numpy as np
 import rx90sym
 
 from identify.estimation.bootstrap import BLOCK_S, DRAWS, SegmentBootstrap
-from identify.estimation.honest_covariance import HONEST_SEED, Fanout, honest_covariance, needs_honest_covariance
 from identify.estimation.incremental_qr import JointFactors, stacked_rows
 from identify.estimation.least_squares import solve_joint_systems
 from identify.estimation.results import METHODS, IdentificationResult
@@ -37,7 +36,7 @@ from identify.observation.processing import RestPolicy, drops_rest
 from identify.observation.row_store import RowStore, keeps_rows
 from identify.observation.stream import (DEFAULT_BLOCK, Piece, Plan, Scan, StreamSettings, in_order, piece,
                                          plan_windows, scan_all, windows_in_order)
-from identify.estimation.stream_cv import choose_processing_streamed, scans_for_choice
+from identify.estimation.stream_cv import KEEP_SECONDS, choose_processing_streamed, scans_for_choice
 from identify.estimation.delay import DelayEstimate, delay_grid, joint_log_rms, refined_delay
 
 __all__ = ["BootstrapSpec", "StreamedFit", "estimate_delay", "fit_streamed"]
@@ -218,8 +217,7 @@ def fit_streamed(robot: rx90sym.Robot, recordings: Sequence[Any], method: str = 
                  delay: float | str = 0.0, spring: bool = True, estimate: bool = False,
                  block: int = DEFAULT_BLOCK, client: Any = None, bootstrap: BootstrapSpec | None = None,
                  convention: str | None = None, gains: Any = None, cross_validate: bool | None = None,
-                 offsets: Sequence[int] = (), friction: Any = None,
-                 **consistent_options: Any) -> StreamedFit:
+                 offsets: Sequence[int] = (), friction: Any = None) -> StreamedFit:
     """:func:`identify.fit` on recordings of any length, block by block.
 
     recordings: CSV paths (streamed), :class:`~identify.Recording` objects or
@@ -238,8 +236,6 @@ def fit_streamed(robot: rx90sym.Robot, recordings: Sequence[Any], method: str = 
     known): the friction columns searched block by block (:mod:`identify.fitting.streamed_friction`),
     then fitted. The other arguments are those of :func:`identify.fit`.
     """
-    from identify.estimation.consistent_fit import consistent_fit
-
     if method not in METHODS:
         raise ValueError(f"method must be one of {METHODS}, got {method!r}")
     if not (delay == "auto" or isinstance(delay, (int, float))):
@@ -265,7 +261,8 @@ def fit_streamed(robot: rx90sym.Robot, recordings: Sequence[Any], method: str = 
     base = presliding_base(robot, base, rest if min_velocity else None)  # FPj columns with "presliding"
     settings = StreamSettings(cutoff, decimate_to or None, min_velocity or None, rest,
                               0.0 if delay == "auto" else float(delay), spring, block)
-    scans, fc = (scans, float(cutoff)) if scans is not None else scan_all(sources, settings)
+    # Each segment's first and last seconds of times kept: the identified model's folds are cut on them.
+    scans, fc = (scans, float(cutoff)) if scans is not None else scan_all(sources, settings, KEEP_SECONDS)
     search = estimate or delay == "auto"
     plans, skipped = _plans(scans, fc, replace(settings, delay=0.02 if search else settings.delay))
     flat = [p for src_plans in plans for p in src_plans]
@@ -280,15 +277,11 @@ def fit_streamed(robot: rx90sym.Robot, recordings: Sequence[Any], method: str = 
 
     def make_store() -> RowStore | None:  # the decimated rows kept when few (of the columns fitted)
         return RowStore(base.names, drop) if keeps_rows(total, robot.n, len(base.names)) else None
-    # The consistent fit's prior is measured in eq. 13's covariance inflated by the toolkit's bootstrap (seed 0),
-    # as on whole recordings (identify.estimation.honest_covariance): fed the same rows, unless it is the one asked.
-    honest = BootstrapSpec(BLOCK_S, DRAWS, HONEST_SEED) if needs_honest_covariance(method, consistent_options) else None
     drop = settings.min_velocity is not None and drops_rest(settings.rest)
     found = record = None
     if lags or friction is None:
-        boot, hboot, store = make_boot(bootstrap), make_boot(honest if honest != bootstrap else None), make_store()
-        factors, moving, count = _accumulate(robot, sources, plans, fc, settings, base, lags, client,
-                                             Fanout(boot, hboot), store)
+        boot, store = make_boot(bootstrap), make_store()
+        factors, moving, count = _accumulate(robot, sources, plans, fc, settings, base, lags, client, boot, store)
     if lags:
         found = _lag_estimate(factors, grid, step)
     if delay == "auto":  # the torques put back in step
@@ -299,19 +292,14 @@ def fit_streamed(robot: rx90sym.Robot, recordings: Sequence[Any], method: str = 
     # A second pass with the torques in step, the friction columns (none when the first pass fitted these columns
     # at this delay: coulomb chosen, no presliding).
     if delay == "auto" or base is not searched or not (lags or friction is None):
-        boot, hboot, store = make_boot(bootstrap), make_boot(honest if honest != bootstrap else None), make_store()
-        factors, moving, count = _accumulate(robot, sources, plans, fc, settings, base, (), client,
-                                             Fanout(boot, hboot), store)
+        boot, store = make_boot(bootstrap), make_store()
+        factors, moving, count = _accumulate(robot, sources, plans, fc, settings, base, (), client, boot, store)
     # Presliding magnitudes FPj of joints that never rest after a motion: 0 on every row, left out (as in memory).
     kept, empty = empty_presliding(factors.nonzero_columns(), base.names)
     fitted = factors if kept is None else factors.subset(kept)
     names = tuple(base.names) if kept is None else tuple(base.names[k] for k in kept)
+    # The (weighted) least squares of eqs. 9-15; the consistent model is made from it by the fit (identify.fit).
     result = solve_joint_systems(fitted.systems(0), names, weighted=method != "ols")
-    if method == "consistent":
-        if honest is not None:
-            std = (hboot or boot).std(result.weights, kept)
-            consistent_options = {**consistent_options, "covariance": honest_covariance(result, std)}
-        result = consistent_fit(robot, result, base, **consistent_options)
     notes = tuple(p.note for p in flat) + skipped + empty
     observation = None if store is None else store.observation(
         [fc] * len(flat), [p.rate for p in flat], [p.source for p in flat], notes, settings.min_velocity, settings.rest,

@@ -64,11 +64,18 @@ def offset_joints(robot: rx90sym.Robot, base: Any) -> tuple[int, ...]:
 
 
 def offset_base(base: Any, joints: Sequence[int]) -> Any:
-    """``base`` with offsets on ``joints`` (0-based; ``base`` itself when none). An OffsetBase
-    inside a FrictionBase is rebuilt inside it."""
+    """``base`` with offsets on ``joints`` (0-based; ``base`` itself when none), added to those it has:
+    the offsets of an OffsetBase are joined, and inside a FrictionBase the columns it wraps get them
+    (its own columns stay after them)."""
+    from dataclasses import replace
+
     joints = tuple(sorted(int(j) for j in joints))
     if not joints:
         return base
+    if isinstance(base, OffsetBase):
+        return OffsetBase(base.base, tuple(sorted(set(base.joints) | set(joints))))
+    if hasattr(base, "terms") and hasattr(base, "form"):  # a FrictionBase: its Coulomb terms index the inner columns
+        return replace(base, base=offset_base(base.base, joints))
     return OffsetBase(base, joints)
 
 

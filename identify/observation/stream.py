@@ -219,13 +219,14 @@ def scan(src: BlockSource, block: int, floor: float | None, keep_s: float = 0.0)
                 src.log)
 
 
-def scan_all(sources: Sequence[BlockSource], settings: StreamSettings) -> tuple[list[Scan], float]:
+def scan_all(sources: Sequence[BlockSource], settings: StreamSettings,
+             keep_s: float = 0.0) -> tuple[list[Scan], float]:
     """Scan every recording; the cut-off [Hz] given, or chosen as on the whole recordings
     (:func:`identify.observation.matrix.automatic_cutoff`: the largest over the segments long enough
-    for a spectrum)."""
+    for a spectrum); ``keep_s``: as :func:`scan`."""
     need = settings.cutoff is None
     floor = (max(2.0, DECIMATION_PASSBAND * settings.decimate_to) if settings.decimate_to else 2.0) if need else None
-    scans = [scan(src, settings.block, floor) for src in sources]
+    scans = [scan(src, settings.block, floor, keep_s) for src in sources]
     return scans, scanned_cutoff(scans, floor) if need else float(settings.cutoff)
 
 

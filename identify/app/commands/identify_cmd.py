@@ -1,4 +1,5 @@
-"""``rx90 identify``: base parameters from recordings (WLS, OLS or consistent), validation, report.
+"""``rx90 identify``: base parameters from recordings (WLS, OLS) and the identified model weighed between
+the robot's description and the data, validation, report.
 
 The options make one :class:`identify.Processing` (its defaults are the library's), the library's
 :func:`identify.fit` does the work and ``--json`` writes its fit file (:meth:`identify.Fit.save`):
@@ -11,6 +12,7 @@ import math
 from typing import TYPE_CHECKING, Any
 
 from identify.io.defaults import DEFAULT_BLOCK
+from identify.estimation.defaults import DEFAULT_DIVERGENCE, DIVERGENCES
 from identify.observation.defaults import (DEFAULT_DECIMATE_TO, DEFAULT_DELAY, DEFAULT_MIN_VELOCITY, DEFAULT_REST,
                                            FRICTION_FORMS, REST_POLICIES)
 
@@ -24,6 +26,19 @@ if TYPE_CHECKING:  # the model and the method are imported when the command runs
     import rx90sym
     from identify.fitting.record import Fit
     from identify.observation.processing import Processing
+
+
+def _prior_weight(text: str) -> str | float:
+    if text == "auto":
+        return text
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"--prior-weight takes 'auto' or a number >= 0 ('inf' allowed), "
+                                         f"got {text!r}") from None
+    if not value >= 0:
+        raise argparse.ArgumentTypeError(f"--prior-weight must be >= 0 ('inf' allowed), got {text!r}")
+    return value
 
 
 def _delay(text: str) -> str | float:
@@ -59,11 +74,21 @@ def register(sub: Any) -> None:
     sp.add_argument("--asymmetric-coulomb", metavar="JOINTS",
                     help="FS+ / FS- instead of FS on these joints: 'all', 'none' or e.g. 1,2,3 "
                          "(default: the robot file's [friction]); not with --offsets (collinear)")
-    sp.add_argument("--method", choices=("ols", "wls", "consistent"), default="wls")
-    sp.add_argument("--prior", metavar="FILE|none",
-                    help="with --method consistent: where the parameters the data cannot see come from "
-                         "(default: the robot's nominal parameters, its [nominal] table or URDF inertials; "
-                         "FILE: a JSON parameter file; none: no prior, the split is arbitrary)")
+    sp.add_argument("--method", choices=("ols", "wls", "consistent"), default="wls",
+                    help="the estimates printed and saved as the fit's result: the paper's weighted (wls, default) "
+                         "or ordinary (ols) least squares with eq. 13's sigma, or the identified model itself "
+                         "(consistent). Every fit also carries the identified model (physically consistent bodies "
+                         "weighed between the prior and the data), which predicts, exports and monitors")
+    sp.add_argument("--prior", metavar="description|none|FILE", default="description",
+                    help="the identified model's prior: 'description' (default: the robot's URDF inertials or "
+                         "robot-file [nominal] bodies; a link whose inertials are not physical gets its nearest "
+                         "physical body), 'none' (the data alone), or FILE (a JSON parameter file)")
+    sp.add_argument("--prior-weight", type=_prior_weight, default="auto", metavar="auto|VALUE",
+                    help="the prior's weight λ >= 0 ('inf': the prior's bodies with the drives fitted; 0: the data "
+                         "alone); 'auto' (default): chosen by blocked cross-validation against the raw torques")
+    sp.add_argument("--divergence", choices=DIVERGENCES, default=DEFAULT_DIVERGENCE,
+                    help=f"how the model's bodies are weighed against the prior's (default {DEFAULT_DIVERGENCE}: "
+                         f"per-link scaled Gaussian; entropic: the log-det divergence of the pseudo-inertias)")
     sp.add_argument("--essential", action="store_true", help="also compute the essential parameters")
     sp.add_argument("--cutoff", type=float, help="Butterworth cut-off for q [Hz] (default: chosen on the torques "
                                                  "by cross-validation; a given cut-off turns it off)")
@@ -103,8 +128,8 @@ def register(sub: Any) -> None:
     sp.add_argument("--validate", help="recording used for cross-validation only")
     sp.add_argument("--json", help="results as JSON")
     sp.add_argument("--report", help="self-contained HTML report")
-    sp.add_argument("--urdf-out", help="with --method consistent: the URDF with the identified inertials "
-                                       "and joint dynamics, and FILE.actuation.json (as rx90 export --urdf)")
+    sp.add_argument("--urdf-out", help="the URDF with the identified model's inertials and joint dynamics, and "
+                                       "FILE.actuation.json (as rx90 export --urdf)")
 
 
 def _robot(args: argparse.Namespace) -> tuple[rx90sym.Robot, Any]:
@@ -155,10 +180,6 @@ def _check(args: argparse.Namespace) -> None:
         rest = ",".join(args.rest) if isinstance(args.rest, tuple) else args.rest
         raise UsageError(f"conflicting options: --rest {rest} and --min-velocity 0 (no rest threshold: every row "
                          f"is a moving one, no rest policy applies): give a threshold or drop --rest")
-    if args.urdf_out and args.method != "consistent":
-        raise UsageError("--urdf-out needs --method consistent (a URDF holds physical bodies only)")
-    if args.prior is not None and args.method != "consistent":
-        raise UsageError("--prior is for --method consistent")
     for out in (args.json, args.report, args.urdf_out):
         check_output(out)
 
@@ -206,9 +227,9 @@ def run(args: argparse.Namespace) -> int:
     sb = attach_spring(robot, spring_model, args.validate, args.method)
     gains = read_gains(args.gains, robot) if args.gains else None
     flags = given_gain_flags(gains) if gains is not None else []
-    # The consistent fit's prior, on whole logs and block by block alike.
-    prior = physical_prior(args, robot) if args.method == "consistent" else None
-    options = {"physical_prior": prior} if args.method == "consistent" else {}
+    # The identified model's prior (--prior, --prior-weight, --divergence), on whole logs and block by block alike.
+    prior = physical_prior(args, robot)
+    options = {"physical_prior": prior, "prior_weight": args.prior_weight, "divergence": args.divergence}
     # Every log read, filtered and fitted block by block (a log within one block is one block: docs/long-logs.md).
     val_rec = args.validate
     result = fit_recordings(args, robot, processing_of(args, sb is None), sb, gains, **options)
@@ -218,14 +239,14 @@ def run(args: argparse.Namespace) -> int:
     for f in result.flags:  # the fit's own errors (a rank that depends on the threshold): fitted, never silent
         if f.code not in TORQUE_CODES:
             progress(f"error: {with_hint(f)}")
-    result = result.with_flags([*result.flags, *flags, *_fit_flags(result, args.method, prior)])
+    result = result.with_flags([*result.flags, *flags, *_fit_flags(result, args.method)])
     if args.essential:
         result = result.with_essential()
     if val_rec is not None:
         result = result.validated(val_rec)
         if result.validation.still_message():
             progress(f"warning: {result.validation.still_message()}")
-    print_fit(result, [], args.delay == "auto", prior)
+    print_fit(result, [], args.delay == "auto")
     if args.json:
         from identify.monitor.thresholds import with_contact_thresholds
 
@@ -241,37 +262,52 @@ def run(args: argparse.Namespace) -> int:
 
 
 def physical_prior(args: argparse.Namespace, robot: rx90sym.Robot) -> Any:
-    """The prior of a consistent fit (--prior), or None with a line saying the split is arbitrary."""
-    from identify.estimation.consistency.prior import nominal_prior
+    """The identified model's prior (--prior) as identify.fit takes it, said on stderr; a prior that gives
+    no body (a description whose masses are all zero, a file naming no link) is refused."""
+    from identify.fitting.fit import model_prior
 
     if args.prior == "none":
-        progress("no prior (--prior none): the split of what the data cannot see is arbitrary")
-        return None
-    prior = nominal_prior(robot, args.prior, progress)  # the library's default prior, said alike
-    if prior is not None:
-        progress(f"prior: {prior.source}")
+        progress("no prior (--prior none): the identified model is the data's alone; the split of what the data "
+                 "cannot see is arbitrary")
+        return "none"
+    try:
+        prior = model_prior(robot, args.prior, args.divergence)
+    except ValueError as exc:
+        raise UsageError(f"--prior {args.prior}: {exc}") from None
+    if prior is None:
+        if args.prior != "description":
+            raise UsageError(f"--prior {args.prior}: no link has a physical body with a mass above 0")
+        progress(f"robot {robot.name!r} has no description bodies: the identified model is the data's alone "
+                 f"(give --prior FILE)")
+        return "none"
+    progress(f"prior: {prior.source} ({len(prior.links)} of {robot.n} links)"
+             + "".join(f"\n  note: {n}" for n in prior.notes))
     return prior
 
 
-def _fit_flags(f: Fit, method: str, prior: Any = None) -> list:
+def _fit_flags(f: Fit, method: str) -> list:
     """A joint the model does not explain stops the run; non-physical WLS estimates are flagged
-    (judged with the larger of eq. 13's and the bootstrap's sigma); a consistent fit with a prior
-    (a PhysicalPrior) is judged against it (link masses, cost over WLS)."""
+    (judged with the larger of eq. 13's and the bootstrap's sigma); the identified model is judged
+    against its prior (link masses)."""
     import numpy as np
 
     from identify.fitting.plausibility import estimate_flags, prior_flags, residual_flags
 
     obs, res = f.observation, f.result
     if obs is None:  # fitted in blocks: ‖Y_j‖² is the joint system's residual at x = 0
-        torque_rms = np.array([np.sqrt(s.rss(np.zeros(s.columns)) / s.rows) for s in res.joint_systems])
+        torque_rms = np.array([np.sqrt(s.rss(np.zeros(s.columns)) / s.rows) for s in f.streamed.result.joint_systems])
     else:
         torque_rms = np.array([np.sqrt(np.mean(obs.Y[obs.joint == j] ** 2)) if np.any(obs.joint == j) else np.inf
                                for j in range(len(res.residual_rms))])
     flags = settle(residual_flags(res.residual_rms, torque_rms, f.robot.limits.tau_max[:torque_rms.size]))
     if method != "consistent":
         flags += settle(estimate_flags(res.names, res.values, np.fmax(res.std, f.bootstrap.std)))
-    elif prior is not None:
-        flags += settle(prior_flags(res.standard, prior.values, res.cost_increase_pct, f.robot.name))
+    model = f.identified
+    if model is not None and model.prior is not None:
+        from rx90sym import nominal_parameters
+
+        flags += settle(prior_flags(model.standard, {k: v for k, v in (nominal_parameters(f.robot) or {}).items()
+                                                     if k.startswith("M")}, f.robot.name))
     return flags
 
 

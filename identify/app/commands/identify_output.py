@@ -20,9 +20,10 @@ def split_text(lay: dict) -> str:
     return f" (split by the gap{'s' if total > 1 else ''} at {where}{more})" if splits else ""
 
 
-def print_fit(f: Fit, recs: list, auto_delay: bool, prior: Any = None) -> None:
-    """The fit on stdout (the chosen processing, the estimates, their bootstrap, flags, spring,
-    essential parameters, validation); the delay and the observation's summary on stderr."""
+def print_fit(f: Fit, recs: list, auto_delay: bool) -> None:
+    """The fit on stdout (the chosen processing, the estimates, their bootstrap, the identified model
+    and its prior's weight, flags, spring, essential parameters, validation); the delay and the
+    observation's summary on stderr."""
     from identify.observation.processing import rest_label
 
     obs, res = f.observation or f.streamed, f.result
@@ -53,14 +54,10 @@ def print_fit(f: Fit, recs: list, auto_delay: bool, prior: Any = None) -> None:
             print(f"note: {note}")
     print(res.table())
     if res.method == "consistent":
-        print("segment bootstrap of the unconstrained WLS estimate (the data's spread, not the consistent one's):")
+        print("segment bootstrap of the least-squares estimate (the data's spread, not the model's):")
     print(f.bootstrap.table(res))
-    if res.method == "consistent":
-        from identify.estimation.consistency.prior import bodies_table
-
-        print(f"\nsplit of the standard parameters: {res.split}")
-        print(f"weighted RSS {res.cost:.6g} vs WLS {res.wls_cost:.6g} ({res.cost_increase_pct:+.3f} %)")
-        print(bodies_table(f.robot.n, res.standard, prior))
+    if f.identified is not None:
+        print_model(f)
     if f.flags:
         print(flag_lines(f.flags))
     print(f"\n{spring_text(f, recs)}")
@@ -70,6 +67,24 @@ def print_fit(f: Fit, recs: list, auto_delay: bool, prior: Any = None) -> None:
     if f.validation is not None:
         print()
         print(f.validation.table())
+
+
+def print_model(f: Fit) -> None:
+    """The identified model: the prior weight's choice, the model's estimates with the data's share of
+    each (unless they are the fit's result, printed already), its cost, its bodies beside the prior's."""
+    import rx90sym
+
+    from identify.estimation.consistency.bodies import bodies_table
+
+    model = f.identified
+    choice = (model.prior or {}).get("choice")
+    print()
+    if choice is not None:
+        print(choice["table"])
+    if f.result is not model:
+        print(model.table())
+    print(f"identified model: {model.split}; weighted RSS {model.cost_increase_pct:+.3f} % of the least squares'")
+    print(bodies_table(f.robot.n, model.standard, rx90sym.nominal_parameters(f.robot) if model.prior else None))
 
 
 def spring_text(f: Fit, recs: list) -> str:

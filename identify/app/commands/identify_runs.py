@@ -18,9 +18,9 @@ from ..common import progress
 
 
 def fit_recordings(args: argparse.Namespace, robot: rx90sym.Robot, processing: Processing, base: Any, gains: Any,
-                   **consistent_options: Any) -> Fit:
-    """The fit of ``args.recordings`` block by block (on Dask with ``--scheduler``); ``consistent_options``:
-    those of the consistent fit (its physical prior)."""
+                   **model_options: Any) -> Fit:
+    """The fit of ``args.recordings`` block by block (on Dask with ``--scheduler``); ``model_options``:
+    those of the identified model (its prior, the prior's weight, the divergence)."""
     from identify.fitting.fit import fit
 
     progress(f"identifying ({args.method}) on {len(args.recordings)} recording(s) block by block ({args.block} "
@@ -29,7 +29,7 @@ def fit_recordings(args: argparse.Namespace, robot: rx90sym.Robot, processing: P
              + ("; the processing chosen first by cross-validation, one pass over the logs per candidate"
                 if processing.cross_validates else ""))
     options = dict(base=base, gains=gains, convention=args.convention, spring_source=args.spring,
-                   block=args.block, bootstrap_seed=args.bootstrap_seed, **consistent_options)
+                   block=args.block, bootstrap_seed=args.bootstrap_seed, **model_options)
     if args.scheduler is None:
         return fit(robot, args.recordings, processing, args.method, **options)
     from excitation.multistart import dask_client

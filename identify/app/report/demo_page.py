@@ -60,8 +60,7 @@ def demo_page(robot: rx90sym.Robot, res: Any, truth: Mapping[str, float], ess: A
             figure("fig-trajectory", "Joint positions of the excitation", trajectory_figure(np.asarray(empty.t),
                                                                                             np.asarray(empty.q))))),
         Section("consistent", "Physically consistent identification", (
-            Text((f"Cost increase over WLS: {con.cost_increase_pct:.3f} %; WLS estimate itself consistent: "
-                  f"{'yes' if con.wls_was_consistent else 'no'}.",)),
+            Text((f"The identified model: {con.split}. Cost increase over WLS: {con.cost_increase_pct:.3f} %.",)),
             bodies_table(con.standard, robot.n, rx90sym.twin.default_parameters(robot)),
             figure("fig-consistent", "Consistent estimate with WLS 2σ bars", parameter_figure(con, truth, "Consistent estimate")))),
         Section("payloads", "Payloads", tuple(_payload_table(n, r) for n, r in payloads.items())),

@@ -7,7 +7,7 @@ from __future__ import annotations
 
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 import numpy as np
 
@@ -17,9 +17,6 @@ from identify.estimation.consistency.lmi import ConsistencyReport, consistency_r
 from identify.estimation.consistency.problem import (DEFAULT_SOLVER_OPTIONS, NULL_SPACE_WEIGHT, SOLVERS, ComBoxes, ConsistencyError,
                       ConsistentProblem, Interval, MassBounds, build_consistent_problem, check_rss_outside,
                       prior_indices, solve_problem)
-
-if TYPE_CHECKING:  # prior.py imports this package's lmi: only for the annotation
-    from identify.estimation.consistency.prior import PhysicalPrior
 
 __all__ = ["ConsistentSolution", "consistent_least_squares"]
 
@@ -96,7 +93,6 @@ def consistent_least_squares(
     nonnegative: Sequence[str] = ("IA", "FV", "FS"),
     solver_options: Mapping[str, Any] | None = None,
     null_space_weight: float = NULL_SPACE_WEIGHT,
-    physical_prior: PhysicalPrior | None = None,
     carried: Mapping[str, np.ndarray] | None = None,
 ) -> ConsistentSolution:
     """Physically consistent least squares over the standard parameters.
@@ -138,9 +134,6 @@ def consistent_least_squares(
             residuals per SI unit². It picks one bounded χ among the many with the same β and
             costs at most a fraction δ·‖ν‖² of the residual; 0 disables it (the solver may
             then return huge values in directions the data do not see).
-        physical_prior: a :class:`identify.estimation.consistency.prior.PhysicalPrior`: its
-            bounds (bounding ellipsoids, mass floors, rotor-inertia ratios) are imposed too; the
-            choice of the unseen directions is :func:`identify.estimation.consistency.prior_fit.prior_fit`.
         carried: ``{body: XX..M}`` (body "1".."n") a link carries that an export writes apart (a
             URDF link's lumped hand and fingers: rx90sym.urdf_export.carried_bodies): the link
             minus it is held physical with the margin, so the export never refuses it.
@@ -183,7 +176,7 @@ def consistent_least_squares(
         return build_consistent_problem(
             R, z, K, names, epsilon=margin, rss_outside=rss_outside, prior=prior, prior_weight=prior_weight,
             mass_bounds=mass_bounds, total_mass=total_mass, com_boxes=com_boxes, nonnegative=nonnegative,
-            null_space_weight=null_space_weight, physical_prior=physical_prior, carried=carried,
+            null_space_weight=null_space_weight, carried=carried,
             # see build_consistent_problem: noise scaling for the interior-point solver, data
             # scaling for the first-order one (same minimiser).
             objective_scale="noise" if solver == "CLARABEL" else "data")

@@ -12,7 +12,7 @@ import time
 import warnings
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 import cvxpy as cp
 import numpy as np
@@ -21,9 +21,6 @@ from rx90sym.messages import plain
 
 from identify.estimation.consistency.errors import ConsistencyError  # noqa: F401 (raised here, re-exported)
 from identify.estimation.consistency.lmi import body_indices, nonnegative_indices, pseudo_inertia
-
-if TYPE_CHECKING:  # prior.py imports this package's lmi: only for the annotation
-    from identify.estimation.consistency.prior import PhysicalPrior
 
 __all__ = ["DEFAULT_SOLVER_OPTIONS", "SOLVERS", "ConsistencyError", "ConsistentProblem",
            "build_consistent_problem", "null_space", "solve_problem"]
@@ -112,7 +109,6 @@ def build_consistent_problem(
     nonnegative: Sequence[str] = ("IA", "FV", "FS"),
     null_space_weight: float = NULL_SPACE_WEIGHT,
     objective_scale: str = "noise",
-    physical_prior: PhysicalPrior | None = None,
     carried: Mapping[str, np.ndarray] | None = None,
 ) -> ConsistentProblem:
     """Build the conic problem behind :func:`consistent_least_squares` (same arguments).
@@ -150,10 +146,6 @@ def build_consistent_problem(
     constraints = (_cone_constraints(chi, names, bodies, epsilon, nonnegative, carried)
                    + _mass_constraints(chi, bodies, mass_bounds, total_mass)
                    + _com_box_constraints(chi, bodies, com_boxes))
-    if physical_prior is not None:  # its bounding ellipsoids, mass floors, rotor-inertia ratios
-        from identify.estimation.consistency.prior import prior_constraints
-
-        constraints += prior_constraints(chi, names, physical_prior)
     problem = cp.Problem(cp.Minimize(objective), constraints)
     return ConsistentProblem(problem, chi, names, scale, noise_scale, float(epsilon))
 
