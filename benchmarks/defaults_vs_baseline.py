@@ -135,7 +135,7 @@ def ur10e() -> list[bool]:
 
 
 def timing() -> None:
-    from identify.fitting.baseline import fit_baseline
+    from identify.fitting.baseline_factors import fit_baseline
 
     robot = rx90sym.load_robot("ur10e")
     sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))

@@ -221,4 +221,4 @@ def test_tx40_heldout_at_figaroh_level():
     print("\nTX40 held-out RMS moving (filtered torques) / FIGAROH WLS:", np.round(ratio, 3))
     print("TX40 held-out RMS (raw torques) / plain baseline:", np.round(val.rms_error / val.baseline_rms_error, 3))
     assert np.all(ratio < 1.10)
-    assert np.all(val.rms_error <= 1.02 * val.baseline_rms_error), val.baseline_verdict()
+    assert np.all(val.rms_error <= 1.02 * val.baseline_rms_error), "\n".join(val.verdict())

@@ -105,7 +105,8 @@ def write_report(path: str, f: Fit, recordings: list, convention: str | None, bl
         every = slice(None, None, -(-v.t.size // REPORT_POINTS))
         return replace(v, t=v.t[every], measured=v.measured[every], predicted=v.predicted[every],
                        moving=v.moving[every], baseline_predicted=None if v.baseline_predicted is None
-                       else v.baseline_predicted[every])
+                       else v.baseline_predicted[every],
+                       user_predicted=None if v.user_predicted is None else v.user_predicted[every])
 
     record = {**f.to_json(), "data": data_record(thin, f.observation or f.streamed, f.validation, samples, clocks)}
     held = shown(f.validation) if f.validation is not None else None

@@ -10,7 +10,7 @@ from identify.fitting.rank_flags import has_rank_flag
 from .cells import fixed, fmt, number
 from .page import Column, Figure, Page, Section, Summary, Table, Text
 from .summary import (REST_SHARE_CHECK, as_flag, flag, heldout_flags, heldout_table, next_steps,
-                      parameter_flags)
+                      parameter_flags, yardstick_flags)
 from .tables import bodies_table, gains_table, key_values, parameter_table, validation_table
 
 #: Largest gap [s] between the end of a fitted recording and the start of the held-out one for the
@@ -44,7 +44,7 @@ def _flags(record: Mapping[str, Any], data: Mapping[str, Any] | None) -> list[di
     flags = [as_flag(f) for f in record.get("flags") or ()]
     val = record.get("validation") or {}
     if val:
-        flags += heldout_flags(val)
+        flags += heldout_flags(val) + yardstick_flags(val)
     else:
         flags.append(flag("no-heldout", "warning", "no held-out data: the fit was not checked on samples it "
                           "did not see", "run again with --validate HELD_OUT.csv (another motion, or the "
