@@ -5,10 +5,9 @@ from __future__ import annotations
 import numpy as np
 import pinocchio as pin
 import pytest
-from scipy.signal import butter, filtfilt
 
 import rx90sym
-from conftest import random_body
+from conftest import plain_signals_by_hand, random_body
 from identify import Processing, fit, load_fit, split
 from identify.fitting.baseline_factors import fit_baseline
 from motions import multisine
@@ -23,13 +22,7 @@ def _independent(robot, fit_rec, test_rec):
     data = model.createData()
 
     def rows(rec):
-        t = np.asarray(rec.t)
-        h = np.median(np.diff(t))
-        b, a = butter(4, 10.0, fs=1 / h)
-        q = filtfilt(b, a, rec.q, axis=0)
-        dq = np.gradient(q, h, axis=0)
-        ddq = np.gradient(dq, h, axis=0)
-        keep = np.flatnonzero((t >= t[0] + 0.5 - 1e-9) & (t <= t[-1] - 0.5 + 1e-9))
+        q, dq, ddq, keep = plain_signals_by_hand(rec)
         n = robot.n
         W = []
         for i in keep:

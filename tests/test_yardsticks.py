@@ -11,11 +11,10 @@ import warnings
 import numpy as np
 import pinocchio as pin
 import pytest
-from scipy.signal import butter, filtfilt
 
 import identify
 import rx90sym
-from conftest import robot_file_without
+from conftest import plain_signals_by_hand, robot_file_without
 from identify import Processing, fit, load_fit, split
 from identify.estimation.raw_folds import RawSpan
 from identify.fitting.baseline import baseline_regressor, memory_windows, window_signals
@@ -55,13 +54,7 @@ def _direct_user_model(fit_rec, test_rec):
     assert model.nq == 6
 
     def rows(rec):
-        t = np.asarray(rec.t)
-        h = np.median(np.diff(t))
-        b, a = butter(4, 10.0, fs=1 / h)
-        q = filtfilt(b, a, rec.q, axis=0)
-        dq = np.gradient(q, h, axis=0)
-        ddq = np.gradient(dq, h, axis=0)
-        keep = np.flatnonzero((t >= t[0] + 0.5 - 1e-9) & (t <= t[-1] - 0.5 + 1e-9))
+        q, dq, ddq, keep = plain_signals_by_hand(rec)
         rnea = np.array([pin.rnea(model, data, q[i], dq[i], ddq[i]) for i in keep])
         return dq[keep], rnea, keep
 

@@ -29,7 +29,7 @@ fixed at the description's values, and the held-out errors of both per time bloc
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Any, Callable, Iterable, Iterator, Sequence
+from typing import Any, Iterable, Iterator, Sequence
 
 import numpy as np
 from scipy.signal import butter, filtfilt
@@ -191,13 +191,19 @@ def yardstick_predictions(robot: rx90sym.Robot, models: Sequence[Any], windows: 
     return [BaselinePrediction(*(np.concatenate(a) for a in zip(*part))) for part in parts]
 
 
+@dataclass(frozen=True, eq=False)
 class LinearYardstick:
-    """What both yardsticks share: a value per :func:`baseline_names` column, predicted through
-    :func:`baseline_regressor` on the baseline's filtered samples (spring subtracted when it was added)."""
+    """What both yardsticks share: a value per :func:`baseline_names` column (``names``), predicted through
+    :func:`baseline_regressor` on the baseline's filtered samples (spring subtracted when it was added); the
+    fitted samples, the rank of the columns fitted, whether the spring torque was added, per joint
+    residual RMS [N m] on the fitted samples."""
 
     names: tuple[str, ...]
     values: np.ndarray
+    samples: int
+    rank: int
     spring: bool
+    residual_rms: np.ndarray
 
     def predict(self, robot: rx90sym.Robot, recording: Any, block: int | None = None) -> BaselinePrediction:
         """The prediction of ``recording`` (every segment on its own; filtered in blocks of at most
@@ -209,33 +215,30 @@ class LinearYardstick:
         :func:`memory_windows`, or :func:`identify.fitting.baseline_blocks.source_windows` for a long log)."""
         return yardstick_predictions(robot, [self], windows)[0]
 
+    def fitted_json(self) -> dict[str, Any]:
+        """The shared fields as the fit file holds them (non-finite numbers null)."""
+        return {"names": list(self.names), "values": [json_number(v) for v in self.values], "samples": self.samples,
+                "rank": self.rank, "spring": self.spring, "residual_rms": [json_number(v) for v in self.residual_rms]}
+
+    @staticmethod
+    def fitted_fields(d: dict[str, Any]) -> tuple:
+        """The shared fields from :meth:`fitted_json`'s record, in order."""
+        values = np.array([np.nan if v is None else v for v in d["values"]], dtype=float)
+        rms = np.array([np.nan if v is None else v for v in d.get("residual_rms", [])], dtype=float)
+        return tuple(d["names"]), values, int(d["samples"]), int(d["rank"]), bool(d["spring"]), rms
+
 
 @dataclass(frozen=True, eq=False)
 class PlainBaseline(LinearYardstick):
-    """The plain OLS baseline fitted: values over ``names`` (:func:`baseline_names`), the fitted
-    samples, the rank of W, whether the spring torque was added; per joint residual RMS [N m] on the
-    fitted samples."""
-
-    names: tuple[str, ...]
-    values: np.ndarray
-    samples: int
-    rank: int
-    spring: bool
-    residual_rms: np.ndarray
+    """The plain OLS baseline fitted (the fields of :class:`LinearYardstick`; rank: of W)."""
 
     def to_json(self) -> dict[str, Any]:
         return {"definition": "plain OLS: q by a 4th-order zero-phase Butterworth at 10 Hz, numpy.gradient, "
                               "rigid-body regressor + [dq_j, sign(dq_j), 1] per joint, lstsq(rcond=1e-10), "
                               "0.5 s trimmed at both ends",
                 "cutoff_hz": BASELINE_CUTOFF_HZ, "order": BASELINE_ORDER, "trim_s": BASELINE_TRIM_S,
-                "rcond": BASELINE_RCOND, "names": list(self.names),
-                "values": [json_number(v) for v in self.values], "samples": self.samples, "rank": self.rank,
-                "spring": self.spring, "residual_rms": [json_number(v) for v in self.residual_rms]}
+                "rcond": BASELINE_RCOND, **self.fitted_json()}
 
     @classmethod
     def from_json(cls, d: dict[str, Any] | None) -> "PlainBaseline | None":
-        if not d:
-            return None
-        values = np.array([np.nan if v is None else v for v in d["values"]], dtype=float)
-        rms = np.array([np.nan if v is None else v for v in d.get("residual_rms", [])], dtype=float)
-        return cls(tuple(d["names"]), values, int(d["samples"]), int(d["rank"]), bool(d["spring"]), rms)
+        return cls(*cls.fitted_fields(d)) if d else None

@@ -31,7 +31,6 @@ import numpy as np
 import rx90sym
 from rx90sym.pinocchio_bridge import PINOCCHIO_ORDER
 
-from identify.estimation.results import json_number
 from identify.fitting.baseline import BASELINE_RCOND, LinearYardstick
 from identify.fitting.baseline_factors import BaselineFactors
 
@@ -84,19 +83,11 @@ class UserModel(LinearYardstick):
     columns (summed over the joints), whether the spring torque was added, per joint residual RMS [N m] on
     the fitted samples, and where the bodies come from."""
 
-    names: tuple[str, ...]
-    values: np.ndarray
-    samples: int
-    rank: int
-    spring: bool
-    residual_rms: np.ndarray
-    source: str
+    source: str = ""
 
     def to_json(self) -> dict[str, Any]:
         return {"computed": True, "definition": USER_MODEL_DEFINITION, "bodies_from": self.source,
-                "names": list(self.names), "values": [json_number(v) for v in self.values],
-                "samples": self.samples, "rank": self.rank, "spring": self.spring,
-                "residual_rms": [json_number(v) for v in self.residual_rms]}
+                **self.fitted_json()}
 
     @classmethod
     def from_json(cls, d: dict[str, Any] | None) -> "tuple[UserModel | None, str]":
@@ -106,10 +97,7 @@ class UserModel(LinearYardstick):
             return None, "not in the fit file (written before schema version 5, or without a baseline)"
         if not d.get("computed"):
             return None, str(d.get("reason") or "not computed")
-        values = np.array([np.nan if v is None else v for v in d["values"]], dtype=float)
-        rms = np.array([np.nan if v is None else v for v in d.get("residual_rms", [])], dtype=float)
-        return cls(tuple(d["names"]), values, int(d["samples"]), int(d["rank"]), bool(d["spring"]), rms,
-                   str(d.get("bodies_from", ""))), ""
+        return cls(*cls.fitted_fields(d), str(d.get("bodies_from", ""))), ""
 
 
 def not_computed(reason: str) -> dict[str, Any]:

@@ -109,9 +109,9 @@ class Validation:
                else (self.baseline_rms_error, self.user_rms_error))
         return {name: v for name, v in zip(YARDSTICK_NAMES, rms) if v is not None}
 
-    def yardstick_ratio(self, moving: bool = False) -> tuple[np.ndarray, list[str]] | None:
+    def yardstick_ratio(self, moving: bool = False) -> tuple[np.ndarray, list[str | None]] | None:
         """(ratio (n,) of the toolkit's RMS to the better yardstick's, the better one's name per joint), on all
-        samples or while moving; None without yardsticks (nan where a joint never moves)."""
+        samples or while moving; None without yardsticks (nan and None where a joint never moves)."""
         sticks = self.yardsticks(moving)
         if not sticks:
             return None
@@ -121,7 +121,7 @@ class Validation:
         own = self.rms_error_moving if moving and self.rms_error_moving is not None else self.rms_error
         better = table[best, np.arange(table.shape[1])]
         with np.errstate(divide="ignore", invalid="ignore"):
-            return own / better, [names[k] for k in best]
+            return own / better, [names[k] if np.isfinite(v) else None for k, v in zip(best, better)]
 
     @property
     def beats_both(self) -> np.ndarray | None:
