@@ -14,6 +14,7 @@ import pytest
 
 import identify
 import rx90sym
+from identify.app.report.tables import validation_table
 from conftest import plain_signals_by_hand, robot_file_without
 from identify import Processing, fit, load_fit, split
 from identify.estimation.raw_folds import RawSpan
@@ -128,6 +129,12 @@ def test_both_yardsticks_in_the_validation_the_json_and_the_fit_file(tx40, tx40_
     assert d["user_model_rms_error_moving"] is not None and d["yardstick_ratio_moving"] is not None
     lines = v.table().splitlines()
     assert "user model rms [N m]" in lines[1] and any(line.startswith("beats both yardsticks") for line in lines)
+    # The report's validation table, from the JSON: both yardsticks' columns, the ratio, the verdicts.
+    table = validation_table(d)
+    heads = [c.header() for c in table.columns]
+    assert "user model RMS all [N·m]" in heads and "plain OLS RMS moving [N·m]" in heads and "beats both" in heads
+    assert [row[heads.index("beats both")].value for row in table.rows] == ["yes" if b else "no" for b in d["beats_both"]]
+    assert "Beats both on all samples on joints" in table.note and "Beats both while moving on joints" in table.note
     # The fit file keeps both (schema 5): read back, the same figures.
     f.save(tmp_path / "fit.json")
     data = json.loads((tmp_path / "fit.json").read_text())
@@ -198,19 +205,21 @@ def _direct_folds(robot, rec, span):
     return err, ref
 
 
-def test_the_held_out_yardsticks_equal_a_direct_per_fold_computation(tx40):
-    """Two segments read in windows of 300 samples, three time blocks, the bounds of one segment narrower
-    than its samples: the per-(block, joint) errors and references equal a direct computation, and the
-    scores are block_scores' of them."""
-    rec = rx90sym.twin.simulate(tx40, multisine(tx40, 6, duration=8.0), duration=8.0, noise="quantised", seed=6,
+def test_the_held_out_yardsticks_equal_a_direct_per_fold_computation(rx90):
+    """The RX90 (its spring added to the torques fitted, not to the reference), two segments read in windows
+    of 300 samples, three time blocks, the bounds of each segment narrower than its samples: the
+    per-(block, joint) errors and references equal a direct computation, and the scores are block_scores'
+    of them."""
+    assert rx90.spring is not None
+    rec = rx90sym.twin.simulate(rx90, multisine(rx90, 6, duration=8.0), duration=8.0, noise="quantised", seed=6,
                                 rate=200.0)
     segment = np.repeat([0, 1], [900, rec.n_samples - 900])
     rec = dataclasses.replace(rec, segment=segment)
-    src = MemorySource(rec, tx40)
+    src = MemorySource(rec, rx90)
     sc = scan(src, 300, None)
     span = RawSpan({(0, 0): (1.0, 3.8), (0, 900): (5.0, 7.3)}, 1.0, 6.3, 3)
-    folds = yardstick_folds(tx40, [src], [sc], span, True, 300)
-    err, ref = _direct_folds(tx40, rec, span)
+    folds = yardstick_folds(rx90, [src], [sc], span, True, 300)
+    err, ref = _direct_folds(rx90, rec, span)
     assert np.all(ref > 0) and np.all(folds.samples > 100)
     np.testing.assert_allclose(folds.ref2, ref, rtol=1e-9)
     for kind in ("plain", "user"):
