@@ -141,14 +141,23 @@ def test_torque_signs_negate_the_joints_given_in_every_form(tmp_path, tx40, caps
 
 def test_a_time_column_that_counts_samples_is_named_with_the_fix(tmp_path, tx40, capsys):
     counted = _log(tmp_path / "counted.csv", 1000.0, 1.0, counter=True)
-    with pytest.raises(RecordingError, match=r"the time column \(column 1, t\) counts samples, not seconds: whole "
-                                             r"numbers \(0, 1, 2, ...\).* the recorded velocities say the rows are "
-                                             r"0.001 s apart; map the column as _ and give the sampling period with "
-                                             r"--period S .*e.g. --period 0.001"):
+    with pytest.raises(RecordingError, match=r"the time column \(column 1, t\) counts samples \(or milliseconds\), "
+                                             r"not seconds: whole numbers \(0, 1, 2, ...\).* the recorded velocities "
+                                             r"say the rows are 0.001 s apart; map the column as _ and give the "
+                                             r"sampling period with --period S .*e.g. --period 0.001"):
         read_log(counted, tx40, COLUMNS, header=True)
+    # A clock in milliseconds at 500 Hz: steps of 2.
+    ms = tmp_path / "ms.csv"
+    seconds = _log(tmp_path / "ms_s.csv", 500.0, 1.0)
+    table = np.loadtxt(seconds, delimiter=",", skiprows=1)
+    table[:, 0] = np.round(table[:, 0] * 1000.0)
+    np.savetxt(ms, table, delimiter=",", header=seconds.read_text().splitlines()[0], comments="", fmt="%.10g")
+    with pytest.raises(RecordingError, match=r"in steps of 2 \(read as seconds: a rate of 0.5 Hz\).*rows are "
+                                             r"0.002 s apart.*e.g. --period 0.002"):
+        read_log(ms, tx40, COLUMNS, header=True)
     bare = _log(tmp_path / "bare.csv", 1000.0, 1.0, counter=True, velocities=False)
     cols = "t,q1..q6,tau1..tau6"
-    with pytest.raises(RecordingError, match=r"counts samples.*at 1 s per row the arm would move at 0.\d+ % of "
+    with pytest.raises(RecordingError, match=r"counts samples.*read in seconds the arm would move at 0.\d+ % of "
                                              r"its velocity limits or less \(95 % of the rows\); map the column as _"):
         read_log(bare, tx40, cols, header=True)
     # The fix: the column ignored and the period given.

@@ -110,13 +110,13 @@ def check_units(t: np.ndarray, q: np.ndarray, dq: np.ndarray | None, robot: rx90
                          f"recording of another robot, or in another angle convention?")
 
 
-#: A time column that counts samples: integer stamps in steps of exactly 1 (read as a rate of 1 Hz) while
-#: the recorded velocities say the rows are less than COUNTER_PERIOD [s] apart...
+#: A time column that counts samples (or milliseconds): whole-number stamps in whole steps (a step of 1 reads
+#: as a rate of 1 Hz) while the recorded velocities say one unit of the column is under COUNTER_PERIOD [s]...
 COUNTER_PERIOD = 0.1
-#: ... or, without recorded velocities, while every joint's steps (their 95th percentile: a lost cycle doubles a
-#: step) are below COUNTER_SPEED of its velocity limit per second: an arm counted in samples at 500 Hz or more
-#: moves at most that much per row, one logged at 1 Hz crawls at under 0.2 % of its limits (one that does
-#: is read with --period 1)...
+#: ... or, without recorded velocities, while every joint's steps per unit (their 95th percentile: a lost cycle
+#: doubles a step) are below COUNTER_SPEED of its velocity limit per second: an arm counted in samples at 500 Hz
+#: or more moves at most that much per row, one logged at 1 Hz crawls at under 0.2 % of its limits (one that
+#: does is read with --period 1)...
 COUNTER_SPEED = 0.002
 #: The percentile of the steps judged against COUNTER_SPEED.
 COUNTER_PERCENTILE = 95.0
@@ -126,9 +126,12 @@ COUNTER_SPAN = 0.05
 
 def sample_clock_refusal(t: np.ndarray, q: np.ndarray, dq: np.ndarray | None, robot: rx90sym.Robot,
                          column: str) -> str | None:
-    """Why the time column ``column`` (its description for the message) holds sample numbers, not
-    seconds (the rule of COUNTER_PERIOD, COUNTER_SPEED, COUNTER_SPAN), or None.
+    """Why the time column ``column`` (its description for the message) holds sample numbers (or
+    milliseconds), not seconds (the rule of COUNTER_PERIOD, COUNTER_SPEED, COUNTER_SPAN), or None.
 
+    Stamps that are whole numbers in whole steps (median step k >= 1: a rate of 1/k Hz read as seconds)
+    while the recorded velocities say one unit of the column is under COUNTER_PERIOD s, or without them
+    the arm moves at under COUNTER_SPEED of its velocity limits per unit.
     t: (N,) the column's values as read (any origin); q: (N, n) positions [rad]; dq: (N, n) recorded
     velocities [rad/s] or None; robot: its velocity limits."""
     t = np.asarray(t, dtype=float)
@@ -136,21 +139,22 @@ def sample_clock_refusal(t: np.ndarray, q: np.ndarray, dq: np.ndarray | None, ro
     if t.size < 3 or not np.all(t == np.round(t)):
         return None
     dt = np.diff(t)
-    if float(np.median(dt)) != 1.0 or not np.any(np.ptp(q, axis=0) >= COUNTER_SPAN):
+    k = float(np.median(dt))
+    if not (k >= 1 and k == round(k)) or not np.any(np.ptp(q, axis=0) >= COUNTER_SPAN):
         return None
     step = np.diff(q, axis=0)
-    head = (f"{column} counts samples, not seconds: whole numbers ({t[0]:g}, {t[1]:g}, {t[2]:g}, ...) in steps "
-            f"of 1 (read as seconds: a rate of 1 Hz)")
+    head = (f"{column} counts samples (or milliseconds), not seconds: whole numbers ({t[0]:g}, {t[1]:g}, {t[2]:g}, "
+            f"...) in steps of {k:g} (read as seconds: a rate of {1 / k:.3g} Hz)")
     fix = "map the column as _ and give the sampling period with --period S (period= in Python)"
     if dq is not None:
-        expected = 0.5 * (dq[1:] + dq[:-1]) * dt[:, None]  # the steps the velocities make over one row [rad per s]
+        expected = 0.5 * (dq[1:] + dq[:-1]) * dt[:, None]  # the steps the velocities make per unit of the column
         power = float(np.sum(expected ** 2))
         if power > 0:
-            period = float(np.sum(step * expected) / power)
-            if not 0 < period < COUNTER_PERIOD:
+            unit = float(np.sum(step * expected) / power)  # s per unit of the column
+            if not 0 < unit < COUNTER_PERIOD:
                 return None
-            return (f"{head}, while the recorded velocities say the rows are {period:.3g} s apart; {fix}, "
-                    f"e.g. --period {period:.2g}")
+            return (f"{head}, while the recorded velocities say the rows are {unit * k:.3g} s apart; {fix}, "
+                    f"e.g. --period {unit * k:.2g}")
     limit = np.asarray(robot.limits.qd_max, dtype=float)
     finite = np.isfinite(limit) & (limit > 0)
     if not finite.any():
@@ -158,5 +162,6 @@ def sample_clock_refusal(t: np.ndarray, q: np.ndarray, dq: np.ndarray | None, ro
     speed = np.percentile(np.abs(step) / dt[:, None], COUNTER_PERCENTILE, axis=0)[finite] / limit[finite]
     if np.any(speed >= COUNTER_SPEED):
         return None
-    return (f"{head}, while at 1 s per row the arm would move at {100 * float(speed.max()):.2g} % of its velocity "
-            f"limits or less ({COUNTER_PERCENTILE:g} % of the rows); {fix} (--period 1 if the rows are 1 s apart)")
+    return (f"{head}, while read in seconds the arm would move at {100 * float(speed.max()):.2g} % of its velocity "
+            f"limits or less ({COUNTER_PERCENTILE:g} % of the rows); {fix} (--period {k:g} if the rows are "
+            f"{k:g} s apart)")
