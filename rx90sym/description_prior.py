@@ -24,6 +24,7 @@ the file has them: the yardstick "the model the user had" uses those, not the pr
 from __future__ import annotations
 
 from dataclasses import dataclass
+from types import MappingProxyType
 from typing import Mapping
 
 import numpy as np
@@ -78,7 +79,7 @@ class DescriptionPrior:
     """The description's parameters as a prior (module docstring).
 
     source: what they come from (shown in outputs); values: theta_0, every standard parameter of the
-    robot (name -> SI value), physical; as_written: the same names as the file gives them; links: one
+    robot (name -> SI value, read-only), physical; as_written: the same names as the file gives them; links: one
     LinkPrior per moving link; ground: the links fixed to the ground whose inertial is ignored (not
     physical as written); notes: every line of the warning (also the ground links' and the
     friction values set to 0)."""
@@ -238,8 +239,8 @@ def description_prior(robot: Robot) -> DescriptionPrior | None:
         lines.append(", ".join(f"{name} = {values[name]:.4g}" for name in negative) + " below 0 as written: 0 in the prior")
         values.update({name: 0.0 for name in negative})
     kind = "URDF inertials" if getattr(robot, "urdf", None) is not None else "[nominal] table"
-    return DescriptionPrior(f"{kind} of {robot.source or robot.name}", values, written, tuple(links), tuple(ground),
-                            tuple(lines))
+    return DescriptionPrior(f"{kind} of {robot.source or robot.name}", MappingProxyType(values),
+                            MappingProxyType(written), tuple(links), tuple(ground), tuple(lines))
 
 
 def required_description_prior(robot: Robot, option: str = "--prior description") -> DescriptionPrior:
