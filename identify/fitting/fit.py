@@ -77,7 +77,8 @@ def fit(robot: rx90sym.Robot, recordings: Sequence[Any], processing: Processing 
     delay estimate, no baseline, no cross-validation).
     The fit keeps its decimated rows (``Fit.observation``) when they are few (identify.observation.row_store);
     its flags hold the recorded-torque checks (identify.fitting.torque_checks: torque scale, gravity at
-    rest; errors that rx90 identify stops on) and a rank that depends on the threshold.
+    rest, errors that rx90 identify stops on; the torques' sign against the description's inverse dynamics,
+    a warning) and a rank that depends on the threshold.
     """
     if method not in METHODS:
         raise ValueError(f"fit: method must be one of {METHODS}, got {method!r}")
@@ -168,7 +169,7 @@ def _fit_blocks(robot: rx90sym.Robot, recordings: Sequence[Any], processing: Any
     from identify.observation.spring_fit import BaseWithSpring, spring_summary
     from identify.io.blocks import block_source, check_block
     from identify.fitting.yardsticks import streamed_yardsticks
-    from identify.fitting.torque_checks import streamed_torque_flags
+    from identify.fitting.torque_checks import streamed_torque_flags, torque_sign_flags
 
     from identify.fitting.streamed_friction import FrictionHook
 
@@ -206,7 +207,8 @@ def _fit_blocks(robot: rx90sym.Robot, recordings: Sequence[Any], processing: Any
     return Fit(robot, sf.result, p, model, base, sf.observation, found, found.delay if found is not None else None, spring,
                boot, block=block, streamed=sf, recordings=sf.recordings,
                choice=_choice_record(sf.choice, getattr(hook, "choice", None)),
-               flags=tuple(streamed_torque_flags(robot, sources, sf.scans, block)),
+               flags=tuple(streamed_torque_flags(robot, sources, sf.scans, block)
+                           + torque_sign_flags(robot, sf.result, base, spring_added=bool(p.spring))),
                baseline=sticks.plain, user_model=sticks.user, user_model_note=sticks.user_note)
 
 

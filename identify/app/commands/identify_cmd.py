@@ -269,7 +269,7 @@ def _fit_flags(f: Fit, method: str, prior: Any = None) -> list:
                                for j in range(len(res.residual_rms))])
     flags = settle(residual_flags(res.residual_rms, torque_rms, f.robot.limits.tau_max[:torque_rms.size]))
     if method != "consistent":
-        flags += settle(estimate_flags(res.names, res.values, np.fmax(res.std, f.bootstrap.std)))
+        flags += settle(estimate_flags(res.names, res.values, np.fmax(res.std, f.bootstrap.std), f.flags))
     elif prior is not None:
         flags += settle(prior_flags(res.standard, prior.values, res.cost_increase_pct, f.robot.name))
     return flags
