@@ -4,7 +4,10 @@ Bodies ``link1`` .. ``linkN`` in Khalil frame j (nested, each placed by its join
 controller's angles, rx90sym.model_export), each with its ``<inertial>`` (mass, CoG, full inertia
 at the CoG: MuJoCo diagonalises it when compiling). Joints ``joint1`` .. ``jointN`` with
 ``armature`` = IA, ``damping`` = FV, ``frictionloss`` = FS and the position range. One ``motor``
-actuator per joint (gear 1, control = joint torque), limited to the robot's torque limit. A
+actuator per joint (gear 1, control = joint torque), limited to the robot's torque limit; on a joint
+with a torque offset OFFj or asymmetric Coulomb friction, an actuator ``constantj`` of gain 0 and a
+constant bias force -OFFj - (FSPj - FSNj)/2 (rx90sym.model_export.constant_forces: the offset
+exactly, the asymmetric Coulomb exactly while the joint moves; ``qfrc_actuator`` holds it). A
 coupled wrist (eqs. 16-18) is a fixed tendon q_a + q_b carrying IA_b, FVM and FSM
 (rx90sym.model_export.actuation). The world frame is the URDF root for a robot read from a URDF
 (a fixed body ``base`` holds Khalil frame 0 where the URDF puts it, and every link body carries a
@@ -22,8 +25,9 @@ from typing import Mapping, Sequence
 import numpy as np
 
 from .description import Robot
-from .model_export import (actuation, checked_parameters, companion, export_joint_names, flange_pose, fmt, joint_origin,
-                           limits_in_controller_angles, link_bodies, payload_body, quaternion, write_model)
+from .model_export import (actuation, checked_parameters, companion, constant_forces, constant_joints, export_joint_names,
+                           flange_pose, fmt, joint_origin, limits_in_controller_angles, link_bodies, payload_body,
+                           quaternion, write_model)
 from .rigid_body import RigidBody
 
 # MuJoCo refuses moving bodies whose mass or principal inertia is below mjMINVAL (1e-15); a
@@ -63,7 +67,7 @@ def _joint(robot: Robot, j: int, name: str, arm: float, damp: float, fric: float
 def mjcf_text(robot: Robot, chi: np.ndarray, payload: RigidBody | None = None) -> str:
     """The MJCF text (module docstring); ValueError naming a link MuJoCo would refuse."""
     bodies = link_bodies(robot, chi)
-    act = actuation(robot, chi)
+    act = actuation(robot, chi, constants_held=True)
     lower, upper = limits_in_controller_angles(robot)
     names = export_joint_names(robot)
     chain = robot.urdf
@@ -109,6 +113,10 @@ def mjcf_text(robot: Robot, chi: np.ndarray, payload: RigidBody | None = None) -
         tau = robot.limits.tau_max[j]
         limit = f' ctrllimited="true" ctrlrange="{fmt(-tau)} {fmt(tau)}"' if math.isfinite(tau) else ' ctrllimited="false"'
         lines.append(f'    <motor name="motor{j + 1}" joint="{names[j]}" gear="1"{limit}/>')
+    constant = constant_forces(robot, chi)
+    for j in constant_joints(robot):  # force = gain * ctrl + bias = biasprm[0], whatever the control
+        lines.append(f'    <general name="constant{j + 1}" joint="{names[j]}" gainprm="0" biastype="affine" '
+                     f'biasprm="{fmt(constant[j])} 0 0" ctrllimited="false"/>')
     lines += ["  </actuator>", "</mujoco>"]
     return "\n".join(lines) + "\n"
 
@@ -128,4 +136,5 @@ def mjcf_export(robot: Robot, params: Mapping[str, float] | Sequence[float], pat
     chi = checked_parameters(robot, params)
     body = payload_body(robot, payload) if payload is not None else None
     text = mjcf_text(robot, chi, body)
-    return text, companion(robot, chi, path, "mjcf", actuation(robot, chi).notes)
+    return text, companion(robot, chi, path, "mjcf", actuation(robot, chi, constants_held=True).notes,
+                           constants_held=True)
