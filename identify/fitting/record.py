@@ -150,13 +150,14 @@ class Fit:
         options = dict(self.filtering(), decimate_to="prediction", filtered_at=self.decimate_to)
         block = block if block is not None else (self.block or DEFAULT_BLOCK)
         convention = convention or self.model.convention
+        simulated = None
+        if rollout is not None:  # first: a window the recording cannot hold is refused before the prediction
+            from identify.rollout.run import roll_out_fit
+
+            simulated = roll_out_fit(self, recording, rollout, block=block, convention=convention)
         val = predict(self.robot, result or self.result, recording, base=self.base, baseline=self.baseline,
                       block=block, convention=convention, gains=self.gains, **options)
-        if rollout is None:
-            return val
-        from identify.rollout.run import roll_out_fit
-
-        return replace(val, rollout=roll_out_fit(self, recording, rollout, block=block, convention=convention))
+        return val if simulated is None else replace(val, rollout=simulated)
 
     def validate(self, recording: Any, rollout: Any = None) -> Validation:
         """Cross-validation on a recording not used in the fit (with the essential parameters when

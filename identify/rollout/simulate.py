@@ -30,7 +30,7 @@ class Simulator:
     def set_period(self, period: float) -> None:
         """Step the recording's sampling period [s] in :func:`substeps` equal steps."""
         if period != self.period:
-            self.period, self.substeps = period, substeps(period)
+            self.period, self.substeps = period, substeps(period, min(MAX_STEP_S, self.sm.max_step))
             self.sm.model.opt.timestep = period / self.substeps
 
     def run(self, q0: np.ndarray, v0: np.ndarray, tau: np.ndarray, keep: bool = False
