@@ -23,7 +23,7 @@ from identify.observation.defaults import DEFAULT_MIN_VELOCITY
 from identify.rollout.defaults import DEFAULT_START_VELOCITY, FIGURE_WINDOWS, window_lengths
 from identify.rollout.model import nominal_model, simulator_model, simulator_parameters
 from identify.rollout.result import GUESS, Rollout, WindowPath, WindowScores
-from identify.rollout.samples import RolloutSource, Window, WindowCutter
+from identify.rollout.samples import RolloutSource, Samples, WindowCutter
 from identify.rollout.simulate import Simulator
 
 __all__ = ["roll_out", "roll_out_fit"]
@@ -124,7 +124,7 @@ def roll_out(robot: rx90sym.Robot, params: Mapping[str, float] | Sequence[float]
                    tuple(tallies[L].scores() for L in lengths), payload is not None)
 
 
-def _score(robot: rx90sym.Robot, sims: Sequence[Simulator], w: Window, tally: _Tally, threshold: float) -> None:
+def _score(robot: rx90sym.Robot, sims: Sequence[Simulator], w: Samples, tally: _Tally, threshold: float) -> None:
     """One window: skipped (bridged samples; at rest) or rolled out by every model and scored."""
     if not w.measured.all():
         tally.bridged += 1

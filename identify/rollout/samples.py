@@ -20,7 +20,7 @@ from identify.observation.matrix import shifted_torques
 from identify.observation.stream import StreamSettings, plan_windows, scan, windows_in_order
 from identify.signal.filtering import derivatives
 
-__all__ = ["RolloutSource", "Samples", "Window", "WindowCutter"]
+__all__ = ["RolloutSource", "Samples", "WindowCutter"]
 
 
 @dataclass(frozen=True, eq=False)
@@ -28,7 +28,8 @@ class Samples:
     """Consecutive raw samples of one segment: ``segment`` its number, ``rate`` [Hz]; t (S,) [s]; q (S, n)
     recorded positions [rad, model angles]; dq (S, n) start velocities [rad/s]; speed (S, n) the speeds
     that decide rest [rad/s] (recorded q̇ when the log has it, else ``dq``: the fit's rest rule); tau
-    (S, n) joint torques [N m] (gains applied, τ(t + delay)); measured (S,) False where bridged."""
+    (S, n) joint torques [N m] (gains applied, τ(t + delay)); measured (S,) False where bridged; index:
+    a window's number among the recording's windows of its length (:class:`WindowCutter`; -1: a block)."""
 
     segment: int
     rate: float
@@ -38,6 +39,7 @@ class Samples:
     speed: np.ndarray
     tau: np.ndarray
     measured: np.ndarray
+    index: int = -1
 
 
 class RolloutSource:
@@ -83,21 +85,6 @@ class RolloutSource:
                           shifted_torques(rec, self.delay)[kept], rec.measured_mask[kept])
 
 
-@dataclass(frozen=True, eq=False)
-class Window:
-    """One window of ``samples`` + 1 consecutive samples (the arrays of :class:`Samples`); ``index``: its
-    number among the recording's windows of this length (scored or not)."""
-
-    index: int
-    rate: float
-    t: np.ndarray
-    q: np.ndarray
-    dq: np.ndarray
-    speed: np.ndarray
-    tau: np.ndarray
-    measured: np.ndarray
-
-
 class WindowCutter:
     """Windows of ``length`` [s] (round(length x rate) samples) from consecutive :class:`Samples`: from
     each segment's first filtered sample, one after the other (a window ends on the next one's first
@@ -116,7 +103,8 @@ class WindowCutter:
         """Samples per window at ``rate`` [Hz] (at least one)."""
         return max(1, int(round(self.length * rate)))
 
-    def feed(self, piece: Samples) -> list[Window]:
+    def feed(self, piece: Samples) -> list[Samples]:
+        """The windows that ``piece`` completes (each ``samples`` + 1 samples, numbered by ``index``)."""
         if piece.segment != self._segment:
             self._segment, self._held = piece.segment, {}
         held = {k: np.concatenate([self._held[k], getattr(piece, k)]) if self._held else getattr(piece, k)
@@ -125,7 +113,7 @@ class WindowCutter:
         out, start = [], 0
         while start + size < held["t"].size:
             cut = slice(start, start + size + 1)
-            out.append(Window(self.count, piece.rate, *(held[k][cut] for k in self._FIELDS)))
+            out.append(Samples(piece.segment, piece.rate, *(held[k][cut] for k in self._FIELDS), index=self.count))
             self.count += 1
             start += size
         self._held = {k: v[start:] for k, v in held.items()}
