@@ -176,6 +176,31 @@ def test_rx90_predict_rollout_writes_the_librarys_figures_and_a_report(files, tm
     assert "fig-rollout" in page and "Rollout in MuJoCo" in page
 
 
+def test_a_validation_with_a_rollout_is_in_the_fit_file_and_its_report(realistic):
+    """identify --validate V --rollout: the fit file's validation holds the rollout, the report a section."""
+    from identify.app.report.identify_page import identify_page
+
+    robot, truth, rec, fit = realistic
+    record = fit.validated(rec, rollout=0.25).to_json()
+    rollout = record["validation"]["rollout"]
+    assert rollout["windows"][0]["windows_scored"] >= 10 and rollout["models"] == ["identified", "nominal"]
+    page = identify_page(record)
+    section = next(s for s in page.sections if s.id == "rollout")
+    assert any(getattr(b, "id", "") == "rollout-0" for b in section.blocks)
+    # identify.predict rolls out a consistent result's bodies with the processing it is given: the same windows
+    alone = identify.predict(robot, fit.result, rec, cutoff=fit.cutoff, min_velocity=fit.min_velocity, rollout=0.25)
+    np.testing.assert_array_equal(alone.rollout.windows[0].position["identified"],
+                                  roll_out_fit(fit, rec, 0.25).windows[0].position["identified"])
+
+
+def test_a_window_where_mujoco_gives_up_is_counted_not_scored(exact):
+    robot, truth, rec = exact
+    wild = replace(rec, tau=rec.tau * 1e300)
+    w = roll_out(robot, truth, wild, 0.5, cutoff=20.0, nominal=False).windows[0]
+    assert w.diverged["identified"] == w.windows > 0 and np.all(np.isnan(w.position["identified"]))
+    assert np.all(w.beats_guess("identified") == 0)
+
+
 @pytest.mark.parametrize("case, argv, message", [
     ("zero", ["--rollout", "0"], "duration > 0"),
     ("longer", ["--rollout", "0.25,30"], "longer than the recording"),
