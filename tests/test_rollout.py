@@ -193,7 +193,8 @@ def test_a_validation_with_a_rollout_is_in_the_fit_file_and_its_report(realistic
                                   roll_out_fit(fit, rec, 0.25).windows[0].position["identified"])
 
 
-def test_a_window_where_mujoco_gives_up_is_counted_not_scored(exact):
+def test_a_window_where_mujoco_gives_up_is_counted_not_scored(exact, tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)  # MuJoCo writes its warning to MUJOCO_LOG.TXT in the working folder
     robot, truth, rec = exact
     wild = replace(rec, tau=rec.tau * 1e300)
     w = roll_out(robot, truth, wild, 0.5, cutoff=20.0, nominal=False).windows[0]
