@@ -143,28 +143,36 @@ class Fit:
 
     # ------------------------------------------------------------ using it
     def predict(self, recording: Any, result: IdentificationResult | None = None, *, block: int | None = None,
-                convention: str | None = None) -> Validation:
+                convention: str | None = None, rollout: Any = None) -> Validation:
         """Torques of ``recording`` (a recording, or a recording file read block by block: ``block`` raw
         samples at a time, default the fit's, its angles ``convention``, default the fit's) predicted with
         this fit's parameters (or ``result``) and processing. Where a joint rests the Coulomb term is 0,
         or the presliding state with that rest policy (every sample is predicted, whatever the rest
-        policy)."""
+        policy). rollout: window lengths [s] ("0.25,0.5" or numbers): the fit's own model, as ``rx90
+        export --mjcf`` writes it, also rolled out in MuJoCo (identify.rollout.run.roll_out_fit; the
+        validation's ``rollout``)."""
         # At 20 x the cut-off (identify.fitting.validation.prediction_rate), not at the fit's decimated rate.
         options = dict(self.filtering(), decimate_to="prediction", filtered_at=self.decimate_to)
-        return predict(self.robot, result or self.result, recording, base=self.base, baseline=self.baseline,
-                       user_model=self.user_model, user_model_note=self.user_model_note,
-                       block=block if block is not None else (self.block or DEFAULT_BLOCK),
-                       convention=convention or self.model.convention,
-                       gains=self.gains, **options)
+        block = block if block is not None else (self.block or DEFAULT_BLOCK)
+        convention = convention or self.model.convention
+        simulated = None
+        if rollout is not None:  # first: a window the recording cannot hold is refused before the prediction
+            from identify.rollout.run import roll_out_fit
 
-    def validate(self, recording: Any) -> Validation:
+            simulated = roll_out_fit(self, recording, rollout, block=block, convention=convention)
+        val = predict(self.robot, result or self.result, recording, base=self.base, baseline=self.baseline,
+                      user_model=self.user_model, user_model_note=self.user_model_note,
+                      block=block, convention=convention, gains=self.gains, **options)
+        return val if simulated is None else replace(val, rollout=simulated)
+
+    def validate(self, recording: Any, rollout: Any = None) -> Validation:
         """Cross-validation on a recording not used in the fit (with the essential parameters when
-        they were computed)."""
-        return self.predict(recording, self.essential)
+        they were computed); rollout: as :meth:`predict`."""
+        return self.predict(recording, self.essential, rollout=rollout)
 
-    def validated(self, recording: Any) -> "Fit":
-        """This fit with its validation on ``recording`` recorded (saved in the file)."""
-        return replace(self, validation=self.validate(recording))
+    def validated(self, recording: Any, rollout: Any = None) -> "Fit":
+        """This fit with its validation on ``recording`` recorded (saved in the file); rollout: as :meth:`predict`."""
+        return replace(self, validation=self.validate(recording, rollout))
 
     def with_flags(self, flags: Sequence[Flag]) -> "Fit":
         """This fit with its plausibility flags recorded (saved in the file's ``flags``)."""

@@ -96,6 +96,7 @@ class Validation:
     user_predicted: np.ndarray | None = None
     user_model_note: str = ""  # why there is no model the user had ("" when there is, or no yardstick at all)
     t0_s: float = 0.0  # the log's own clock at the recording's first sample (t counts from it) [s]
+    rollout: Any = None  # the model rolled out in MuJoCo (identify.rollout.result.Rollout), None: not asked
 
     @property
     def beats_baseline(self) -> np.ndarray | None:
@@ -149,7 +150,7 @@ class Validation:
                else f"moving: |q̇j| ≥ {self.moving_threshold:g} rad/s")
         lines = [f"Validation on {self.source} against the raw measured torques ({self.t.size} samples; cut-off "
                  f"{self.cutoff:.4g} Hz, rate {self.rate:.6g} Hz, {thr})", head, *rows]
-        return "\n".join(lines + self.verdict())
+        return "\n".join(lines + self.verdict() + ([self.rollout.table()] if self.rollout is not None else []))
 
     def verdict(self) -> list[str]:
         """"beats both yardsticks on joints ..." on all samples scored and while moving (per joint, RMS), with
@@ -204,7 +205,8 @@ class Validation:
                 "user_model_note": self.user_model_note or None,
                 **self._yardstick_dict(),
                 "rms_error_filtered": listed(self.rms_error_filtered),
-                "rms_error_filtered_moving": listed(self.rms_error_filtered_moving)}
+                "rms_error_filtered_moving": listed(self.rms_error_filtered_moving),
+                **({"rollout": self.rollout.to_dict()} if self.rollout is not None else {})}
 
     def _yardstick_dict(self) -> dict[str, Any]:
         """The JSON's comparison with the yardsticks: per joint the ratio to the better one and its name, and
@@ -242,7 +244,7 @@ def predict(robot: rx90sym.Robot, result: IdentificationResult, recording: Any, 
             min_velocity: float | None = None, delay: float = 0.0, rest: RestPolicy = "zero-coulomb",
             baseline: Any = None, filtered_at: float | None | str = "prediction", block: int = DEFAULT_BLOCK,
             convention: str | None = None, gains: Any = None, user_model: Any = None,
-            user_model_note: str = "") -> Validation:
+            user_model_note: str = "", rollout: Any = None) -> Validation:
     """Predicted vs measured torques of ``recording`` (a recording, or a recording file) with the parameters
     of ``result``, block by block whatever its length.
 
@@ -259,6 +261,9 @@ def predict(robot: rx90sym.Robot, result: IdentificationResult, recording: Any, 
     decimated; "prediction": the prediction's rate; :meth:`identify.Fit.predict` gives the fit's own).
     block: raw samples read, filtered and predicted at a time (memory: a block, the decimated
     prediction and the samples scored); convention, gains: how a recording file is read.
+    rollout: window lengths [s] ("0.25,0.5" or numbers): the bodies of ``result`` (a consistent fit's
+    ``standard``) rolled out in MuJoCo with this processing (identify.rollout.run.roll_out; the
+    validation's ``rollout``); None: not.
     """
     if base is None:  # the symbolic base, with the torque offsets the fit chose (OFFj in the result)
         base = offset_base(rx90sym.base_parameters(robot), result_offsets(result, robot))
@@ -320,9 +325,18 @@ def predict(robot: rx90sym.Robot, result: IdentificationResult, recording: Any, 
     # The filtered figures on the fit's rows: from this pass when they are the prediction's, else a pass of their own.
     filtered = (sums.result() if sums is not None else
                 streamed_filtered_rms(robot, src, scans[0], fc, filtered_settings, regressor, names, beta))
-    return replace(scored_validation(RawScores(t, Y, pred, mov, base_pred, user_pred), src.source, settings.min_velocity,
-                                     fc, plans[0].rate), **filtered, t0_s=log_clock(recording, src),
-                   user_model_note=user_model_note if user_model is None else "")
+    val = replace(scored_validation(RawScores(t, Y, pred, mov, base_pred, user_pred), src.source, settings.min_velocity,
+                                    fc, plans[0].rate), **filtered, t0_s=log_clock(recording, src),
+                  user_model_note=user_model_note if user_model is None else "")
+    if rollout is None:
+        return val
+    from identify.rollout.run import roll_out
+
+    standard = getattr(result, "standard", None)
+    if not standard:
+        raise ValueError(f"a {result.method} result holds base parameters, not physical bodies: nothing to roll out")
+    return replace(val, rollout=roll_out(robot, rx90sym.nominal_parameters(robot, dict(standard)), src, rollout,
+                                         cutoff=fc, delay=delay, min_velocity=min_velocity, block=block))
 
 
 def log_clock(recording: Any, source: Any = None) -> float:
