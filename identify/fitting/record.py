@@ -26,6 +26,7 @@ from identify.estimation.delay import DelayEstimate
 from identify.fitting.validation import Validation, predict
 from identify.io.blocks import DEFAULT_BLOCK
 from identify.fitting.baseline import PlainBaseline
+from identify.fitting.user_model import UserModel, not_computed
 from identify.observation.offsets import offset_base
 
 
@@ -106,6 +107,8 @@ class Fit:
     block: int | None = None        # logs read block by block with this many samples (None: whole)
     streamed: Any = None            # the block-wise fit's record (identify.fitting.streamed.StreamedFit)
     baseline: Any = None            # the plain OLS baseline (identify.fitting.baseline.PlainBaseline) or None
+    user_model: Any = None          # the model the user had (identify.fitting.user_model.UserModel) or None
+    user_model_note: str = ""       # why there is no model the user had ("" when there is)
     contact_thresholds: np.ndarray | None = None  # contact monitor's per joint [N·m] (identify.monitor)
     identified: ConsistentResult | None = None  # the identified model (identify.estimation.consistent_fit)
     result_validation: Validation | None = None  # the (W)LS estimates' own validation, beside the model's
@@ -154,30 +157,40 @@ class Fit:
 
     # ------------------------------------------------------------ using it
     def predict(self, recording: Any, result: IdentificationResult | None = None, *, block: int | None = None,
-                convention: str | None = None) -> Validation:
+                convention: str | None = None, rollout: Any = None) -> Validation:
         """Torques of ``recording`` (a recording, or a recording file read block by block: ``block`` raw
         samples at a time, default the fit's, its angles ``convention``, default the fit's) predicted with
         this fit's identified model (:attr:`model_result`; or ``result``) and processing. Where a joint rests the Coulomb term is 0,
         or the presliding state with that rest policy (every sample is predicted, whatever the rest
-        policy)."""
+        policy). rollout: window lengths [s] ("0.25,0.5" or numbers): the fit's own model, as ``rx90
+        export --mjcf`` writes it, also rolled out in MuJoCo (identify.rollout.run.roll_out_fit; the
+        validation's ``rollout``)."""
         # At 20 x the cut-off (identify.fitting.validation.prediction_rate), not at the fit's decimated rate.
         options = dict(self.filtering(), decimate_to="prediction", filtered_at=self.decimate_to)
+        block = block if block is not None else (self.block or DEFAULT_BLOCK)
+        convention = convention or self.model.convention
+        simulated = None
+        if rollout is not None:  # first: a window the recording cannot hold is refused before the prediction
+            from identify.rollout.run import roll_out_fit
+
+            simulated = roll_out_fit(self, recording, rollout, block=block, convention=convention)
         result = result or self.model_result
-        return predict(self.robot, result, recording, base=self.columns_of(result), baseline=self.baseline,
-                       block=block if block is not None else (self.block or DEFAULT_BLOCK),
-                       convention=convention or self.model.convention,
-                       gains=self.gains, **options)
+        val = predict(self.robot, result, recording, base=self.columns_of(result), baseline=self.baseline,
+                      user_model=self.user_model, user_model_note=self.user_model_note,
+                      block=block, convention=convention, gains=self.gains, **options)
+        return val if simulated is None else replace(val, rollout=simulated)
 
-    def validate(self, recording: Any) -> Validation:
+    def validate(self, recording: Any, rollout: Any = None) -> Validation:
         """Cross-validation on a recording not used in the fit (with the essential parameters when
-        they were computed)."""
-        return self.predict(recording, self.essential)
+        they were computed); rollout: as :meth:`predict`."""
+        return self.predict(recording, self.essential, rollout=rollout)
 
-    def validated(self, recording: Any) -> "Fit":
+    def validated(self, recording: Any, rollout: Any = None) -> "Fit":
         """This fit with its validation on ``recording`` recorded (saved in the file): the identified
-        model's (what predicts), and beside it the (W)LS estimates' when they are not the model."""
+        model's (what predicts), and beside it the (W)LS estimates' when they are not the model;
+        rollout: as :meth:`predict`."""
         ls = self.predict(recording, self.result) if self.result is not self.model_result else None
-        return replace(self, validation=self.validate(recording), result_validation=ls)
+        return replace(self, validation=self.validate(recording, rollout), result_validation=ls)
 
     def with_flags(self, flags: Sequence[Flag]) -> "Fit":
         """This fit with its plausibility flags recorded (saved in the file's ``flags``)."""
@@ -221,6 +234,8 @@ class Fit:
                     "flags": [f.to_json() for f in self.flags], "recordings": list(self.recordings),
                     "processing_choice": self.choice,
                     "baseline": self.baseline.to_json() if self.baseline is not None else None,
+                    "user_model": (self.user_model.to_json() if self.user_model is not None
+                                   else not_computed(self.user_model_note) if self.user_model_note else None),
                     "contact_thresholds_nm": (None if self.contact_thresholds is None
                                               else [float(v) for v in self.contact_thresholds]),
                     "identified": self.identified.to_dict() if self.identified is not None else None})
@@ -246,6 +261,7 @@ class Fit:
             baseline = PlainBaseline.from_json(data.get("baseline"))  # None in older files
             identified = (ConsistentResult.from_dict(data["identified"]) if isinstance(data.get("identified"), dict)
                           else result if isinstance(result, ConsistentResult) else None)
+            user, note = UserModel.from_json(data.get("user_model"))  # None in files of schema 4 and older
         except (KeyError, TypeError, ValueError) as exc:
             raise ValueError(f"{path}: {exc}".replace(f"{path}: {path}: ", f"{path}: ")) from None
         rob = robot if isinstance(robot, rx90sym.Robot) else robot_of(model, robot)
@@ -264,7 +280,7 @@ class Fit:
                    delay_estimate_s=data.get("delay_estimate_s"), spring=data.get("spring"),
                    bootstrap=bootstrap, essential=essential, flags=flags,
                    recordings=tuple(data.get("recordings", [])), choice=data.get("processing_choice"),
-                   baseline=baseline,
+                   baseline=baseline, user_model=user, user_model_note=note,
                    contact_thresholds=(None if data.get("contact_thresholds_nm") is None
                                        else np.asarray(data["contact_thresholds_nm"], dtype=float)),
                    identified=identified)
