@@ -420,3 +420,42 @@ def test_a_corrupt_recording_is_named_by_line_and_column(files, tmp_path, capsys
         assert f"{name}.csv" in msg and f"line {at}" in msg, msg
         if name == "abc":
             assert f"column '{header[2]}'" in msg and "'abc' is not a number" in msg, msg
+
+
+# --- the identified model's prior and weight ------------------------------------------------------
+
+@pytest.mark.parametrize("args, needle", [
+    (("--prior-weight", "-1"), "--prior-weight must be >= 0"),
+    (("--prior-weight", "heavy"), "--prior-weight takes 'auto' or a number"),
+    (("--prior-weight", "nan"), "--prior-weight must be >= 0"),
+])
+def test_identify_refuses_a_bad_prior_weight(files, tmp_path, capsys, args, needle):
+    out = tmp_path / "id.json"
+    with pytest.raises(SystemExit) as stop:  # argparse's own refusal of an option's value
+        rx90_cmd(capsys, "identify", files["empty.csv"], *args, "--json", out)
+    err = capsys.readouterr().err
+    assert stop.value.code == 2 and needle in err and not out.exists(), err
+
+
+def test_identify_refuses_a_prior_file_with_parameters_the_robot_does_not_have(files, tmp_path, capsys):
+    prior = tmp_path / "prior.json"
+    values = {**rx90sym.twin.default_parameters(rx90sym.load_robot("rx90")), "M7": 1.0, "XX7": 0.1}
+    prior.write_text(json.dumps({"robot": "rx90", "parameters": values}))
+    out = tmp_path / "id.json"
+    msg = refused(capsys, out, "identify", files["empty.csv"], "--prior", prior, "--json", out)
+    assert "'M7'" in msg and "'XX7'" in msg and str(prior) in msg
+
+
+def test_identify_refuses_a_description_without_bodies_as_the_prior(files, tmp_path, capsys):
+    """--prior description on a robot whose [nominal] masses are all 0: exit 2, nothing written."""
+    from rx90sym.robot_file import ROBOTS_DIR
+
+    text = (ROBOTS_DIR / "rx90.toml").read_text()
+    massless = text.replace("mass = [26.0, 22.0, 12.0, 8.0, 2.0, 0.6]", "mass = [0.0, 0.0, 0.0, 0.0, 0.0, 0.0]")
+    assert massless != text
+    robot = tmp_path / "rx90.toml"
+    robot.write_text(massless)
+    out = tmp_path / "id.json"
+    msg = refused(capsys, out, "identify", files["empty.csv"], "--robot", str(robot), "--prior", "description",
+                  "--json", out)
+    assert "gives no body to a moving link" in msg and "masses 0, 0, 0, 0, 0, 0 kg" in msg

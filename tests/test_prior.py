@@ -121,3 +121,29 @@ def test_the_divergence_is_zero_at_the_prior_and_its_hessian_its_curvature(rx90,
         second = (prior.value(up) + prior.value(down)) / h ** 2   # 2 D(±hΔ)/h² -> Δᵀ H Δ
         assert second == pytest.approx(direction @ H @ direction, rel=1e-3 if h == 1e-3 else 3e-2)
     assert prior.value({n: truth[n] + direction[k] for k, n in enumerate(names)}) > 0
+
+
+def test_the_held_out_check_refuses_only_a_model_worse_than_the_description():
+    """identify.fitting.plausibility.heldout_flags on the cross-validation's per-block errors: a model worse
+    than the yardstick over all joints in every block is refused; one worse on one joint only is a warning
+    naming that joint with both figures to two decimals; a model no worse says nothing unless it explains
+    under half of a joint's torque."""
+    from identify.fitting.plausibility import heldout_flags
+
+    reference = np.array([[10.0, 20.0, 30.0]] * 5) + np.arange(5)[:, None] * 0.3
+    worse = reference * 1.1
+    (refusal,) = heldout_flags(worse.mean(0), worse, reference.mean(0), reference, "the model the user had")
+    assert refusal.severity == "error" and refusal.code == "model_unexplained"
+    assert "22.66 % against 20.60 %" in refusal.message and "the model the user had" in refusal.message
+    one = reference.copy()
+    one[:, 1] *= 1.05
+    one[:, 0] *= 0.9
+    one[:, 2] *= 0.95
+    flags = heldout_flags(one.mean(0), one, reference.mean(0), reference, "the plain OLS")
+    assert [(f.code, f.severity, f.joint) for f in flags] == [("model_worse_on_joint", "warning", 2)]
+    assert "21.63 % against 20.60 %" in flags[0].message
+    assert heldout_flags(reference.mean(0) * 0.9, reference * 0.9, reference.mean(0), reference, "x") == []
+    poor = reference.copy()
+    poor[:, 2] = 50.4  # above RESIDUAL_SHARE (50 %) of the torque, yet no worse than the yardstick's 50.6
+    flags = heldout_flags(poor.mean(0), poor, np.r_[reference.mean(0)[:2], 50.6], np.c_[reference[:, :2], [50.6] * 5], "x")
+    assert [(f.code, f.severity) for f in flags] == [("model_unexplained", "warning")] and "50.40 %" in flags[0].message

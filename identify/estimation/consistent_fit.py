@@ -35,7 +35,8 @@ class ConsistentResult(IdentificationResult):
 
     std / rel_std_pct: σ of the least squares on the same columns (eqs. 13-15, inflated by the segment
     bootstrap's ratio where the residuals are coloured): the data's information on each parameter;
-    least_squares: those estimates.
+    least_squares: those estimates; heldout: the model's held-back errors in the fitted data (the blocked
+    cross-validation's: ``score_pct``, ``per_joint_pct``, ``per_block_pct``; None without the fit's folds).
     standard: the variables x (name -> value: the standard parameters, then the columns that are not
     standard parameters, e.g. torque offsets); cost, wls_cost: weighted residual sum of squares of this
     model and of the (W)LS fit; prior: the prior's record (source, divergence, weight λ and its choice;
@@ -51,6 +52,7 @@ class ConsistentResult(IdentificationResult):
     data_share: np.ndarray | None = None
     wls_was_consistent: bool = False
     least_squares: np.ndarray | None = None
+    heldout: dict | None = None
 
     @property
     def cost_increase_pct(self) -> float:
@@ -74,7 +76,7 @@ class ConsistentResult(IdentificationResult):
                   "data_share": None if self.data_share is None else [json_number(v) for v in self.data_share],
                   "least_squares": (None if self.least_squares is None
                                     else [json_number(v) for v in self.least_squares]),
-                  "wls_was_consistent": self.wls_was_consistent})
+                  "wls_was_consistent": self.wls_was_consistent, "heldout": self.heldout})
         return d
 
     def table(self) -> str:
@@ -111,7 +113,8 @@ class ConsistentResult(IdentificationResult):
                    prior=d.get("prior") if isinstance(d.get("prior"), dict) else None,
                    data_share=None if share is None else np.array([np.nan if v is None else v for v in share]),
                    least_squares=None if least is None else np.array([np.nan if v is None else v for v in least]),
-                   wls_was_consistent=bool(d.get("wls_was_consistent", False)))
+                   wls_was_consistent=bool(d.get("wls_was_consistent", False)),
+                   heldout=d.get("heldout") if isinstance(d.get("heldout"), dict) else None)
 
 
 def _pct(v: float) -> str:
@@ -163,7 +166,7 @@ def consistent_fit(robot: rx90sym.Robot, wls: IdentificationResult, columns: Any
     """
     from identify.estimation.consistency.errors import ConsistencyError
     from identify.estimation.consistency.weighted_fit import TIE_BREAK, PriorProblem, column_map
-    from identify.estimation.prior_weight import choose_prior_weight, fold_system
+    from identify.estimation.prior_weight import choose_prior_weight, fold_system, held_back_scores
     from identify.observation.offsets import offset_base
     from rx90sym.urdf_carried import carried_bodies
 
@@ -211,6 +214,14 @@ def consistent_fit(robot: rx90sym.Robot, wls: IdentificationResult, columns: Any
     else:
         weight = float(prior_weight)
     fixed = prior is not None and math.isinf(weight)
+    heldout = None
+    if factors is not None:  # the model's own held-back errors (the chosen weight's, or the weight given)
+        done = (dict(zip(choice.weights, choice.scores))[weight] if choice is not None else
+                held_back_scores(factors, {False: make(False), True: make(True)} if prior is not None
+                                 else {False: make(False)}, [weight], offsets)[0])
+        if not math.isnan(done.score):
+            heldout = {"score_pct": done.score, "per_joint_pct": list(done.per_joint),
+                       "per_block_pct": [list(row) for row in done.per_block]}
     problem = make(fixed)
     x = problem.solve(R, z, weight, scale)
     report = problem.check(x)
@@ -251,7 +262,7 @@ def consistent_fit(robot: rx90sym.Robot, wls: IdentificationResult, columns: Any
         cond_unweighted=wls.cond_unweighted, residual_rms=residual_rms, weights=weights, rows=rows,
         method="consistent", covariance=None, system=None, joint_systems=(),
         standard=dict(zip(cmap.names, (float(v) for v in x))), cost=cost + scale - wls_cost, wls_cost=scale,
-        prior=record, data_share=share, least_squares=least, wls_was_consistent=_admits_bodies(robot, columns, names, least))
+        prior=record, data_share=share, least_squares=least, heldout=heldout, wls_was_consistent=_admits_bodies(robot, columns, names, least))
 
 
 def _least_squares(R: np.ndarray, z: np.ndarray, scale: float, rows: int, wls: IdentificationResult,

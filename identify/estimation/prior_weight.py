@@ -29,7 +29,8 @@ from identify.observation.candidates import Candidate
 from identify.observation.cross_validation import clearly_better
 from identify.observation.cv_scoring import block_scores
 
-__all__ = ["WEIGHT_GRID", "FoldSystem", "ObservationFolds", "WeightChoice", "choose_prior_weight", "fold_system", "observation_folds"]
+__all__ = ["WEIGHT_GRID", "FoldSystem", "ObservationFolds", "WeightChoice", "choose_prior_weight", "fold_system",
+           "held_back_scores", "observation_folds"]
 
 #: λ of the grid: the data alone (0), decades, the description's bodies (inf).
 WEIGHT_GRID = (0.0, 1e-2, 1e-1, 1.0, 1e1, 1e2, 1e3, 1e4, 1e5, 1e6, math.inf)
@@ -125,8 +126,10 @@ def fold_system(fitted: Sequence[Any], held: int | None, n: int, c: int,
                       weights, tuple(joints), tuple(counts))
 
 
-def _held_back(factors: Any, problems: dict, weights: Sequence[float], offsets: Sequence[int]) -> list[Candidate]:
-    """Per weight the held-back errors of every block (``factors``: a RawFactors of the fit's columns)."""
+def held_back_scores(factors: Any, problems: dict, weights: Sequence[float], offsets: Sequence[int]) -> list[Candidate]:
+    """Per weight the held-back errors of every block, a Candidate each (``factors``: a RawFactors of the
+    fit's columns, with an offset on the joints ``offsets``; ``problems``: the compiled problems for
+    finite λ (key False) and λ = ∞ (True); the weight -1 stands for the unconstrained least squares)."""
     blocks, n, c = factors.span.blocks, factors.n, factors.c
     offsets = tuple(offsets)
     err2 = np.full((len(weights), blocks, n), np.nan)
@@ -169,7 +172,7 @@ def choose_prior_weight(factors: Any, free: PriorProblem, fixed: PriorProblem, o
     torque offset on the joints ``offsets``; ``free``/``fixed`` the compiled problems for finite λ and
     for λ = ∞; ``keeps(λ)``: why the model at λ overrides what the data determine (None: it does not),
     such a λ never chosen."""
-    scored = _held_back(factors, {False: free, True: fixed}, (-1.0,) + tuple(weights), offsets)
+    scored = held_back_scores(factors, {False: free, True: fixed}, (-1.0,) + tuple(weights), offsets)
     unconstrained, scored = scored[0], scored[1:]
     valid = [(w, s) for w, s in zip(weights, scored) if not math.isnan(s.score)]
     if not valid:

@@ -115,17 +115,15 @@ def model_prior(robot: rx90sym.Robot, physical_prior: Any, divergence: str = DEF
     if physical_prior is None or (isinstance(physical_prior, str) and physical_prior == "none"):
         return None
     if isinstance(physical_prior, str) and physical_prior == "description":
-        values, label = rx90sym.nominal_parameters(robot), _description_label(robot)
-    else:
-        values = rx90sym.nominal_parameters(robot, physical_prior)
-        label = str(physical_prior) if not isinstance(physical_prior, dict) else "given parameters"
+        from rx90sym.description_prior import description_prior
+
+        described = description_prior(robot)
+        if described is None:
+            return None
+        return body_prior(described.values, robot.n, described.source, divergence, described.notes)
+    values = rx90sym.nominal_parameters(robot, physical_prior)
+    label = str(physical_prior) if not isinstance(physical_prior, dict) else "given parameters"
     return body_prior(values, robot.n, label, divergence)
-
-
-def _description_label(robot: rx90sym.Robot) -> str:
-    if robot.urdf is not None:
-        return f"URDF inertials of {robot.source}"
-    return f"[nominal] of {robot.source or robot.name}"
 
 
 def _fit_observation(robot: rx90sym.Robot, recordings: Sequence[Any], obs: Observation, p: Processing, method: str,
@@ -217,7 +215,8 @@ def _fit_blocks(robot: rx90sym.Robot, recordings: Sequence[Any], processing: Any
     base = sf.columns  # with the offsets and the friction columns chosen
     rest = sf.settings.rest  # the policy given, or chosen by the cross-validation
     sources = [block_source(r, robot, convention, gains) for r in recordings]
-    identified = _identified(robot, sf.result, base, _model_factors(robot, sources, sf, client), options,
+    span = _model_span(sf)
+    identified = _identified(robot, sf.result, base, _model_factors(robot, sources, sf, span, client), options,
                              given=columns_given, spread=sf.bootstrap_std)
     result = identified if method == "consistent" else sf.result
     model = FitModel.of(robot, convention=convention, gains=gains.to_dict() if gains is not None else None,
@@ -229,29 +228,50 @@ def _fit_blocks(robot: rx90sym.Robot, recordings: Sequence[Any], processing: Any
     boot = Bootstrap(sf.bootstrap_std, sf.bootstrap_block / sf.rate, spec.draws, spec.seed) if spec else None
     found = sf.delay_estimate
     # The yardsticks and the recorded-torque checks: a pass each over the logs, block by block, as on whole ones.
-    sticks = streamed_yardsticks(robot, sources, sf.scans, p.spring, block, client)
+    sticks = streamed_yardsticks(robot, sources, sf.scans, p.spring, block, client, span)
     return Fit(robot, result, p, model, base, sf.observation, found, found.delay if found is not None else None, spring,
                boot, block=block, streamed=sf, recordings=sf.recordings,
                choice=_choice_record(sf.choice, getattr(hook, "choice", None)),
                flags=tuple(streamed_torque_flags(robot, sources, sf.scans, block)
-                           + torque_sign_flags(robot, sf.result, base, spring_added=bool(p.spring))),
+                           + torque_sign_flags(robot, sf.result, base, spring_added=bool(p.spring))
+                           + model_flags(identified, sticks.folds)),
                baseline=sticks.plain, user_model=sticks.user, user_model_note=sticks.user_note,
                identified=identified)
 
 
-def _model_factors(robot: rx90sym.Robot, sources: Sequence[Any], sf: Any, client: Any) -> Any:
-    """The per-(time block, joint) factors of the fit's own columns and processing, and of the raw
-    samples they predict: what the prior weight's cross-validation scores (one pass over the logs)."""
-    from dataclasses import replace
-
+def _model_span(sf: Any) -> Any:
+    """The time blocks of the identified model's cross-validation and of the yardsticks' held-out errors:
+    the fit's own processing (its cut-off's filter edges, its decimation and delay from each segment's
+    ends), :data:`identify.observation.cross_validation.DEFAULT_BLOCKS` of them."""
     from identify.estimation.raw_folds import raw_span
-    from identify.estimation.stream_cv import column_factors
     from identify.observation.candidates import Candidate
     from identify.observation.cross_validation import DEFAULT_BLOCKS
 
-    settings = replace(sf.settings, cutoff=sf.cutoff)
-    span = raw_span(sf.scans, [Candidate(sf.cutoff, settings.decimate_to)], DEFAULT_BLOCKS, settings.delay)
-    return column_factors(robot, sources, sf.scans, sf.columns, settings, span, client)
+    return raw_span(sf.scans, [Candidate(sf.cutoff, sf.settings.decimate_to)], DEFAULT_BLOCKS, sf.settings.delay)
+
+
+def _model_factors(robot: rx90sym.Robot, sources: Sequence[Any], sf: Any, span: Any, client: Any) -> Any:
+    """The per-(time block, joint) factors of the fit's own columns and processing, and of the raw
+    samples they predict: what the identified model is fitted and its prior weight cross-validated on
+    (one pass over the logs)."""
+    from dataclasses import replace
+
+    from identify.estimation.stream_cv import column_factors
+
+    return column_factors(robot, sources, sf.scans, sf.columns, replace(sf.settings, cutoff=sf.cutoff), span, client)
+
+
+def model_flags(model: Any, folds: Any) -> list:
+    """The identified model's held-back errors against the yardstick's on the same time blocks
+    (identify.fitting.plausibility.heldout_flags): the model the user had, or the plain OLS where the
+    description has no bodies; none without held-back errors."""
+    from identify.fitting.plausibility import heldout_flags
+
+    if model is None or model.heldout is None or folds is None:
+        return []
+    kind, name = ("user", "the model the user had") if "user" in folds.err2 else ("plain", "the plain OLS")
+    _, per_joint, per_block = folds.scores(kind)
+    return heldout_flags(model.heldout["per_joint_pct"], model.heldout["per_block_pct"], per_joint, per_block, name)
 
 
 def _choice_record(choice: ProcessingChoice | None, friction: Any) -> dict | None:

@@ -79,8 +79,8 @@ def register(sub: Any) -> None:
                          "or ordinary (ols) least squares with eq. 13's sigma, or the identified model itself "
                          "(consistent). Every fit also carries the identified model (physically consistent bodies "
                          "weighed between the prior and the data), which predicts, exports and monitors")
-    sp.add_argument("--prior", metavar="description|none|FILE", default="description",
-                    help="the identified model's prior: 'description' (default: the robot's URDF inertials or "
+    sp.add_argument("--prior", metavar="description|none|FILE",
+                    help="the identified model's prior: 'description' (the default: the robot's URDF inertials or "
                          "robot-file [nominal] bodies; a link whose inertials are not physical gets its nearest "
                          "physical body), 'none' (the data alone), or FILE (a JSON parameter file)")
     sp.add_argument("--prior-weight", type=_prior_weight, default="auto", metavar="auto|VALUE",
@@ -219,7 +219,7 @@ def run(args: argparse.Namespace) -> int:
     from identify.io.gains import read_gains
 
     from ..spring_output import attach_spring
-    from .identify_output import print_fit, write_report
+    from .identify_output import print_choices, print_fit, write_report
 
     _check(args)
     robot, spring_model = _robot(args)
@@ -236,12 +236,16 @@ def run(args: argparse.Namespace) -> int:
     # Every log read, filtered and fitted block by block (a log within one block is one block: docs/long-logs.md).
     val_rec = args.validate
     result = fit_recordings(args, robot, processing_of(args, sb is None), sb, gains, **options)
-    # The recorded torques' scale and gravity at rest, checked by the fit (every log, block by block when long):
-    # an error stops the run (exit 2, nothing written).
-    settle([f for f in result.flags if f.code in TORQUE_CODES])
-    for f in result.flags:  # the fit's own errors (a rank that depends on the threshold): fitted, never silent
-        if f.code not in TORQUE_CODES:
-            progress(f"error: {with_hint(f)}")
+    # What the fit chose, before any refusal: the processing's and the prior weight's tables.
+    print_choices(result)
+    # The recorded torques' scale, sign and gravity at rest, and the identified model against the model the user
+    # had on held-back blocks, checked by the fit (every log, block by block when long): an error stops the run
+    # (exit 2, nothing written), a warning is printed.
+    stopping = [f for f in result.flags if f.code in TORQUE_CODES or f.code in MODEL_CODES]
+    settle(stopping)
+    for f in result.flags:  # the fit's other flags (a rank that depends on the threshold): fitted, never silent
+        if f not in stopping:
+            progress(f"{f.severity}: {with_hint(f)}")
     result = result.with_flags([*result.flags, *flags, *_fit_flags(result, args.method)])
     if args.essential:
         result = result.with_essential()
@@ -264,6 +268,10 @@ def run(args: argparse.Namespace) -> int:
     return 0
 
 
+#: The identified model's checks against the yardsticks (identify.fitting.plausibility.heldout_flags).
+MODEL_CODES = ("model_unexplained", "model_worse_on_joint")
+
+
 def physical_prior(args: argparse.Namespace, robot: rx90sym.Robot) -> Any:
     """The identified model's prior (--prior) as identify.fit takes it, said on stderr; a prior that gives
     no body (a description whose masses are all zero, a file naming no link) is refused."""
@@ -274,12 +282,17 @@ def physical_prior(args: argparse.Namespace, robot: rx90sym.Robot) -> Any:
                  "cannot see is arbitrary")
         return "none"
     try:
-        prior = model_prior(robot, args.prior, args.divergence)
+        if args.prior == "description":  # asked for: a description without bodies is refused
+            from rx90sym.description_prior import required_description_prior
+
+            required_description_prior(robot)
+        prior = model_prior(robot, args.prior or "description", args.divergence)
     except ValueError as exc:
-        raise UsageError(f"--prior {args.prior}: {exc}") from None
+        raise UsageError(f"--prior {args.prior or 'description'}: {exc}".replace("--prior description: --prior "
+                                                                                "description: ", "--prior description: ")) from None
     if prior is None:
-        if args.prior != "description":
-            raise UsageError(f"--prior {args.prior}: no link has a physical body with a mass above 0")
+        if args.prior is not None:
+            raise UsageError(f"--prior {args.prior}: no link has a body with a mass above 0")
         progress(f"robot {robot.name!r} has no description bodies: the identified model is the data's alone "
                  f"(give --prior FILE)")
         return "none"
@@ -289,9 +302,9 @@ def physical_prior(args: argparse.Namespace, robot: rx90sym.Robot) -> Any:
 
 
 def _fit_flags(f: Fit, method: str) -> list:
-    """A joint the model does not explain stops the run; non-physical WLS estimates are flagged
-    (judged with the larger of eq. 13's and the bootstrap's sigma); the identified model is judged
-    against its prior (link masses)."""
+    """A joint the model explains poorly (a fit without held-back errors) is flagged; non-physical WLS
+    estimates are flagged (judged with the larger of eq. 13's and the bootstrap's sigma); the identified
+    model is judged against its prior (link masses)."""
     import numpy as np
 
     from identify.fitting.plausibility import estimate_flags, prior_flags, residual_flags
@@ -302,7 +315,10 @@ def _fit_flags(f: Fit, method: str) -> list:
     else:
         torque_rms = np.array([np.sqrt(np.mean(obs.Y[obs.joint == j] ** 2)) if np.any(obs.joint == j) else np.inf
                                for j in range(len(res.residual_rms))])
-    flags = settle(residual_flags(res.residual_rms, torque_rms, f.robot.limits.tau_max[:torque_rms.size]))
+    # Held-back errors against the yardsticks judged the fit already (its flags); without them the residuals.
+    judged = f.identified is not None and f.identified.heldout is not None
+    flags = [] if judged else settle(residual_flags(res.residual_rms, torque_rms,
+                                                    f.robot.limits.tau_max[:torque_rms.size]))
     if method != "consistent":
         flags += settle(estimate_flags(res.names, res.values, np.fmax(res.std, f.bootstrap.std), f.flags))
     model = f.identified

@@ -20,6 +20,22 @@ def split_text(lay: dict) -> str:
     return f" (split by the gap{'s' if total > 1 else ''} at {where}{more})" if splits else ""
 
 
+def print_choices(f: Fit) -> None:
+    """What the fit chose, on stdout (before any refusal): the processing's candidate table (or why
+    there is none) and the prior weight's."""
+    from identify.observation.processing import rest_label
+
+    if f.choice is not None:
+        print(f.choice["table"])
+    else:
+        p = f.processing
+        why = f"--cutoff {p.cutoff:g} given" if p.cutoff is not None else "--no-cross-validate"
+        print(f"processing not cross-validated ({why}): rest policy {rest_label(f.rest)}")
+    choice = ((f.identified.prior or {}).get("choice") if f.identified is not None else None)
+    if choice is not None:
+        print(choice["table"])
+
+
 def print_fit(f: Fit, recs: list, auto_delay: bool) -> None:
     """The fit on stdout (the chosen processing, the estimates, their bootstrap, the identified model
     and its prior's weight, flags, spring, essential parameters, validation); the delay and the
@@ -33,12 +49,6 @@ def print_fit(f: Fit, recs: list, auto_delay: bool) -> None:
         if lay["bridged_samples"] or lay["segments"] > 1 or lay["stale_rows"]:
             print(f"{lay['source']}: {lay['segments']} segment(s){split_text(lay)}, {lay['bridged_samples']} samples "
                   f"bridged over lost packets (not fitted), {lay['stale_rows'] or 0} stale rows dropped when read")
-    if f.choice is not None:
-        print(f.choice["table"])
-    else:
-        p = f.processing
-        why = f"--cutoff {p.cutoff:g} given" if p.cutoff is not None else "--no-cross-validate"
-        print(f"processing not cross-validated ({why}): rest policy {rest_label(f.rest)}")
     if f.model.friction is not None and "velocity_scale" in f.model.friction:
         from identify.estimation.separable import VelocityScales
 
@@ -77,10 +87,7 @@ def print_model(f: Fit) -> None:
     from identify.estimation.consistency.bodies import bodies_table
 
     model = f.identified
-    choice = (model.prior or {}).get("choice")
     print()
-    if choice is not None:
-        print(choice["table"])
     if f.result is not model:
         print(model.table())
     print(f"identified model: {model.split}; weighted RSS {model.cost_increase_pct:+.3f} % of the least squares'")

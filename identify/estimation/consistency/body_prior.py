@@ -27,7 +27,7 @@ from dataclasses import dataclass, field
 import cvxpy as cp
 import numpy as np
 
-from rx90sym.physical import DEFAULT_MARGIN, INERTIAL_FIELDS
+from rx90sym.physical import DEFAULT_MARGIN, INERTIAL_FIELDS, nearest_physical_body
 from rx90sym.rigid_body import RigidBody, physical_problem
 from rx90sym.rigid_body import pseudo_inertia as numeric_pseudo_inertia
 
@@ -38,6 +38,9 @@ __all__ = ["DIVERGENCES", "DEFAULT_DIVERGENCE", "BodyPrior", "body_prior"]
 
 #: Relative uncertainty of the Gaussian's scales per kind (module docstring).
 UNCERTAINTY = {"M": 0.1, "MX": 0.2, "XX": 1.0}
+#: Margin of a prior body [kg m², kg]: inside the identified model's own solve margin (ten times the
+#: consistency margin), so that λ = ∞ — the prior's bodies themselves — is a feasible model.
+PRIOR_MARGIN = 100 * DEFAULT_MARGIN
 MIN_GYRATION = 0.05  # m
 
 
@@ -134,13 +137,14 @@ def _scales(body: RigidBody, link: str) -> dict[str, float]:
 
 
 def body_prior(values: Mapping[str, float] | None, n: int, source: str, divergence: str = DEFAULT_DIVERGENCE,
-               margin: float = DEFAULT_MARGIN) -> BodyPrior | None:
-    """The prior of the links 1..n from standard parameters ``values`` (the description's: a link
-    with a mass above 0 and physical with ``margin`` is informed, any other contributes nothing and
-    is named in the notes); None when no link is informed."""
+               notes: Sequence[str] = ()) -> BodyPrior | None:
+    """The prior of the links 1..n from standard parameters ``values`` (the description's): a link with a
+    mass above 0 is informed, its body made physical with :data:`PRIOR_MARGIN` where it is not (the
+    nearest physical body with its mass and centre of mass, said in the notes); any other link contributes
+    nothing (named in the notes); None when no link is informed. ``notes``: the description's own."""
     if values is None:
         return None
-    links, notes, scales = [], [], {}
+    links, notes, scales, kept = [], list(notes), {}, {}
     for j in range(1, n + 1):
         key = str(j)
         try:
@@ -148,16 +152,17 @@ def body_prior(values: Mapping[str, float] | None, n: int, source: str, divergen
         except KeyError:
             notes.append(f"link {j}: no inertial in the description: no prior")
             continue
-        if not body.m > 0:
+        if not body.m > PRIOR_MARGIN:
             notes.append(f"link {j}: no mass in the description: no prior")
             continue
-        problem = physical_problem(body, margin)
-        if problem:
-            notes.append(f"link {j}: not a physical body ({problem}): no prior")
-            continue
+        if physical_problem(body, PRIOR_MARGIN):
+            problem = physical_problem(body, 0.0)
+            body = nearest_physical_body(body, PRIOR_MARGIN)
+            if problem:
+                notes.append(f"link {j}: not a physical body ({problem}): the nearest physical body is the prior")
         links.append(key)
         scales.update(_scales(body, key))
+        kept.update(zip((f"{p}{key}" for p in INERTIAL_FIELDS), (float(v) for v in body.vector())))
     if not links:
         return None
-    kept = {f"{p}{b}": float(values[f"{p}{b}"]) for b in links for p in INERTIAL_FIELDS}
-    return BodyPrior(kept, tuple(links), divergence, source, tuple(notes), scales)
+    return BodyPrior(kept, tuple(links), divergence, source, tuple(dict.fromkeys(notes)), scales)
