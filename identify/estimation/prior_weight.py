@@ -33,7 +33,7 @@ __all__ = ["WEIGHT_GRID", "FoldSystem", "ObservationFolds", "WeightChoice", "cho
            "held_back_scores", "observation_folds"]
 
 #: λ of the grid: the data alone (0), decades, the description's bodies (inf).
-WEIGHT_GRID = (0.0, 1e-2, 1e-1, 1.0, 1e1, 1e2, 1e3, 1e4, 1e5, 1e6, math.inf)
+WEIGHT_GRID = (0.0, 1e-1, 1.0, 1e1, 1e2, 1e3, 1e4, 1e5, math.inf)
 
 
 def weight_label(value: float) -> str:
