@@ -1,5 +1,5 @@
 """What a fit block by block carries besides its estimates, against the whole-signal fit of the same log:
-the consistent fit's default prior (measured in the bootstrap-inflated covariance), the plain OLS baseline
+the identified model with the default prior (its weight chosen by cross-validation), the plain OLS baseline
 (filtered in windows with margins, and its prediction) and the recorded-torque checks, for blocks smaller
 than the log (several blocks) and a block holding the whole log (a CSV path: the block path in one block)."""
 from __future__ import annotations
@@ -33,8 +33,7 @@ def _rel(a: np.ndarray, b: np.ndarray) -> float:
 @pytest.fixture(scope="module")
 def log(twin_empty, rx90, tmp_path_factory):
     """The 20 s twin run (5,000 samples) with a slow torque disturbance the model does not hold (its residuals
-    coloured: the segment bootstrap's σ 3.5 x eq. 13's, so the prior's covariance is the inflated one), in
-    memory and as a CSV file."""
+    coloured: the segment bootstrap's σ 3.5 x eq. 13's), in memory and as a CSV file."""
     rec = twin_empty[0]
     slow = 0.05 * np.cumsum(np.random.default_rng(0).normal(size=rec.tau.shape), axis=0)  # N m, a random walk
     rec = dataclasses.replace(rec, tau=rec.tau + slow)
@@ -45,39 +44,35 @@ def log(twin_empty, rx90, tmp_path_factory):
 
 @pytest.fixture(scope="module")
 def consistent(rx90, log):
-    """The consistent fit with the default prior: whole, in three blocks, and the CSV file in one block (the block
-path, its bootstrap with another seed)."""
+    """The consistent fit with the default prior (the description, its weight chosen by cross-validation):
+    whole, in three blocks, and the CSV file in one block (the block path, its bootstrap with another seed)."""
     rec, path = log
     n = rec.n_samples
     return {"whole": identify.fit(rx90, [rec], GIVEN, "consistent"),
             "blocks": identify.fit(rx90, [rec], GIVEN, "consistent", block=n // 3),
-            # Another bootstrap seed: the prior's covariance still from the seed-0 bootstrap, as on whole recordings.
             "one block": identify.fit(rx90, [path], GIVEN, "consistent", block=n + 1, bootstrap_seed=3)}
 
 
 def test_the_consistent_fit_takes_the_default_prior_block_by_block(consistent, log):
-    """The robot's nominal parameters as the prior, in the covariance inflated by the same segment bootstrap:
-    the standard parameters equal the whole fit's (measured ~1e-13 relative; the solver's tolerance allowed)."""
+    """The robot's description as the prior, its weight chosen on the same folds: the weight, the cross-validation's
+    scores and the standard parameters equal the whole fit's (measured ~1e-12 relative; the solver's tolerance
+    allowed); the data alone (no prior) give other parameters."""
     whole = consistent["whole"]
-    assert whole.result.prior is not None and whole.result.prior["covariance"] == "segment bootstrap"
+    prior = whole.result.prior
+    assert prior is not None and prior["choice"] is not None
     names = list(whole.result.standard)
     ref = np.array([whole.result.standard[k] for k in names])
     for key in ("blocks", "one block"):
         got = consistent[key]
-        assert got.block is not None and got.result.prior == whole.result.prior, key
+        assert got.block is not None and got.result.prior["weight_label"] == prior["weight_label"], key
+        scores = [v for v in got.result.prior["choice"]["scores_pct"] if v is not None]
+        assert _rel(scores, [v for v in prior["choice"]["scores_pct"] if v is not None]) < 1e-7, key
         assert _rel([got.result.standard[k] for k in names], ref) < 1e-7, key
     assert _rel(consistent["blocks"].bootstrap.std, whole.bootstrap.std) < 1e-8
     assert consistent["one block"].bootstrap.seed == 3 and _rel(consistent["one block"].bootstrap.std,
                                                                  whole.bootstrap.std) > 1e-3
-    # Eq. 13's covariance (no inflation; measured 2.5e-2 away), or no prior, give other parameters: the
-    # comparisons above can fail (another bootstrap seed behind the covariance: 1e-3 away).
-    w = whole.observation
-    from identify.estimation.least_squares import weighted_least_squares
-
-    eq13 = weighted_least_squares(w.W, w.Y, w.joint, w.names).covariance
-    for options in ({"covariance": eq13}, {"physical_prior": None}):
-        other = identify.fit(whole.robot, [log[0]], GIVEN, "consistent", **options)
-        assert _rel([other.result.standard[k] for k in names], ref) > 1e-3, options
+    other = identify.fit(whole.robot, [log[0]], GIVEN, "consistent", physical_prior="none")
+    assert _rel([other.result.standard[k] for k in names], ref) > 1e-3
 
 
 def test_the_baseline_block_by_block_is_the_whole_logs(rx90, log, consistent, twin_empty):
@@ -219,11 +214,11 @@ def test_rx90_predict_on_a_long_log_is_the_fits_prediction(rx90, consistent, twi
         assert _rel(np.array(got[name]), getattr(ref, name)) < 1e-8, name
 
 
-def test_the_consistent_fit_refuses_presliding_rest_on_both_paths(rx90, log):
-    """Its standard parameters are what a URDF holds (Coulomb and viscous friction): the presliding rest
-    policy is refused block by block as on the whole log."""
+def test_the_consistent_fit_of_presliding_rest_is_the_same_on_both_paths(rx90, log):
+    """The identified model holds the presliding magnitudes FPj beside the standard parameters (applied from
+    the fit by a simulator): block by block as on the whole log."""
     rec, path = log
-    for recordings, block in (([rec], None), ([rec], 1000), ([path], 1000)):
-        with pytest.raises(ValueError, match="rest policy 'presliding'"):
-            identify.fit(rx90, recordings, Processing(cross_validate=False, rest="presliding"), "consistent",
-                         block=block)
+    fits = [identify.fit(rx90, recordings, Processing(cross_validate=False, rest="presliding"), "consistent",
+                         block=block) for recordings, block in (([rec], None), ([path], 1000))]
+    assert any(k.startswith("FP") for k in fits[0].result.extras)
+    assert _rel(fits[1].result.values, fits[0].result.values) < 1e-7

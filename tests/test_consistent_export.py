@@ -89,9 +89,11 @@ def _check_case(spec: str, tip: str | None, seed: int, folder: Path, capsys, opt
     assert main(["identify", str(folder / "run.csv"), *where, "--convention", "khalil", "--cutoff", "10",
                  "--method", "consistent", "--json", str(fit_file), *options]) == 0
     table = capsys.readouterr().out
-    if "--prior" not in options:  # with the prior: every centre of mass in its bounding ellipsoid
-        bodies = table[table.index("in ellipsoid"):].splitlines()[1:robot.n + 1]
-        assert all(line.split()[0] == str(j) and " yes " in line for j, line in enumerate(bodies, 1)), table
+    if "--prior" not in options:  # with the description as the prior (the twin's own bodies): every mass its own
+        bodies = table[table.index("link   mass kg"):].splitlines()[1:robot.n + 1]
+        ratios = [float(line.split()[3]) for line in bodies]
+        assert [line.split()[0] for line in bodies] == [str(j) for j in range(1, robot.n + 1)], table
+        assert all(0.8 <= r <= 1.25 for r in ratios), table
     assert main(["export", str(fit_file), "--urdf", str(urdf), "--mjcf", str(mjcf)]) == 0, capsys.readouterr().err
 
     standard = json.loads(fit_file.read_text())["standard"]

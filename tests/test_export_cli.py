@@ -29,7 +29,7 @@ def _twin_recording(robot, chi, path: Path, seed: int) -> None:
 @pytest.fixture(scope="module")
 def fits(tmp_path_factory):
     """A UR10e twin with its nominal parameters, identified (consistent); wls.json: the same
-    identification as a WLS fit writes it (method "wls", no standard parameters)."""
+    identification as a fit file without the identified model (method "wls", no standard parameters)."""
     folder = tmp_path_factory.mktemp("ur10e_fit")
     robot = rx90sym.load_robot("ur10e")
     chi = robot.parameter_vector(rx90sym.nominal_parameters(robot))
@@ -38,7 +38,7 @@ def fits(tmp_path_factory):
     assert main(["identify", *common, "--method", "consistent", "--json", str(folder / "id.json")]) == 0
     wls = json.loads((folder / "id.json").read_text())
     wls["method"] = "wls"
-    for key in ("standard", "cost", "wls_cost", "cost_increase_pct", "wls_was_consistent"):
+    for key in ("standard", "extras", "cost", "wls_cost", "cost_increase_pct", "wls_was_consistent", "identified"):
         wls.pop(key, None)
     (folder / "wls.json").write_text(json.dumps(wls))
     return robot, folder
@@ -76,7 +76,8 @@ def test_exported_urdf_and_mjcf_reproduce_the_fits_inverse_dynamics(fits, tmp_pa
 
 
 def test_the_library_exports_a_loaded_fit_like_the_command(fits, tmp_path):
-    """identify.export_urdf / export_mjcf on identify.load_fit; a WLS fit is refused."""
+    """identify.export_urdf / export_mjcf on identify.load_fit; a fit file without bodies (written before
+    the identified model) is refused."""
     import identify
 
     robot, folder = fits
@@ -87,7 +88,7 @@ def test_the_library_exports_a_loaded_fit_like_the_command(fits, tmp_path):
     assert a.read_text() == b.read_text()
     identify.export_mjcf(fit, c)
     assert c.read_text().startswith('<mujoco model="ur10e">')
-    with pytest.raises(ValueError, match="consistent method"):
+    with pytest.raises(ValueError, match="base parameters only"):
         identify.export_urdf(identify.load_fit(folder / "wls.json"), tmp_path / "w.urdf")
     assert not (tmp_path / "w.urdf").exists()
 

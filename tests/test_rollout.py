@@ -188,9 +188,12 @@ def test_a_validation_with_a_rollout_is_in_the_fit_file_and_its_report(realistic
     section = next(s for s in page.sections if s.id == "rollout")
     assert any(getattr(b, "id", "") == "rollout-0" for b in section.blocks)
     # identify.predict rolls out a consistent result's bodies with the processing it is given: the same windows
+    # (its positions differ where the fit's smooth friction form, applied from the fit, is not given)
     alone = identify.predict(robot, fit.result, rec, cutoff=fit.cutoff, min_velocity=fit.min_velocity, rollout=0.25)
-    np.testing.assert_array_equal(alone.rollout.windows[0].position["identified"],
-                                  roll_out_fit(fit, rec, 0.25).windows[0].position["identified"])
+    own = roll_out_fit(fit, rec, 0.25).windows[0]
+    got = alone.rollout.windows[0]
+    assert (got.windows, got.skipped_rest, got.skipped_bridged) == (own.windows, own.skipped_rest, own.skipped_bridged)
+    np.testing.assert_array_equal(got.position["guess"], own.position["guess"])  # the same windows, the same guess
 
 
 def test_a_window_where_mujoco_gives_up_is_counted_not_scored(exact, tmp_path, monkeypatch):
@@ -205,11 +208,16 @@ def test_a_window_where_mujoco_gives_up_is_counted_not_scored(exact, tmp_path, m
 @pytest.mark.parametrize("case, argv, message", [
     ("zero", ["--rollout", "0"], "duration > 0"),
     ("longer", ["--rollout", "0.25,30"], "longer than the recording"),
-    ("wls", ["--rollout", "0.25"], "holds base parameters"),
+    ("no-bodies", ["--rollout", "0.25"], "holds base parameters only"),
     ("at-rest", ["--rollout", "0.25"], "no window of 0.25 s while the arm moves"),
 ])
 def test_bad_rollouts_exit_2_with_the_reason_and_write_nothing(files, tmp_path, capsys, case, argv, message):
-    recording, fit = files / "run.csv", files / ("wls.json" if case == "wls" else "id.json")
+    recording, fit = files / "run.csv", files / "id.json"
+    if case == "no-bodies":  # a fit file written before the identified model: the paper's estimates only
+        record = json.loads((files / "wls.json").read_text())
+        record.pop("identified")
+        fit = tmp_path / "old.json"
+        fit.write_text(json.dumps(record))
     if case == "at-rest":   # the twin's first 6 s held still: every window at rest
         robot, rec = rx90sym.load_robot("ur10e"), identify.read_recording(recording, rx90sym.load_robot("ur10e"))
         still = replace(rec, q=np.tile(rec.q[:1], (rec.n_samples, 1)))

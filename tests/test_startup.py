@@ -26,6 +26,7 @@ ALLOWED = (
     "identify.io", "identify.io.defaults",
     "identify.signal", "identify.signal.defaults",
     "identify.observation", "identify.observation.defaults",
+    "identify.estimation", "identify.estimation.defaults",
     "identify.gains", "identify.gains.defaults",
     "identify.payloads", "identify.payloads.defaults",
     "identify.monitor", "identify.monitor.defaults",

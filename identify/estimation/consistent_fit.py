@@ -37,8 +37,8 @@ class ConsistentResult(IdentificationResult):
     bootstrap's ratio where the residuals are coloured): the data's information on each parameter;
     least_squares: those estimates; heldout: the model's held-back errors in the fitted data (the blocked
     cross-validation's: ``score_pct``, ``per_joint_pct``, ``per_block_pct``; None without the fit's folds).
-    standard: the variables x (name -> value: the standard parameters, then the columns that are not
-    standard parameters, e.g. torque offsets); cost, wls_cost: weighted residual sum of squares of this
+    standard: the standard parameters (name -> value, SI); extras: the model's columns that are not the
+    robot's standard parameters (torque offsets it adds, Stribeck levels, presliding magnitudes); cost, wls_cost: weighted residual sum of squares of this
     model and of the (W)LS fit; prior: the prior's record (source, divergence, weight λ and its choice;
     None: no prior, the split of what the data cannot see is the tie-break's); data_share: per base
     parameter the share the data determined (0..1); wls_was_consistent: whether the least-squares
@@ -46,6 +46,7 @@ class ConsistentResult(IdentificationResult):
     """
 
     standard: dict = field(default_factory=dict)
+    extras: dict = field(default_factory=dict)
     cost: float = float("nan")
     wls_cost: float = float("nan")
     prior: dict | None = None
@@ -70,6 +71,7 @@ class ConsistentResult(IdentificationResult):
     def to_dict(self) -> dict[str, Any]:
         d = super().to_dict()
         d.update({"standard": {k: float(v) for k, v in self.standard.items()},
+                  "extras": {k: float(v) for k, v in self.extras.items()},
                   "cost": self.cost, "wls_cost": self.wls_cost,
                   "cost_increase_pct": self.cost_increase_pct,
                   "prior": self.prior, "split": self.split,
@@ -108,7 +110,9 @@ class ConsistentResult(IdentificationResult):
             raise ValueError("a consistent result without its 'standard' parameters")
         share, least = d.get("data_share"), d.get("least_squares")
         base = {f: getattr(result, f) for f in result.__dataclass_fields__}
+        extras = d.get("extras") if isinstance(d.get("extras"), dict) else {}
         return cls(**base, standard={str(k): float(v) for k, v in standard.items()},
+                   extras={str(k): float(v) for k, v in extras.items()},
                    cost=float(d.get("cost", float("nan"))), wls_cost=float(d.get("wls_cost", float("nan"))),
                    prior=d.get("prior") if isinstance(d.get("prior"), dict) else None,
                    data_share=None if share is None else np.array([np.nan if v is None else v for v in share]),
@@ -261,21 +265,26 @@ def consistent_fit(robot: rx90sym.Robot, wls: IdentificationResult, columns: Any
         sigma_rho=float(np.sqrt(max(cost + scale - wls_cost, 0.0) / max(rows - len(names), 1))), cond=wls.cond,
         cond_unweighted=wls.cond_unweighted, residual_rms=residual_rms, weights=weights, rows=rows,
         method="consistent", covariance=None, system=None, joint_systems=(),
-        standard=dict(zip(cmap.names, (float(v) for v in x))), cost=cost + scale - wls_cost, wls_cost=scale,
+        standard=dict(zip(cmap.names[:cmap.standard], (float(v) for v in x[:cmap.standard]))),
+        extras=dict(zip(cmap.names[cmap.standard:], (float(v) for v in x[cmap.standard:]))),
+        cost=cost + scale - wls_cost, wls_cost=scale,
         prior=record, data_share=share, least_squares=least, heldout=heldout, wls_was_consistent=_admits_bodies(robot, columns, names, least))
 
 
 def _least_squares(R: np.ndarray, z: np.ndarray, scale: float, rows: int, wls: IdentificationResult,
                    spread: np.ndarray | None) -> tuple[np.ndarray, np.ndarray]:
     """(estimates, σ) of the least squares on the model's own weighted system (eqs. 10-14: σρ² the
-    weighted residual over rows − c), σ inflated by the median ratio of ``spread`` (the segment
-    bootstrap's σ) to eq. 13's of the fit's ``wls`` where above 1 (coloured residuals)."""
+    weighted residual over rows − c), σ inflated by √(rows / the fit's rows) where the model's rows are
+    more (sampled at the prediction rate: no more independent than the fit's decimated ones), and by the
+    median ratio of ``spread`` (the segment bootstrap's σ) to eq. 13's of the fit's ``wls`` where above 1
+    (coloured residuals)."""
     import scipy.linalg as sla
 
     c = R.shape[1]
     beta = np.linalg.lstsq(R, z, rcond=None)[0]
     r_inv = sla.pinv(R)
     std = np.sqrt(np.maximum(np.einsum("ij,ij->i", r_inv, r_inv), 0.0) * scale / max(rows - c, 1))
+    std = std * np.sqrt(max(1.0, rows / max(wls.rows, 1)))
     if spread is not None:
         ratios = np.asarray(spread, dtype=float) / np.where(wls.std > 0, wls.std, np.nan)
         ratios = ratios[np.isfinite(ratios)]

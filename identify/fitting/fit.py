@@ -148,7 +148,7 @@ def _fit_observation(robot: rx90sym.Robot, recordings: Sequence[Any], obs: Obser
     visited = [r for r in recordings if hasattr(r, "q")]
     spring = spring_summary(robot, base if isinstance(base, BaseWithSpring) else None, result, visited)[0]
     done = Fit(robot, result, p, model, base, obs, None, None, spring, flags=tuple(rank_flags(base)),
-               identified=identified)
+               identified=identified, ls_result=wls if result is not wls else None)
     return done if bootstrap_seed is None else done.bootstrapped(bootstrap_seed)
 
 
@@ -225,7 +225,8 @@ def _fit_blocks(robot: rx90sym.Robot, recordings: Sequence[Any], processing: Any
                         delay_s=sf.delay, friction=sf.friction, offset_joints=_offset_record(base))
     angles = [SimpleNamespace(q=sf.q_range)]  # what the spring summary reads: the range visited
     spring = spring_summary(robot, base if isinstance(base, BaseWithSpring) else None, result, angles)[0]
-    boot = Bootstrap(sf.bootstrap_std, sf.bootstrap_block / sf.rate, spec.draws, spec.seed) if spec else None
+    boot = (Bootstrap(sf.bootstrap_std, sf.bootstrap_block / sf.rate, spec.draws, spec.seed, tuple(sf.result.names))
+            if spec else None)
     found = sf.delay_estimate
     # The yardsticks and the recorded-torque checks: a pass each over the logs, block by block, as on whole ones.
     sticks = streamed_yardsticks(robot, sources, sf.scans, p.spring, block, client, span)
@@ -236,7 +237,7 @@ def _fit_blocks(robot: rx90sym.Robot, recordings: Sequence[Any], processing: Any
                            + torque_sign_flags(robot, sf.result, base, spring_added=bool(p.spring))
                            + model_flags(identified, sticks.folds)),
                baseline=sticks.plain, user_model=sticks.user, user_model_note=sticks.user_note,
-               identified=identified)
+               identified=identified, ls_result=sf.result if result is not sf.result else None)
 
 
 def _model_span(sf: Any) -> Any:
@@ -251,14 +252,18 @@ def _model_span(sf: Any) -> Any:
 
 
 def _model_factors(robot: rx90sym.Robot, sources: Sequence[Any], sf: Any, span: Any, client: Any) -> Any:
-    """The per-(time block, joint) factors of the fit's own columns and processing, and of the raw
-    samples they predict: what the identified model is fitted and its prior weight cross-validated on
-    (one pass over the logs)."""
+    """The per-(time block, joint) factors of the fit's own columns and processing, at the rate the fit
+    predicts at (identify.fitting.validation.prediction_rate: a held-back block is predicted as
+    :meth:`Fit.predict` predicts, not interpolated from the decimated rows), and of the raw samples they
+    predict: what the identified model is fitted and its prior weight cross-validated on (one pass)."""
     from dataclasses import replace
 
     from identify.estimation.stream_cv import column_factors
+    from identify.fitting.validation import prediction_rate
 
-    return column_factors(robot, sources, sf.scans, sf.columns, replace(sf.settings, cutoff=sf.cutoff), span, client)
+    rate = min(s.rate for s in sf.scans)
+    settings = replace(sf.settings, cutoff=sf.cutoff, decimate_to=prediction_rate(sf.cutoff, rate))
+    return column_factors(robot, sources, sf.scans, sf.columns, settings, span, client)
 
 
 def model_flags(model: Any, folds: Any) -> list:

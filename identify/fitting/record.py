@@ -39,12 +39,22 @@ BOOTSTRAP_DRAWS = DRAWS
 
 @dataclass(frozen=True, eq=False)
 class Bootstrap:
-    """Segment-bootstrap σ of each estimate: std (per parameter, its unit), block_s [s], draws, seed."""
+    """Segment-bootstrap σ of each estimate: std (per parameter, its unit), block_s [s], draws, seed; names:
+    the parameters they are the σ of (the least-squares estimates'; empty: the result's, in its order)."""
 
     std: np.ndarray
     block_s: float
     draws: int
     seed: int
+    names: tuple[str, ...] = ()
+
+    def of(self, names: Sequence[str]) -> np.ndarray:
+        """σ of the parameters ``names`` (NaN for one the bootstrap did not draw: a column only the
+        identified model has)."""
+        if not self.names:
+            return self.std
+        by_name = dict(zip(self.names, self.std))
+        return np.array([by_name.get(n, np.nan) for n in names])
 
     def to_json(self) -> dict[str, Any]:
         # A column the draws could not estimate (NaN) is null in the file, NaN again when read.
@@ -64,7 +74,7 @@ class Bootstrap:
         """σ of eq. 13 (white residuals) beside the segment-bootstrap σ, per parameter."""
         width = max([len("Parameter")] + [len(n) for n in res.names])
         lines = [f"{'Parameter':<{width}}  {'σ eq. 13':>10}  {'σ bootstrap':>11}  ratio"]
-        for n, s, b in zip(res.names, res.std, self.std):
+        for n, s, b in zip(res.names, res.std, self.of(res.names)):
             ratio = b / s if s > 0 else float("nan")
             lines.append(f"{n:<{width}}  {s:10.3g}  {b:11.3g}  {ratio:5.2f}")
         return "\n".join(lines)
@@ -112,6 +122,7 @@ class Fit:
     contact_thresholds: np.ndarray | None = None  # contact monitor's per joint [N·m] (identify.monitor)
     identified: ConsistentResult | None = None  # the identified model (identify.estimation.consistent_fit)
     result_validation: Validation | None = None  # the (W)LS estimates' own validation, beside the model's
+    ls_result: IdentificationResult | None = None  # the (W)LS estimates when the result is the model (consistent)
 
     # ------------------------------------------------------------ what the fit used
     @property
@@ -137,6 +148,12 @@ class Fit:
     @property
     def gains(self) -> DriveGains | None:
         return gains_of(self.model)
+
+    @property
+    def least_squares(self) -> IdentificationResult:
+        """The paper's (weighted) least-squares estimates with eq. 13's σ (the result, unless the method
+        was "consistent")."""
+        return self.ls_result if self.ls_result is not None else self.result
 
     @property
     def model_result(self) -> IdentificationResult:
@@ -200,7 +217,7 @@ class Fit:
         """This fit with its essential parameters (eqs. 16-17) computed."""
         from identify.estimation.essential import essential_parameters
 
-        return replace(self, essential=essential_parameters(self.result))
+        return replace(self, essential=essential_parameters(self.least_squares))
 
     def bootstrapped(self, seed: int = 0, draws: int = BOOTSTRAP_DRAWS, block_s: float = BOOTSTRAP_BLOCK_S) -> "Fit":
         """This fit with the segment-bootstrap σ of each estimate (blocks of ``block_s`` s)."""
@@ -214,16 +231,17 @@ class Fit:
             raise ValueError("bootstrap needs the fit's observation matrix (not a fit loaded from a file; "
                              "a fit in blocks computes it while it reads them: fit(..., bootstrap_seed=...))")
         block = max(1, int(round(block_s * obs.rate)))
-        std = segment_bootstrap_std(obs.W, obs.Y, obs.joint, obs.samples, self.result.weights, block, draws, seed)
-        return replace(self, bootstrap=Bootstrap(std, block / obs.rate, draws, seed))
+        ls = self.least_squares
+        std = segment_bootstrap_std(obs.W, obs.Y, obs.joint, obs.samples, ls.weights, block, draws, seed)
+        return replace(self, bootstrap=Bootstrap(std, block / obs.rate, draws, seed, tuple(ls.names)))
 
     # ------------------------------------------------------------ the file
     def to_json(self) -> dict[str, Any]:
         """The fit file's content (keys of the former identification JSON kept, new ones added)."""
         out = {"robot": self.model.robot, "method": self.result.method, **self.result.to_dict(),
                "spring": self.spring}
-        if self.bootstrap is not None:
-            out.update(self.bootstrap.to_json())
+        if self.bootstrap is not None:  # in the result's order
+            out.update(replace(self.bootstrap, std=self.bootstrap.of(self.result.names), names=()).to_json())
         out.update({"cutoff_hz": self.model.cutoff_hz, "decimate_to_hz": self.model.decimate_to_hz,
                     "delay_estimate_s": self.delay_estimate_s, "model": self.model.to_json(),
                     "essential": self.essential.to_dict() if self.essential is not None else {},

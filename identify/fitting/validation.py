@@ -330,13 +330,12 @@ def predict(robot: rx90sym.Robot, result: IdentificationResult, recording: Any, 
                   user_model_note=user_model_note if user_model is None else "")
     if rollout is None:
         return val
+    from identify.rollout.model import result_parameters
     from identify.rollout.run import roll_out
 
-    standard = getattr(result, "standard", None)
-    if not standard:
-        raise ValueError(f"a {result.method} result holds base parameters, not physical bodies: nothing to roll out")
-    return replace(val, rollout=roll_out(robot, rx90sym.nominal_parameters(robot, dict(standard)), src, rollout,
-                                         cutoff=fc, delay=delay, min_velocity=min_velocity, block=block))
+    model, params = result_parameters(robot, result)
+    return replace(val, rollout=roll_out(model, params, src, rollout, cutoff=fc, delay=delay,
+                                         min_velocity=min_velocity, block=block))
 
 
 def log_clock(recording: Any, source: Any = None) -> float:

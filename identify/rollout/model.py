@@ -27,7 +27,7 @@ from identify.io.bags import MissingExtra
 from identify.observation.friction import friction_columns
 
 __all__ = ["SimulatorModel", "SmoothFriction", "load_mujoco", "nominal_model", "simulator_model",
-           "simulator_parameters"]
+           "simulator_parameters", "result_parameters"]
 
 #: The extra that loads an MJCF (pyproject's optional dependencies).
 MUJOCO_EXTRA = ".[mujoco]"
@@ -44,21 +44,30 @@ def load_mujoco() -> Any:
 
 def simulator_parameters(fit: Any) -> tuple[rx90sym.Robot, dict[str, float]]:
     """(robot, standard parameters) of a fit's model in a simulator: what ``rx90 export`` writes and
-    the rollout rolls out (``fit``: an identify.Fit). The identified model's ``standard`` table
-    (``Fit.model_result``); torque offsets it holds for joints the robot gives none make the robot one
-    with offsets (0 on the other joints). ValueError for a fit without bodies (a fit file written before
-    the identified model)."""
+    the rollout rolls out (``fit``: an identify.Fit): :func:`result_parameters` of its identified model
+    (``Fit.model_result``). ValueError for a fit without bodies (a fit file written before the
+    identified model)."""
     result = getattr(fit, "model_result", fit.result)
-    standard = getattr(result, "standard", None)
-    if not standard:
+    if not getattr(result, "standard", None):
         raise ValueError(f"this {fit.result.method} fit holds base parameters only, no physical bodies (a fit file "
                          f"written before the identified model): identify again to export or simulate a model")
-    robot = fit.robot
-    offsets = [name for name in standard if name.startswith("OFF") and name not in robot.parameter_names]
+    return result_parameters(fit.robot, result)
+
+
+def result_parameters(robot: rx90sym.Robot, result: Any) -> tuple[rx90sym.Robot, dict[str, float]]:
+    """(robot, standard parameters) of a physically consistent ``result``: its ``standard`` table, and the
+    torque offsets it fits beyond the robot's own parameters (its columns OFFj) making the robot one with
+    offsets (0 on the other joints). ValueError for a result without bodies."""
+    standard = getattr(result, "standard", None)
+    if not standard:
+        raise ValueError(f"a {result.method} result holds base parameters, not physical bodies: nothing to export "
+                         f"or simulate")
+    offsets = {n: float(v) for n, v in zip(result.names, result.values)
+               if n.startswith("OFF") and n not in robot.parameter_names}
     if offsets and not robot.offsets:
         robot = robot.with_options(offsets=True)
     names = set(robot.parameter_names)  # the model's other columns (Stribeck levels, presliding) are applied apart
-    return robot, rx90sym.nominal_parameters(robot, {k: v for k, v in standard.items() if k in names})
+    return robot, rx90sym.nominal_parameters(robot, {**{k: v for k, v in standard.items() if k in names}, **offsets})
 
 
 @dataclass(frozen=True)

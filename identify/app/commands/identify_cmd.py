@@ -320,7 +320,7 @@ def _fit_flags(f: Fit, method: str) -> list:
     flags = [] if judged else settle(residual_flags(res.residual_rms, torque_rms,
                                                     f.robot.limits.tau_max[:torque_rms.size]))
     if method != "consistent":
-        flags += settle(estimate_flags(res.names, res.values, np.fmax(res.std, f.bootstrap.std), f.flags))
+        flags += settle(estimate_flags(res.names, res.values, np.fmax(res.std, f.bootstrap.of(res.names)), f.flags))
     model = f.identified
     if model is not None and model.prior is not None:
         from rx90sym import nominal_parameters
