@@ -82,11 +82,6 @@ def _estimates(M: np.ndarray, g: np.ndarray) -> np.ndarray:
     return estimates
 
 
-def _spread(M: np.ndarray, g: np.ndarray) -> np.ndarray:
-    """Standard deviation of the refits ``M_d⁻¹·g_d`` (NaN where every draw was rank deficient)."""
-    return np.nanstd(_estimates(M, g), axis=0, ddof=1)
-
-
 class SegmentBootstrap:
     """:func:`segment_bootstrap_std` fed block by block (a long log's W is never held).
 
@@ -109,28 +104,35 @@ class SegmentBootstrap:
         self.M = np.zeros((draws, joints, columns, columns))
         self.g = np.zeros((draws, joints, columns))
 
-    def add(self, joint: int, samples: np.ndarray, W: np.ndarray, Y: np.ndarray) -> None:
-        """Rows of joint ``joint``: their decimated sample index (increasing), W (m, c), Y (m,)."""
+    def add(self, joint: int, samples: np.ndarray, W: np.ndarray, Y: np.ndarray,
+            instruments: np.ndarray | None = None) -> None:
+        """Rows of joint ``joint``: their decimated sample index (increasing), W (m, c), Y (m,);
+        ``instruments``: (m, c) Z of an instrumental-variable fit (its draws solve ZᵀW x = ZᵀY)."""
         if samples.size == 0:
             return
+        Z = W if instruments is None else instruments
         ids = np.asarray(samples) // self.block
         starts = np.flatnonzero(np.r_[True, ids[1:] != ids[:-1]])
         stops = np.r_[starts[1:], ids.size]
-        A = np.stack([W[a:b].T @ W[a:b] for a, b in zip(starts, stops)])
-        g = np.stack([W[a:b].T @ Y[a:b] for a, b in zip(starts, stops)])
+        A = np.stack([Z[a:b].T @ W[a:b] for a, b in zip(starts, stops)])
+        g = np.stack([Z[a:b].T @ Y[a:b] for a, b in zip(starts, stops)])
         picked = self.counts[:, ids[starts]].astype(float)
         self.M[:, joint] += (picked @ A.reshape(A.shape[0], -1)).reshape(self.M.shape[0], *A.shape[1:])
         self.g[:, joint] += picked @ g
 
-    def std(self, weights: np.ndarray, columns: Sequence[int] | None = None) -> np.ndarray:
-        """(c,) standard deviations for the joint weights of the fit (1 for OLS); ``columns``: those of the
-        parameters fitted only (None: all)."""
+    def estimates(self, weights: np.ndarray, columns: Sequence[int] | None = None) -> np.ndarray:
+        """The refits themselves, (draws, c) (a NaN row where a draw was rank deficient), for the joint
+        weights of the fit (1 for OLS); ``columns``: those of the parameters fitted only (None: all)."""
         w2 = np.asarray(weights, dtype=float) ** 2
         M, g = np.tensordot(self.M, w2, axes=([1], [0])), np.tensordot(self.g, w2, axes=([1], [0]))
         if columns is not None:
             keep = np.asarray(columns, dtype=int)
             M, g = M[:, keep][:, :, keep], g[:, keep]
-        return _spread(M, g)
+        return _estimates(M, g)
+
+    def std(self, weights: np.ndarray, columns: Sequence[int] | None = None) -> np.ndarray:
+        """(c,) standard deviations of :meth:`estimates` (NaN where every draw was rank deficient)."""
+        return np.nanstd(self.estimates(weights, columns), axis=0, ddof=1)
 
 
 def bootstrap_std(W: np.ndarray, Y: np.ndarray, joint: np.ndarray, samples: np.ndarray, weights: np.ndarray,
