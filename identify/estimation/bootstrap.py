@@ -11,8 +11,7 @@ from typing import Sequence
 
 import numpy as np
 
-__all__ = ["SegmentBootstrap", "segment_bootstrap_std", "segment_bootstrap_estimates", "bootstrap_std",
-           "bootstrap_estimates", "BLOCK_S", "DRAWS"]
+__all__ = ["SegmentBootstrap", "segment_bootstrap_std", "bootstrap_std", "BLOCK_S", "DRAWS"]
 
 #: Block length, s: longer than the residual's correlation (filtered at 20-30 Hz, decimated to
 #: 50 Hz: a few samples), short enough for ~100 blocks in a 50 s run.
@@ -21,34 +20,8 @@ BLOCK_S = 0.5
 DRAWS = 200
 
 
-def segment_bootstrap_estimates(W: np.ndarray, Y: np.ndarray, joint: np.ndarray, samples: np.ndarray,
-                                weights: np.ndarray, block: int, draws: int = 200, seed: int = 0,
-                                instruments: np.ndarray | None = None) -> np.ndarray:
-    """The ``draws`` segment-bootstrap refits themselves, (draws, c) (a NaN row where a draw was
-    rank deficient): for estimates that combine several fits (payload method 2's difference of
-    two runs), whose spread is that of the combined draws. Arguments as :func:`segment_bootstrap_std`."""
-    if block < 1 or draws < 2:
-        raise ValueError(f"block must be >= 1 sample and draws >= 2, got {block} and {draws}")
-    w = np.asarray(weights, dtype=float)[np.asarray(joint)]
-    Ww, Yw = W * w[:, None], Y * w
-    Zw = Ww if instruments is None else np.asarray(instruments) * w[:, None]
-    ids = np.asarray(samples) // block
-    blocks = np.unique(ids)
-    c = W.shape[1]
-    # Per-block normal (or instrumental) equations: a draw is then a weighted sum, not a new QR.
-    A = np.zeros((blocks.size, c, c))
-    g = np.zeros((blocks.size, c))
-    for k, b in enumerate(blocks):
-        rows = ids == b
-        A[k] = Zw[rows].T @ Ww[rows]
-        g[k] = Zw[rows].T @ Yw[rows]
-    counts = _draw_counts(blocks.size, draws, seed)
-    return _estimates(np.tensordot(counts, A, axes=1), counts @ g)
-
-
 def segment_bootstrap_std(W: np.ndarray, Y: np.ndarray, joint: np.ndarray, samples: np.ndarray,
-                          weights: np.ndarray, block: int, draws: int = 200, seed: int = 0,
-                          instruments: np.ndarray | None = None) -> np.ndarray:
+                          weights: np.ndarray, block: int, draws: int = 200, seed: int = 0) -> np.ndarray:
     """Standard deviation of each estimate over ``draws`` segment-bootstrap refits.
 
     Args:
@@ -56,14 +29,26 @@ def segment_bootstrap_std(W: np.ndarray, Y: np.ndarray, joint: np.ndarray, sampl
         samples: (r,) sample index of each row (rows of one sample go together).
         weights: (n,) joint weights of the fit (1 for OLS); block: samples per block (≥ 1).
         draws: number of bootstrap refits; seed: seeds the draws.
-        instruments: (r, c) instruments Z of an instrumental-variable fit (the estimate solves
-            ZᵀW x = ZᵀY, e.g. the drive gains' IDIM-IV); None: least squares (Z = W).
 
     Returns:
         (c,) standard deviations, units of the parameters (NaN where a draw was rank deficient).
     """
-    estimates = segment_bootstrap_estimates(W, Y, joint, samples, weights, block, draws, seed, instruments)
-    return np.nanstd(estimates, axis=0, ddof=1)
+    if block < 1 or draws < 2:
+        raise ValueError(f"block must be >= 1 sample and draws >= 2, got {block} and {draws}")
+    w = np.asarray(weights, dtype=float)[np.asarray(joint)]
+    Ww, Yw = W * w[:, None], Y * w
+    ids = np.asarray(samples) // block
+    blocks = np.unique(ids)
+    c = W.shape[1]
+    # Per-block normal equations: a draw is then a weighted sum, not a new QR.
+    A = np.zeros((blocks.size, c, c))
+    g = np.zeros((blocks.size, c))
+    for k, b in enumerate(blocks):
+        rows = ids == b
+        A[k] = Ww[rows].T @ Ww[rows]
+        g[k] = Ww[rows].T @ Yw[rows]
+    counts = _draw_counts(blocks.size, draws, seed)
+    return np.nanstd(_estimates(np.tensordot(counts, A, axes=1), counts @ g), axis=0, ddof=1)
 
 
 def _draw_counts(blocks: int, draws: int, seed: int) -> np.ndarray:
@@ -136,16 +121,9 @@ class SegmentBootstrap:
 
 
 def bootstrap_std(W: np.ndarray, Y: np.ndarray, joint: np.ndarray, samples: np.ndarray, weights: np.ndarray,
-                  rate: float, seed: int = 0, instruments: np.ndarray | None = None) -> np.ndarray:
+                  rate: float, seed: int = 0) -> np.ndarray:
     """:func:`segment_bootstrap_std` with the toolkit's blocks of BLOCK_S seconds (``rate``: the
-    rows' sample rate, Hz) and DRAWS refits; the one bootstrap of identification, payload, drive
-    gains and the consistent fit."""
+    rows' sample rate, Hz) and DRAWS refits, for rows held in memory (the consistent fit's
+    covariance); logs read block by block fold theirs into :class:`SegmentBootstrap`."""
     block = max(1, int(round(BLOCK_S * rate)))
-    return segment_bootstrap_std(W, Y, joint, samples, weights, block, DRAWS, seed, instruments)
-
-
-def bootstrap_estimates(W: np.ndarray, Y: np.ndarray, joint: np.ndarray, samples: np.ndarray,
-                        weights: np.ndarray, rate: float, seed: int = 0) -> np.ndarray:
-    """:func:`segment_bootstrap_estimates` with the toolkit's blocks (BLOCK_S) and DRAWS refits."""
-    block = max(1, int(round(BLOCK_S * rate)))
-    return segment_bootstrap_estimates(W, Y, joint, samples, weights, block, DRAWS, seed)
+    return segment_bootstrap_std(W, Y, joint, samples, weights, block, DRAWS, seed)

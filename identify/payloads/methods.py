@@ -10,9 +10,11 @@ observation matrix Wc is the ten columns of link n in the standard regressor (eq
 - method 3 (eq. 28): same motion empty and loaded, chi_c = Wc+ (Y_T - Y_v);
 - method 4 (eq. 29): global system of empty and loaded motions, which may differ.
 
-Each has a constrained variant (payload pseudo-inertia PSD, mass within a scale's tolerance),
-and identify.monitor.payload.PayloadMonitor updates method 4 after every new loaded motion (the
-paper's conclusion).
+Every method reads, filters and fits its runs block by block on the rows identify makes (methods
+1, 3, 4: identify.payloads.systems; method 2: two identify.fit), any length, any number of segments,
+memory bounded by the block. Each has a constrained variant (payload pseudo-inertia PSD, mass within
+a scale's tolerance), and identify.monitor.payload.PayloadMonitor updates method 4 after every new
+loaded motion (the paper's conclusion).
 """
 from __future__ import annotations
 
@@ -35,7 +37,7 @@ from identify.observation.defaults import DEFAULT_DECIMATE_TO
 from identify.observation.processing import Processing
 from identify.observation.stream import StreamSettings
 from identify.payloads.defaults import MASS_TOL
-from identify.payloads.robot_params import FIT_PROCESSING, known_robot
+from identify.payloads.robot_params import known_robot
 from identify.payloads.systems import drop_rest, fold_rows, method_1_rows, method_3_rows, method_4_rows
 from identify.signal.pairing import POSITION_TOLERANCE
 from identify.estimation.results import IdentificationResult

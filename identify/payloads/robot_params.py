@@ -21,10 +21,7 @@ from identify.fitting.record import Fit, load_fit
 from identify.fitting.validation import base_vector
 from identify.observation.offsets import offset_base
 
-__all__ = ["KnownRobot", "known_robot", "FIT_PROCESSING"]
-
-#: The processing a fit brings to method 1 (keyword arguments of :func:`identify.payload`).
-FIT_PROCESSING = ("cutoff", "decimate_to", "min_velocity", "rest", "delay", "spring")
+__all__ = ["KnownRobot", "known_robot"]
 
 
 @dataclass(frozen=True, eq=False)

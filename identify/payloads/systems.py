@@ -14,7 +14,6 @@ from typing import Any, Callable
 import numpy as np
 
 import rx90sym
-from rx90sym.parameters import PAYLOAD_NAMES
 
 from identify.estimation.bootstrap import BLOCK_S, DRAWS, SegmentBootstrap
 from identify.estimation.incremental_qr import JointFactors
