@@ -29,11 +29,7 @@ from identify.signal.pairing import PairedRuns, on_empty_grid, pair_runs
 from rx90sym.parameters import PAYLOAD_NAMES
 from rx90sym.recording import Recording
 
-__all__ = ["Columns", "RunBlock", "Runs", "open_runs", "payload_columns", "robot_columns", "run_blocks", "run_sources"]
-
-#: (names, regressor_batch) of the columns a run's motion carries (identify.observation.matrix.column_regressor).
-Columns = tuple[tuple[str, ...], Callable[..., np.ndarray]]
-
+__all__ = ["RunBlock", "RunColumns", "Runs", "open_runs", "run_blocks", "run_sources"]
 
 @dataclass(frozen=True, eq=False)
 class RunBlock:
@@ -84,40 +80,46 @@ class Runs:
         return np.vstack([np.min([r[0] for r in ranges], axis=0), np.max([r[1] for r in ranges], axis=0)])
 
 
-def payload_columns(robot: rx90sym.Robot, base: Any = None, extra: Callable[..., np.ndarray] | None = None,
-                    extra_names: tuple[str, ...] = ()) -> Columns:
-    """(names, regressor) of ``base``'s columns (None: none), the payload's ten (XXc ... Mc of link n in
-    the standard regressor, eq. 21) and ``extra``
-    (e.g. the spring torque, named ``extra_names``), in that order. A symbolic base is read off the
-    standard regressor with the payload's columns (one evaluation); other columns (torque offsets,
-    friction forms of a fit) are evaluated beside them."""
-    payload = [robot.parameter_names[i] for i in rx90sym.payload_regressor_columns(robot)]
-    if base is None or hasattr(base, "independent"):
-        standard = [robot.parameter_names[i] for i in getattr(base, "independent", ())] + payload
-        _, own = column_regressor(robot, columns=standard)
-        parts = [own]
-    else:
-        _, robot_part = column_regressor(robot, base)
-        _, own = column_regressor(robot, columns=payload)
-        parts = [robot_part, own]
-    if extra is not None:
-        parts.append(extra)
-    names = (tuple(base.names) if base is not None else ()) + PAYLOAD_NAMES + tuple(extra_names)
+class RunColumns:
+    """The columns of a run's motion: ``base``'s (None: none), the payload's ten (``payload``: XXc ... Mc,
+    link n's columns of the standard regressor, eq. 21) and the spring torque as a last column
+    (``spring`` True; False: a column of zeros; None: no such column), in that order; none at all
+    (torques only) is a valid choice. Called as a regressor, (Q, QD, QDD) -> (S, n, c). A symbolic
+    base is read off the standard regressor with the payload's columns (one evaluation); other
+    columns (torque offsets, friction forms of a fit) are evaluated beside them. Picklable (a Dask
+    task carries it): the compiled workspaces are made where it is called."""
 
-    def regressor(Q: np.ndarray, QD: np.ndarray, QDD: np.ndarray) -> np.ndarray:
-        return np.concatenate([p(Q, QD, QDD) for p in parts], axis=2) if len(parts) > 1 else parts[0](Q, QD, QDD)
+    def __init__(self, robot: rx90sym.Robot, base: Any = None, payload: bool = True, spring: bool | None = None):
+        self.robot, self.base, self.payload, self.spring = robot, base, payload, spring
+        self.names = ((tuple(base.names) if base is not None else ()) + (PAYLOAD_NAMES if payload else ())
+                      + (() if spring is None else ("spring",)))
+        self._parts: list | None = None
 
-    return names, regressor
+    def __getstate__(self) -> dict:
+        return {**self.__dict__, "_parts": None}
 
+    def _make(self) -> list:
+        robot, base = self.robot, self.base
+        payload = [robot.parameter_names[i] for i in rx90sym.payload_regressor_columns(robot)] if self.payload else []
+        if base is None or hasattr(base, "independent"):
+            standard = [robot.parameter_names[i] for i in getattr(base, "independent", ())] + payload
+            parts = [column_regressor(robot, columns=standard)[1]] if standard else []
+        else:
+            parts = [column_regressor(robot, base)[1]] + ([column_regressor(robot, columns=payload)[1]] if payload else [])
+        if self.spring is not None:
+            on = self.spring
+            parts.append(lambda Q, QD, QDD: robot.spring_torque_batch(Q)[:, :, :1] if on
+                         else np.zeros((len(Q), robot.n, 1)))
+        return parts
 
-def robot_columns(robot: rx90sym.Robot, base: Any, extra: Callable[..., np.ndarray] | None = None,
-                  extra_names: tuple[str, ...] = ()) -> Columns:
-    """(names, regressor) of ``base``'s columns and ``extra``: an empty run's (the payload's columns are 0)."""
-    _, own = column_regressor(robot, base)
-    names = tuple(base.names) + tuple(extra_names)
-    if extra is None:
-        return names, own
-    return names, lambda Q, QD, QDD: np.concatenate([own(Q, QD, QDD), extra(Q, QD, QDD)], axis=2)
+    def __call__(self, Q: np.ndarray, QD: np.ndarray, QDD: np.ndarray) -> np.ndarray:
+        if self._parts is None:
+            self._parts = self._make()
+        if not self._parts:
+            return np.zeros(np.shape(Q) + (0,))
+        if len(self._parts) == 1:
+            return self._parts[0](Q, QD, QDD)
+        return np.concatenate([p(Q, QD, QDD) for p in self._parts], axis=2)
 
 
 def run_sources(robot: rx90sym.Robot, runs: Sequence[Any], what: str, convention: str | None,
@@ -192,13 +194,12 @@ def open_runs(robot: rx90sym.Robot, empty: Sequence[Any], loaded: Sequence[Any],
 
 
 def _task(robot: rx90sym.Robot, loaded: bool, rec: Recording, partner: Recording | None, pair: PairedRuns | None,
-          window: Any, plan: Plan, cutoff: float, settings: StreamSettings, columns: dict[str, Columns],
+          window: Any, plan: Plan, cutoff: float, settings: StreamSettings, columns: dict[str, RunColumns],
           first: int, reduce: Callable[[RunBlock], Any] | None) -> Any:
     """One window through :func:`identify.observation.stream.piece` (a pair: both runs on the empty run's
     samples), reduced by ``reduce`` where it runs (a Dask worker)."""
     def motion(r: Recording, role: str) -> FilteredMotion:
-        names, regressor = columns[role]
-        return piece(robot, r, window, plan, cutoff, settings, regressor, names, first).motion
+        return piece(robot, r, window, plan, cutoff, settings, columns[role], columns[role].names, first).motion
 
     if pair is not None:
         block = RunBlock(True, motion(on_empty_grid(pair, rec, partner), "loaded"), motion(rec, "empty"),
@@ -208,7 +209,7 @@ def _task(robot: rx90sym.Robot, loaded: bool, rec: Recording, partner: Recording
     return block if reduce is None else reduce(block)
 
 
-def _arguments(robot: rx90sym.Robot, runs: Runs, columns: dict[str, Columns],
+def _arguments(robot: rx90sym.Robot, runs: Runs, columns: dict[str, RunColumns],
                reduce: Callable[[RunBlock], Any] | None) -> Iterator[tuple]:
     first = 0
     for g in runs.groups:
@@ -229,7 +230,7 @@ def _arguments(robot: rx90sym.Robot, runs: Runs, columns: dict[str, Columns],
         first = at
 
 
-def run_blocks(robot: rx90sym.Robot, runs: Runs, columns: dict[str, Columns],
+def run_blocks(robot: rx90sym.Robot, runs: Runs, columns: dict[str, RunColumns],
                reduce: Callable[[RunBlock], Any] | None = None, client: Any = None) -> Iterator[Any]:
     """Every window of every run in order, as a :class:`RunBlock` (or ``reduce(block)``, computed where
     the block is: on a Dask worker with ``client``); ``columns``: the columns of the empty and of the

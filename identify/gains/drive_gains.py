@@ -33,7 +33,7 @@ from rx90sym.recording import RecordingError
 from identify.estimation.bootstrap import BLOCK_S, DRAWS, SegmentBootstrap
 from identify.estimation.results import IdentificationResult, json_number
 from identify.fitting.plausibility import PlausibilityError, gain_flags, raise_errors
-from identify.fitting.run_blocks import RunBlock, Runs, open_runs, payload_columns, robot_columns, run_blocks, run_sources
+from identify.fitting.run_blocks import RunBlock, RunColumns, Runs, open_runs, run_blocks, run_sources
 from identify.gains.defaults import DEFAULT_METHOD, FLAG_PCT, GAIN_METHODS
 from identify.gains.iv_fit import IV_ITERATIONS, GainRows, GainSums, iv_fit
 from identify.gains.methods import swapped_runs_error
@@ -237,13 +237,6 @@ def _current_offsets(torque_offsets: np.ndarray | None, k: np.ndarray, Rt: np.nd
     return np.linalg.solve(Rt @ np.diag(k), torque_offsets)
 
 
-def _spring(robot: rx90sym.Robot, spring: bool):
-    """The spring torque as one column (zeros without a spring or with ``spring`` False)."""
-    def column(Q: np.ndarray, QD: np.ndarray, QDD: np.ndarray) -> np.ndarray:
-        return robot.spring_torque_batch(Q)[:, :, :1] if spring else np.zeros((len(Q), robot.n, 1))
-    return column
-
-
 def _same_motion_rows(mass: float, drop: bool):
     """eq. 28 turned around: Rt diag(k) (i_l − i_e) − Wc' χ' = Wc_M Mc − (S_l − S_e), on a pair's block."""
     def rows(b: RunBlock) -> GainRows:
@@ -286,8 +279,7 @@ def _same_motion(empty, loaded, position_tol, settings, *, robot, Rt, mass, free
                  spring):
     runs = open_runs(robot, empty, loaded, settings, paired=True, position_tol=position_tol,
                      instead="--method global")
-    spring = _spring(robot, spring)
-    columns = {"loaded": payload_columns(robot, None, spring, ("spring",)), "empty": (("spring",), spring)}
+    columns = {"loaded": RunColumns(robot, spring=spring), "empty": RunColumns(robot, payload=False, spring=spring)}
     names = tuple(f"K{j + 1}" for j in free) + _OTHER_PAYLOAD
     drop = settings.min_velocity is not None and drops_rest(settings.rest)
     fit = _fit(robot, runs, columns, _same_motion_rows(mass, drop), names, Rt, free, k_fixed, 9, "same-motion",
@@ -304,9 +296,7 @@ def _global(empty, loaded, offsets, base, settings, *, robot, Rt, mass, free, k_
     base = base if base is not None else rx90sym.base_parameters(robot)
     nb = base.nb
     runs = open_runs(robot, empty, loaded, settings)
-    spring = _spring(robot, spring)
-    columns = {"loaded": payload_columns(robot, base, spring, ("spring",)),
-               "empty": robot_columns(robot, base, spring, ("spring",))}
+    columns = {"loaded": RunColumns(robot, base, spring=spring), "empty": RunColumns(robot, base, False, spring)}
     names = tuple(f"K{j + 1}" for j in free) + tuple(base.names) + _OTHER_PAYLOAD
     drop = settings.min_velocity is not None and drops_rest(settings.rest)
     fit, boot = _fit(robot, runs, columns, _global_rows(nb, mass, drop), names, Rt, free, k_fixed, nb + 9, "global",

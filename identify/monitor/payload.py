@@ -10,7 +10,7 @@ import rx90sym
 from rx90sym.parameters import PAYLOAD_NAMES
 
 from identify.estimation.least_squares import solve_joint_systems, solve_system, stack_systems
-from identify.fitting.run_blocks import open_runs, payload_columns, robot_columns
+from identify.fitting.run_blocks import RunColumns, open_runs
 from identify.payloads.methods import (PayloadResult, check_wrist_motion, estimates_in_tip_frame, payload_estimates,
                                        processing_settings, recording_list, result_subset)
 from identify.payloads.systems import FoldedRows, drop_rest, fold_rows, method_4_rows
@@ -49,7 +49,7 @@ class PayloadMonitor:
         self.names = tuple(self.base.names) + PAYLOAD_NAMES
         runs = open_runs(robot, empty, [], processing_settings(options, block), **self.read)
         self.settings = replace(runs.settings, cutoff=runs.cutoff)  # every loaded motion filtered alike
-        self._folded = fold_rows(robot, runs, {"empty": robot_columns(robot, self.base)}, method_4_rows(drop_rest(runs)),
+        self._folded = fold_rows(robot, runs, {"empty": RunColumns(robot, self.base, payload=False)}, method_4_rows(drop_rest(runs)),
                                  self.names, None, folded=FoldedRows(robot.n, self.names, 0, 1.0, None))
         nb = self.base.nb
         self.empty_fit = solve_joint_systems(self._folded.factors.subset(range(nb)).systems(0), self.base.names)
@@ -60,7 +60,7 @@ class PayloadMonitor:
         """Add one loaded motion (a recording or a file) and return the new payload estimate."""
         runs = open_runs(self.robot, [], [loaded], self.settings, **self.read)
         check_wrist_motion(self.robot, runs.q_range, [s.source for s in runs.loaded_scans])
-        fold_rows(self.robot, runs, {"loaded": payload_columns(self.robot, self.base)}, method_4_rows(drop_rest(runs)),
+        fold_rows(self.robot, runs, {"loaded": RunColumns(self.robot, self.base)}, method_4_rows(drop_rest(runs)),
                   self.names, None, folded=self._folded)
         systems = self._folded.factors.systems(0)
         fit = solve_system(stack_systems(systems, self.weights), self.names, joint_systems=systems,

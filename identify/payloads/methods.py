@@ -31,7 +31,7 @@ from rx90sym.rigid_body import RigidBody, physical_problem
 from identify.estimation.consistency import ConsistencyError, pseudo_inertia
 from identify.estimation.consistency.fit import SOLVE_FACTOR
 from identify.estimation.least_squares import compress, solve_system
-from identify.fitting.run_blocks import Runs, open_runs, payload_columns, robot_columns
+from identify.fitting.run_blocks import RunColumns, Runs, open_runs
 from identify.io.blocks import DEFAULT_BLOCK, check_block
 from identify.observation.defaults import DEFAULT_DECIMATE_TO
 from identify.observation.processing import Processing
@@ -185,7 +185,7 @@ def payload_estimates(fit: IdentificationResult) -> tuple[np.ndarray, np.ndarray
 
 def _method_1(robot, base, runs: Runs, known, seed, client):
     # eq. 22: the robot's known part (the fit's own columns) moved to the right-hand side.
-    columns = payload_columns(robot, known.base)
+    columns = RunColumns(robot, known.base)
     folded = fold_rows(robot, runs, {"loaded": columns}, method_1_rows(known.beta, drop_rest(runs)), PAYLOAD_NAMES,
                        seed, client)
     fit = folded.solve()
@@ -194,7 +194,7 @@ def _method_1(robot, base, runs: Runs, known, seed, client):
 
 def _method_3(robot, base, runs: Runs, known, seed, client):
     # eq. 28: the empty run's torques (its Y alone: no column) replace W chi.
-    columns = {"loaded": payload_columns(robot), "empty": ((), _torques_only)}
+    columns = {"loaded": RunColumns(robot), "empty": RunColumns(robot, payload=False)}  # the empty run: its torques
     folded = fold_rows(robot, runs, columns, method_3_rows(drop_rest(runs)), PAYLOAD_NAMES, seed, client)
     fit = folded.solve()
     return fit, None, folded.bootstrap_std(fit)
@@ -202,16 +202,11 @@ def _method_3(robot, base, runs: Runs, known, seed, client):
 
 def _method_4(robot, base, runs: Runs, known, seed, client):
     names = tuple(base.names) + PAYLOAD_NAMES
-    columns = {"empty": robot_columns(robot, base), "loaded": payload_columns(robot, base)}
+    columns = {"empty": RunColumns(robot, base, payload=False), "loaded": RunColumns(robot, base)}
     folded = fold_rows(robot, runs, columns, method_4_rows(drop_rest(runs)), names, seed, client)
     fit = folded.solve()
     boot = folded.bootstrap_std(fit)
     return fit, result_subset(fit, base.names), None if boot is None else boot[[names.index(n) for n in PAYLOAD_NAMES]]
-
-
-def _torques_only(Q: np.ndarray, QD: np.ndarray, QDD: np.ndarray) -> np.ndarray:
-    """No column: an empty run of method 3 carries its torques only."""
-    return np.zeros(Q.shape + (0,))
 
 
 def result_subset(fit: IdentificationResult, names: Sequence[str]) -> IdentificationResult:

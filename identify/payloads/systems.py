@@ -19,7 +19,7 @@ from identify.estimation.bootstrap import BLOCK_S, DRAWS, SegmentBootstrap
 from identify.estimation.incremental_qr import JointFactors
 from identify.estimation.least_squares import solve_joint_systems
 from identify.estimation.results import IdentificationResult
-from identify.fitting.run_blocks import Columns, RunBlock, Runs, run_blocks
+from identify.fitting.run_blocks import RunBlock, RunColumns, Runs, run_blocks
 from identify.observation.processing import drops_rest
 
 __all__ = ["FoldedRows", "drop_rest", "fold_rows", "method_1_rows", "method_3_rows", "method_4_rows"]
@@ -90,7 +90,7 @@ class FoldedRows:
         return None if self.boot is None else self.boot.std(fit.weights)
 
 
-def fold_rows(robot: rx90sym.Robot, runs: Runs, columns: dict[str, Columns], rows: Callable[[RunBlock], JointRows],
+def fold_rows(robot: rx90sym.Robot, runs: Runs, columns: dict[str, RunColumns], rows: Callable[[RunBlock], JointRows],
               names: tuple[str, ...], seed: int | None, client: Any = None,
               folded: FoldedRows | None = None) -> FoldedRows:
     """Every block of ``runs`` through ``rows`` (on the Dask workers with ``client``), folded in order
