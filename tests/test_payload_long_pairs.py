@@ -111,3 +111,22 @@ def test_segments_that_do_not_pair_are_refused_naming_both_counts(rx90, runs, tm
                  "--json", str(out)]) == 2
     err = capsys.readouterr().err
     assert f"e.csv has {COPIES} segments and l.csv 1" in err and not out.exists()
+
+
+@pytest.mark.slow
+def test_dask_workers_give_the_serial_estimates(rx90, runs):
+    """The blocks as Dask tasks on two worker processes (the runs' columns and row builders pickled):
+    the serial payload (method 3, its bootstrap too) and gains."""
+    from dask.distributed import Client, LocalCluster
+
+    e, l, long_e, long_l = runs["torques"]
+    ce, cl = runs["currents"][2:]
+    serial = identify.payload(rx90, 3, empty=[long_e], loaded=[long_l], block=BLOCK)
+    gains = drive_gains(rx90, [ce], [cl], 4.275, fix={6: SENSOR.gains[5]}, block=BLOCK)
+    with LocalCluster(n_workers=2, threads_per_worker=1, processes=True, dashboard_address=None) as cluster, \
+            Client(cluster) as client:
+        spread = identify.payload(rx90, 3, empty=[long_e], loaded=[long_l], block=BLOCK, client=client)
+        spread_gains = drive_gains(rx90, [ce], [cl], 4.275, fix={6: SENSOR.gains[5]}, block=BLOCK, client=client)
+    np.testing.assert_allclose(spread.values, serial.values, rtol=1e-12)
+    np.testing.assert_allclose(spread.bootstrap_std, serial.bootstrap_std, rtol=1e-12)
+    np.testing.assert_allclose(spread_gains.gains.gains, gains.gains.gains, rtol=1e-12)
