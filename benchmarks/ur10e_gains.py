@@ -85,14 +85,14 @@ def held_out_mass(robot: rx90sym.Robot, gains: np.ndarray, empty: Recording, loa
 def figures(data: Path = DATA, split: float = 25.0) -> dict:
     robot = ur10e_robot()
     empty, loaded = load_run(data / EMPTY[0], EMPTY[1]), load_run(data / LOADED[0], LOADED[1])
-    pair = pair_runs(empty, loaded)
+    (pair,) = pair_runs(empty, loaded)
     out: dict = {"pair": pair, "whole": {}, "part": {}, "mass": {}}
     for method in ("same-motion", "global"):
         out["whole"][method] = drive_gains(robot, [empty], [loaded], MASS, method=method, mass_std=MASS_STD)
     out["controller"] = controller_constants(empty)
     out["controller_loaded"] = controller_constants(loaded)
     cut = int(round(split * RATE))
-    e, l = pair.empty, pair.loaded
+    e, l = pair.recordings(empty, loaded)
     first = (e.select(slice(0, cut)), l.select(slice(0, cut)))
     rest = (e.select(slice(cut, e.n_samples)), l.select(slice(cut, l.n_samples)))
     candidates = {"source (README)": np.array(SOURCE_GAINS), "controller constants": out["controller"]}

@@ -75,8 +75,8 @@ def main(argv: list[str] | None = None) -> int:
     robot = ug.ur10e_robot()
     empty = ug.load_run(args.data / ug.EMPTY[0], ug.EMPTY[1])
     loaded = ug.load_run(args.data / ug.LOADED[0], ug.LOADED[1])
-    pair = pair_runs(empty, loaded)
-    e, l = pair.empty, pair.loaded
+    (pair,) = pair_runs(empty, loaded)
+    e, l = pair.recordings(empty, loaded)
     constants = ug.controller_constants(empty)
     print(f"{WINDOWS} disjoint windows of {e.n_samples / WINDOWS / ug.RATE:.1f} s; gains: controller constants")
     print(f"{'method':>6s} {'window':>7s} {'Mc kg':>8s} {'2σ eq.13':>9s} {'2σ boot':>8s}")

@@ -33,7 +33,8 @@ def benchmark_module(name: str):
 @pytest.fixture(scope="session")
 def ur10e_gains_25s():
     """The shared UR10e pair (benchmarks/ur10e_gains.py), paired, and drive gains fitted on its
-    first 25 s (global method): (benchmark module, robot, pair, gains result, cut sample).
+    first 25 s (global method): (benchmark module, robot, pair, its two runs on one grid, gains result,
+    cut sample).
     Skips when the logs are absent (they are never copied into the repository)."""
     b = benchmark_module("ur10e_gains")
     if not (b.DATA / b.EMPTY[0]).exists():
@@ -42,11 +43,12 @@ def ur10e_gains_25s():
     from identify.signal.pairing import pair_runs
 
     robot = b.ur10e_robot()
-    pair = pair_runs(b.load_run(b.DATA / b.EMPTY[0], b.EMPTY[1]), b.load_run(b.DATA / b.LOADED[0], b.LOADED[1]))
+    runs = b.load_run(b.DATA / b.EMPTY[0], b.EMPTY[1]), b.load_run(b.DATA / b.LOADED[0], b.LOADED[1])
+    (pair,) = pair_runs(*runs)
+    e, l = pair.recordings(*runs)
     cut = 2500  # 25 s at the benchmark's 100 Hz grid
-    gains = drive_gains(robot, [pair.empty.select(slice(0, cut))], [pair.loaded.select(slice(0, cut))], b.MASS,
-                        method="global")
-    return b, robot, pair, gains, cut
+    gains = drive_gains(robot, [e.select(slice(0, cut))], [l.select(slice(0, cut))], b.MASS, method="global")
+    return b, robot, pair, (e, l), gains, cut
 
 
 def robot_file_without(path, name: str, *tables: str):

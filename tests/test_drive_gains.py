@@ -164,12 +164,13 @@ def test_pairing_finds_the_lag_to_a_fraction_of_a_sample(rx90, shift_samples):
     step = 1 / 250
     empty = _shifted_run(rx90, 0.5, 3.0, 10, 4500)
     loaded = _shifted_run(rx90, 0.5 + shift_samples * step, 107.0, 40, 4700)
-    p = pair_runs(empty, loaded)
+    (p,) = pair_runs(empty, loaded)
+    e, l = p.recordings(empty, loaded)
     # loaded clock at the same point of the motion: t_e - 3 + 107 - shift
     expect = 104.0 - shift_samples * step
     assert abs(p.lag - expect) < 0.02 * step
-    assert p.gap < 2e-4 and p.empty.n_samples == p.loaded.n_samples
-    np.testing.assert_array_equal(p.empty.t, p.loaded.t)
+    assert p.gap < 2e-4 and e.n_samples == l.n_samples == p.samples
+    np.testing.assert_array_equal(e.t, l.t)
 
 
 def test_pairing_refuses_another_motion(rx90):

@@ -79,7 +79,8 @@ def test_a_position_gap_names_the_tolerance_that_accepts_it(rx90, pair, mass):
     assert "--method global needs no pairing" in msg and "method 4" not in msg
     # The tolerance it names does accept the pair, and is a round figure just above the gap.
     tol = float(re.search(r"--position-tol (\S+) accepts this pair", msg).group(1))
-    gap = pair_runs(empty, drifted, position_tol=tol).gap
+    (pair,) = pair_runs(empty, drifted, position_tol=tol)
+    gap = pair.gap
     assert gap <= tol < 1.1 * gap and 0.02 < gap < 0.026
     # Payload method 3 names its own alternative.
     with pytest.raises(ValueError, match="--method 4 needs no pairing"):

@@ -184,7 +184,7 @@ def test_payload(folder, robot, wls, method):
     cli_json = json.loads(out.read_text())
     lib = identify.payload(robot, method, empty=[] if method == 1 else [read(folder, "fit.csv", robot)],
                            loaded=[read(folder, "loaded.csv", robot)],
-                           robot_params=identify.load_fit(folder / "wls.json").result if method == 1 else None)
+                           robot_params=folder / "wls.json" if method == 1 else None)
     same_numbers(as_json(lib.to_dict()), cli_json)
 
 

@@ -50,10 +50,9 @@ def ur():
 @needs_data
 @pytest.mark.slow
 def test_gains_fitted_on_25_s_give_the_mass_on_the_rest(ur, ur10e_gains_25s):
-    b, robot, p, res, cut = ur10e_gains_25s
+    b, robot, p, (e, l), res, cut = ur10e_gains_25s
     empty = ur[2]
     assert p.gap < 0.005  # the same trajectory, run ~17 min apart on the controller's clock
-    e, l = p.empty, p.loaded
     # Joint 1 (vertical axis) feels the payload only through its unknown inertia: flagged.
     assert res.flagged == (1,)
     # The controller's own constants (independent: its target current on its target torque)

@@ -38,9 +38,9 @@ def parse_set_target_payload(text: str) -> tuple[float, np.ndarray, np.ndarray]:
 @pytest.fixture(scope="module")
 def held_out(ur10e_gains_25s):
     """Gains fitted on the first 25 s of the pair (conftest); the remaining samples with them."""
-    b, robot, pair, gains, cut = ur10e_gains_25s
+    b, robot, pair, runs, gains, cut = ur10e_gains_25s
     g = DriveGains(gains.gains.gains, side="joint")
-    return b, robot, [apply_gains(r.select(slice(cut, r.n_samples)), g, robot) for r in (pair.empty, pair.loaded)]
+    return b, robot, [apply_gains(r.select(slice(cut, r.n_samples)), g, robot) for r in runs]
 
 
 @needs_data

@@ -36,13 +36,26 @@ def given_gain_flags(gains: object) -> list[Flag]:
     return settle(gain_flags(gains.gains, np.zeros_like(gains.gains)))
 
 
-def checked(rec: object, robot: object) -> object:
-    """The recording, refused when its positions do not fit the robot (degrees, swapped q/qd
-    groups, out of range: identify.io.units.check_units)."""
+def checked_peaks(sources: Sequence[object], robot: object, block: int, torques: object = None,
+                  units: bool = True) -> list:
+    """Each recording source (identify.io.blocks) read once block by block: checked as a file is and, with
+    ``units``, refused when its positions do not fit the robot (degrees, swapped q/qd groups, out of
+    range: identify.io.units.check_units); returns the peak |torque| of each block, (1, n) arrays of
+    ``torques(rec)`` (default the recorded torques; a block where it gives None has none)."""
+    import numpy as np
+
     from identify.io.units import check_units
 
-    check_units(rec.t, rec.q, rec.dq, robot, rec.source)
-    return rec
+    peaks = []
+    for src in sources:
+        for rec in src.scan(block):
+            new = rec.select(slice(int(rec.meta.get("new_from", 0)), None))
+            if units:
+                check_units(new.t, new.q, new.dq, robot, src.source)
+            tau = new.tau if torques is None else torques(new)
+            if tau is not None and len(tau):
+                peaks.append(np.max(np.abs(np.asarray(tau, dtype=float)), axis=0)[None, :])
+    return peaks
 
 
 #: Codes whose hint is the consistent fit: given only when the flag's action is to use it (never for

@@ -11,8 +11,7 @@ from typing import Sequence
 
 import numpy as np
 
-__all__ = ["SegmentBootstrap", "segment_bootstrap_std", "segment_bootstrap_estimates", "bootstrap_std",
-           "bootstrap_estimates", "BLOCK_S", "DRAWS"]
+__all__ = ["SegmentBootstrap", "segment_bootstrap_std", "bootstrap_std", "BLOCK_S", "DRAWS"]
 
 #: Block length, s: longer than the residual's correlation (filtered at 20-30 Hz, decimated to
 #: 50 Hz: a few samples), short enough for ~100 blocks in a 50 s run.
@@ -21,34 +20,8 @@ BLOCK_S = 0.5
 DRAWS = 200
 
 
-def segment_bootstrap_estimates(W: np.ndarray, Y: np.ndarray, joint: np.ndarray, samples: np.ndarray,
-                                weights: np.ndarray, block: int, draws: int = 200, seed: int = 0,
-                                instruments: np.ndarray | None = None) -> np.ndarray:
-    """The ``draws`` segment-bootstrap refits themselves, (draws, c) (a NaN row where a draw was
-    rank deficient): for estimates that combine several fits (payload method 2's difference of
-    two runs), whose spread is that of the combined draws. Arguments as :func:`segment_bootstrap_std`."""
-    if block < 1 or draws < 2:
-        raise ValueError(f"block must be >= 1 sample and draws >= 2, got {block} and {draws}")
-    w = np.asarray(weights, dtype=float)[np.asarray(joint)]
-    Ww, Yw = W * w[:, None], Y * w
-    Zw = Ww if instruments is None else np.asarray(instruments) * w[:, None]
-    ids = np.asarray(samples) // block
-    blocks = np.unique(ids)
-    c = W.shape[1]
-    # Per-block normal (or instrumental) equations: a draw is then a weighted sum, not a new QR.
-    A = np.zeros((blocks.size, c, c))
-    g = np.zeros((blocks.size, c))
-    for k, b in enumerate(blocks):
-        rows = ids == b
-        A[k] = Zw[rows].T @ Ww[rows]
-        g[k] = Zw[rows].T @ Yw[rows]
-    counts = _draw_counts(blocks.size, draws, seed)
-    return _estimates(np.tensordot(counts, A, axes=1), counts @ g)
-
-
 def segment_bootstrap_std(W: np.ndarray, Y: np.ndarray, joint: np.ndarray, samples: np.ndarray,
-                          weights: np.ndarray, block: int, draws: int = 200, seed: int = 0,
-                          instruments: np.ndarray | None = None) -> np.ndarray:
+                          weights: np.ndarray, block: int, draws: int = 200, seed: int = 0) -> np.ndarray:
     """Standard deviation of each estimate over ``draws`` segment-bootstrap refits.
 
     Args:
@@ -56,14 +29,26 @@ def segment_bootstrap_std(W: np.ndarray, Y: np.ndarray, joint: np.ndarray, sampl
         samples: (r,) sample index of each row (rows of one sample go together).
         weights: (n,) joint weights of the fit (1 for OLS); block: samples per block (≥ 1).
         draws: number of bootstrap refits; seed: seeds the draws.
-        instruments: (r, c) instruments Z of an instrumental-variable fit (the estimate solves
-            ZᵀW x = ZᵀY, e.g. the drive gains' IDIM-IV); None: least squares (Z = W).
 
     Returns:
         (c,) standard deviations, units of the parameters (NaN where a draw was rank deficient).
     """
-    estimates = segment_bootstrap_estimates(W, Y, joint, samples, weights, block, draws, seed, instruments)
-    return np.nanstd(estimates, axis=0, ddof=1)
+    if block < 1 or draws < 2:
+        raise ValueError(f"block must be >= 1 sample and draws >= 2, got {block} and {draws}")
+    w = np.asarray(weights, dtype=float)[np.asarray(joint)]
+    Ww, Yw = W * w[:, None], Y * w
+    ids = np.asarray(samples) // block
+    blocks = np.unique(ids)
+    c = W.shape[1]
+    # Per-block normal equations: a draw is then a weighted sum, not a new QR.
+    A = np.zeros((blocks.size, c, c))
+    g = np.zeros((blocks.size, c))
+    for k, b in enumerate(blocks):
+        rows = ids == b
+        A[k] = Ww[rows].T @ Ww[rows]
+        g[k] = Ww[rows].T @ Yw[rows]
+    counts = _draw_counts(blocks.size, draws, seed)
+    return np.nanstd(_estimates(np.tensordot(counts, A, axes=1), counts @ g), axis=0, ddof=1)
 
 
 def _draw_counts(blocks: int, draws: int, seed: int) -> np.ndarray:
@@ -80,11 +65,6 @@ def _estimates(M: np.ndarray, g: np.ndarray) -> np.ndarray:
         if np.linalg.matrix_rank(M[i]) == c:
             estimates[i] = np.linalg.solve(M[i], g[i])
     return estimates
-
-
-def _spread(M: np.ndarray, g: np.ndarray) -> np.ndarray:
-    """Standard deviation of the refits ``M_d⁻¹·g_d`` (NaN where every draw was rank deficient)."""
-    return np.nanstd(_estimates(M, g), axis=0, ddof=1)
 
 
 class SegmentBootstrap:
@@ -109,41 +89,41 @@ class SegmentBootstrap:
         self.M = np.zeros((draws, joints, columns, columns))
         self.g = np.zeros((draws, joints, columns))
 
-    def add(self, joint: int, samples: np.ndarray, W: np.ndarray, Y: np.ndarray) -> None:
-        """Rows of joint ``joint``: their decimated sample index (increasing), W (m, c), Y (m,)."""
+    def add(self, joint: int, samples: np.ndarray, W: np.ndarray, Y: np.ndarray,
+            instruments: np.ndarray | None = None) -> None:
+        """Rows of joint ``joint``: their decimated sample index (increasing), W (m, c), Y (m,);
+        ``instruments``: (m, c) Z of an instrumental-variable fit (its draws solve ZᵀW x = ZᵀY)."""
         if samples.size == 0:
             return
+        Z = W if instruments is None else instruments
         ids = np.asarray(samples) // self.block
         starts = np.flatnonzero(np.r_[True, ids[1:] != ids[:-1]])
         stops = np.r_[starts[1:], ids.size]
-        A = np.stack([W[a:b].T @ W[a:b] for a, b in zip(starts, stops)])
-        g = np.stack([W[a:b].T @ Y[a:b] for a, b in zip(starts, stops)])
+        A = np.stack([Z[a:b].T @ W[a:b] for a, b in zip(starts, stops)])
+        g = np.stack([Z[a:b].T @ Y[a:b] for a, b in zip(starts, stops)])
         picked = self.counts[:, ids[starts]].astype(float)
         self.M[:, joint] += (picked @ A.reshape(A.shape[0], -1)).reshape(self.M.shape[0], *A.shape[1:])
         self.g[:, joint] += picked @ g
 
-    def std(self, weights: np.ndarray, columns: Sequence[int] | None = None) -> np.ndarray:
-        """(c,) standard deviations for the joint weights of the fit (1 for OLS); ``columns``: those of the
-        parameters fitted only (None: all)."""
+    def estimates(self, weights: np.ndarray, columns: Sequence[int] | None = None) -> np.ndarray:
+        """The refits themselves, (draws, c) (a NaN row where a draw was rank deficient), for the joint
+        weights of the fit (1 for OLS); ``columns``: those of the parameters fitted only (None: all)."""
         w2 = np.asarray(weights, dtype=float) ** 2
         M, g = np.tensordot(self.M, w2, axes=([1], [0])), np.tensordot(self.g, w2, axes=([1], [0]))
         if columns is not None:
             keep = np.asarray(columns, dtype=int)
             M, g = M[:, keep][:, :, keep], g[:, keep]
-        return _spread(M, g)
+        return _estimates(M, g)
+
+    def std(self, weights: np.ndarray, columns: Sequence[int] | None = None) -> np.ndarray:
+        """(c,) standard deviations of :meth:`estimates` (NaN where every draw was rank deficient)."""
+        return np.nanstd(self.estimates(weights, columns), axis=0, ddof=1)
 
 
 def bootstrap_std(W: np.ndarray, Y: np.ndarray, joint: np.ndarray, samples: np.ndarray, weights: np.ndarray,
-                  rate: float, seed: int = 0, instruments: np.ndarray | None = None) -> np.ndarray:
+                  rate: float, seed: int = 0) -> np.ndarray:
     """:func:`segment_bootstrap_std` with the toolkit's blocks of BLOCK_S seconds (``rate``: the
-    rows' sample rate, Hz) and DRAWS refits; the one bootstrap of identification, payload, drive
-    gains and the consistent fit."""
+    rows' sample rate, Hz) and DRAWS refits, for rows held in memory (the consistent fit's
+    covariance); logs read block by block fold theirs into :class:`SegmentBootstrap`."""
     block = max(1, int(round(BLOCK_S * rate)))
-    return segment_bootstrap_std(W, Y, joint, samples, weights, block, DRAWS, seed, instruments)
-
-
-def bootstrap_estimates(W: np.ndarray, Y: np.ndarray, joint: np.ndarray, samples: np.ndarray,
-                        weights: np.ndarray, rate: float, seed: int = 0) -> np.ndarray:
-    """:func:`segment_bootstrap_estimates` with the toolkit's blocks (BLOCK_S) and DRAWS refits."""
-    block = max(1, int(round(BLOCK_S * rate)))
-    return segment_bootstrap_estimates(W, Y, joint, samples, weights, block, DRAWS, seed)
+    return segment_bootstrap_std(W, Y, joint, samples, weights, block, DRAWS, seed)

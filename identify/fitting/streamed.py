@@ -87,6 +87,7 @@ class StreamedFit:
     scans: tuple[Scan, ...] = ()  # the first pass over each recording (the baseline's and checks' passes reuse it)
     columns: Any = None
     friction: dict | None = None
+    bootstrap_draws: np.ndarray | None = None  # (draws, c) the bootstrap's refits (payload method 2 differences them)
 
     def summary(self) -> str:
         """What was fitted, in the manner of :meth:`identify.Observation.summary`."""
@@ -304,9 +305,10 @@ def fit_streamed(robot: rx90sym.Robot, recordings: Sequence[Any], method: str = 
     observation = None if store is None else store.observation(
         [fc] * len(flat), [p.rate for p in flat], [p.source for p in flat], notes, settings.min_velocity, settings.rest,
         kept)
+    draws = boot.estimates(result.weights, kept) if boot is not None else None
     return StreamedFit(result, fc, flat[0].rate, notes, tuple(s.source for s in scans), total,
                        moving / total if settings.min_velocity is not None else None, found, settings.delay,
-                       boot.std(result.weights, kept) if boot is not None else None, bblock, settings, count,
+                       None if draws is None else np.nanstd(draws, axis=0, ddof=1), bblock, settings, count,
                        np.vstack([np.min([s.q_range[0] for s in scans], axis=0),
                                   np.max([s.q_range[1] for s in scans], axis=0)]),
-                       tuple(s.layout() for s in scans), choice, observation, tuple(scans), base, record)
+                       tuple(s.layout() for s in scans), choice, observation, tuple(scans), base, record, draws)

@@ -22,33 +22,33 @@ from a datasheet instead.
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import Mapping, Sequence
+from typing import Any, Mapping, Sequence
 
 import numpy as np
 
 import rx90sym
 from rx90sym.parameters import PAYLOAD_NAMES
-from rx90sym.recording import Recording, RecordingError
+from rx90sym.recording import RecordingError
 
-from identify.gains.defaults import DEFAULT_METHOD, FLAG_PCT, GAIN_METHODS
-from identify.signal.filtering import choose_cutoff
-from identify.io.gains import DriveGains, apply_gains
-from identify.estimation.bootstrap import bootstrap_std
-from identify.estimation.least_squares import triangular_cond, weighted_least_squares
-from identify.observation.defaults import DEFAULT_DECIMATE_TO
-from identify.observation.matrix import FilteredMotion, column_regressor, filtered_motion, stack_rows
-from identify.signal.pairing import POSITION_TOLERANCE, PairedRuns, pair_runs
+from identify.estimation.bootstrap import BLOCK_S, DRAWS, SegmentBootstrap
 from identify.estimation.results import IdentificationResult, json_number
 from identify.fitting.plausibility import PlausibilityError, gain_flags, raise_errors
+from identify.fitting.run_blocks import RunBlock, RunColumns, Runs, open_runs, run_blocks, run_sources
+from identify.gains.defaults import DEFAULT_METHOD, FLAG_PCT, GAIN_METHODS
+from identify.gains.iv_fit import IV_ITERATIONS, GainRows, GainSums, iv_fit
 from identify.gains.methods import swapped_runs_error
+from identify.io.blocks import DEFAULT_BLOCK, check_block
+from identify.io.gains import DriveGains
+from identify.observation.defaults import DEFAULT_DECIMATE_TO
+from identify.observation.processing import drops_rest
+from identify.observation.stream import StreamSettings
+from identify.signal.pairing import POSITION_TOLERANCE, PairedRuns
 
 __all__ = ["DriveGainsResult", "drive_gains", "GAIN_METHODS", "DEFAULT_METHOD", "FLAG_PCT"]
 
-# Instrumental-variable iterations (IDIM-IV, see _fit): at most this many, until no unknown moves
-# by more than IV_TOLERANCE of its sigma (the twin's weak motor 6 needs ~8; the others 2).
-IV_ITERATIONS = 30
-IV_TOLERANCE = 1e-3
 _OTHER_PAYLOAD = PAYLOAD_NAMES[:-1]  # XXc .. MZc; Mc is known
+#: The source of the unit joint-side gains that read the runs' currents as "torques" (filtered like torques).
+_UNIT = "unit gains"
 
 
 @dataclass(frozen=True, eq=False)
@@ -101,34 +101,7 @@ class DriveGainsResult:
         return "\n".join(lines)
 
 
-def _unit_currents(rec: Recording, robot: rx90sym.Robot) -> Recording:
-    """The recording with tau = its currents (unit joint-side gains): filtered like torques."""
-    if rec.current is None:
-        raise RecordingError(f"{rec.source}: drive gains are identified from motor currents; "
-                             "the recording holds none")
-    return apply_gains(rec, DriveGains(np.ones(robot.n), side="joint", source="unit gains"), robot)
-
-
-def _current_motions(robot: rx90sym.Robot, recs: Sequence[Recording], columns: Sequence[int], cutoff: float | None,
-             decimate_to: float | None, spring: bool) -> list[FilteredMotion]:
-    """Filtered currents (Y) and [W columns, spring torque] (Phi), one parallel filter for all."""
-    _, standard = column_regressor(robot, columns=[robot.parameter_names[i] for i in columns])
-
-    def regressor(Q: np.ndarray, QD: np.ndarray, QDD: np.ndarray) -> np.ndarray:
-        W = standard(Q, QD, QDD)
-        s = robot.spring_torque_batch(Q)[:, :, :1] if spring else np.zeros((len(Q), robot.n, 1))
-        return np.concatenate([W, s], axis=2)
-
-    return [filtered_motion(robot, _unit_currents(r, robot), cutoff, decimate_to, False, regressor)
-            for r in recs]
-
-
-def _current_columns(Y: np.ndarray, Rt: np.ndarray) -> np.ndarray:
-    """(S, n, n_motors): column m of joint j is Rt[j, m] i_m, so that tau = this @ k."""
-    return Y[:, None, :] * Rt[None, :, :]
-
-
-def _check_inputs(robot: rx90sym.Robot, empty: Sequence[Recording], loaded: Sequence[Recording],
+def _check_inputs(robot: rx90sym.Robot, empty: Sequence[Any], loaded: Sequence[Any],
                   mass: float, mass_std: float, method: str, fix: Mapping[int, float]) -> None:
     if method not in GAIN_METHODS:
         raise ValueError(f"drive_gains: method must be one of {GAIN_METHODS}, got {method!r}")
@@ -151,19 +124,24 @@ def _check_inputs(robot: rx90sym.Robot, empty: Sequence[Recording], loaded: Sequ
                          f"number of each)")
 
 
-def drive_gains(robot: rx90sym.Robot, empty: Sequence[Recording], loaded: Sequence[Recording], mass: float,
+def drive_gains(robot: rx90sym.Robot, empty: Sequence[Any], loaded: Sequence[Any], mass: float,
                 method: str = DEFAULT_METHOD, fix: Mapping[int, float] | None = None, mass_std: float = 0.0,
                 side: str | None = None, offsets: bool = True, flag_pct: float = FLAG_PCT,
                 position_tol: float = POSITION_TOLERANCE, base: rx90sym.BaseParameters | None = None,
                 cutoff: float | None = None, decimate_to: float | None = DEFAULT_DECIMATE_TO,
                 min_velocity: float | None = None, spring: bool = True,
-                iterations: int = IV_ITERATIONS, bootstrap_seed: int = 0, _swap_check: bool = True) -> DriveGainsResult:
-    """Identify the drive gains from current recordings and a payload of known mass.
+                iterations: int = IV_ITERATIONS, bootstrap_seed: int | None = 0, *, rest: str | tuple = "drop",
+                delay: float = 0.0, convention: str | None = None, block: int | None = None, client: Any = None,
+                _swap_check: bool = True) -> DriveGainsResult:
+    """Identify the drive gains from current recordings and a payload of known mass, block by block.
 
     Args:
         robot: the robot (its transmission ``Rt`` maps motor to joint torques).
-        empty, loaded: current recordings without / with the payload (``same-motion``: run i of
-            each is the same trajectory, paired in time by :func:`identify.signal.pairing.pair_runs`).
+        empty, loaded: runs with motor currents without / with the payload: recordings, or recording
+            files read ``block`` raw samples at a time (memory bounded by the block whatever their length;
+            ``convention``: their angles). ``same-motion``: run i of each is the same trajectory, paired
+            segment by segment (:func:`identify.signal.pairing.pair_runs`; runs of different segment
+            counts refused).
         mass: the payload's weighed mass, kg.
         method: ``"same-motion"`` (eq. 28) or ``"global"`` (eq. 29).
         fix: joint number (1-based) -> gain [N·m/A] known from a datasheet.
@@ -175,11 +153,14 @@ def drive_gains(robot: rx90sym.Robot, empty: Sequence[Recording], loaded: Sequen
         flag_pct: flag a gain whose relative sigma exceeds this, %.
         position_tol: same-motion: largest position gap between paired runs, rad.
         base: base parameters of ``robot`` (``global``; computed when None).
-        cutoff, decimate_to, min_velocity, spring: filtering as in :func:`identify.fit`.
+        cutoff, decimate_to, min_velocity, rest, delay, spring: the processing, as in :func:`identify.fit`
+            (cut-off None: chosen on the runs, identify.fitting.run_blocks).
         iterations: at most this many instrumental-variable iterations (0: least squares, biased
             toward zero gains by the current noise).
         bootstrap_seed: seed of the segment bootstrap (identify.estimation.bootstrap) whose sigma,
-            when larger than eq. 13's, is the gain's (coloured residuals, window-to-window spread).
+            when larger than eq. 13's, is the gain's (coloured residuals, window-to-window spread;
+            None: none).
+        client: a ``dask.distributed.Client`` running the blocks.
 
     Raises:
         ValueError: bad arguments, recordings without currents, runs that do not pair.
@@ -200,13 +181,23 @@ def drive_gains(robot: rx90sym.Robot, empty: Sequence[Recording], loaded: Sequen
     k_fixed = np.array([fix.get(j + 1, 0.0) for j in range(robot.n)])
     if int(iterations) != iterations or iterations < 0:
         raise ValueError(f"drive_gains: iterations must be an integer >= 0, got {iterations!r}")
-    opts = dict(robot=robot, Rt=Rt, mass=mass, free=free, k_fixed=k_fixed, cutoff=cutoff,
-                decimate_to=decimate_to, min_velocity=min_velocity, spring=spring, iterations=int(iterations),
-                rate=decimate_to or empty[0].rate, seed=bootstrap_seed)
+    # The currents read as torques through unit joint-side gains: filtered like torques, no spring added.
+    unit = DriveGains(np.ones(robot.n), side="joint", source=_UNIT)
+    empty, loaded = (run_sources(robot, runs, what, convention, unit) for runs, what in ((empty, "empty"),
+                                                                                      (loaded, "loaded")))
+    for src in empty + loaded:
+        if not src.holds_current:
+            raise RecordingError(f"{src.source}: drive gains are identified from motor currents; the recording "
+                                 f"holds none")
+    # Y is the currents alone: the spring torque is a column of its own (on the right-hand side, Kn).
+    settings = StreamSettings(cutoff, decimate_to or None, min_velocity or None, rest, float(delay), False,
+                              check_block(block) if block is not None else DEFAULT_BLOCK)
+    opts = dict(robot=robot, Rt=Rt, mass=mass, free=free, k_fixed=k_fixed, iterations=int(iterations),
+                seed=bootstrap_seed, client=client, spring=spring)
     if method == "same-motion":
-        (fit, boot), pairs, robot_fit, i0 = _same_motion(empty, loaded, position_tol, **opts)
+        (fit, boot), pairs, robot_fit, i0 = _same_motion(empty, loaded, position_tol, settings, **opts)
     else:
-        (fit, boot), robot_fit, i0 = _global(empty, loaded, offsets, base, **opts)
+        (fit, boot), robot_fit, i0 = _global(empty, loaded, offsets, base, settings, **opts)
         pairs = ()
     k = k_fixed.copy()
     std_ls, std_boot = np.full(robot.n, np.nan), np.full(robot.n, np.nan)
@@ -223,7 +214,8 @@ def drive_gains(robot: rx90sym.Robot, empty: Sequence[Recording], loaded: Sequen
             raise
         raise swapped_runs_error(exc, lambda: drive_gains(
             robot, loaded, empty, mass, method, fix, mass_std, side, offsets, flag_pct, position_tol, base, cutoff,
-            decimate_to, min_velocity, spring, iterations, bootstrap_seed, _swap_check=False),
+            decimate_to, min_velocity, spring, iterations, bootstrap_seed, rest=rest, delay=delay, block=block,
+            client=client, _swap_check=False),
             [r.source for r in empty], [r.source for r in loaded], robot_fit) from None
     flagged = tuple(j + 1 for j in free if not rel[j] <= flag_pct)
     gains = DriveGains(k, side=side, current_offsets=_current_offsets(i0, k, Rt),
@@ -245,128 +237,70 @@ def _current_offsets(torque_offsets: np.ndarray | None, k: np.ndarray, Rt: np.nd
     return np.linalg.solve(Rt @ np.diag(k), torque_offsets)
 
 
-@dataclass(frozen=True, eq=False)
-class _Motion:
-    """One motion in the form G(I) k - X theta = Kn (per sample, joint on axis 1).
-
-    I: (S, n) filtered currents (same-motion: loaded minus empty); X: (S, n, c) the other
-    unknowns' columns; Kn: (S, n) the known-mass column times Mc minus the spring torque; dq: (S, n).
-    """
-
-    I: np.ndarray
-    X: np.ndarray
-    Kn: np.ndarray
-    dq: np.ndarray
+def _same_motion_rows(mass: float, drop: bool):
+    """eq. 28 turned around: Rt diag(k) (i_l − i_e) − Wc' χ' = Wc_M Mc − (S_l − S_e), on a pair's block."""
+    def rows(b: RunBlock) -> GainRows:
+        m, e = b.motion, b.empty
+        return GainRows(m.Y - e.Y, m.Phi[:, :, :9], m.Phi[:, :, 9] * mass - (m.Phi[:, :, 10] - e.Phi[:, :, 0]),
+                        m.rows(drop) & e.rows(False), b.first)
+    return rows
 
 
-def _system(motions: Sequence[_Motion], currents: Sequence[np.ndarray], Rt: np.ndarray, free: list[int],
-            k_fixed: np.ndarray, min_velocity: float | None):
-    """Rows (grouped per joint) of [G(currents)_free, -X] and of the right-hand side."""
-    blocks = [np.concatenate([_current_columns(c, Rt)[:, :, free], -m.X], axis=2) for m, c in zip(motions, currents)]
-    Ys = [m.Kn - _current_columns(m.I, Rt) @ k_fixed for m in motions]
-    return stack_rows(blocks, Ys, min_velocity, [m.dq for m in motions])
+def _global_rows(nb: int, mass: float, drop: bool):
+    """eq. 29 with currents: Rt diag(k) i − Wb β − Wc' χ' = Wc_M Mc − S (an empty run's Wc is 0)."""
+    def rows(b: RunBlock) -> GainRows:
+        m = b.motion
+        Wc = m.Phi[:, :, nb:nb + 10] if b.loaded else np.zeros(m.Phi.shape[:2] + (10,))
+        return GainRows(m.Y, np.concatenate([m.Phi[:, :, :nb], Wc[:, :, :9]], axis=2),
+                        Wc[:, :, 9] * mass - m.Phi[:, :, -1], m.rows(drop), b.first)
+    return rows
 
 
-def _fit(motions: Sequence[_Motion], names: Sequence[str], Rt: np.ndarray, free: list[int],
-         k_fixed: np.ndarray, min_velocity: float | None, method: str, iterations: int, rate: float,
-         seed: int) -> tuple[IdentificationResult, np.ndarray]:
-    """WLS, then instrumental variables with the model's predicted currents (IDIM-IV).
-
-    The currents are regressors here, so their noise biases plain LS toward zero gains (errors in
-    variables: 5-8 % on the twin's realistic runs); the currents predicted by the current estimate,
-    i = (Rt diag(k))^-1 (X theta + Kn), are free of that noise and serve as instruments. Iterated
-    until no unknown moves by more than IV_TOLERANCE of its sigma (at most ``iterations`` times).
-    Each joint's rows are weighted by 1/sigma of its residual (the usual per-joint block fit,
-    eqs. 12-13, fails: a joint whose rows carry no known-mass term has a homogeneous block).
-    Returns the fit and the segment-bootstrap sigma of its unknowns (same instruments; rate: the
-    rows' sample rate, Hz; seed: the bootstrap's).
-    """
-    W, Y, joint, samples = _system(motions, [m.I for m in motions], Rt, free, k_fixed, min_velocity)
-    ols = weighted_least_squares(W, Y, joint, names, weighted=False)  # rank check names the unknowns
-    x = ols.values
-    n_f = len(free)
-    nj = int(joint.max()) + 1
-    Z = W  # the instruments; W itself (plain LS) before the first iteration
-    cov, sigma_rho, sigma = _iv_covariance(W, Z, Y, x, joint, nj)
-    for _ in range(iterations):
-        k = k_fixed.copy()
-        k[free] = x[:n_f]
-        if np.any(k == 0):
-            raise ValueError("drive gains: a gain came out as 0; the runs do not excite it")
-        gain = Rt @ np.diag(k)
-        predicted = [np.linalg.solve(gain, (np.einsum("snc,c->sn", m.X, x[n_f:]) + m.Kn).T).T for m in motions]
-        Z, _, _, _ = _system(motions, predicted, Rt, free, k_fixed, min_velocity)
-        w = 1.0 / sigma[joint]
-        Aw, Zw = W * w[:, None], Z * w[:, None]
-        x_new = np.linalg.solve(Zw.T @ Aw, Zw.T @ (Y * w))
-        cov, sigma_rho, sigma = _iv_covariance(W, Z, Y, x_new, joint, nj)
-        step = np.max(np.abs(x_new - x) / np.sqrt(np.diag(cov)))
-        x = x_new
-        if step < IV_TOLERANCE:
-            break
-    std = np.sqrt(np.diag(cov))                                                   # eq. 14
-    res = Y - W @ x
-    rms = np.array([np.sqrt(np.mean(res[joint == j] ** 2)) for j in range(nj)])
-    boot = bootstrap_std(W, Y, joint, samples, 1.0 / sigma, rate, seed, instruments=Z)
-    cond = triangular_cond(np.linalg.qr(W / sigma[joint][:, None], mode="r"))
-    return IdentificationResult(tuple(names), x, std, 100 * std / np.abs(x), sigma_rho,
-                                cond, ols.cond_unweighted, rms, 1.0 / sigma,
-                                len(Y), f"drive-gains-{method}-iv", cov), boot
+def _fit(robot: rx90sym.Robot, runs: Runs, columns: dict, rows: Any, names: tuple[str, ...], Rt: np.ndarray,
+         free: list[int], k_fixed: np.ndarray, cx: int, method: str, iterations: int, seed: int | None,
+         client: Any) -> tuple[IdentificationResult, np.ndarray]:
+    """The IV fit on the sums of one pass (identify.gains.iv_fit), then a second pass for the segment
+    bootstrap with the final instruments: (fit, bootstrap σ of its unknowns)."""
+    sums = GainSums(Rt, free, k_fixed, cx)
+    for block in run_blocks(robot, runs, columns, rows, client):
+        sums.add(block)
+    fit, instruments = iv_fit(sums, names, method, iterations)
+    if seed is None:
+        return fit, np.full(len(names), np.nan)
+    boot = SegmentBootstrap(runs.samples, max(1, int(round(BLOCK_S * runs.rate))), robot.n, len(names), DRAWS, seed)
+    for block in run_blocks(robot, runs, columns, rows, client):
+        for j in range(robot.n):
+            idx, A, y, Z = sums.bootstrap_rows(block, instruments, j)
+            boot.add(j, block.first + idx, A, y, Z)
+    return fit, boot.std(fit.weights)
 
 
-def _iv_covariance(W: np.ndarray, Z: np.ndarray, Y: np.ndarray, x: np.ndarray, joint: np.ndarray,
-                   nj: int) -> tuple[np.ndarray, float, np.ndarray]:
-    """(covariance, sigma_rho, per-joint sigma) of the estimate x with instruments Z."""
-    sigma = _joint_sigma(Y - W @ x, joint, nj, W.shape[1])
-    w = 1.0 / sigma[joint]
-    Aw, Zw, r = W * w[:, None], Z * w[:, None], (Y - W @ x) * w
-    sigma_rho = float(np.sqrt(r @ r / (len(r) - len(x))))                       # eq. 12
-    ZAinv = np.linalg.inv(Zw.T @ Aw)
-    return sigma_rho**2 * ZAinv @ (Zw.T @ Zw) @ ZAinv.T, sigma_rho, sigma       # eq. 13, IV form
-
-
-def _joint_sigma(r: np.ndarray, joint: np.ndarray, nj: int, c: int) -> np.ndarray:
-    dof = 1.0 - c / len(r)
-    sigma = np.array([np.sqrt(np.mean(r[joint == j] ** 2) / dof) for j in range(nj)])
-    if np.any(sigma <= 0):
-        raise ValueError(f"joint {int(np.argmin(sigma)) + 1}: the gain fit leaves no residual; cannot weight it")
-    return sigma
-
-
-def _same_motion(empty, loaded, position_tol, *, robot, Rt, mass, free, k_fixed, cutoff, decimate_to,
-                 min_velocity, spring, iterations, rate, seed):
-    pairs = [pair_runs(e, l, position_tol, instead="--method global") for e, l in zip(empty, loaded)]
-    # One cut-off for both runs of a pair, so that the same samples are kept and compared.
-    cutoff = cutoff or max(choose_cutoff(np.asarray(p.loaded.q), p.loaded.rate) for p in pairs)
-    cols = list(rx90sym.payload_regressor_columns(robot))
-    m_l = _current_motions(robot, [p.loaded for p in pairs], cols, cutoff, decimate_to, spring)
-    m_e = _current_motions(robot, [p.empty for p in pairs], cols, cutoff, decimate_to, spring)
-    # eq. 28 turned around: Rt diag(k) (i_l - i_e) - Wc' chi' = Wc_M Mc - (S_l - S_e).
-    motions = [_Motion(a.Y - b.Y, a.Phi[:, :, :9], a.Phi[:, :, 9] * mass - (a.Phi[:, :, 10] - b.Phi[:, :, 10]), a.dq)
-               for a, b in zip(m_l, m_e)]
+def _same_motion(empty, loaded, position_tol, settings, *, robot, Rt, mass, free, k_fixed, iterations, seed, client,
+                 spring):
+    runs = open_runs(robot, empty, loaded, settings, paired=True, position_tol=position_tol,
+                     instead="--method global")
+    columns = {"loaded": RunColumns(robot, spring=spring), "empty": RunColumns(robot, payload=False, spring=spring)}
     names = tuple(f"K{j + 1}" for j in free) + _OTHER_PAYLOAD
-    return _fit(motions, names, Rt, free, k_fixed, min_velocity, "same-motion", iterations, rate, seed), pairs, None, None
+    drop = settings.min_velocity is not None and drops_rest(settings.rest)
+    fit = _fit(robot, runs, columns, _same_motion_rows(mass, drop), names, Rt, free, k_fixed, 9, "same-motion",
+               iterations, seed, client)
+    return fit, runs.pairs, None, None
 
 
-def _global(empty, loaded, offsets, base, *, robot, Rt, mass, free, k_fixed, cutoff, decimate_to,
-            min_velocity, spring, iterations, rate, seed):
+def _global(empty, loaded, offsets, base, settings, *, robot, Rt, mass, free, k_fixed, iterations, seed, client,
+            spring):
     if offsets and not robot.offsets:
         robot = robot.with_options(offsets=True)
         if base is not None and "OFF1" not in base.names:
             base = None  # the base parameters of the robot without offsets
     base = base if base is not None else rx90sym.base_parameters(robot)
     nb = base.nb
-    cols = list(base.independent) + list(rx90sym.payload_regressor_columns(robot))
-    motions = (_current_motions(robot, empty, cols, cutoff, decimate_to, spring)
-               + _current_motions(robot, loaded, cols, cutoff, decimate_to, spring))
-    system = []
-    for i, m in enumerate(motions):
-        Wc = m.Phi[:, :, nb:nb + 10] if i >= len(empty) else np.zeros_like(m.Phi[:, :, nb:nb + 10])
-        # eq. 29 with currents: Rt diag(k) i - Wb beta - Wc' chi' = Wc_M Mc - S.
-        system.append(_Motion(m.Y, np.concatenate([m.Phi[:, :, :nb], Wc[:, :, :9]], axis=2),
-                              Wc[:, :, 9] * mass - m.Phi[:, :, nb + 10], m.dq))
+    runs = open_runs(robot, empty, loaded, settings)
+    columns = {"loaded": RunColumns(robot, base, spring=spring), "empty": RunColumns(robot, base, False, spring)}
     names = tuple(f"K{j + 1}" for j in free) + tuple(base.names) + _OTHER_PAYLOAD
-    fit, boot = _fit(system, names, Rt, free, k_fixed, min_velocity, "global", iterations, rate, seed)
+    drop = settings.min_velocity is not None and drops_rest(settings.rest)
+    fit, boot = _fit(robot, runs, columns, _global_rows(nb, mass, drop), names, Rt, free, k_fixed, nb + 9, "global",
+                     iterations, seed, client)
     idx = [fit.names.index(n) for n in base.names]
     cov = fit.covariance[np.ix_(idx, idx)] if fit.covariance is not None else None
     robot_fit = IdentificationResult(tuple(base.names), fit.values[idx], fit.std[idx], fit.rel_std_pct[idx],

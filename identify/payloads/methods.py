@@ -10,13 +10,14 @@ observation matrix Wc is the ten columns of link n in the standard regressor (eq
 - method 3 (eq. 28): same motion empty and loaded, chi_c = Wc+ (Y_T - Y_v);
 - method 4 (eq. 29): global system of empty and loaded motions, which may differ.
 
-Each has a constrained variant (payload pseudo-inertia PSD, mass within a scale's tolerance),
-and identify.monitor.payload.PayloadMonitor updates method 4 after every new loaded motion (the
-paper's conclusion).
+Every method reads, filters and fits its runs block by block on the rows identify makes (methods
+1, 3, 4: identify.payloads.systems; method 2: two identify.fit), any length, any number of segments,
+memory bounded by the block. Each has a constrained variant (payload pseudo-inertia PSD, mass within
+a scale's tolerance), and identify.monitor.payload.PayloadMonitor updates method 4 after every new
+loaded motion (the paper's conclusion).
 """
 from __future__ import annotations
 
-from dataclasses import dataclass
 from typing import Any, Mapping, Sequence
 
 import cvxpy as cp
@@ -29,77 +30,72 @@ from rx90sym.rigid_body import RigidBody, physical_problem
 
 from identify.estimation.consistency import ConsistencyError, pseudo_inertia
 from identify.estimation.consistency.fit import SOLVE_FACTOR
-from identify.estimation.bootstrap import bootstrap_estimates, bootstrap_std
-from identify.estimation.least_squares import compress, solve_system, weighted_least_squares
+from identify.estimation.least_squares import compress, solve_system
+from identify.fitting.run_blocks import RunColumns, Runs, open_runs
+from identify.io.blocks import DEFAULT_BLOCK, check_block
 from identify.observation.defaults import DEFAULT_DECIMATE_TO
 from identify.observation.processing import Processing
+from identify.observation.stream import StreamSettings
 from identify.payloads.defaults import MASS_TOL
-from identify.signal.filtering import choose_cutoff
-from identify.observation.matrix import column_regressor, filtered_motion, stack_rows
-from identify.signal.pairing import POSITION_TOLERANCE, PairedRuns, pair_runs
+from identify.payloads.robot_params import known_robot
+from identify.payloads.systems import drop_rest, fold_rows, method_1_rows, method_3_rows, method_4_rows
+from identify.signal.pairing import POSITION_TOLERANCE
 from identify.estimation.results import IdentificationResult
 from identify.payloads.result import PayloadResult
 
 METHODS = (1, 2, 3, 4)
 # A loaded motion must move the wrist: otherwise Wc is (nearly) rank deficient (eq. 22).
 MIN_WRIST_MOTION = 0.05  # rad, range of each of joints 4..6 over all loaded motions together
+#: The processing of the payload methods (keyword arguments of :func:`payload`) and its defaults: the
+#: automatic cut-off, decimation to 50 Hz, no rest threshold (rest "drop" once one is given), no delay.
+PROCESSING = {"cutoff": None, "decimate_to": DEFAULT_DECIMATE_TO, "min_velocity": None, "rest": "drop", "delay": 0.0,
+              "spring": True}
 
 
 def recording_list(recs: Any) -> list:
-    """``recs`` as a list of recordings (None: none; one recording: a list of it)."""
+    """``recs`` as a list of recordings or files (None: none; one: a list of it)."""
     if recs is None:
         return []
     return list(recs) if isinstance(recs, (list, tuple)) else [recs]
 
 
-def check_joint_count(robot: rx90sym.Robot, recs: Sequence[Any], what: str) -> None:
-    """Refuse a recording (``what``: "empty" or "loaded") with another joint count or of another robot."""
-    for rec in recs:
-        if rec.q.shape[1] != robot.n:
-            raise ValueError(f"{what} recording {rec.source}: {rec.q.shape[1]} joints, robot "
-                             f"{robot.name!r} has {robot.n}")
-        if rec.robot and rec.robot != robot.name:
-            raise ValueError(f"{what} recording {rec.source} is of robot {rec.robot!r}, not {robot.name!r}")
-
-
-def check_wrist_motion(robot: rx90sym.Robot, loaded: Sequence[Any]) -> None:
-    """Refuse loaded motions whose wrist joints all move by less than MIN_WRIST_MOTION rad (eq. 22)."""
-    q = np.concatenate([np.asarray(r.q) for r in loaded])
+def check_wrist_motion(robot: rx90sym.Robot, q_range: np.ndarray, sources: Sequence[str]) -> None:
+    """Refuse loaded motions whose wrist joints all move by less than MIN_WRIST_MOTION rad (eq. 22);
+    ``q_range``: (2, n) smallest and largest position of each joint over them [rad]."""
     wrist = list(range(max(0, robot.n - 3), robot.n))
-    span = q[:, wrist].max(axis=0) - q[:, wrist].min(axis=0)
+    span = q_range[1, wrist] - q_range[0, wrist]
     if np.all(span < MIN_WRIST_MOTION):
-        raise ValueError(f"loaded motion(s) {[r.source for r in loaded]}: joints "
-                         f"{[w + 1 for w in wrist]} move by at most {span.max():.3g} rad; the payload "
-                         f"is not excited (need > {MIN_WRIST_MOTION} rad on at least one of them)")
+        raise ValueError(f"loaded motion(s) {list(sources)}: joints {[w + 1 for w in wrist]} move by at most "
+                         f"{span.max():.3g} rad; the payload is not excited (need > {MIN_WRIST_MOTION} rad on at "
+                         f"least one of them)")
 
 
-def payload_motions(robot: rx90sym.Robot, recs: Sequence[Any], columns: Sequence[int], options: Mapping[str, Any]):
-    """Filtered motions with the standard regressor's ``columns`` (indices) as Phi."""
-    _, regressor = column_regressor(robot, columns=[robot.parameter_names[i] for i in columns])
-    return [filtered_motion(robot, r, options.get("cutoff"), options.get("decimate_to", DEFAULT_DECIMATE_TO),
-                            options.get("spring", True), regressor, delay=options.get("delay", 0.0))
-            for r in recs]
-
-
-def payload_rows(blocks: Sequence[np.ndarray], Y: Sequence[np.ndarray], motions: Sequence[Any],
-                 options: Mapping[str, Any]):
-    """Rows grouped per joint; a joint's rows near rest are dropped when options has min_velocity."""
-    return stack_rows(blocks, Y, options.get("min_velocity"), [m.dq for m in motions])
-
-
-def _robot_vector(robot: rx90sym.Robot, base: Any, robot_params: Any) -> np.ndarray:
-    """Base parameter values from an IdentificationResult, a dict of base or standard names."""
-    if robot_params is None:
-        raise ValueError("method 1 needs the robot's parameters (robot_params): an identification "
-                         "result, or a dict of base or standard parameter values")
-    values = robot_params.as_dict() if hasattr(robot_params, "as_dict") else dict(robot_params)
-    if set(values) <= set(robot.parameter_names) and not set(values) <= set(base.names):
-        return base.K @ robot.parameter_vector(values, strict=False)
-    unknown = set(values) - set(base.names)
+def _processing(options: Mapping[str, Any], fit_processing: Mapping[str, Any] | None) -> dict[str, Any]:
+    """The processing asked (``options``), defaults :data:`PROCESSING`; with a fit's (method 1), the fit's,
+    an option given beside it only when it is the same."""
+    unknown = sorted(set(options) - set(PROCESSING))
     if unknown:
-        raise ValueError(f"robot_params: {sorted(unknown)[:5]} are not base parameters of {robot.name!r}")
-    # Parameters of the base set left out (e.g. an essential set) count as 0.
-    return np.array([values.get(n, 0.0) for n in base.names])
+        raise ValueError(f"payload: unknown option(s) {unknown}; the processing options are {sorted(PROCESSING)}")
+    if fit_processing is None:
+        return {**PROCESSING, **options}
+    for key, value in options.items():
+        own = fit_processing[key]
+        same = value == own or (isinstance(value, float) and isinstance(own, float) and np.isclose(value, own,
+                                                                                                     rtol=1e-12))
+        if not same:
+            raise ValueError(f"payload method 1: {key}={value!r} given, but the fit given as robot_params was made with "
+                             f"{key}={own!r}: its rows are those of its own processing (give the same, or leave it out)")
+    return dict(fit_processing)
+
+
+def _settings(p: Mapping[str, Any], block: int | None) -> StreamSettings:
+    return StreamSettings(p["cutoff"], p["decimate_to"] or None, p["min_velocity"] or None, p["rest"],
+                          float(p["delay"]), bool(p["spring"]), check_block(block) if block is not None else DEFAULT_BLOCK)
+
+
+def processing_settings(options: Mapping[str, Any], block: int | None = None) -> StreamSettings:
+    """The block pipeline's settings of the processing ``options`` (defaults :data:`PROCESSING`)."""
+    return _settings(_processing(options, None), block)
 
 
 # --------------------------------------------------------------------------------------------
@@ -108,18 +104,24 @@ def _robot_vector(robot: rx90sym.Robot, base: Any, robot_params: Any) -> np.ndar
 def payload(robot: rx90sym.Robot, method: int, empty: Sequence[Any] = (), loaded: Sequence[Any] = (),
             robot_params: Any = None, base: Any = None, a_priori: Mapping[str, float] | str | None = None,
             constrained: bool = False, mass: float | None = None, mass_tol: float = MASS_TOL,
-            position_tol: float = POSITION_TOLERANCE, bootstrap_seed: int | None = 0, **options: Any) -> PayloadResult:
-    """Identify the payload by method 1, 2, 3 or 4 of section IV.
+            position_tol: float = POSITION_TOLERANCE, bootstrap_seed: int | None = 0, *, convention: str | None = None,
+            gains: Any = None, block: int | None = None, client: Any = None, **options: Any) -> PayloadResult:
+    """Identify the payload by method 1, 2, 3 or 4 of section IV, block by block on logs of any length.
 
-    empty / loaded: recordings without / with the payload; robot_params: the robot's base (or
-    standard) parameters for method 1; a_priori: CAD values (dict or bundled payload name) to
-    print beside the estimates; constrained: impose the payload pseudo-inertia PSD and, when
-    ``mass`` [kg] is given (weighed), |Mc - mass| <= mass_tol [kg]; position_tol [rad]: method 3
-    pairs each empty run with its loaded run in time (identify.signal.pairing: lag, common part) and
-    refuses pairs whose positions still differ by more; options: cutoff, decimate_to, spring,
-    min_velocity, delay (see identify.observation_matrix; an identification's are
-    ``FitModel.filtering()``); bootstrap_seed: seed of the segment bootstrap beside eq. 13's sigma
-    (identify.estimation.bootstrap; methods 1, 3 and 4; None: no bootstrap).
+    empty / loaded: runs without / with the payload (recordings, or recording files read block by block:
+    ``block`` raw samples at a time, memory bounded by the block; ``convention``, ``gains``: how files
+    are read, gains turning currents into torques); robot_params: method 1's known robot, a
+    :class:`~identify.Fit` or its file (its columns, torque offsets included, and its processing, gains
+    and convention: identify.payloads.robot_params), its result, or a dict of base or standard
+    parameter values; a_priori: CAD values (dict or bundled payload name) to print beside the
+    estimates; constrained: impose the payload pseudo-inertia PSD and, when ``mass`` [kg] is given
+    (weighed), |Mc - mass| <= mass_tol [kg]; position_tol [rad]: method 3 pairs each empty run with its
+    loaded run segment by segment (identify.signal.pairing: lag, common part; runs of different
+    segment counts refused) and refuses pairs whose positions still differ by more; options: the
+    processing, :data:`PROCESSING` (cutoff [Hz], decimate_to [Hz], min_velocity [rad/s], rest, delay
+    [s], spring; an identification's are ``Fit.filtering()``); client: a ``dask.distributed.Client``
+    running the blocks; bootstrap_seed: seed of the segment bootstrap beside eq. 13's sigma
+    (identify.estimation.bootstrap; None: no bootstrap).
     """
     if method not in METHODS:
         raise ValueError(f"payload: method must be 1, 2, 3 or 4, got {method!r}")
@@ -128,9 +130,6 @@ def payload(robot: rx90sym.Robot, method: int, empty: Sequence[Any] = (), loaded
         raise ValueError("payload: no loaded recording given")
     if method in (2, 3, 4) and not empty:
         raise ValueError(f"payload method {method} needs at least one empty (unloaded) recording")
-    check_joint_count(robot, empty, "empty")
-    check_joint_count(robot, loaded, "loaded")
-    check_wrist_motion(robot, loaded)
     if isinstance(a_priori, str):
         a_priori = rx90sym.load_payload(a_priori)
     base = base if base is not None else rx90sym.base_parameters(robot)
@@ -143,18 +142,23 @@ def payload(robot: rx90sym.Robot, method: int, empty: Sequence[Any] = (), loaded
     if method != 1 and robot_params is not None:
         raise ValueError(f"payload method {method} identifies the robot's parameters itself; "
                          "robot_params is for method 1 only")
-    pairs: list[PairedRuns] = []
-    if method == 3:
-        empty, loaded, pairs = _paired(empty, loaded, position_tol)
-    solve = {1: _method_1, 2: _method_2, 3: _method_3, 4: _method_4}[method]
-    fit, robot_fit, rows = solve(robot, base, empty, loaded, robot_params=robot_params, options=options)
+    known = known_robot(robot, base, robot_params) if method == 1 else None
+    p = _processing(options, known.processing if known is not None else None)
+    if known is not None:
+        gains = gains if gains is not None else known.gains
+        convention = convention if convention is not None else known.convention
+    read = dict(convention=convention, gains=gains, block=block, client=client)
+    pairs: tuple = ()
+    if method == 2:
+        fit, robot_fit, boot = _method_2(robot, base, empty, loaded, p, bootstrap_seed, **read)
+    else:
+        runs = open_runs(robot, empty, loaded, _settings(p, block), paired=method == 3, position_tol=position_tol,
+                         convention=convention, gains=gains)
+        check_wrist_motion(robot, runs.q_range, [s.source for s in runs.loaded_scans])
+        solve = {1: _method_1, 3: _method_3, 4: _method_4}[method]
+        fit, robot_fit, boot = solve(robot, base, runs, known, bootstrap_seed, client)
+        pairs = runs.pairs
     values, std, rel = payload_estimates(fit)
-    boot = None
-    if callable(rows) and bootstrap_seed is not None:  # method 2: a difference of two fits
-        boot = rows(bootstrap_seed)
-    elif rows is not None and bootstrap_seed is not None:
-        rate = options.get("decimate_to", DEFAULT_DECIMATE_TO) or loaded[0].rate
-        boot = bootstrap_std(*rows, fit.weights, rate, bootstrap_seed)[[fit.names.index(n) for n in PAYLOAD_NAMES]]
     if constrained:
         values = _constrained(fit, mass, mass_tol)
         rel = 100 * std / np.abs(values)
@@ -179,54 +183,30 @@ def payload_estimates(fit: IdentificationResult) -> tuple[np.ndarray, np.ndarray
     return fit.values[idx], fit.std[idx], fit.rel_std_pct[idx]
 
 
-def _method_1(robot, base, empty, loaded, robot_params, options, **_):
-    beta = _robot_vector(robot, base, robot_params)
-    cols = list(base.independent) + list(rx90sym.payload_regressor_columns(robot))
-    motions = payload_motions(robot, loaded, cols, options)
-    nb = base.nb
-    # eq. 22: the robot's known part is moved to the left-hand side.
-    Y = [m.Y - m.Phi[:, :, :nb] @ beta for m in motions]
-    W, Yr, joint, samples = payload_rows([m.Phi[:, :, nb:] for m in motions], Y, motions, options)
-    return weighted_least_squares(W, Yr, joint, PAYLOAD_NAMES), None, (W, Yr, joint, samples)
+def _method_1(robot, base, runs: Runs, known, seed, client):
+    # eq. 22: the robot's known part (the fit's own columns) moved to the right-hand side.
+    columns = RunColumns(robot, known.base)
+    folded = fold_rows(robot, runs, {"loaded": columns}, method_1_rows(known.beta, drop_rest(runs)), PAYLOAD_NAMES,
+                       seed, client)
+    fit = folded.solve()
+    return fit, None, folded.bootstrap_std(fit)
 
 
-def _paired(empty, loaded, position_tol):
-    """Method 3: each loaded run on the time grid of the same motion run empty (lag, common part)."""
-    if len(empty) != len(loaded):
-        raise ValueError(f"payload method 3 pairs each loaded motion with the same motion run empty: "
-                         f"got {len(empty)} empty and {len(loaded)} loaded recordings")
-    pairs = [pair_runs(e, l, position_tol) for e, l in zip(empty, loaded)]
-    return [p.empty for p in pairs], [p.loaded for p in pairs], pairs
+def _method_3(robot, base, runs: Runs, known, seed, client):
+    # eq. 28: the empty run's torques (its Y alone: no column) replace W chi.
+    columns = {"loaded": RunColumns(robot), "empty": RunColumns(robot, payload=False)}  # the empty run: its torques
+    folded = fold_rows(robot, runs, columns, method_3_rows(drop_rest(runs)), PAYLOAD_NAMES, seed, client)
+    fit = folded.solve()
+    return fit, None, folded.bootstrap_std(fit)
 
 
-def _method_3(robot, base, empty, loaded, options, **_):
-    cols = list(rx90sym.payload_regressor_columns(robot))
-    # One cut-off for both runs of a pair, so that the same samples are kept and compared.
-    cutoff = options.get("cutoff") or max(choose_cutoff(np.asarray(r.q), r.rate) for r in loaded)
-    same = {**options, "cutoff": cutoff}
-    m_l = payload_motions(robot, loaded, cols, same)
-    m_e = payload_motions(robot, empty, cols, same)
-    # eq. 28: the empty run's torques replace W chi.
-    W, Y, joint, samples = payload_rows([m.Phi for m in m_l], [a.Y - b.Y for a, b in zip(m_l, m_e)], m_l, options)
-    return weighted_least_squares(W, Y, joint, PAYLOAD_NAMES), None, (W, Y, joint, samples)
-
-
-def _global_rows(robot, base, empty, loaded, options):
-    """Rows of eq. 29: [W_v 0; W_T W_c] and [Y_v; Y_T], grouped per joint."""
-    cols = list(base.independent) + list(rx90sym.payload_regressor_columns(robot))
-    nb = base.nb
-    m_e = payload_motions(robot, empty, cols, options)
-    m_l = payload_motions(robot, loaded, cols, options)
-    blocks = [np.concatenate([m.Phi[:, :, :nb], np.zeros_like(m.Phi[:, :, nb:])], axis=2) for m in m_e]
-    blocks += [m.Phi for m in m_l]
-    return payload_rows(blocks, [m.Y for m in m_e + m_l], m_e + m_l, options)
-
-
-def _method_4(robot, base, empty, loaded, options, **_):
-    W, Y, joint, samples = _global_rows(robot, base, empty, loaded, options)
+def _method_4(robot, base, runs: Runs, known, seed, client):
     names = tuple(base.names) + PAYLOAD_NAMES
-    fit = weighted_least_squares(W, Y, joint, names)
-    return fit, result_subset(fit, base.names), (W, Y, joint, samples)
+    columns = {"empty": RunColumns(robot, base, payload=False), "loaded": RunColumns(robot, base)}
+    folded = fold_rows(robot, runs, columns, method_4_rows(drop_rest(runs)), names, seed, client)
+    fit = folded.solve()
+    boot = folded.bootstrap_std(fit)
+    return fit, result_subset(fit, base.names), None if boot is None else boot[[names.index(n) for n in PAYLOAD_NAMES]]
 
 
 def result_subset(fit: IdentificationResult, names: Sequence[str]) -> IdentificationResult:
@@ -245,25 +225,30 @@ def grouping_relations(robot: rx90sym.Robot, base: Any) -> np.ndarray:
     return base.K[:, list(rx90sym.payload_regressor_columns(robot))]
 
 
-def _method_2(robot, base, empty, loaded, options, **_):
+def _method_2(robot, base, empty, loaded, p, seed, *, convention, gains, block, client):
     from identify.fitting.fit import fit
 
-    kw = {k: options[k] for k in ("cutoff", "decimate_to", "spring", "min_velocity", "delay") if k in options}
     # One processing for both runs (their difference is the payload): not chosen on each run.
-    processing = Processing(**{"min_velocity": None, "rest": "drop", "estimate_delay": False, "cross_validate": False,
-                               **kw})
-    empty_fit, loaded_fit = (fit(robot, runs, processing, base=base, bootstrap_seed=None) for runs in (empty, loaded))
+    processing = Processing(**{"estimate_delay": False, "cross_validate": False, **p})
+    options = dict(base=base, gains=gains, convention=convention, block=block, client=client)
+    loaded_fit = fit(robot, loaded, processing, bootstrap_seed=None if seed is None else seed + 1, **options)
+    check_wrist_motion(robot, loaded_fit.streamed.q_range, loaded_fit.streamed.sources)
+    empty_fit = fit(robot, empty, processing, bootstrap_seed=seed, **options)
     fit_v, fit_t = empty_fit.result, loaded_fit.result
+    if fit_v.names != fit_t.names:
+        raise ValueError(f"payload method 2: the empty and loaded fits have different columns ({fit_v.names} and "
+                         f"{fit_t.names}): their difference is not the payload's")
     delta = fit_t.values - fit_v.values                    # eq. 23
     cov = fit_t.covariance + fit_v.covariance
     Kc = grouping_relations(robot, base)
     rows = np.flatnonzero(np.any(Kc != 0, axis=1))         # only relations that hold the payload
+    at = [fit_t.names.index(base.names[r]) for r in rows]
     # Generalised LS on eqs. 24-27: each relation weighted by the precision of its Delta beta,
     # so that, e.g., Mc leans on the well identified MX2R rather than on ZZ1R.
-    C = cov[np.ix_(rows, rows)]
+    C = cov[np.ix_(at, at)]
     L = np.linalg.cholesky(C)
     A = np.linalg.solve(L, Kc[rows])
-    b = np.linalg.solve(L, delta[rows])
+    b = np.linalg.solve(L, delta[at])
     system = compress(A, b)
     sol = solve_system(system, PAYLOAD_NAMES, method="payload-2")
     # The covariance of Delta beta is known (not estimated from this small system): eq. 13 with
@@ -271,24 +256,21 @@ def _method_2(robot, base, empty, loaded, options, **_):
     Rinv = np.linalg.inv(system.R)
     covc = Rinv @ Rinv.T
     std = np.sqrt(np.diag(covc))
-    fit = IdentificationResult(PAYLOAD_NAMES, sol.values, std, 100 * std / np.abs(sol.values),
-                               sol.sigma_rho, sol.cond, sol.cond_unweighted, np.zeros(0), np.zeros(0),
-                               len(rows), "payload-2", covc)
-
-    def bootstrap(seed: int) -> np.ndarray:
-        # Each run's segment bootstrap (independent draws: two experiments), their difference per
-        # draw (eq. 23) through the same whitened relations (eqs. 24-27): the spread of the payload.
-        draws = [bootstrap_estimates(f.observation.W, f.observation.Y, f.observation.joint, f.observation.samples,
-                                     f.result.weights, f.observation.rate, seed + k)
-                 for k, f in enumerate((empty_fit, loaded_fit))]
-        deltas = (draws[1] - draws[0])[:, rows]
+    result = IdentificationResult(PAYLOAD_NAMES, sol.values, std, 100 * std / np.abs(sol.values),
+                                  sol.sigma_rho, sol.cond, sol.cond_unweighted, np.zeros(0), np.zeros(0),
+                                  len(rows), "payload-2", covc)
+    boot = None
+    if seed is not None:
+        # Each run's segment bootstrap (independent draws: two experiments), their difference per draw
+        # (eq. 23) through the same whitened relations (eqs. 24-27): the spread of the payload.
+        deltas = (loaded_fit.streamed.bootstrap_draws - empty_fit.streamed.bootstrap_draws)[:, at]
         deltas = deltas[~np.isnan(deltas).any(axis=1)]  # rank-deficient draws
         if deltas.shape[0] < 2:
-            return np.full(len(PAYLOAD_NAMES), np.nan)
-        chi, *_ = np.linalg.lstsq(A, np.linalg.solve(L, deltas.T), rcond=None)
-        return np.nanstd(chi.T, axis=0, ddof=1)
-
-    return fit, fit_t, bootstrap
+            boot = np.full(len(PAYLOAD_NAMES), np.nan)
+        else:
+            chi, *_ = np.linalg.lstsq(A, np.linalg.solve(L, deltas.T), rcond=None)
+            boot = np.nanstd(chi.T, axis=0, ddof=1)
+    return result, fit_t, boot
 
 
 def _constrained(fit: IdentificationResult, mass: float | None, mass_tol: float) -> np.ndarray:

@@ -3,11 +3,14 @@ sigma, the a priori values, the robot's estimates, and its table and JSON."""
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from identify.estimation.results import IdentificationResult, json_number
+
+if TYPE_CHECKING:
+    from identify.signal.pairing import PairedRuns
 
 __all__ = ["PayloadResult"]
 
@@ -18,8 +21,8 @@ class PayloadResult:
 
     robot: the identified robot base parameters (methods 2 and 4), else None;
     a_priori: reference values (CAD) when given; constrained: whether the PSD/mass constraints
-    were imposed; fit: the underlying least-squares result; pairs: method 3's paired runs (lag,
-    position gap); bootstrap_std: the segment-bootstrap sigma (coloured residuals) beside eq. 13's
+    were imposed; fit: the underlying least-squares result; pairs: method 3's paired runs, one per
+    segment (lag, position gap); bootstrap_std: the segment-bootstrap sigma (coloured residuals) beside eq. 13's
     ``std``, or None (method 2).
     """
 
@@ -66,9 +69,7 @@ class PayloadResult:
                 "a_priori": self.a_priori,
                 # The robot's base parameters identified with the payload (methods 2 and 4).
                 "robot": None if self.robot is None else self.robot.to_dict(),
-                "pairing": [{"empty": p.empty.source, "loaded": p.loaded.source, "lag_s": p.lag,
-                             "position_gap_rad": p.gap, "position_gap_joint": p.gap_joint,
-                             "common_samples": p.empty.n_samples} for p in self.pairs]}
+                "pairing": [p.to_dict() for p in self.pairs]}
 
     def _boot(self) -> np.ndarray:
         return np.full(len(self.names), np.nan) if self.bootstrap_std is None else self.bootstrap_std
@@ -95,8 +96,3 @@ class PayloadResult:
                          "unconstrained fit's)")
         lines += [p.summary() for p in self.pairs]
         return "\n".join(lines)
-
-
-# --------------------------------------------------------------------------------------------
-# Building the systems
-# --------------------------------------------------------------------------------------------

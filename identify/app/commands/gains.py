@@ -7,11 +7,13 @@ import math
 from typing import TYPE_CHECKING, Any
 
 from identify.gains.defaults import DEFAULT_METHOD, FLAG_PCT, GAIN_METHODS
+from identify.io.defaults import DEFAULT_BLOCK
 from identify.observation.defaults import DEFAULT_DECIMATE_TO
 from identify.signal.defaults import POSITION_TOLERANCE
 
-from ..flags import checked, flag_lines, settle
+from ..flags import checked_peaks, flag_lines, settle
 from ..common import UsageError, check_output, convention_option, load_robot, progress, robot_option
+from .identify_runs import block_option
 
 if TYPE_CHECKING:  # annotations only: the method is imported when the command runs
     import numpy as np
@@ -50,6 +52,9 @@ def register(sub: Any) -> None:
     sp.add_argument("--cutoff", type=float, help="Butterworth cut-off for q [Hz] (default: chosen from the data)")
     sp.add_argument("--decimate-to", type=float, default=DEFAULT_DECIMATE_TO,
                     help=f"rate after parallel filtering [Hz] (default {DEFAULT_DECIMATE_TO:g})")
+    sp.add_argument("--block", type=block_option, default=DEFAULT_BLOCK,
+                    help=f"raw samples read, filtered and fitted at a time (default {DEFAULT_BLOCK}; memory grows "
+                         f"with it, not with the logs)")
     sp.add_argument("--json", help="the gains as JSON (read by --gains of every command)")
     sp.add_argument("--report", help="self-contained HTML report")
 
@@ -75,8 +80,8 @@ def run(args: argparse.Namespace) -> int:
     from rx90sym.files import file_sha256, write_json
     from identify.fitting.plausibility import PlausibilityError, gain_flags
     from identify.gains.drive_gains import drive_gains
+    from identify.io.blocks import block_source
     from identify.io.gains import read_gains
-    from identify.io.recordings import read_recording
 
     if args.method == "same-motion" and args.no_offsets and args.no_compare:
         raise UsageError("conflicting options: --no-offsets is for --method global (offsets cancel in same-motion; "
@@ -89,20 +94,22 @@ def run(args: argparse.Namespace) -> int:
     robot = load_robot(args, recordings=args.empty + args.loaded)
     fix = parse_fix(args.fix, robot.n)
     reference = read_gains(args.gains, robot) if args.gains else None
-    progress(f"reading {len(args.empty)} empty and {len(args.loaded)} loaded recording(s)")
-    empty = [checked(read_recording(p, robot, convention=args.convention), robot) for p in args.empty]
-    loaded = [checked(read_recording(p, robot, convention=args.convention), robot) for p in args.loaded]
-    progress(f"identifying the drive gains ({args.method})")
+    progress(f"checking {len(args.empty)} empty and {len(args.loaded)} loaded recording(s) block by block "
+             f"({args.block} samples per block)")
+    sources = [block_source(p, robot, args.convention) for p in args.empty + args.loaded]
+    checked_peaks(sources, robot, args.block, torques=lambda rec: None)
+    empty, loaded = list(args.empty), list(args.loaded)
+    progress(f"identifying the drive gains ({args.method}) block by block")
     options = dict(fix=fix, mass_std=args.mass_std, side=args.side, offsets=not args.no_offsets,
                    flag_pct=args.flag_pct, position_tol=args.position_tol, cutoff=args.cutoff,
-                   decimate_to=args.decimate_to)
+                   decimate_to=args.decimate_to, convention=args.convention, block=args.block)
     try:
         res = drive_gains(robot, empty, loaded, args.mass, method=args.method, **options)
     except PlausibilityError as exc:
         settle(exc.flags)  # the same errors, with the options that address them
         raise
     comparison = None if args.no_compare else _compare(res, robot, empty, loaded, args.mass, options)
-    flags = settle(_torque_scale(res.gains, robot, empty + loaded)
+    flags = settle(_torque_scale(res.gains, robot, sources, args.block)
                    + gain_flags(res.gains.gains, res.gains.std, res.fixed, res.rel_std_pct, res.flag_pct))
     print(res.table())
     if flags:
@@ -113,8 +120,8 @@ def run(args: argparse.Namespace) -> int:
         print(_comparison(res.gains.gains, reference, res.gains.side))
     # The runs the gains were fitted on: a payload identified on the same runs with these gains
     # returns the mass the gains were scaled to (rx90 payload warns: not an independent check).
-    fitted_on = [{"role": role, "source": r.source, "sha256": file_sha256(r.source) if r.source else None}
-                 for role, runs in (("empty", empty), ("loaded", loaded)) for r in runs]
+    fitted_on = [{"role": role, "source": p, "sha256": file_sha256(p)}
+                 for role, runs in (("empty", empty), ("loaded", loaded)) for p in runs]
     if args.json:
         compared = (comparison.to_dict() if hasattr(comparison, "to_dict") else
                     None if comparison is None else {k: v for k, v in comparison.items() if k != "line"})
@@ -124,8 +131,7 @@ def run(args: argparse.Namespace) -> int:
         from ..report.writers import write_gains_report
 
         write_gains_report(args.report, {**res.to_dict(), "flags": [f.to_json() for f in flags],
-                                         "data": {"empty": [r.source for r in empty],
-                                                  "loaded": [r.source for r in loaded]}})
+                                         "data": {"empty": empty, "loaded": loaded}})
     return 0
 
 
@@ -146,12 +152,14 @@ def _compare(res: Any, robot: Any, empty: list, loaded: list, mass: float, optio
     return compare_methods(res, res_other)
 
 
-def _torque_scale(gains: Any, robot: Any, recs: list) -> list[Flag]:
+def _torque_scale(gains: Any, robot: Any, sources: list, block: int) -> list[Flag]:
     """The torque-scale check identify and payload apply, on the torques the fitted gains make of
-    the recordings' currents: gains scale with --mass, so a mass in g gives torques 1000x too large."""
+    the recordings' currents (read block by block): gains scale with --mass, so a mass in g gives
+    torques 1000x too large."""
     from identify.fitting.plausibility import torque_scale_flags
 
-    torques = [gains.torques(robot, r.current) for r in recs if r.current is not None]
+    torques = checked_peaks(sources, robot, block, units=False,
+                            torques=lambda rec: None if rec.current is None else gains.torques(robot, rec.current))
     return [dataclasses.replace(f, code="gains_scale", action="is --mass in g instead of kg? (the fitted gains "
                                 "scale with it)")
             for f in torque_scale_flags(torques, robot, "torques the fitted gains give")]

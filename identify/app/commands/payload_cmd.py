@@ -5,19 +5,22 @@ import argparse
 import dataclasses
 from typing import TYPE_CHECKING, Any
 
+from identify.io.defaults import DEFAULT_BLOCK
 from identify.payloads.defaults import MASS_TOL
 from identify.signal.defaults import POSITION_TOLERANCE
 
-from ..flags import checked, flag_lines, given_gain_flags, settle
+from ..flags import checked_peaks, flag_lines, given_gain_flags, settle
 from ..common import (UsageError, check_output, convention_option, load_robot, progress, robot_option,
                       robot_params, spring_notice)
+from .identify_runs import block_option
 
 if TYPE_CHECKING:  # annotations only: the method is imported when the command runs
     import numpy as np
 
 
 METHOD_NEEDS = """what each method needs:
-  1  --loaded and --robot-params (the robot's identified parameters); no --empty
+  1  --loaded and --robot-params (a fit of rx90 identify --json: its columns, torque offsets included,
+     and its processing; or a JSON of parameter values); no --empty
   2  --empty and --loaded (any motions; the robot is identified twice, the payload solves eqs. 24-27)
   3  --empty and --loaded, the same trajectory each (paired in time: lag, common part, --position-tol)
   4  --empty and --loaded (any motions; robot and payload in one system, eq. 29)
@@ -34,7 +37,8 @@ def register(sub: Any) -> None:
     sp.add_argument("--loaded", nargs="+", required=True, help="recordings with the payload")
     robot_option(sp, None, "the robot the recordings' '# robot:' line names")
     convention_option(sp)
-    sp.add_argument("--robot-params", help="JSON of the robot's parameters (rx90 identify --json)")
+    sp.add_argument("--robot-params", help="method 1: the robot's fit (rx90 identify --json: its columns and "
+                                           "processing are used) or a JSON of its parameter values")
     sp.add_argument("--a-priori", help="bundled payload name or JSON file of a priori values")
     sp.add_argument("--mass", type=float, help="weighed mass [kg] (constrained fit)")
     sp.add_argument("--mass-tol", type=float, help=f"tolerance of the weighed mass [kg] (default {MASS_TOL:g})")
@@ -46,6 +50,9 @@ def register(sub: Any) -> None:
                                     "or the JSON of rx90 gains")
     sp.add_argument("--position-tol", type=float,
                     help=f"method 3: largest position gap of a paired run [rad] (default {POSITION_TOLERANCE:g})")
+    sp.add_argument("--block", type=block_option, default=DEFAULT_BLOCK,
+                    help=f"raw samples read, filtered and fitted at a time (default {DEFAULT_BLOCK}; memory grows "
+                         f"with it, not with the logs)")
     sp.add_argument("--json", help="results as JSON")
     sp.add_argument("--report", help="self-contained HTML report")
 
@@ -53,10 +60,9 @@ def register(sub: Any) -> None:
 def run(args: argparse.Namespace) -> int:
     from rx90sym.files import write_json
     from rx90sym.flange_payload import flange_payload
-    from identify.fitting.record import load_fit
     from identify.fitting.plausibility import mass_bound_flags, payload_flags, torque_scale_flags
-    from identify.io.gains import apply_gains, read_gains
-    from identify.io.recordings import read_recording
+    from identify.io.blocks import block_source
+    from identify.io.gains import read_gains
     from identify.payloads.methods import payload
 
     _check_options(args)
@@ -64,30 +70,24 @@ def run(args: argparse.Namespace) -> int:
     check_output(args.report)
     robot = load_robot(args, offsets=args.offsets, recordings=args.empty + args.loaded)
     spring_notice(robot)
-    gains = read_gains(args.gains, robot) if args.gains else None
-    flags = given_gain_flags(gains) if gains is not None else []
-
-    def read(path: str) -> Any:
-        rec = checked(read_recording(path, robot, convention=args.convention), robot)
-        return apply_gains(rec, gains, robot) if gains is not None and rec.current is not None else rec
-
-    empty = [read(p) for p in args.empty]
-    loaded = [read(p) for p in args.loaded]
-    if gains is not None:
+    known = _robot_params(args, robot)
+    filt = _filtering(args, robot, known)
+    gains = read_gains(args.gains, robot) if args.gains else getattr(known, "gains", None)
+    convention = args.convention or getattr(getattr(known, "model", None), "convention", None)
+    flags = given_gain_flags(gains) if args.gains else []
+    sources = [block_source(p, robot, convention, gains) for p in args.empty + args.loaded]
+    if gains is not None and args.gains:
         flags += settle(circular_gain_flags(gains, args.empty + args.loaded))
-    if gains is not None and all(r.current is None for r in empty + loaded):
-        raise UsageError(f"--gains {args.gains}: none of the recordings holds motor currents")
-    flags += settle(torque_scale_flags([r.tau for r in empty + loaded if r.tau is not None], robot))
-    params = robot_params(args.robot_params) if args.robot_params else None
-    progress(f"identifying the payload (method {args.method})")
-    filt = {}
-    if args.filtering_from:  # the fit's achieved cut-off, decimation and delay (not its rest handling)
-        f = load_fit(args.filtering_from, robot).filtering()
-        filt = {k: f[k] for k in ("cutoff", "decimate_to", "delay")}
-    res = payload(robot, args.method, empty=empty, loaded=loaded, robot_params=params, **filt,
+        if not any(s.holds_current for s in sources):
+            raise UsageError(f"--gains {args.gains}: none of the recordings holds motor currents")
+    progress(f"checking {len(sources)} recording(s) block by block ({args.block} samples per block)")
+    flags += settle(torque_scale_flags(checked_peaks(sources, robot, args.block), robot))
+    progress(f"identifying the payload (method {args.method}) block by block")
+    res = payload(robot, args.method, empty=args.empty, loaded=args.loaded, robot_params=known, **filt,
                   a_priori=args.a_priori, constrained=args.constrained, mass=args.mass,
                   mass_tol=args.mass_tol if args.mass_tol is not None else MASS_TOL,
-                  position_tol=args.position_tol if args.position_tol is not None else POSITION_TOLERANCE)
+                  position_tol=args.position_tol if args.position_tol is not None else POSITION_TOLERANCE,
+                  convention=convention, gains=gains, block=args.block)
     std = res.std_headline
     flags += settle(_unconstrained_mass_flags(res, std) + payload_flags(res.names, res.values, std))
     if args.constrained and args.mass is not None:
@@ -99,7 +99,7 @@ def run(args: argparse.Namespace) -> int:
         print(flag_lines(flags))
     spring = robot.spring.describe() if robot.spring is not None else None
     record = {**res.to_dict(), "spring": spring, "flags": [f.to_json() for f in flags], "robot_name": robot.name,
-              "mass": args.mass, "data": {"empty": [r.source for r in empty], "loaded": [r.source for r in loaded]},
+              "mass": args.mass, "data": {"empty": list(args.empty), "loaded": list(args.loaded)},
               # The neutral block: mass, CoG and inertia at the CoG in the maker's flange frame (what
               # a controller takes; rx90 export --ur / --franka writes it in the controller's form).
               "flange": flange_payload(robot, res.as_dict()).to_dict()}
@@ -110,6 +110,57 @@ def run(args: argparse.Namespace) -> int:
 
         write_payload_report(args.report, record, res)
     return 0
+
+
+def _robot_params(args: argparse.Namespace, robot: Any) -> Any:
+    """Method 1's --robot-params: a fit file (a Fit: its columns and processing) or parameter values."""
+    import json
+
+    from identify.fitting.record import load_fit
+
+    if not args.robot_params:
+        return None
+    try:
+        with open(args.robot_params) as fh:
+            is_fit = "model" in json.load(fh)
+    except (OSError, json.JSONDecodeError) as exc:
+        raise ValueError(f"{args.robot_params}: cannot read robot parameters ({exc})") from None
+    if not is_fit:
+        return robot_params(args.robot_params)
+    fit = load_fit(args.robot_params)
+    if fit.model.robot != robot.name or fit.robot.n != robot.n:
+        raise UsageError(f"--robot-params {args.robot_params}: a fit of robot {fit.model.robot!r} ({fit.robot.n} joints), "
+                         f"the payload runs are of {robot.name!r} ({robot.n} joints)")
+    if args.offsets:
+        raise UsageError(f"conflicting options: --offsets with --robot-params {args.robot_params}: method 1 uses the "
+                         f"fit's own columns, its torque offsets included")
+    return fit
+
+
+def _filtering(args: argparse.Namespace, robot: Any, known: Any) -> dict:
+    """--filtering-from: the fit's achieved cut-off, decimation and delay (not its rest handling); with a
+    fit as --robot-params, the same as that fit's or refused."""
+    from identify.fitting.record import Fit, load_fit
+
+    if not args.filtering_from:
+        return {}
+    f = load_fit(args.filtering_from, robot).filtering()
+    filt = {k: f[k] for k in ("cutoff", "decimate_to", "delay")}
+    if isinstance(known, Fit):
+        own = {k: known.filtering()[k] for k in filt}
+        if any(not _same(filt[k], own[k]) for k in filt):
+            shown = ", ".join(f"{k} {filt[k]!r} and {own[k]!r}" for k in filt if not _same(filt[k], own[k]))
+            raise UsageError(f"conflicting options: --filtering-from {args.filtering_from} and --robot-params "
+                             f"{args.robot_params} were processed differently ({shown}): method 1 uses the processing "
+                             f"of the fit given as --robot-params; leave --filtering-from out")
+        return {}
+    return filt
+
+
+def _same(a: Any, b: Any) -> bool:
+    import math
+
+    return a == b or (isinstance(a, float) and isinstance(b, float) and math.isclose(a, b, rel_tol=1e-12))
 
 
 def _unconstrained_mass_flags(res: Any, std: np.ndarray) -> list:
@@ -132,7 +183,7 @@ def _check_options(args: argparse.Namespace) -> None:
     if args.mass is not None and not args.constrained:
         raise UsageError("conflicting options: --mass is used by the constrained fit; add --constrained")
     if args.method == 1 and not args.robot_params:
-        raise UsageError("method 1 needs --robot-params FILE.json (the robot's identified parameters)")
+        raise UsageError("method 1 needs --robot-params FILE.json (the robot's fit, rx90 identify --json)")
     if args.method == 1 and args.empty:
         raise UsageError("conflicting options: method 1 uses --robot-params, not --empty recordings")
     if args.method != 1 and args.robot_params:
