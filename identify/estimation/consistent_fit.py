@@ -99,7 +99,10 @@ def consistent_fit(robot: rx90sym.Robot, wls: IdentificationResult, base: Any, p
         raise ValueError("consistent fit needs a result that still holds its compressed system "
                          "(not one loaded from JSON)")
     if tuple(wls.names) != tuple(base.names):
-        raise ValueError("consistent fit needs a result on the full base parameter set")
+        missing = [n for n in base.names if n not in wls.names]
+        raise ValueError("consistent fit needs a result on the full base parameter set" + (
+            f": the fitted rows cannot separate {', '.join(missing)} (left out, or merged into another column: "
+            f"the fit's flags say which); use method 'wls', or a motion that excites them" if missing else ""))
     from identify.estimation.consistency import consistency_margin, consistent_least_squares
 
     prior_record = None

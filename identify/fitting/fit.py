@@ -28,9 +28,10 @@ from identify.observation.offsets import OffsetBase, offset_joints
 from rx90sym.base_parameters import BaseParameters
 from identify.observation.processing import Processing, friction_label, has_policy, has_smooth_friction
 from identify.fitting.record import BOOTSTRAP_BLOCK_S, BOOTSTRAP_DRAWS, Bootstrap, Fit
-from identify.fitting.rank_flags import rank_flags
+from identify.fitting.rank_flags import column_flags, rank_flags
 
 if TYPE_CHECKING:
+    from identify.fitting.plausibility import Flag
     from identify.fitting.streamed import ProcessingChoice
 
 __all__ = ["fit"]
@@ -168,7 +169,6 @@ def _fit_blocks(robot: rx90sym.Robot, recordings: Sequence[Any], processing: Any
     from identify.observation.spring_fit import BaseWithSpring, spring_summary
     from identify.io.blocks import block_source, check_block
     from identify.fitting.baseline_blocks import streamed_baseline
-    from identify.fitting.torque_checks import streamed_torque_flags
 
     from identify.fitting.streamed_friction import FrictionHook
 
@@ -195,18 +195,31 @@ def _fit_blocks(robot: rx90sym.Robot, recordings: Sequence[Any], processing: Any
     model = FitModel.of(robot, convention=convention, gains=gains.to_dict() if gains is not None else None,
                         rest=rest, min_velocity=p.min_velocity, spring=spring_source or _spring_label(robot, base),
                         cutoff_hz=sf.cutoff, decimate_to_hz=sf.settings.decimate_to, rate_hz=sf.rate,
-                        delay_s=sf.delay, friction=sf.friction, offset_joints=_offset_record(base))
+                        delay_s=sf.delay, friction=sf.friction, offset_joints=_offset_record(base),
+                        torque_left_out=tuple(j + 1 for j in sf.settings.left_out) or None)
     angles = [SimpleNamespace(q=sf.q_range)]  # what the spring summary reads: the range visited
     spring = spring_summary(robot, base if isinstance(base, BaseWithSpring) else None, sf.result, angles)[0]
     boot = Bootstrap(sf.bootstrap_std, sf.bootstrap_block / sf.rate, spec.draws, spec.seed) if spec else None
     found = sf.delay_estimate
     # The baseline and the recorded-torque checks: a pass each over the logs, block by block, as on whole ones.
     sources = [block_source(r, robot, convention, gains) for r in recordings]
-    return Fit(robot, sf.result, p, model, base, sf.observation, found, found.delay if found is not None else None, spring,
+    return Fit(robot, sf.result, p, model, base, sf.observation, found,
+               found.delay if found is not None and found.found else None, spring,
                boot, block=block, streamed=sf, recordings=sf.recordings,
                choice=_choice_record(sf.choice, getattr(hook, "choice", None)),
-               flags=tuple(streamed_torque_flags(robot, sources, sf.scans, block)),
+               flags=_flags(robot, sources, sf, block),
                baseline=streamed_baseline(robot, sources, sf.scans, p.spring, block, client))
+
+
+def _flags(robot: rx90sym.Robot, sources: Sequence[Any], sf: Any, block: int) -> tuple[Flag, ...]:
+    """The flags of a fit in blocks: the joints whose torque was left out (constant: not logged), the columns
+    left out or merged, the recorded-torque checks (of the joints fitted)."""
+    from identify.fitting.torque_checks import not_logged_flags, streamed_torque_flags
+
+    left = sf.settings.left_out
+    checks = [f for f in streamed_torque_flags(robot, sources, sf.scans, block) if f.joint is None
+              or f.joint - 1 not in left]
+    return (*not_logged_flags(sf.scans, left), *column_flags(sf.reduction, [j + 1 for j in left]), *checks)
 
 
 def _choice_record(choice: ProcessingChoice | None, friction: Any) -> dict | None:

@@ -143,13 +143,15 @@ class Fit:
         samples at a time, default the fit's, its angles ``convention``, default the fit's) predicted with
         this fit's parameters (or ``result``) and processing. Where a joint rests the Coulomb term is 0,
         or the presliding state with that rest policy (every sample is predicted, whatever the rest
-        policy)."""
+        policy). A joint whose torque the fit left out is not predicted (NaN, said)."""
         # At 20 x the cut-off (identify.fitting.validation.prediction_rate), not at the fit's decimated rate.
         options = dict(self.filtering(), decimate_to="prediction", filtered_at=self.decimate_to)
-        return predict(self.robot, result or self.result, recording, base=self.base, baseline=self.baseline,
+        done = predict(self.robot, result or self.result, recording, base=self.base, baseline=self.baseline,
                        block=block if block is not None else (self.block or DEFAULT_BLOCK),
                        convention=convention or self.model.convention,
                        gains=self.gains, **options)
+        # A joint whose torque the fit left out (constant: not logged) is not predicted (Validation.without_joints).
+        return done.without_joints(self.model.torque_left_out) if self.model.torque_left_out else done
 
     def validate(self, recording: Any) -> Validation:
         """Cross-validation on a recording not used in the fit (with the essential parameters when

@@ -17,11 +17,14 @@ import numpy as np
 import rx90sym
 
 from identify.fitting.plausibility import GravityAtRest, Flag, static_gravity_flags, torque_scale_flags
+from identify.io.unlogged import constant_channels
 
-__all__ = ["CODES", "recorded_torque_flags", "streamed_torque_flags"]
+__all__ = ["CODES", "NOT_LOGGED", "not_logged_flags", "recorded_torque_flags", "streamed_torque_flags"]
 
 #: The codes of the recorded-torque checks (errors: ``rx90 identify`` exits 2 on them, nothing written).
 CODES = ("torque_scale", "static_gravity")
+#: The code of a joint whose torque is constant over a recording (a channel not logged), left out of the fit.
+NOT_LOGGED = "torque_not_logged"
 
 
 def _checked(robot: rx90sym.Robot, blocks: Iterator[tuple], nominal: dict | None) -> list[Flag]:
@@ -67,3 +70,18 @@ def streamed_torque_flags(robot: rx90sym.Robot, sources: Sequence[Any], scans: S
     lengths); the same flags and figures as the logs held whole."""
     nominal = rx90sym.nominal_parameters(robot) if isinstance(nominal, str) else nominal
     return _checked(robot, _source_blocks(sources, scans, block), nominal)
+
+
+def not_logged_flags(scans: Sequence[Any], joints: Sequence[int]) -> list[Flag]:
+    """A warning per joint (0-based ``joints``) whose torque is constant over a recording of ``scans``
+    (:func:`identify.observation.stream.torque_left_out`: a channel not logged), left out of the fit."""
+    out = []
+    for j in joints:
+        where = [f"{s.source} ({s.tau_range[0, j]:.6g} N·m)" for s in scans
+                 if s.tau_range is not None and constant_channels(s.tau_range[0, j:j + 1], s.tau_range[1, j:j + 1])]
+        out.append(Flag(NOT_LOGGED, "warning",
+                        f"joint {j + 1}'s torque holds one value on every sample of {', '.join(where)}: a channel "
+                        f"not logged; joint {j + 1} is left out of the fit (its rows out of W, its torque neither "
+                        f"fitted nor scored in the choices, not predicted)",
+                        "log the joint's torque (or its current with --gains) to identify it", joint=j + 1))
+    return out

@@ -10,7 +10,7 @@ errors are reported on all samples and on the samples where each joint moves.
 from __future__ import annotations
 
 from dataclasses import dataclass, replace
-from typing import Any
+from typing import Any, Sequence
 
 import numpy as np
 
@@ -87,6 +87,26 @@ class Validation:
     rms_error_filtered: np.ndarray | None = None
     rms_error_filtered_moving: np.ndarray | None = None
     t0_s: float = 0.0  # the log's own clock at the recording's first sample (t counts from it) [s]
+    not_predicted: tuple[int, ...] = ()  # joints (1-based) whose torque the fit left out: NaN, not scored
+
+    def without_joints(self, joints: Sequence[int]) -> "Validation":
+        """This validation with joints (1-based) not predicted: their predicted torques and every figure NaN
+        (a fit that left a joint's torque out fitted none of the columns only its rows see: a prediction
+        of that joint would lack them)."""
+        cols = [j - 1 for j in joints]
+
+        def cut(a: np.ndarray | None) -> np.ndarray | None:
+            if a is None:
+                return None
+            out = np.array(a, dtype=float)
+            out[..., cols] = np.nan
+            return out
+
+        names = ("relative_error_pct", "rms_error", "predicted", "relative_error_pct_moving", "rms_error_moving",
+                 "baseline_rms_error", "baseline_rms_error_moving", "baseline_predicted", "rms_error_filtered",
+                 "rms_error_filtered_moving")
+        return replace(self, **{k: cut(getattr(self, k)) for k in names},
+                       not_predicted=tuple(sorted(set(self.not_predicted) | set(joints))))
 
     @property
     def beats_baseline(self) -> np.ndarray | None:
@@ -103,7 +123,9 @@ class Validation:
         base = self.baseline_rms_error is not None
         if base:
             head += "  baseline rms [N m]  baseline moving [N m]"
-        rows = [f"{j + 1:5d}  {self.rms_error[j]:15.3f}  {self.relative_error_pct[j]:18.2f}  "
+        rows = [f"{j + 1:5d}  not predicted: its torque was left out of the fit (constant: a channel not logged)"
+                if j + 1 in self.not_predicted else
+                f"{j + 1:5d}  {self.rms_error[j]:15.3f}  {self.relative_error_pct[j]:18.2f}  "
                 f"{rms_m[j]:16.3f}  {rel_m[j]:19.2f}  {100 * frac[j]:10.1f}"
                 + (f"  {self.baseline_rms_error[j]:18.3f}  {self.baseline_rms_error_moving[j]:21.3f}" if base else "")
                 for j in range(n)]
@@ -118,7 +140,7 @@ class Validation:
         beats = self.beats_baseline
         won = ", ".join(str(j + 1) for j in np.flatnonzero(beats)) or "none"
         lost = ", ".join(f"{j + 1} ({self.rms_error[j] / self.baseline_rms_error[j]:.3f}x)"
-                         for j in np.flatnonzero(~beats))
+                         for j in np.flatnonzero(~beats) if j + 1 not in self.not_predicted)
         return (f"beats the plain baseline (OLS, 10 Hz, same samples) on joints {won}"
                 + (f"; not on joints {lost}" if lost else ""))
 
@@ -150,7 +172,8 @@ class Validation:
                 "baseline_rms_error_moving": listed(self.baseline_rms_error_moving),
                 "beats_baseline": None if self.beats_baseline is None else [bool(v) for v in self.beats_baseline],
                 "rms_error_filtered": listed(self.rms_error_filtered),
-                "rms_error_filtered_moving": listed(self.rms_error_filtered_moving)}
+                "rms_error_filtered_moving": listed(self.rms_error_filtered_moving),
+                "not_predicted": list(self.not_predicted)}
 
 
 def prediction_rate(cutoff: float, rate: float) -> float | None:

@@ -195,7 +195,7 @@ def run(args: argparse.Namespace) -> int:
     from identify.io.gains import read_gains
 
     from ..spring_output import attach_spring
-    from .identify_output import print_fit, write_report
+    from .identify_output import print_fit, show_choice, write_report
 
     _check(args)
     robot, spring_model = _robot(args)
@@ -211,20 +211,29 @@ def run(args: argparse.Namespace) -> int:
     options = {"physical_prior": prior} if args.method == "consistent" else {}
     # Every log read, filtered and fitted block by block (a log within one block is one block: docs/long-logs.md).
     val_rec = args.validate
-    result = fit_recordings(args, robot, processing_of(args, sb is None), sb, gains, **options)
-    # The recorded torques' scale and gravity at rest, checked by the fit (every log, block by block when long):
-    # an error stops the run (exit 2, nothing written).
-    settle([f for f in result.flags if f.code in TORQUE_CODES])
-    for f in result.flags:  # the fit's own errors (a rank that depends on the threshold): fitted, never silent
-        if f.code not in TORQUE_CODES:
-            progress(f"error: {with_hint(f)}")
-    result = result.with_flags([*result.flags, *flags, *_fit_flags(result, args.method, prior)])
-    if args.essential:
-        result = result.with_essential()
-    if val_rec is not None:
-        result = result.validated(val_rec)
-        if result.validation.still_message():
-            progress(f"warning: {result.validation.still_message()}")
+    # The processing choice's table is printed before any refusal that follows it (the fit's own errors carry it).
+    try:
+        result = fit_recordings(args, robot, processing_of(args, sb is None), sb, gains, **options)
+    except Exception as exc:
+        show_choice(getattr(exc, "processing_choice", None))
+        raise
+    try:
+        # The recorded torques' scale and gravity at rest, checked by the fit (every log, block by block when
+        # long): an error stops the run (exit 2, nothing written).
+        settle([f for f in result.flags if f.code in TORQUE_CODES])
+        for f in result.flags:  # the fit's own findings (columns left out or merged, a rank that depends on the
+            if f.code not in TORQUE_CODES:  # threshold): fitted, never silent
+                progress(f"{f.severity}: {with_hint(f)}")
+        result = result.with_flags([*result.flags, *flags, *_fit_flags(result, args.method, prior)])
+        if args.essential:
+            result = result.with_essential()
+        if val_rec is not None:
+            result = result.validated(val_rec)
+            if result.validation.still_message():
+                progress(f"warning: {result.validation.still_message()}")
+    except Exception:
+        show_choice(result.choice)
+        raise
     print_fit(result, [], args.delay == "auto", prior)
     if args.json:
         from identify.monitor.thresholds import with_contact_thresholds
@@ -263,7 +272,8 @@ def _fit_flags(f: Fit, method: str, prior: Any = None) -> list:
 
     obs, res = f.observation, f.result
     if obs is None:  # fitted in blocks: ‖Y_j‖² is the joint system's residual at x = 0
-        torque_rms = np.array([np.sqrt(s.rss(np.zeros(s.columns)) / s.rows) for s in res.joint_systems])
+        torque_rms = np.array([np.sqrt(s.rss(np.zeros(s.columns)) / s.rows) if s.rows else np.nan
+                               for s in res.joint_systems])  # nan: a joint whose torque was left out
     else:
         torque_rms = np.array([np.sqrt(np.mean(obs.Y[obs.joint == j] ** 2)) if np.any(obs.joint == j) else np.inf
                                for j in range(len(res.residual_rms))])
