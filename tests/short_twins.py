@@ -1,7 +1,7 @@
 """Short twin recordings of ordinary motions: the logs users bring (tests/test_own_choices.py).
 
 The bundled Panda (7 joints, its [nominal] table as the truth) on synchronised trapezoidal
-point-to-point moves (tests/twin_logs.py ``point_to_point``, short rests), a few seconds at 200 Hz,
+point-to-point moves (tests/twin_logs.py ``point_to_point``, short rests), a few seconds at 100 Hz (a few hundred samples),
 the twin's "realistic" noise (tests/twin_logs.py ``COULOMB_SMOOTHING``) and a torque sensor offset per
 joint drawn in 0.1-2 N m with a random sign; optionally some joints moving one way only (a speed that
 never falls below half its mean: their Coulomb column is +1 on every row, as their offset's), some
@@ -53,7 +53,7 @@ def _motion(robot: rx90sym.Robot, seed: int, duration: float, one_way: Sequence[
     return traj
 
 
-def short_twin(seed: int, duration: float = 4.0, rate: float = 200.0, one_way: Sequence[int] = (),
+def short_twin(seed: int, duration: float = 4.0, rate: float = 100.0, one_way: Sequence[int] = (),
                still: Sequence[int] = (), not_logged: Sequence[int] = (), offsets: bool = False,
                lag: float = 0.0) -> ShortTwin:
     """The Panda twin's recording (joints 0-based); ``offsets``: the robot with its own torque offsets

@@ -80,7 +80,7 @@ def too_short(scans: Sequence[Scan], columns: int, default_decimate: float | Non
     lowest = min(c.cutoff for c in grid)
     coarsest = min((c.decimate_to for c in grid if c.decimate_to), default=None)
     margin = EDGE_PERIODS / lowest + (2.0 / coarsest if coarsest else 0.0) + abs(delay)
-    longest = max((g.samples - 1) / g.rate for s in scans for g in s.segments)
+    longest = max(g.samples / g.rate for s in scans for g in s.segments)  # samples x period
     need = max(required_seconds(columns, rows_rate, default.cutoff, margin, blocks), longest + 1.0 / rows_rate)
     what = "the recording is" if len(scans) == 1 else "the longest recording is"
     return (f"{what} {longest:.3g} s long, too short for the cross-validation's {blocks} blocks: each fold's fit "

@@ -79,6 +79,13 @@ def fit(robot: rx90sym.Robot, recordings: Sequence[Any], processing: Processing 
     The fit keeps its decimated rows (``Fit.observation``) when they are few (identify.observation.row_store);
     its flags hold the recorded-torque checks (identify.fitting.torque_checks: torque scale, gravity at
     rest; errors that rx90 identify stops on) and a rank that depends on the threshold.
+    The fit never stops on its own rows: columns they cannot separate are left out or merged
+    (identify.estimation.dependent_columns; flags column_left_out, columns_merged; ``result.holds``),
+    a joint whose torque holds one value on every sample of a recording (not logged) is left out
+    (flag torque_not_logged, ``model.torque_left_out``: not predicted), a recording too short for the
+    cross-validation's blocks gets the fixed defaults (``choice["skipped"]`` says why), a torque delay
+    at the search bound is not applied. An error raised once the processing is chosen carries the
+    choice as its attribute ``processing_choice`` (its ``table()``).
     """
     if method not in METHODS:
         raise ValueError(f"fit: method must be one of {METHODS}, got {method!r}")
