@@ -23,6 +23,7 @@ from identify.fitting import streamed
 from identify.io.recordings import RecordingWarning
 from identify.io.unlogged import constant_channels
 
+from conftest import SHARED
 from short_twins import short_twin
 
 
@@ -185,3 +186,43 @@ def test_torques_logged_beyond_the_bound_give_no_delay():
     g = identify.fit(lagged.robot, [lagged.recording], identify.Processing(delay="auto"))
     # Within the bound: found and applied (10 ms, one sample at 100 Hz: 4.0-7.6 ms over seeds 6-9).
     assert g.delay_estimate.found and 0.002 < g.delay < 0.02
+
+
+# --------------------------------------------------------------------------- the real Gen3 logs
+
+GEN3 = SHARED / "data" / "kinova_gen3"
+#: Its three inertia tensors that break the triangle inequality, made physical (the largest principal
+#: moment lowered below the sum of the others; the default fit does not use the inertials).
+GEN3_PHYSICAL = (('izz="0.072179"', 'izz="0.0078213"'), ('ixx="0.01457"', 'ixx="0.00489404"'),
+                 ('ixx="0.01596"', 'ixx="0.00187498"'))
+GEN3_COLUMNS = "_,q1..q7,qd1..qd7,_*7,{},_*7,_*7,{},_*28"  # Torque (computed) skipped; TorqueSm or Cur mapped
+
+
+@pytest.mark.skipif(not (GEN3 / "RunTrajectory1.csv").exists(), reason=f"the Kinova Gen3 logs are not at {GEN3}")
+@pytest.mark.filterwarnings("default")  # the command prints them (the URDF's snapped origins, its missing limits)
+def test_the_gen3_logs_are_converted_and_fitted(tmp_path, capsys):
+    text = (GEN3 / "gen3.urdf").read_text()
+    for old, new in GEN3_PHYSICAL:
+        assert text.count(old) == 1
+        text = text.replace(old, new)
+    urdf = tmp_path / "gen3.urdf"
+    urdf.write_text(text)
+    convert = ["convert", "--robot", str(urdf), "--period", "0.001"]
+    # Sensor torques: joint 1's column holds 0 on every row (before: 'no fold could be fitted and scored').
+    sensors = tmp_path / "run1.csv"
+    assert main([*convert, str(GEN3 / "RunTrajectory1.csv"), "--columns", GEN3_COLUMNS.format("tau1..tau7", "_*7"),
+                 "--out", str(sensors)]) == 0
+    assert "tau1 in column 23 (joint 1, 0 N·m) holds one value on every row" in capsys.readouterr().err
+    assert main(["identify", str(sensors), "--robot", str(urdf), "--json", str(tmp_path / "run1.json")]) == 0
+    out, err = capsys.readouterr()
+    fit = json.loads((tmp_path / "run1.json").read_text())
+    assert fit["model"]["torque_left_out"] == [1] and "ZZ1R" not in {p["name"] for p in fit["parameters"]}
+    assert "processing not cross-validated: the recording is 1.94 s long" in out
+    # Currents of joint 2 alone (before: 'W is rank deficient: rank 56 < 66'): the still joints' columns left out.
+    currents = tmp_path / "j2.csv"
+    assert main([*convert, str(GEN3 / "joint_2_trapez.csv"), "--columns", GEN3_COLUMNS.format("_*7", "i1..i7"),
+                 "--gains", "9.13,9.13,9.13,9.13,5.852,5.852,5.852", "--out", str(currents)]) == 0
+    assert main(["identify", str(currents), "--robot", str(urdf), "--json", str(tmp_path / "j2.json")]) == 0
+    left = {f["parameter"] for f in json.loads((tmp_path / "j2.json").read_text())["flags"]
+            if f["code"] == "column_left_out"}
+    assert {"FS1", "FS3", "FS4", "FS5", "FS6", "FS7"} <= left
