@@ -45,6 +45,7 @@ bench: $(STAMP)
 	$(PY) benchmarks/bench_consistency.py
 	$(PY) benchmarks/bench_excitation.py
 	$(PY) benchmarks/compare_excitation.py
+	$(PY) benchmarks/bench_rollout.py
 
 clean:
 	rm -rf $(VENV) demo-output build *.egg-info

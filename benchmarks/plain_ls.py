@@ -11,7 +11,8 @@ from typing import Any
 import numpy as np
 
 import rx90sym
-from identify.fitting.baseline import BASELINE_CUTOFF_HZ, PlainBaseline, fit_baseline
+from identify.fitting.baseline import BASELINE_CUTOFF_HZ, PlainBaseline
+from identify.fitting.baseline_factors import fit_baseline
 
 #: The fixed cut-off of the baseline, Hz.
 PLAIN_CUTOFF = BASELINE_CUTOFF_HZ

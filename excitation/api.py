@@ -210,7 +210,8 @@ def collision_model(robot: rx90sym.Robot, obstacles: Sequence[Box | str] = (), s
     capsules = arm_capsules(robot, tool_point, radii=radii)
     if self_collision:
         lim = robot.limits
-        centre = np.where(np.isfinite(lim.q_min + lim.q_max), 0.5 * (lim.q_min + lim.q_max), 0.0)
+        with np.errstate(invalid="ignore"):  # a joint without position limits: inf - inf
+            centre = np.where(np.isfinite(lim.q_min + lim.q_max), 0.5 * (lim.q_min + lim.q_max), 0.0)
         # Default capsules between frame origins do not describe an arm with offsets (a UR's
         # wrist, a Panda): dropping only the pairs touching at the centre still left every motion
         # in contact on the UR10e. Self-collision is then not checked (reported by `ignored`).

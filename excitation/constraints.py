@@ -100,8 +100,8 @@ class LimitReport:
 def position_bounds(model: ExcitationModel, margin: float) -> tuple[np.ndarray, np.ndarray]:
     """[lower, upper] position bounds (n,) [rad], the range shrunk by ``margin`` about its centre."""
     lim = model.limits
-    centre, half = 0.5 * (lim.q_max + lim.q_min), 0.5 * (lim.q_max - lim.q_min)
-    with np.errstate(invalid="ignore"):
+    with np.errstate(invalid="ignore"):  # a joint without position limits: inf - inf
+        centre, half = 0.5 * (lim.q_max + lim.q_min), 0.5 * (lim.q_max - lim.q_min)
         lo = np.where(np.isfinite(half), centre - (1.0 - margin) * half, -np.inf)
         hi = np.where(np.isfinite(half), centre + (1.0 - margin) * half, np.inf)
     return lo, hi

@@ -94,8 +94,8 @@ class Envelope:
         offsets = np.asarray(offsets, float)
         n = lo.size
         if self.position_limits is None:
-            centre, half = 0.5 * (lo + hi), 0.5 * (hi - lo) * self.position_fraction
-            with np.errstate(invalid="ignore"):
+            with np.errstate(invalid="ignore"):  # a joint without position limits: inf - inf
+                centre, half = 0.5 * (lo + hi), 0.5 * (hi - lo) * self.position_fraction
                 q_lo = np.where(np.isfinite(half), centre - half, lo)
                 q_hi = np.where(np.isfinite(half), centre + half, hi)
         else:
@@ -255,7 +255,8 @@ def find_centre(model: ExcitationModel, margins: Margins = Margins(), slack: flo
     none is found (e.g. a floor the arm cannot clear), naming what the best pose breaks."""
     lim = model.limits
     lo, hi = position_bounds(model, margins.position)
-    centre = np.where(np.isfinite(lo + hi), 0.5 * (lo + hi), 0.0)
+    with np.errstate(invalid="ignore"):  # a joint without position limits: inf - inf
+        centre = np.where(np.isfinite(lo + hi), 0.5 * (lo + hi), 0.0)
     inflated = Margins(height=margins.height + slack, clearance=margins.clearance + slack)
     if not pose_violations(model, centre, inflated) and _cover_ok(model, centre, inflated.clearance):
         return centre

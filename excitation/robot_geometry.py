@@ -104,7 +104,7 @@ def _pose_mul(a: tuple, b: tuple) -> tuple:
 
 
 def _urdf_geometry(robot: rx90sym.Robot, mesh_radius: float) -> ArmGeometry:
-    from rx90sym.urdf import relative_pose, zero_poses
+    from rx90sym.urdf_tree import relative_pose, zero_poses
     from rx90sym.urdf_tree import rpy_matrix
 
     chain = robot.urdf

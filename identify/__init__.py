@@ -60,6 +60,10 @@ _EXPORTS = {
     # models out: URDF and MJCF with actuator terms
     "export_urdf": "identify.export.models",
     "export_mjcf": "identify.export.models",
+    # the exported model in a simulator: rollouts against the recorded motion
+    "roll_out": "identify.rollout.run",
+    "roll_out_fit": "identify.rollout.run",
+    "Rollout": "identify.rollout.result",
 }
 __all__ = list(_EXPORTS)
 

@@ -3,8 +3,12 @@
 Bodies ``link1`` .. ``linkN`` in Khalil frame j (nested, each placed by its joint's origin in the
 controller's angles, rx90sym.model_export), each with its ``<inertial>`` (mass, CoG, full inertia
 at the CoG: MuJoCo diagonalises it when compiling). Joints ``joint1`` .. ``jointN`` with
-``armature`` = IA, ``damping`` = FV, ``frictionloss`` = FS and the position range. One ``motor``
-actuator per joint (gear 1, control = joint torque), limited to the robot's torque limit. A
+``armature`` = IA, ``damping`` = FV, ``frictionloss`` = FS (its constraint's time constant
+:data:`FRICTION_TIMECONST`) and the position range. One ``motor``
+actuator per joint (gear 1, control = joint torque), limited to the robot's torque limit; on a joint
+with a torque offset OFFj or asymmetric Coulomb friction, an actuator ``constantj`` of gain 0 and a
+constant bias force -OFFj - (FSPj - FSNj)/2 (rx90sym.model_export.constant_forces: the offset
+exactly, the asymmetric Coulomb exactly while the joint moves; ``qfrc_actuator`` holds it). A
 coupled wrist (eqs. 16-18) is a fixed tendon q_a + q_b carrying IA_b, FVM and FSM
 (rx90sym.model_export.actuation). The world frame is the URDF root for a robot read from a URDF
 (a fixed body ``base`` holds Khalil frame 0 where the URDF puts it, and every link body carries a
@@ -22,8 +26,9 @@ from typing import Mapping, Sequence
 import numpy as np
 
 from .description import Robot
-from .model_export import (actuation, checked_parameters, companion, export_joint_names, flange_pose, fmt, joint_origin,
-                           limits_in_controller_angles, link_bodies, payload_body, quaternion, write_model)
+from .model_export import (actuation, checked_parameters, companion, constant_forces, constant_joints, export_joint_names,
+                           flange_pose, fmt, joint_origin, limits_in_controller_angles, link_bodies, payload_body,
+                           quaternion, write_model)
 from .rigid_body import RigidBody
 
 # MuJoCo refuses moving bodies whose mass or principal inertia is below mjMINVAL (1e-15); a
@@ -31,6 +36,12 @@ from .rigid_body import RigidBody
 # its margin (rx90sym.physical.DEFAULT_MARGIN, 1e-8) gives m >= 1e-8 kg, principal moments >= 2e-8.
 MIN_MASS = 1e-9          # kg
 MIN_INERTIA = 1e-12      # kg m^2, smallest principal moment about the CoG
+#: Time constant [s] of the joints' (and the tendon's) dry friction constraint (``solreffriction``):
+#: twice MuJoCo's default 2 ms step, the stiffest its step keeps stable (MuJoCo raises a shorter one
+#: to twice the step in use). MuJoCo's own 0.02 s is a soft Coulomb term: on the UR10e twin's exact
+#: torques the exported true model ended 0.7-1.9 mrad off after 0.25 s with it, 0.16-0.54 mrad with this
+#: (identify.rollout; docs/rollout.md).
+FRICTION_TIMECONST = 0.004
 
 
 def _vec(v: Sequence[float]) -> str:
@@ -52,7 +63,7 @@ def _inertial(body: RigidBody, where: str) -> str:
 def _joint(robot: Robot, j: int, name: str, arm: float, damp: float, fric: float, lower: float, upper: float) -> str:
     kind = "slide" if robot.sigma[j] else "hinge"
     attrs = [f'name="{name}"', f'type="{kind}"', 'axis="0 0 1"', f'armature="{fmt(arm)}"',
-             f'damping="{fmt(damp)}"', f'frictionloss="{fmt(fric)}"']
+             f'damping="{fmt(damp)}"', f'frictionloss="{fmt(fric)}"', f'solreffriction="{fmt(FRICTION_TIMECONST)} 1"']
     if math.isfinite(lower) and math.isfinite(upper):
         attrs += ['limited="true"', f'range="{fmt(lower)} {fmt(upper)}"']
     else:
@@ -63,7 +74,7 @@ def _joint(robot: Robot, j: int, name: str, arm: float, damp: float, fric: float
 def mjcf_text(robot: Robot, chi: np.ndarray, payload: RigidBody | None = None) -> str:
     """The MJCF text (module docstring); ValueError naming a link MuJoCo would refuse."""
     bodies = link_bodies(robot, chi)
-    act = actuation(robot, chi)
+    act = actuation(robot, chi, constants_held=True)
     lower, upper = limits_in_controller_angles(robot)
     names = export_joint_names(robot)
     chain = robot.urdf
@@ -101,7 +112,7 @@ def mjcf_text(robot: Robot, chi: np.ndarray, payload: RigidBody | None = None) -
         a, b, arm, damp, fric = act.tendon
         lines += ["  <tendon>",
                   f'    <fixed name="wrist_coupling" armature="{fmt(arm)}" damping="{fmt(damp)}" '
-                  f'frictionloss="{fmt(fric)}">',
+                  f'frictionloss="{fmt(fric)}" solreffriction="{fmt(FRICTION_TIMECONST)} 1">',
                   f'      <joint joint="{names[a]}" coef="1"/>', f'      <joint joint="{names[b]}" coef="1"/>',
                   "    </fixed>", "  </tendon>"]
     lines.append("  <actuator>")
@@ -109,6 +120,10 @@ def mjcf_text(robot: Robot, chi: np.ndarray, payload: RigidBody | None = None) -
         tau = robot.limits.tau_max[j]
         limit = f' ctrllimited="true" ctrlrange="{fmt(-tau)} {fmt(tau)}"' if math.isfinite(tau) else ' ctrllimited="false"'
         lines.append(f'    <motor name="motor{j + 1}" joint="{names[j]}" gear="1"{limit}/>')
+    constant = constant_forces(robot, chi)
+    for j in constant_joints(robot):  # force = gain * ctrl + bias = biasprm[0], whatever the control
+        lines.append(f'    <general name="constant{j + 1}" joint="{names[j]}" gainprm="0" biastype="affine" '
+                     f'biasprm="{fmt(constant[j])} 0 0" ctrllimited="false"/>')
     lines += ["  </actuator>", "</mujoco>"]
     return "\n".join(lines) + "\n"
 
@@ -128,4 +143,5 @@ def mjcf_export(robot: Robot, params: Mapping[str, float] | Sequence[float], pat
     chi = checked_parameters(robot, params)
     body = payload_body(robot, payload) if payload is not None else None
     text = mjcf_text(robot, chi, body)
-    return text, companion(robot, chi, path, "mjcf", actuation(robot, chi).notes)
+    return text, companion(robot, chi, path, "mjcf", actuation(robot, chi, constants_held=True).notes,
+                           constants_held=True)

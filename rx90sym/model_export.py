@@ -197,7 +197,7 @@ def joint_terms(robot: Robot, chi: np.ndarray) -> tuple[np.ndarray, np.ndarray, 
     return IA, FV, FS
 
 
-def actuation(robot: Robot, chi: np.ndarray) -> Actuation:
+def actuation(robot: Robot, chi: np.ndarray, constants_held: bool = False) -> Actuation:
     """The joint and tendon terms that reproduce eqs. 5 and 16-18 in a simulator.
 
     Coupled wrist (a, b): eqs. 17-18 add IA_b q''_b to row a and IA_b q''_a to row b, so the
@@ -206,9 +206,10 @@ def actuation(robot: Robot, chi: np.ndarray) -> Actuation:
     q_a + q_b with armature IA_b. Viscous friction likewise: joints FV_a - FVM, FV_b - FVM,
     tendon FVM. Both exact when the joint terms are >= 0 (else clipped at 0, with a note).
     Coulomb: the tendon's frictionloss FSM acts on sign(q'_a + q'_b), exact for the "motor"
-    form, an approximation of eqs. 17-18's sign(q'_b) / sign(q'_a) for the "paper" form."""
+    form, an approximation of eqs. 17-18's sign(q'_b) / sign(q'_a) for the "paper" form.
+    constants_held: the file holds :func:`constant_forces` (MJCF), named so in the notes."""
     IA, FV, FS = joint_terms(robot, chi)
-    notes = list(common_notes(robot))
+    notes = list(common_notes(robot, constants_held))
     tendon = None
     if robot.coupling is not None:
         a, b = robot.coupling.joints
@@ -228,11 +229,39 @@ def actuation(robot: Robot, chi: np.ndarray) -> Actuation:
     return Actuation(IA, FV, FS, tendon, tuple(notes))
 
 
-def common_notes(robot: Robot) -> tuple[str, ...]:
-    """What no model file holds: asymmetric Coulomb, torque offsets, the spring."""
-    notes = [f"joint {j + 1}: asymmetric Coulomb FS+/FS- written as their mean (companion 'other': both)"
-             for j in robot.asymmetric_coulomb]
-    if robot.offsets:
+def constant_forces(robot: Robot, chi: np.ndarray) -> np.ndarray:
+    """Per joint the constant generalised force [N m or N] the environment exerts in the fit's model
+    beyond what a joint's damping and frictionloss hold: -OFFj (the motor supplies the offset) and, on
+    an asymmetric-Coulomb joint, -(FSPj - FSNj)/2 (FSPj [q'>0] - FSNj [q'<0] is the mean times
+    sign(q') plus this half difference wherever the joint moves); 0 elsewhere."""
+    v = _values(robot, chi)
+    out = np.zeros(robot.n)
+    for j in range(robot.n):
+        out[j] -= v.get(f"OFF{j + 1}", 0.0)
+        if j in robot.asymmetric_coulomb:
+            out[j] -= 0.5 * (v[f"FSP{j + 1}"] - v[f"FSN{j + 1}"])
+    return out
+
+
+def constant_joints(robot: Robot) -> tuple[int, ...]:
+    """The joints (0-based) with a term of :func:`constant_forces`: torque offsets, asymmetric Coulomb."""
+    offsets = set(range(robot.n)) if robot.offsets else {j for j in range(robot.n)
+                                                           if f"OFF{j + 1}" in robot.parameter_names}
+    return tuple(sorted(offsets | set(robot.asymmetric_coulomb)))
+
+
+def common_notes(robot: Robot, constants_held: bool = False) -> tuple[str, ...]:
+    """What a model file does not hold: asymmetric Coulomb, torque offsets, the spring.
+    constants_held: the file holds :func:`constant_forces` as constant actuator forces (MJCF): the
+    offsets are exact, the asymmetric Coulomb exact while the joint moves."""
+    if constants_held:
+        notes = [f"joint {j + 1}: asymmetric Coulomb FS+/FS-: frictionloss (FS+ + FS-)/2 and actuator constant{j + 1} "
+                 f"-(FS+ - FS-)/2, exact while the joint moves (at rest the fit's model has no Coulomb term, the "
+                 f"constant force remains)" for j in robot.asymmetric_coulomb]
+    else:
+        notes = [f"joint {j + 1}: asymmetric Coulomb FS+/FS- written as their mean (companion 'other': both)"
+                 for j in robot.asymmetric_coulomb]
+    if robot.offsets and not constants_held:
         notes.append("torque offsets OFFj are not part of the model file (companion 'other')")
     if robot.spring is not None:
         notes.append(f"the spring of joint {robot.spring.joint + 1} is not part of the model file "
@@ -248,10 +277,10 @@ def export_joint_names(robot: Robot) -> tuple[str, ...]:
 
 
 def companion(robot: Robot, chi: np.ndarray, model_file: str | Path, kind: str,
-              notes: Sequence[str] = ()) -> dict[str, Any]:
+              notes: Sequence[str] = (), constants_held: bool = False) -> dict[str, Any]:
     """The companion JSON of an exported model file (``kind`` "urdf" or "mjcf"): every joint's
     IA, FV, FS, the other parameters, the frames and angles, and what the file cannot hold
-    (``notes``: the file kind's own, e.g. from :func:`actuation`)."""
+    (``notes``: the file kind's own, e.g. from :func:`actuation`; ``constants_held``: as there)."""
     v = _values(robot, chi)
     IA, FV, FS = joint_terms(robot, chi)
     names = export_joint_names(robot)
@@ -272,5 +301,5 @@ def companion(robot: Robot, chi: np.ndarray, model_file: str | Path, kind: str,
             "coulomb_sign": robot.coupling.coulomb_sign,
             "equations": "eqs. 17-18: row a += IA_b q''_b + FVM q'_b + FSM s_a, row b += IA_b q''_a + FVM q'_a "
                          "+ FSM s_b (s: sign(q'_b), sign(q'_a) for 'paper', sign(q'_a + q'_b) for 'motor')"},
-        "not_in_model_file": list(dict.fromkeys([*notes, *common_notes(robot)])),
+        "not_in_model_file": list(dict.fromkeys([*notes, *common_notes(robot, constants_held)])),
     }

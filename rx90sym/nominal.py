@@ -5,9 +5,12 @@ parameters, roughly?" (torque limits of an excitation, plausibility checks, the 
 consistent fit, the twin of robots other than the RX90):
 
 1. ``source`` given: a JSON parameter file (see :func:`read_parameter_file`);
-2. a robot loaded from a URDF: its inertials (``rx90sym.urdf_parameters``, when available);
+2. a robot loaded from a URDF: its inertials (``rx90sym.urdf_parameters``);
 3. a robot file with a ``[nominal]`` table (every bundled robot: published values with their
    sources, derived ones named as derived; rx90sym.nominal_table);
+
+   in both, the description's prior (rx90sym.description_prior): a body that is not physical as
+   written is the nearest physical one (the warning of the load says which);
 4. otherwise ``None``: the caller must say so (no silent defaults).
 
 The RX90 twin's true parameters (``rx90sym/data/rx90_true_params.json``) are NOT the RX90's
@@ -21,7 +24,6 @@ from typing import Any, Mapping
 
 from .files import read_json
 from .description import Robot
-from .nominal_table import NominalError, nominal_values
 from .parameters import checked_values, split_name
 from .robot_file import ROBOTS_DIR
 
@@ -54,26 +56,19 @@ def nominal_parameters(robot: Robot, source: str | Path | Mapping[str, float] | 
     """Standard parameters name -> value [SI] for ``robot``, or None when none are known.
 
     source: a JSON parameter file (path) or a name -> value mapping. Without it: the robot's
-    URDF inertials, then its robot file's [nominal] table, then None.
+    URDF inertials, then its robot file's [nominal] table, then None; a body that is not physical
+    as written is replaced by the nearest physical one (rx90sym.description_prior: the description's
+    prior; ``description_prior(robot).as_written`` keeps the values as the file gives them).
     Raises ValueError naming the file and the field on a malformed source.
     """
     if isinstance(source, Mapping):
         return _complete(robot, dict(source), "parameters")
     if source is not None:
         return read_parameter_file(robot, source)
-    if getattr(robot, "urdf", None) is not None:  # a robot imported from a URDF
-        try:  # hook: the URDF reader provides rx90sym.urdf_parameters
-            from . import urdf_parameters
-        except ImportError:
-            urdf_parameters = None
-        if urdf_parameters is not None:
-            return _complete(robot, dict(urdf_parameters(robot)), f"{robot.source} (inertials)")
-    if robot.nominal is not None:
-        try:
-            return nominal_values(robot, robot.nominal)
-        except NominalError as exc:
-            raise ValueError(f"{robot.source or robot.name}: {exc}") from None
-    return None
+    from .description_prior import description_prior
+
+    prior = description_prior(robot)
+    return None if prior is None else _complete(robot, dict(prior.values), prior.source)
 
 
 def read_parameter_file(robot: Robot, path: str | Path) -> dict[str, float]:

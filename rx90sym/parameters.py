@@ -41,12 +41,14 @@ def checked_values(table: Any, names: Sequence[str], where: str, what: str = "pa
     Errors name the source (``where``) and the offending field."""
     if not isinstance(table, Mapping):
         raise ValueError(f"{where}: expected a mapping of {what} names to numbers, got {type(table).__name__}")
+    unknown = sorted(set(table) - set(names))
+    if unknown:  # first: a file of another robot (or a typo) names what this robot does not have
+        more = f" and {len(unknown) - 6} more" if len(unknown) > 6 else ""
+        raise ValueError(f"{where}: unknown {what}(s) {unknown[:6]}{more}: not {what}s of this robot (its "
+                         f"{len(names)}: {', '.join(list(names)[:4])}, ..., {names[-1]})")
     missing = [p for p in names if p not in table]
     if missing:
         raise ValueError(f"{where}: missing {what}(s) {missing[:6]}")
-    unknown = sorted(set(table) - set(names))
-    if unknown:
-        raise ValueError(f"{where}: unknown {what}(s) {unknown[:6]} (expected {list(names)[:10]}...)")
     out = {}
     for p in names:
         v = table[p]

@@ -35,8 +35,8 @@ import numpy as np
 
 from .rigid_body import RigidBody, physical_problem
 
-__all__ = ["DEFAULT_MARGIN", "INERTIAL_FIELDS", "NONNEGATIVE", "body_indices", "nonnegative_indices",
-           "parameter_problems"]
+__all__ = ["DEFAULT_MARGIN", "INERTIAL_FIELDS", "NONNEGATIVE", "body_indices", "nearest_physical_body",
+           "nonnegative_indices", "parameter_problems"]
 
 #: Margin of a consistent fit (module docstring): pseudo-inertias >= eps 1, prefixed parameters >= eps.
 DEFAULT_MARGIN = 1e-8
@@ -125,3 +125,29 @@ def parameter_problems(names: Sequence[str], chi: np.ndarray, margin: float = 0.
         if not chi[i] >= margin:  # NaN fails too
             out.append(f"{names[i]} = {chi[i]:.3g} < {margin:g}")
     return tuple(out)
+
+
+def nearest_physical_body(body: RigidBody, margin: float = DEFAULT_MARGIN) -> RigidBody:
+    """The physical body nearest to ``body`` with its mass and centre of mass (mass > 0 required).
+
+    About the centre of mass c the pseudo-inertia is blockdiag(S, m), S = tr(I)/2 1 - I the second
+    moments of the mass [kg m^2] (rx90sym.rigid_body.pseudo_inertia); keeping m and c, the nearest
+    (Frobenius norm) has S's eigenvalues raised to a floor, in S's own axes: the cone of the consistent
+    fit's LMIs. The floor is ``margin`` / s^2, s the smallest singular value of the translation by c
+    (the pseudo-inertia about the frame's origin is T blockdiag(S, m) T^T), so that the body is physical
+    with ``margin`` in the frame it is given in (physical_problem(., margin) is None; within a few
+    margins of the exact nearest such body). The principal moments follow as I_a = S_b + S_c: with one
+    second moment below 0 (the triangle inequality I_a + I_b < I_c broken) the largest moment is kept
+    and the two others raised. A body physical with ``margin`` already is returned as it is."""
+    if not body.m > margin:
+        raise ValueError(f"nearest_physical_body: the mass must be > {margin:g} kg, got {body.m:g}")
+    if physical_problem(body, margin) is None:
+        return body
+    c, inertia = body.com_inertia()
+    translation = np.eye(4)
+    translation[:3, 3] = c
+    floor = margin / np.linalg.svd(translation, compute_uv=False)[-1] ** 2
+    S = 0.5 * np.trace(inertia) * np.eye(3) - inertia
+    lam, V = np.linalg.eigh(0.5 * (S + S.T))
+    S = V @ np.diag(np.maximum(lam, floor)) @ V.T
+    return RigidBody.from_com(body.m, c, np.eye(3), np.trace(S) * np.eye(3) - S)

@@ -115,6 +115,6 @@ def physical_problem(body: RigidBody, margin: float = 0.0) -> str | None:
     if a < 0:
         return f"a principal moment of inertia about the centre of mass is negative ({a:g} kg m^2; {detail})"
     if a + b < c:
-        return (f"principal moments {a:g}, {b:g}, {c:g} kg m^2 break the triangle inequality "
-                f"(no mass distribution has them; {detail})")
+        return (f"principal moments {a:.4g}, {b:.4g}, {c:.4g} kg m^2 break the triangle inequality "
+                f"({a:.4g} + {b:.4g} < {c:.4g}: no mass distribution has them)")
     return f"{detail} (mass {body.m:g} kg, principal moments {a:g}, {b:g}, {c:g} kg m^2)"

@@ -9,6 +9,7 @@ from __future__ import annotations
 import difflib
 import math
 import tomllib
+import warnings
 from pathlib import Path
 from typing import Any
 
@@ -283,12 +284,19 @@ def parse_robot(data: dict, source: str, lines: Lines | None = None) -> Robot:
         flange = parse_flange(data["flange"], lambda key: where("flange", key or None)) if "flange" in data else None
     except NominalError as exc:
         raise RobotFileError(str(exc)) from None
-    return Robot(name=name, sigma=cols[0], alpha=cols[1], d=cols[2], theta=cols[3], r=cols[4],
-                 limits=limits, d_labels=tuple(d_labels), r_labels=tuple(r_labels),
-                 controller_offsets=offsets, gear_ratios=gear, Rq=Rq, Rt=Rt, spring=spring,
-                 coupling=coupling, asymmetric_coulomb=asym, description=str(data.get("description", "")),
-                 source=source, nominal=nominal, flange=flange, joint_names=tuple(names),
-                 controller_rate=None if rate is None else float(rate))
+    robot = Robot(name=name, sigma=cols[0], alpha=cols[1], d=cols[2], theta=cols[3], r=cols[4],
+                  limits=limits, d_labels=tuple(d_labels), r_labels=tuple(r_labels),
+                  controller_offsets=offsets, gear_ratios=gear, Rq=Rq, Rt=Rt, spring=spring,
+                  coupling=coupling, asymmetric_coulomb=asym, description=str(data.get("description", "")),
+                  source=source, nominal=nominal, flange=flange, joint_names=tuple(names),
+                  controller_rate=None if rate is None else float(rate))
+    if nominal is not None:  # [nominal] bodies are a prior, never a gate: those not physical said once
+        from .description_prior import DescriptionWarning, description_warning
+
+        said = description_warning(robot)
+        if said:
+            warnings.warn(said, DescriptionWarning, stacklevel=3)
+    return robot
 
 
 def _parse_joints(joints: list, where: Any) -> tuple[list, list[str], list[str]]:

@@ -11,6 +11,8 @@
   (a tilted first axis makes MX1, MY1 identifiable).
 - Links hanging rigidly on the chain (fixed joints, joints off the chain locked at 0: a hand,
   fingers) are lumped into the moving link they hang on, as Pinocchio's buildReducedModel does.
+- The inertials are the description's prior, never a gate: those that are no physical rigid body
+  load, named in one warning with the prior used instead (rx90sym.description_prior).
 """
 from __future__ import annotations
 
@@ -25,17 +27,14 @@ import numpy as np
 
 from .description import GRAVITY, Limits, Robot, robot_from_table
 from .parameters import LINK_PARAMETERS
-from .rigid_body import RigidBody, physical_problem
+from .rigid_body import RigidBody
 from .defaults import ACCELERATION_CAP, ACCELERATION_DEFAULT_TEXT, ACCELERATION_PER_VELOCITY
 from .urdf_snap import SNAP_LENGTH_M, SNAP_RAD
-from .urdf_tree import MOVABLE, UrdfError, UrdfTree, read_urdf
+from .urdf_tree import _EPS, MOVABLE, Pose, UrdfError, UrdfTree, _clean, read_urdf, relative_pose, zero_poses
 
 # A URDF has no acceleration limits: min(ACCELERATION_PER_VELOCITY x the velocity limit, the cap) unless given
 # (rx90sym.defaults; the commands that use limits, excite and simulate, say so).
 DEFAULT_ACCELERATION = ACCELERATION_CAP  # rad/s^2, m/s^2: the ceiling
-_EPS = 1e-12  # round-off of the frame construction (lengths in m, cosines)
-
-Pose = tuple[np.ndarray, np.ndarray]  # (R, p): a frame's axes and origin in another frame
 
 
 @dataclass(frozen=True, eq=False)
@@ -98,27 +97,6 @@ def acceleration_note(robot: Any) -> str | None:
         return None
     return (f"the URDF gives no acceleration limits: assumed {ACCELERATION_DEFAULT_TEXT}; give --acceleration "
             f"(Python: acceleration=) to set them")
-
-
-def zero_poses(tree: UrdfTree) -> dict[str, Pose]:
-    """Pose of every link frame in the root frame with every joint at 0."""
-    poses: dict[str, Pose] = {tree.root: (np.eye(3), np.zeros(3))}
-    stack = [tree.root]
-    while stack:
-        link = stack.pop()
-        R, p = poses[link]
-        for j in tree.children(link):
-            poses[j.child] = (R @ j.R, p + R @ j.p)
-            stack.append(j.child)
-    return poses
-
-
-def _clean(v: np.ndarray) -> np.ndarray:
-    """Round-off of the construction removed: entries within _EPS of 0, +-1 made exact."""
-    v = np.array(v, dtype=float)
-    for target in (0.0, 1.0, -1.0):
-        v[np.abs(v - target) < _EPS] = target
-    return v
 
 
 def _unit(v: np.ndarray) -> np.ndarray:
@@ -247,9 +225,6 @@ def load_urdf(path: str | Path, tip: str | None = None,
     movable = [j for j in chain if j.type in MOVABLE]
     if not movable:
         raise UrdfError(f"{tree.path}: no movable joint between the root {tree.root!r} and tip {tip!r}")
-    for link, body in tree.inertials.items():
-        if body.m != 0 or np.any(body.J != 0):
-            check_physical(link, body, f"{tree.path}")
     poses = zero_poses(tree)
     points, axes = [], []
     for j in movable:
@@ -281,9 +256,16 @@ def load_urdf(path: str | Path, tip: str | None = None,
     sigma = [1 if j.type == "prismatic" else 0 for j in movable]
     table = [(s, a, d, th, r) for s, (a, d, th, r) in zip(sigma, rows)]
     # The joint variable starts from the zero pose: prismatic offsets are r_j at q = 0.
-    return robot_from_table(table, name=tree.name, limits=_limits(tree.path, movable, acceleration),
-                            gravity=gravity, urdf=urdf, source=tree.path,
-                            description=f"URDF {Path(tree.path).name}, root {tree.root!r} to tip {tip!r}")
+    robot = robot_from_table(table, name=tree.name, limits=_limits(tree.path, movable, acceleration),
+                             gravity=gravity, urdf=urdf, source=tree.path,
+                             description=f"URDF {Path(tree.path).name}, root {tree.root!r} to tip {tip!r}")
+    # The inertials are a prior, never a gate: those that are not physical are said once, with the prior used.
+    from .description_prior import DescriptionWarning, description_warning
+
+    said = description_warning(robot)
+    if said:
+        warnings.warn(said, DescriptionWarning, stacklevel=2)
+    return robot
 
 
 def urdf_parameters(robot: Robot) -> dict[str, float]:
@@ -329,13 +311,6 @@ def _last_moving_link(tree: UrdfTree, link: str) -> str | None:
     return moving[-1].child if moving else None
 
 
-def relative_pose(a: Pose, b: Pose) -> Pose:
-    """Pose of frame b in frame a (both given in a common frame)."""
-    Ra, pa = a
-    Rb, pb = b
-    return _clean(Ra.T @ Rb), Ra.T @ (pb - pa)
-
-
 def _lumped(tree: UrdfTree, moving: list[str]) -> tuple[tuple[str, ...], ...]:
     """Links with an inertial carried by each moving link (rigidly, or off the chain at q = 0)."""
     owned: list[list[str]] = [[] for _ in moving]
@@ -364,6 +339,10 @@ def _limits(path: str, joints: list, acceleration: float | Sequence[float] | Non
 
     q_min = np.array([-inf if j.type == "continuous" else value(j.lower, -inf) for j in joints])
     q_max = np.array([inf if j.type == "continuous" else value(j.upper, inf) for j in joints])
+    open_ended = [j.name for j in joints if j.type == "revolute" and (j.lower is None or j.upper is None)]
+    if open_ended:  # one line for all (a maker's continuous joints written as revolute)
+        warnings.warn(f"{path}: revolute joint(s) {', '.join(repr(name) for name in open_ended)} without <limit lower "
+                      f"upper>: no position limit (read as continuous)", stacklevel=3)
     for j, lo, hi in zip(joints, q_min, q_max):
         if lo > hi:
             raise UrdfError(f"{path}: joint {j.name!r}: <limit lower> {lo:g} > upper {hi:g}")
@@ -381,13 +360,6 @@ def _limits(path: str, joints: list, acceleration: float | Sequence[float] | Non
         if np.any(~np.isfinite(qdd)) or np.any(qdd <= 0):
             raise ValueError(f"acceleration limits must be finite and > 0, got {acceleration!r}")
     return Limits(q_min, q_max, qd, qdd, tau)
-
-
-def check_physical(name: str, body: RigidBody, where: str) -> None:
-    """Raise UrdfError naming the link when ``body`` is not a physical rigid body."""
-    problem = physical_problem(body)
-    if problem is not None:
-        raise UrdfError(f"{where}: link {name!r}: <inertial> is not a physical rigid body ({problem})")
 
 
 def payload_matrix(robot: Robot) -> np.ndarray:

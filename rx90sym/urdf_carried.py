@@ -3,22 +3,32 @@ links): the exported link k is the fitted body minus them, and the consistent fi
 difference physical too (rx90sym.physical.parameter_problems, ``carried``)."""
 from __future__ import annotations
 
+from typing import Mapping
+
 import numpy as np
 
 from .description import Robot
 from .rigid_body import RigidBody
-from .urdf import relative_pose, zero_poses
+from .urdf_tree import relative_pose, zero_poses
 
-__all__ = ["carried_bodies"]
+__all__ = ["carried_bodies", "lumped_body"]
+
+
+def lumped_body(chain, poses: dict, k: int, inertials: Mapping[str, RigidBody] | None = None,
+                own: bool = True) -> RigidBody:
+    """The inertials moving link k lumps (its own URDF link's too when ``own``), in that link's frame;
+    ``inertials``: URDF link -> body in its frame (default: the file's ``<inertial>`` elements)."""
+    link, out = chain.links[k], RigidBody.zero()
+    inertials = chain.tree.inertials if inertials is None else inertials
+    for c in chain.lumped[k]:
+        if own or c != link:
+            out = out + inertials[c].expressed_in_parent(*relative_pose(poses[link], poses[c]))
+    return out
 
 
 def _children(chain, poses: dict, k: int) -> RigidBody:
     """The inertials that moving link k carries besides its own URDF link's, in that link's frame."""
-    link, out = chain.links[k], RigidBody.zero()
-    for c in chain.lumped[k]:
-        if c != link:
-            out = out + chain.tree.inertials[c].expressed_in_parent(*relative_pose(poses[link], poses[c]))
-    return out
+    return lumped_body(chain, poses, k, own=False)
 
 
 def carried_bodies(robot: Robot) -> dict[str, tuple[np.ndarray, tuple[str, ...]]]:

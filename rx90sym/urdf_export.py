@@ -23,7 +23,7 @@ from .model_export import (checked_parameters, companion, companion_path, joint_
 from .parameters import LINK_PARAMETERS
 from .physical import body_problem
 from .rigid_body import RigidBody
-from .urdf import zero_poses
+from .urdf_tree import zero_poses
 from .urdf_carried import _children, carried_bodies  # noqa: F401  (carried_bodies: public here too)
 from .urdf_generate import dynamics_xml, generated_urdf, gravity_note, inertial_xml
 from .urdf_tree import UrdfError

@@ -23,6 +23,11 @@ JOINT_TYPES = MOVABLE + ("fixed", "floating", "planar")
 SNAP = 1e-9
 
 
+_EPS = 1e-12  # round-off of the frame construction (lengths in m, cosines)
+
+Pose = tuple[np.ndarray, np.ndarray]  # (R, p): a frame's axes and origin in another frame
+
+
 class UrdfError(ValueError):
     """A URDF that cannot be used; the message names the file and the element."""
 
@@ -262,3 +267,31 @@ def _single_root(path: Path, links: list[str], joints: dict[str, UrdfJoint], par
         raise UrdfError(f"{path}: joint {j!r} closes a loop (link {unreachable[0]!r} is not below "
                         f"the root {roots[0]!r})")
     return roots[0]
+
+
+def zero_poses(tree: UrdfTree) -> dict[str, Pose]:
+    """Pose of every link frame in the root frame with every joint at 0."""
+    poses: dict[str, Pose] = {tree.root: (np.eye(3), np.zeros(3))}
+    stack = [tree.root]
+    while stack:
+        link = stack.pop()
+        R, p = poses[link]
+        for j in tree.children(link):
+            poses[j.child] = (R @ j.R, p + R @ j.p)
+            stack.append(j.child)
+    return poses
+
+
+def _clean(v: np.ndarray) -> np.ndarray:
+    """Round-off of the frame construction removed: entries within _EPS of 0, +-1 made exact."""
+    v = np.array(v, dtype=float)
+    for target in (0.0, 1.0, -1.0):
+        v[np.abs(v - target) < _EPS] = target
+    return v
+
+
+def relative_pose(a: Pose, b: Pose) -> Pose:
+    """Pose of frame b in frame a (both given in a common frame)."""
+    Ra, pa = a
+    Rb, pb = b
+    return _clean(Ra.T @ Rb), Ra.T @ (pb - pa)

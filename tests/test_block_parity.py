@@ -11,7 +11,7 @@ import pytest
 
 import identify
 import rx90sym
-from identify.fitting.baseline import fit_baseline, fit_baseline_windows
+from identify.fitting.baseline_factors import fit_baseline, fit_baseline_windows
 from identify.fitting.baseline_blocks import source_windows
 from identify.fitting.plausibility import GravityAtRest
 from identify.fitting.torque_checks import (CODES, _source_blocks, recorded_torque_flags,

@@ -12,7 +12,7 @@ Measured, the worst joint's ratio per seed 0..4 (all samples):
   (seed 2 chose 2 Hz: 1.06x on joint 2, 1.27x on joint 4; the case below);
 - Panda, 200 Hz, 12 s chirp, 8 s predicted: 0.586, 0.854, 1.000, 0.487, 0.773 (seed 0 below).
 The full trial (6 and 7 joints, 100 Hz and 1 kHz, with and without a static part, 5 seeds) is
-benchmarks/defaults_vs_baseline.py --twins.
+benchmarks/defaults_vs_yardsticks.py --twins.
 """
 from __future__ import annotations
 

@@ -14,7 +14,7 @@ import pytest
 
 import rx90sym
 from rx90sym.mjcf_export import write_mjcf
-from rx90sym.model_export import export_joint_names
+from rx90sym.model_export import export_joint_names, joint_terms
 
 from conftest import random_chi
 
@@ -134,6 +134,23 @@ def test_mujoco_inverse_and_forward_dynamics_equal_the_fits(tmp_path, case):
         data.qpos[:], data.qvel[:], data.qfrc_applied[:], data.ctrl[:] = qc, qd, tau, 0.0
         mujoco.mj_forward(model, data)
         assert np.abs(data.qacc - expected).max() <= 1e-8 * max(1.0, np.abs(expected).max())
+
+
+@pytest.mark.parametrize("options", [{"offsets": True}, {"asymmetric_coulomb": (0, 2)}])
+def test_torque_offsets_and_asymmetric_coulomb_are_constant_actuator_forces(tmp_path, options):
+    """The MJCF's actuators constantj: the fit's torques give its accelerations while every joint moves
+    (frictionloss off: its mean Coulomb term taken off the torques as MuJoCo would apply it)."""
+    rng = np.random.default_rng(13)
+    robot = rx90sym.load_robot("ur10e").with_options(**options)
+    chi = random_chi(robot, rng)
+    model, data = _mujoco(write_mjcf(robot, chi, tmp_path / "arm.xml")[0])
+    assert model.nu == robot.n + (robot.n if robot.offsets else len(robot.asymmetric_coulomb))
+    _, _, mean_coulomb = joint_terms(robot, chi)
+    for qc, qd, qdd in zip(*moving_states(robot, rng, 4)):
+        tau = np.array(robot.inverse_dynamics(robot.to_model(qc), qd, qdd, chi)).ravel()
+        data.qpos[:], data.qvel[:], data.qfrc_applied[:], data.ctrl[:] = qc, qd, tau - mean_coulomb * np.sign(qd), 0.0
+        mujoco.mj_forward(model, data)
+        assert np.abs(data.qacc - qdd).max() <= 1e-8 * max(1.0, np.abs(qdd).max())
 
 
 def test_mjcf_holds_the_actuators_limits_gravity_and_flange(tmp_path):

@@ -143,6 +143,8 @@ def test_dask_blocks_equal_serial(rx90, rx90_base, twin_empty, whole_fit, tmp_pa
         spread = identify.fit(rx90, twin_empty[:1], WHOLE, base=rx90_base, block=1000, client=client)
     np.testing.assert_allclose(spread.result.values, serial.result.values, rtol=1e-10)
     np.testing.assert_allclose(spread.bootstrap.std, serial.bootstrap.std, rtol=1e-10)
+    for stick in ("baseline", "user_model"):  # the yardsticks' windows on the workers too
+        np.testing.assert_allclose(getattr(spread, stick).values, getattr(serial, stick).values, rtol=1e-10)
     assert spread.streamed.blocks == serial.streamed.blocks >= 4 and serial.observation is not None  # rows kept (few)
     _close(serial.result.values, whole_fit.result.values, 1e-8)
     assert serial.bootstrapped(0) is serial
@@ -229,7 +231,7 @@ def test_fleet_fits_every_robot_on_its_own_logs(rx90, rx90_base, twin_empty, who
 
 def test_a_log_within_one_block_is_one_block(rx90, twin_empty):
     """One pipeline: identify.fit with the defaults (processing, offsets and friction form chosen on the
-    torques, delay, bootstrap, baseline) gives the same estimates to 1e-8 relative for a block of N / 3,
+    torques, delay, bootstrap, both yardsticks) gives the same estimates to 1e-8 relative for a block of N / 3,
     N - 1, N, N + 1 and 100 N samples of an N-sample recording, and the same choices."""
     rec = twin_empty[0]
     n = rec.n_samples
@@ -246,6 +248,7 @@ def test_a_log_within_one_block_is_one_block(rx90, twin_empty):
         _close(got.result.values, ref.result.values, 1e-8)
         _close(got.bootstrap.std, ref.bootstrap.std, 1e-8)
         _close(got.baseline.values, ref.baseline.values, 1e-8)
+        _close(got.user_model.values, ref.user_model.values, 1e-8)
 
 
 def test_a_fit_in_blocks_keeps_the_rows_of_the_whole_observation(rx90, rx90_base, twin_empty, whole_fit):

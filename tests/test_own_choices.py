@@ -191,22 +191,13 @@ def test_torques_logged_beyond_the_bound_give_no_delay():
 # --------------------------------------------------------------------------- the real Gen3 logs
 
 GEN3 = SHARED / "data" / "kinova_gen3"
-#: Its three inertia tensors that break the triangle inequality, made physical (the largest principal
-#: moment lowered below the sum of the others; the default fit does not use the inertials).
-GEN3_PHYSICAL = (('izz="0.072179"', 'izz="0.0078213"'), ('ixx="0.01457"', 'ixx="0.00489404"'),
-                 ('ixx="0.01596"', 'ixx="0.00187498"'))
 GEN3_COLUMNS = "_,q1..q7,qd1..qd7,_*7,{},_*7,_*7,{},_*28"  # Torque (computed) skipped; TorqueSm or Cur mapped
 
 
 @pytest.mark.skipif(not (GEN3 / "RunTrajectory1.csv").exists(), reason=f"the Kinova Gen3 logs are not at {GEN3}")
-@pytest.mark.filterwarnings("default")  # the command prints them (the URDF's snapped origins, its missing limits)
+@pytest.mark.filterwarnings("default")  # the command prints them (the URDF's inertials, snapped origins, limits)
 def test_the_gen3_logs_are_converted_and_fitted(tmp_path, capsys):
-    text = (GEN3 / "gen3.urdf").read_text()
-    for old, new in GEN3_PHYSICAL:
-        assert text.count(old) == 1
-        text = text.replace(old, new)
-    urdf = tmp_path / "gen3.urdf"
-    urdf.write_text(text)
+    urdf = GEN3 / "gen3.urdf"  # as shipped: three inertials not physical, a prior the default fit does not use
     convert = ["convert", "--robot", str(urdf), "--period", "0.001"]
     # Sensor torques: joint 1's column holds 0 on every row (before: 'no fold could be fitted and scored').
     sensors = tmp_path / "run1.csv"

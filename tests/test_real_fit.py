@@ -212,7 +212,7 @@ def test_tx40_heldout_at_figaroh_level():
     fit's rows (how FIGAROH's figures are scored): RMS while moving per joint at FIGAROH's WLS level
     (the margin 10 % is for BLAS/platform differences). Against the raw measured torques: at most the
     plain OLS baseline's RMS on the same samples, every joint (measured ratios 0.18–0.79 without the
-    offsets, benchmarks/defaults_vs_baseline.py)."""
+    offsets, benchmarks/defaults_vs_yardsticks.py)."""
     robot = rx90sym.load_robot("tx40", offsets=True)
     rec = identify.read_motor_recording(TX40 / "pos_read_data.csv", TX40 / "curr_data.csv", robot, 2e-4)
     fit = identify.fit(robot, [rec.select(slice(0, 30000))], identify.Processing(estimate_delay=False))
@@ -221,4 +221,4 @@ def test_tx40_heldout_at_figaroh_level():
     print("\nTX40 held-out RMS moving (filtered torques) / FIGAROH WLS:", np.round(ratio, 3))
     print("TX40 held-out RMS (raw torques) / plain baseline:", np.round(val.rms_error / val.baseline_rms_error, 3))
     assert np.all(ratio < 1.10)
-    assert np.all(val.rms_error <= 1.02 * val.baseline_rms_error), val.baseline_verdict()
+    assert np.all(val.rms_error <= 1.02 * val.baseline_rms_error), "\n".join(val.verdict())

@@ -29,6 +29,7 @@ ALLOWED = (
     "identify.gains", "identify.gains.defaults",
     "identify.payloads", "identify.payloads.defaults",
     "identify.monitor", "identify.monitor.defaults",
+    "identify.rollout", "identify.rollout.defaults",
 )
 
 

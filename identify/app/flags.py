@@ -45,8 +45,17 @@ def checked(rec: object, robot: object) -> object:
     return rec
 
 
+#: Codes whose hint is the consistent fit: given only when the flag's action is to use it (never for
+#: estimates that a torque sign or gain explains: identify.fitting.plausibility.SUSPECT_TORQUES).
+_CONSISTENT_HINTED = ("estimate_not_physical", "consistency_margin_negative")
+
+
 def with_hint(flag: Flag) -> str:
+    from identify.fitting.plausibility import CONSISTENT_ACTION
+
     hint = HINTS.get(flag.code)
+    if flag.code in _CONSISTENT_HINTED and flag.action != CONSISTENT_ACTION:
+        hint = None
     return flag.line() + (f" [{hint}]" if hint else "")
 
 

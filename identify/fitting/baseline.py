@@ -18,11 +18,18 @@ problem) so that a long log never holds the whole W; a segment is filtered in bl
 (:meth:`BaselineSegment.windows`: the Butterworth's settling, two samples for the two gradients), one
 block being the whole segment in memory, so a long log read block by block
 (:mod:`identify.fitting.baseline_blocks`) gets the same baseline in bounded memory.
+
+The fit is :mod:`identify.fitting.baseline_factors`' (:func:`~identify.fitting.baseline_factors.fit_baseline`).
+Its per-joint factors of [W_j | y_j] (per time block when a blocked
+cross-validation's blocks are given) hold everything the second yardstick needs too: the model the
+user had (:mod:`identify.fitting.user_model`) is the same factors solved with the rigid-body columns
+fixed at the description's values, and the held-out errors of both per time block
+(:mod:`identify.fitting.yardsticks`) come from the same factors, without another pass over the data.
 """
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Any, Callable, Iterable, Iterator, Sequence
+from typing import Any, Iterable, Iterator, Sequence
 
 import numpy as np
 from scipy.signal import butter, filtfilt
@@ -33,10 +40,9 @@ from rx90sym.pinocchio_bridge import PINOCCHIO_ORDER, pinocchio_columns
 from identify.estimation.results import json_number
 from identify.signal.blocks import Window, lowpass_margin, motion_windows
 
-__all__ = ["BASELINE_CUTOFF_HZ", "BASELINE_ORDER", "BASELINE_TRIM_S", "BASELINE_RCOND", "PlainBaseline",
-           "BaselinePrediction", "BaselineSegment", "baseline_names", "baseline_regressor",
-           "fit_baseline", "fit_baseline_windows", "memory_windows", "window_factors", "segment_of", "window_signals",
-           "plain_baseline"]
+__all__ = ["BASELINE_CUTOFF_HZ", "BASELINE_ORDER", "BASELINE_TRIM_S", "BASELINE_RCOND", "CHUNK", "LinearYardstick",
+           "PlainBaseline", "BaselinePrediction", "BaselineSegment", "baseline_names", "baseline_regressor",
+           "memory_windows", "segment_of", "window_signals", "yardstick_predictions"]
 
 #: Cut-off [Hz] and order of the baseline's zero-phase Butterworth on q.
 BASELINE_CUTOFF_HZ = 10.0
@@ -46,7 +52,7 @@ BASELINE_TRIM_S = 0.5
 #: numpy.linalg.lstsq's rcond of the baseline.
 BASELINE_RCOND = 1e-10
 #: Samples of W evaluated at a time (each chunk compressed by a QR).
-_CHUNK = 4096
+CHUNK = 4096
 
 
 def baseline_names(robot: rx90sym.Robot) -> tuple[str, ...]:
@@ -94,6 +100,7 @@ class BaselineSegment:
     last: float
     samples: int
     source: str = "<memory>"
+    key: tuple[int, int] | None = None  # (recording index, its first raw sample): RawSpan.bounds' key
 
     def windows(self, block: int | None = None) -> list[Window]:
         """Blocks of at most ``block`` samples (None: the whole segment, one block), each with the margins
@@ -158,11 +165,38 @@ class BaselinePrediction:
     scored: np.ndarray
 
 
+def yardstick_predictions(robot: rx90sym.Robot, models: Sequence[Any], windows: Iterable[tuple]
+                          ) -> list[BaselinePrediction]:
+    """The predictions of ``models`` (each with ``names`` = :func:`baseline_names`, ``values`` and ``spring``, the
+    same for all: :class:`PlainBaseline`, :class:`identify.fitting.user_model.UserModel`) on the cores of
+    ``windows`` ((segment, window, raw samples), in time order), in one pass: the regressor evaluated once."""
+    names, springs = baseline_names(robot), {bool(m.spring) for m in models}
+    if any(tuple(m.names) != names for m in models):
+        raise ValueError(f"a yardstick was fitted with other columns than robot {robot.name!r}'s")
+    if len(springs) > 1:
+        raise ValueError("the yardsticks were fitted with and without the spring torque: predict them apart")
+    spring = springs.pop() if springs else True
+    parts: list[list] = [[] for _ in models]
+    for segment, window, rec in windows:
+        s = window_signals(robot, segment, window, rec, spring)
+        preds = [np.full(s.tau.shape, np.nan) for _ in models]
+        rows = np.flatnonzero(s.kept)
+        for start in range(0, rows.size, CHUNK):
+            idx = rows[start:start + CHUNK]
+            Phi = baseline_regressor(robot, s.q[idx], s.dq[idx], s.ddq[idx])
+            for pred, m in zip(preds, models):
+                pred[idx] = Phi @ m.values - s.spring[idx]
+        for part, pred in zip(parts, preds):
+            part.append((s.t, pred, s.tau, s.kept))
+    return [BaselinePrediction(*(np.concatenate(a) for a in zip(*part))) for part in parts]
+
+
 @dataclass(frozen=True, eq=False)
-class PlainBaseline:
-    """The plain OLS baseline fitted: values over ``names`` (:func:`baseline_names`), the fitted
-    samples, the rank of W, whether the spring torque was added; per joint residual RMS [N m] on the
-    fitted samples."""
+class LinearYardstick:
+    """What both yardsticks share: a value per :func:`baseline_names` column (``names``), predicted through
+    :func:`baseline_regressor` on the baseline's filtered samples (spring subtracted when it was added); the
+    fitted samples, the rank of the columns fitted, whether the spring torque was added, per joint
+    residual RMS [N m] on the fitted samples."""
 
     names: tuple[str, ...]
     values: np.ndarray
@@ -172,103 +206,39 @@ class PlainBaseline:
     residual_rms: np.ndarray
 
     def predict(self, robot: rx90sym.Robot, recording: Any, block: int | None = None) -> BaselinePrediction:
-        """The baseline's prediction of ``recording`` (every segment on its own; filtered in blocks of at most
+        """The prediction of ``recording`` (every segment on its own; filtered in blocks of at most
         ``block`` samples, None: each segment whole)."""
         return self.predict_windows(robot, memory_windows([recording], block))
 
     def predict_windows(self, robot: rx90sym.Robot, windows: Iterable[tuple]) -> BaselinePrediction:
         """The prediction on the cores of ``windows`` ((segment, window, raw samples), in time order:
         :func:`memory_windows`, or :func:`identify.fitting.baseline_blocks.source_windows` for a long log)."""
-        if tuple(baseline_names(robot)) != self.names:
-            raise ValueError(f"the plain baseline was fitted with other columns than robot {robot.name!r}'s")
-        parts = []
-        for segment, window, rec in windows:
-            s = window_signals(robot, segment, window, rec, self.spring)
-            pred = np.full(s.tau.shape, np.nan)
-            rows = np.flatnonzero(s.kept)
-            for start in range(0, rows.size, _CHUNK):
-                idx = rows[start:start + _CHUNK]
-                pred[idx] = baseline_regressor(robot, s.q[idx], s.dq[idx], s.ddq[idx]) @ self.values - s.spring[idx]
-            parts.append((s.t, pred, s.tau, s.kept))
-        t, pred, tau, kept = (np.concatenate(a) for a in zip(*parts))
-        return BaselinePrediction(t, pred, tau, kept)
+        return yardstick_predictions(robot, [self], windows)[0]
+
+    def fitted_json(self) -> dict[str, Any]:
+        """The shared fields as the fit file holds them (non-finite numbers null)."""
+        return {"names": list(self.names), "values": [json_number(v) for v in self.values], "samples": self.samples,
+                "rank": self.rank, "spring": self.spring, "residual_rms": [json_number(v) for v in self.residual_rms]}
+
+    @staticmethod
+    def fitted_fields(d: dict[str, Any]) -> tuple:
+        """The shared fields from :meth:`fitted_json`'s record, in order."""
+        values = np.array([np.nan if v is None else v for v in d["values"]], dtype=float)
+        rms = np.array([np.nan if v is None else v for v in d.get("residual_rms", [])], dtype=float)
+        return tuple(d["names"]), values, int(d["samples"]), int(d["rank"]), bool(d["spring"]), rms
+
+
+@dataclass(frozen=True, eq=False)
+class PlainBaseline(LinearYardstick):
+    """The plain OLS baseline fitted (the fields of :class:`LinearYardstick`; rank: of W)."""
 
     def to_json(self) -> dict[str, Any]:
         return {"definition": "plain OLS: q by a 4th-order zero-phase Butterworth at 10 Hz, numpy.gradient, "
                               "rigid-body regressor + [dq_j, sign(dq_j), 1] per joint, lstsq(rcond=1e-10), "
                               "0.5 s trimmed at both ends",
                 "cutoff_hz": BASELINE_CUTOFF_HZ, "order": BASELINE_ORDER, "trim_s": BASELINE_TRIM_S,
-                "rcond": BASELINE_RCOND, "names": list(self.names),
-                "values": [json_number(v) for v in self.values], "samples": self.samples, "rank": self.rank,
-                "spring": self.spring, "residual_rms": [json_number(v) for v in self.residual_rms]}
+                "rcond": BASELINE_RCOND, **self.fitted_json()}
 
     @classmethod
     def from_json(cls, d: dict[str, Any] | None) -> "PlainBaseline | None":
-        if not d:
-            return None
-        values = np.array([np.nan if v is None else v for v in d["values"]], dtype=float)
-        rms = np.array([np.nan if v is None else v for v in d.get("residual_rms", [])], dtype=float)
-        return cls(tuple(d["names"]), values, int(d["samples"]), int(d["rank"]), bool(d["spring"]), rms)
-
-
-def fit_baseline(robot: rx90sym.Robot, recordings: Sequence[Any], spring: bool = True,
-                 block: int | None = None) -> PlainBaseline:
-    """The plain OLS baseline (module docstring) on every segment of ``recordings`` (held in memory), each
-    filtered in blocks of at most ``block`` samples (None: whole; the result is the same to ~1e-12)."""
-    return fit_baseline_windows(robot, memory_windows(recordings, block), spring)
-
-
-def window_factors(robot: rx90sym.Robot, segment: BaselineSegment, window: Window, rec: Any,
-                   spring: bool = True) -> tuple[list[np.ndarray], int]:
-    """(per joint the triangular factor of [W_j | y_j] on the fitted samples of the core of ``window``, their
-    number): the rows compressed chunk by chunk (a Dask task when the blocks are spread)."""
-    c, n = len(baseline_names(robot)), robot.n
-    s = window_signals(robot, segment, window, rec, spring)
-    kept = np.flatnonzero(s.kept)
-    R = [np.zeros((0, c + 1)) for _ in range(n)]
-    for start in range(0, kept.size, _CHUNK):
-        idx = kept[start:start + _CHUNK]
-        Phi = baseline_regressor(robot, s.q[idx], s.dq[idx], s.ddq[idx])
-        y = s.tau[idx] + s.spring[idx]
-        R = [np.linalg.qr(np.vstack([R[j], np.column_stack([Phi[:, j, :], y[:, j]])]), mode="r") for j in range(n)]
-    return R, int(kept.size)
-
-
-def fit_baseline_windows(robot: rx90sym.Robot, windows: Iterable[tuple], spring: bool = True,
-                         run: Callable[..., Iterable[tuple]] | None = None) -> PlainBaseline:
-    """The plain OLS baseline on the cores of ``windows`` ((segment, window, raw samples):
-    :func:`memory_windows`, or :func:`identify.fitting.baseline_blocks.source_windows` for a long log).
-    The rows of each joint are compressed apart ([W_j | y_j] -> R_j, stacked: the same singular values
-    as W), which gives each joint's residual on the fitted samples without a second pass. run: how the
-    windows' :func:`window_factors` run (``run(task, arguments)`` yielding the results in order, e.g.
-    identify.observation.stream.in_order on Dask; None: here)."""
-    names = baseline_names(robot)
-    c, n = len(names), robot.n
-    tasks = ((robot, segment, window, rec, spring) for segment, window, rec in windows)
-    R = [np.zeros((0, c + 1)) for _ in range(n)]
-    rows = 0
-    for factors, count in (window_factors(*a) for a in tasks) if run is None else run(window_factors, tasks):
-        R = [f if not r.shape[0] else np.linalg.qr(np.vstack([r, f]), mode="r") if f.shape[0] else r
-             for r, f in zip(R, factors)]
-        rows += count
-    if rows == 0:
-        raise ValueError(f"the plain baseline has no sample to fit (every segment shorter than "
-                         f"{2 * BASELINE_TRIM_S:g} s)")
-    stacked = np.vstack(R)
-    values, _, rank, _ = np.linalg.lstsq(stacked[:, :c], stacked[:, c], rcond=BASELINE_RCOND)
-    x = np.r_[values, -1.0]
-    residual = np.array([np.linalg.norm(Rj @ x) / np.sqrt(rows) for Rj in R])
-    return PlainBaseline(names, values, rows, int(rank), bool(spring), residual)
-
-
-def plain_baseline(robot: rx90sym.Robot, recordings: Sequence[Any], spring: bool = True,
-                   windows: Iterable[tuple] | None = None) -> PlainBaseline | None:
-    """:func:`fit_baseline` (on ``windows`` when given: a long log's, block by block), or None where it
-    cannot be fitted (no recordings, a rate of 20 Hz or less, every segment shorter than 1 s): the
-    validation then shows no baseline."""
-    if not recordings:
-        return None
-    try:
-        return fit_baseline_windows(robot, memory_windows(recordings) if windows is None else windows, spring)
-    except ValueError:
-        return None
+        return cls(*cls.fitted_fields(d)) if d else None

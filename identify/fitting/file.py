@@ -35,9 +35,17 @@ __all__ = ["SCHEMA_VERSION", "FitModel", "read_fit_file", "robot_file_hash", "to
 #: Also in 4: ``baseline`` (the plain OLS baseline's parameters and figures, identify.fitting.baseline),
 #: ``model.offset_joints`` (torque offsets chosen per joint) and the processing choice's ``offsets``,
 #: ``offset_candidate`` and ``scored_against``; a file without them reads None.
-SCHEMA_VERSION = 4
+#: 5: the second yardstick, ``user_model`` (the model the user had: the description's rigid bodies as written
+#: plus viscous, Coulomb and offset per joint fitted on the baseline's samples; its parameters over the
+#: baseline's names, where its bodies come from, its figures: identify.fitting.user_model.UserModel), or
+#: ``{"computed": false, "reason"}`` where the description has no inertial parameters; the validation's
+#: ``user_model_rms_error[_moving]``, ``user_model_note``, ``yardstick_ratio[_moving]``,
+#: ``better_yardstick[_moving]`` and ``beats_both[_moving]``. Versions 2-4 are still read (no model the user
+#: had: the validation says so).
+#: Also in 5 (the other fields of this version, each with its line here):
+SCHEMA_VERSION = 5
 #: Older layouts read as they are.
-READABLE_VERSIONS = (2, 3, SCHEMA_VERSION)
+READABLE_VERSIONS = (2, 3, 4, SCHEMA_VERSION)
 
 
 def robot_file_hash(robot: rx90sym.Robot) -> str | None:

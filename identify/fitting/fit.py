@@ -4,7 +4,7 @@
 the processing chosen on the torques, the torque-delay estimate, the observation rows of one
 :class:`~identify.observation.processing.Processing`, eqs. 6-8, folded into per-joint factors; the
 friction columns; (weighted) least squares, eqs. 9-15; optionally the physically consistent fit;
-the plain baseline and the recorded-torque checks) and returns a :class:`Fit` that predicts and
+the two yardsticks and the recorded-torque checks) and returns a :class:`Fit` that predicts and
 validates with its own processing, carries its bootstrap σ, and saves itself
 (:mod:`identify.fitting.record`).
 """
@@ -78,7 +78,8 @@ def fit(robot: rx90sym.Robot, recordings: Sequence[Any], processing: Processing 
     delay estimate, no baseline, no cross-validation).
     The fit keeps its decimated rows (``Fit.observation``) when they are few (identify.observation.row_store);
     its flags hold the recorded-torque checks (identify.fitting.torque_checks: torque scale, gravity at
-    rest; errors that rx90 identify stops on) and a rank that depends on the threshold.
+    rest, errors that rx90 identify stops on; the torques' sign against the description's inverse dynamics,
+    a warning) and a rank that depends on the threshold.
     The fit never stops on its own rows: columns they cannot separate are left out or merged
     (identify.estimation.dependent_columns; flags column_left_out, columns_merged; ``result.holds``),
     a joint whose torque holds one value on every sample of a recording (not logged) is left out
@@ -175,7 +176,7 @@ def _fit_blocks(robot: rx90sym.Robot, recordings: Sequence[Any], processing: Any
     from identify.fitting.streamed import DEFAULT_BLOCK, BootstrapSpec, fit_streamed  # the block path's modules
     from identify.observation.spring_fit import BaseWithSpring, spring_summary
     from identify.io.blocks import block_source, check_block
-    from identify.fitting.baseline_blocks import streamed_baseline
+    from identify.fitting.yardsticks import streamed_yardsticks
 
     from identify.fitting.streamed_friction import FrictionHook
 
@@ -208,24 +209,27 @@ def _fit_blocks(robot: rx90sym.Robot, recordings: Sequence[Any], processing: Any
     spring = spring_summary(robot, base if isinstance(base, BaseWithSpring) else None, sf.result, angles)[0]
     boot = Bootstrap(sf.bootstrap_std, sf.bootstrap_block / sf.rate, spec.draws, spec.seed) if spec else None
     found = sf.delay_estimate
-    # The baseline and the recorded-torque checks: a pass each over the logs, block by block, as on whole ones.
+    # The yardsticks and the recorded-torque checks: a pass each over the logs, block by block, as on whole ones.
     sources = [block_source(r, robot, convention, gains) for r in recordings]
+    sticks = streamed_yardsticks(robot, sources, sf.scans, p.spring, block, client)
     return Fit(robot, sf.result, p, model, base, sf.observation, found,
                found.delay if found is not None and found.found else None, spring,
                boot, block=block, streamed=sf, recordings=sf.recordings,
                choice=_choice_record(sf.choice, getattr(hook, "choice", None)),
-               flags=_flags(robot, sources, sf, block),
-               baseline=streamed_baseline(robot, sources, sf.scans, p.spring, block, client))
+               flags=_flags(robot, sources, sf, block, base, bool(p.spring)),
+               baseline=sticks.plain, user_model=sticks.user, user_model_note=sticks.user_note)
 
 
-def _flags(robot: rx90sym.Robot, sources: Sequence[Any], sf: Any, block: int) -> tuple[Flag, ...]:
+def _flags(robot: rx90sym.Robot, sources: Sequence[Any], sf: Any, block: int, base: Any,
+           spring_added: bool) -> tuple[Flag, ...]:
     """The flags of a fit in blocks: the joints whose torque was left out (constant: not logged), the columns
-    left out or merged, the recorded-torque checks (of the joints fitted)."""
-    from identify.fitting.torque_checks import not_logged_flags, streamed_torque_flags
+    left out or merged, the recorded-torque checks and the torques' sign (of the joints fitted)."""
+    from identify.fitting.torque_checks import not_logged_flags, streamed_torque_flags, torque_sign_flags
 
     left = sf.settings.left_out
-    checks = [f for f in streamed_torque_flags(robot, sources, sf.scans, block) if f.joint is None
-              or f.joint - 1 not in left]
+    checks = [f for f in (streamed_torque_flags(robot, sources, sf.scans, block)
+                          + torque_sign_flags(robot, sf.result, base, spring_added=spring_added))
+              if f.joint is None or f.joint - 1 not in left]
     return (*not_logged_flags(sf.scans, left), *column_flags(sf.reduction, [j + 1 for j in left]), *checks)
 
 

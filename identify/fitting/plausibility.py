@@ -22,6 +22,9 @@ Errors (the likely cause is named):
 - ``static_gravity`` — at rest, a joint's torque is not the gravity of the robot's nominal
   parameters (``[nominal]``) within a factor :data:`GRAVITY_RATIO` (or of the opposite sign).
 
+- ``torque_sign`` (warning, identify.fitting.torque_checks) — a joint's recorded torques have the
+  opposite sign of the description's inverse dynamics: the fix (torque signs) is named.
+
 Warnings:
 
 - ``gain_negative`` — a negative gain (half of the gains at most): that motor's current sign may be
@@ -31,7 +34,8 @@ Warnings:
   never returned: it is not identified; fix it from a datasheet;
 - ``estimate_not_physical`` — a plain (ungrouped) base parameter that physics wants >= 0 (a mass,
   a diagonal inertia, a rotor inertia, a friction coefficient) with value + 3 sigma < 0;
-- ``consistency_margin_negative`` — no physical standard parameters reproduce the estimate;
+- ``consistency_margin_negative`` — no physical standard parameters reproduce the estimate (both advise
+  the consistent fit, unless a flag of :data:`SUSPECT_TORQUES` names a sign or gain: fix that first);
 - ``payload_inertia_not_physical`` — the payload's pseudo-inertia has a negative eigenvalue;
 - ``payload_mass_on_bound`` — the constrained mass sits on its bound (weighed mass ± tolerance,
   within :data:`BOUND_SHARE` of the tolerance): the data pull it outside, the bound set it.
@@ -58,7 +62,7 @@ import rx90sym
 __all__ = ["Flag", "PlausibilityError", "raise_errors", "gain_flags", "payload_flags", "torque_scale_flags",
            "residual_flags", "estimate_flags", "mass_bound_flags", "margin_flags", "static_gravity_flags", "GravityAtRest",
            "prior_flags", "PRIOR_MASS_RATIO", "CONSISTENT_COST_PCT", "TORQUE_LOW", "TORQUE_HIGH", "RESIDUAL_SHARE", "RESIDUAL_FLOOR",
-           "SIGMAS"]
+           "SIGMAS", "CONSISTENT_ACTION", "SUSPECT_TORQUES"]
 
 #: Every joint's torque peak below this fraction of its limit: torques of the wrong scale.
 TORQUE_LOW = 0.01
@@ -85,6 +89,12 @@ PRIOR_MASS_RATIO = 3.0
 CONSISTENT_COST_PCT = 5.0
 #: How many sigma below zero a non-negative quantity may lie before it is flagged.
 SIGMAS = 3.0
+#: The action of estimate_not_physical and consistency_margin_negative when the torques are not suspect.
+CONSISTENT_ACTION = "use the physically consistent fit"
+#: Flags that make the recorded torques suspect (a sign, a gain, a unit): estimates no physical body has
+#: are then their symptom, and the consistent fit is not advised (identify.fitting.torque_checks).
+SUSPECT_TORQUES = ("torque_sign", "torque_scale", "static_gravity", "gains_negative", "gain_negative",
+                   "gain_unidentified")
 # Plain parameters that physics wants >= 0: masses, diagonal inertias, rotor inertias, viscous
 # and (symmetric) Coulomb friction, the coupled motor's friction.
 _NONNEGATIVE = re.compile(r"^(M|XX|YY|ZZ|IA|FV|FS|FVM|FSM)\d+$")
@@ -246,24 +256,38 @@ def residual_flags(residual_rms: np.ndarray, torque_rms: np.ndarray, torque_limi
                  "joint order (swapped columns), the units (rad, N m) and the torque signs", joint=bad[0] + 1)]
 
 
-def estimate_flags(names: Sequence[str], values: np.ndarray, std: np.ndarray) -> list[Flag]:
+def _unphysical_action(torque_flags: Sequence[Flag]) -> str:
+    """What to do about estimates no physical body has: the consistent fit (CONSISTENT_ACTION), unless the
+    recorded torques are suspect (a flag of SUSPECT_TORQUES among ``torque_flags``): a wrong sign or gain
+    makes such estimates, and a physically consistent fit would only hide it."""
+    suspect = sorted({f.code for f in torque_flags if f.code in SUSPECT_TORQUES})
+    if not suspect:
+        return CONSISTENT_ACTION
+    return (f"fix the recorded torques first ({', '.join(suspect)}): a wrong torque sign or gain makes such "
+            f"estimates, which a physically consistent fit cannot correct")
+
+
+def estimate_flags(names: Sequence[str], values: np.ndarray, std: np.ndarray,
+                   torque_flags: Sequence[Flag] = ()) -> list[Flag]:
     """Plain parameters that physics wants >= 0 with value + SIGMAS sigma < 0 (grouped base
-    parameters, e.g. ZZ1R, are sums with signs and are not judged)."""
+    parameters, e.g. ZZ1R, are sums with signs and are not judged). torque_flags: the fit's other
+    flags; with one of SUSPECT_TORQUES the action is to fix the torques, never the consistent fit."""
     flags = []
+    action = _unphysical_action(torque_flags)
     for n, v, s in zip(names, np.asarray(values, dtype=float), np.asarray(std, dtype=float)):
         if _NONNEGATIVE.match(n) and v + SIGMAS * np.nan_to_num(s) < 0:
             flags.append(Flag("estimate_not_physical", "warning", f"{n} = {v:.4g} ± {s:.3g} cannot be physical "
-                              f"(value + {SIGMAS:g} sigma < 0)", "use the physically consistent fit",
-                              parameter=n))
+                              f"(value + {SIGMAS:g} sigma < 0)", action, parameter=n))
     return flags
 
 
-def margin_flags(margin: float) -> list[Flag]:
-    """A negative consistency margin (identify.estimation.consistency.consistency_margin)."""
+def margin_flags(margin: float, torque_flags: Sequence[Flag] = ()) -> list[Flag]:
+    """A negative consistency margin (identify.estimation.consistency.consistency_margin); torque_flags as
+    for :func:`estimate_flags`."""
     if margin >= 0:
         return []
     return [Flag("consistency_margin_negative", "warning", f"no physical standard parameters reproduce the "
-                 f"estimate (consistency margin {margin:.3g})", "use the physically consistent fit")]
+                 f"estimate (consistency margin {margin:.3g})", _unphysical_action(torque_flags))]
 
 
 class GravityAtRest:
@@ -303,7 +327,8 @@ class GravityAtRest:
         for j in np.flatnonzero(judged):
             s = float(self.tau_g[j] / self.g_g[j])
             if not 1 / GRAVITY_RATIO <= s <= GRAVITY_RATIO:
-                cause = "the torque sign" if s < 0 else "the robot, the units or the gains"
+                cause = ("the torque sign (a log counting torques the other way: convert it with torque signs, "
+                         "rx90 convert --torque-signs)" if s < 0 else "the robot, the units or the gains")
                 flags.append(Flag("static_gravity", "error", f"at rest, joint {j + 1}'s torque is {s:.3g} x the "
                                   f"gravity of robot {robot.name}'s nominal parameters ({self.count} samples at rest; "
                                   f"expected {1 / GRAVITY_RATIO:.2g}..{GRAVITY_RATIO:g})", f"check {cause}",

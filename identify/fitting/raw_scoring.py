@@ -5,7 +5,7 @@ A fit predicts at its own (decimated) samples, from filtered positions; the torq
 against are the ones the log holds, unfiltered, at every recorded time stamp: the prediction is
 interpolated linearly onto those stamps (after the torque lag it compensates) and only the samples
 inside both (the prediction's span, measured, not bridged) are scored. Two fits with different
-filters, or the toolkit and the plain baseline (:mod:`identify.fitting.baseline`), are so compared
+filters, or the toolkit and the yardsticks (:mod:`identify.fitting.yardsticks`), are so compared
 on the same samples of the same signal.
 """
 from __future__ import annotations
@@ -28,12 +28,14 @@ SCORE_TRIM_S = 0.5
 class RawScores:
     """The scored samples of a recording: t (S,) [s]; measured (S, n) raw torques [N m]; predicted
     (S, n) the fit's prediction there; moving (S, n) the fit's moving mask at the nearest predicted
-    sample; baseline (S, n) the plain baseline's prediction (None: no baseline)."""
+    sample; baseline (S, n) the plain baseline's prediction (None: no baseline); user (S, n) the model the
+    user had's (identify.fitting.user_model; None: none)."""
 
     t: np.ndarray
     measured: np.ndarray
     predicted: np.ndarray
     moving: np.ndarray
     baseline: np.ndarray | None = None
+    user: np.ndarray | None = None
 
 

@@ -26,6 +26,7 @@ from identify.estimation.delay import DelayEstimate
 from identify.fitting.validation import Validation, predict
 from identify.io.blocks import DEFAULT_BLOCK
 from identify.fitting.baseline import PlainBaseline
+from identify.fitting.user_model import UserModel, not_computed
 from identify.observation.offsets import offset_base
 
 
@@ -82,7 +83,9 @@ class Fit:
     plausibility warnings of the fit (identify.fitting.plausibility, :meth:`with_flags`); recordings: per
     recording its samples, segments, samples bridged over lost packets and stale rows dropped
     (:func:`identify.io.recordings.layout_summary`); choice: the cross-validated processing's
-    candidate table (:meth:`ProcessingChoice.to_dict`), None when the processing was given.
+    candidate table (:meth:`ProcessingChoice.to_dict`), None when the processing was given. baseline,
+    user_model: the two yardsticks every validation shows (the plain OLS baseline, the model the user had;
+    :mod:`identify.fitting.yardsticks`), user_model_note: why there is no model the user had.
     """
 
     robot: rx90sym.Robot
@@ -103,6 +106,8 @@ class Fit:
     block: int | None = None        # logs read block by block with this many samples (None: whole)
     streamed: Any = None            # the block-wise fit's record (identify.fitting.streamed.StreamedFit)
     baseline: Any = None            # the plain OLS baseline (identify.fitting.baseline.PlainBaseline) or None
+    user_model: Any = None          # the model the user had (identify.fitting.user_model.UserModel) or None
+    user_model_note: str = ""       # why there is no model the user had ("" when there is)
     contact_thresholds: np.ndarray | None = None  # contact monitor's per joint [N·m] (identify.monitor)
 
     # ------------------------------------------------------------ what the fit used
@@ -138,29 +143,38 @@ class Fit:
 
     # ------------------------------------------------------------ using it
     def predict(self, recording: Any, result: IdentificationResult | None = None, *, block: int | None = None,
-                convention: str | None = None) -> Validation:
+                convention: str | None = None, rollout: Any = None) -> Validation:
         """Torques of ``recording`` (a recording, or a recording file read block by block: ``block`` raw
         samples at a time, default the fit's, its angles ``convention``, default the fit's) predicted with
         this fit's parameters (or ``result``) and processing. Where a joint rests the Coulomb term is 0,
         or the presliding state with that rest policy (every sample is predicted, whatever the rest
-        policy). A joint whose torque the fit left out is not predicted (NaN, said)."""
+        policy). rollout: window lengths [s] ("0.25,0.5" or numbers): the fit's own model, as ``rx90
+        export --mjcf`` writes it, also rolled out in MuJoCo (identify.rollout.run.roll_out_fit; the
+        validation's ``rollout``). A joint whose torque the fit left out is not predicted (NaN, said)."""
         # At 20 x the cut-off (identify.fitting.validation.prediction_rate), not at the fit's decimated rate.
         options = dict(self.filtering(), decimate_to="prediction", filtered_at=self.decimate_to)
-        done = predict(self.robot, result or self.result, recording, base=self.base, baseline=self.baseline,
-                       block=block if block is not None else (self.block or DEFAULT_BLOCK),
-                       convention=convention or self.model.convention,
-                       gains=self.gains, **options)
+        block = block if block is not None else (self.block or DEFAULT_BLOCK)
+        convention = convention or self.model.convention
+        simulated = None
+        if rollout is not None:  # first: a window the recording cannot hold is refused before the prediction
+            from identify.rollout.run import roll_out_fit
+
+            simulated = roll_out_fit(self, recording, rollout, block=block, convention=convention)
+        val = predict(self.robot, result or self.result, recording, base=self.base, baseline=self.baseline,
+                      user_model=self.user_model, user_model_note=self.user_model_note,
+                      block=block, convention=convention, gains=self.gains, **options)
         # A joint whose torque the fit left out (constant: not logged) is not predicted (Validation.without_joints).
-        return done.without_joints(self.model.torque_left_out) if self.model.torque_left_out else done
+        val = val.without_joints(self.model.torque_left_out) if self.model.torque_left_out else val
+        return val if simulated is None else replace(val, rollout=simulated)
 
-    def validate(self, recording: Any) -> Validation:
+    def validate(self, recording: Any, rollout: Any = None) -> Validation:
         """Cross-validation on a recording not used in the fit (with the essential parameters when
-        they were computed)."""
-        return self.predict(recording, self.essential)
+        they were computed); rollout: as :meth:`predict`."""
+        return self.predict(recording, self.essential, rollout=rollout)
 
-    def validated(self, recording: Any) -> "Fit":
-        """This fit with its validation on ``recording`` recorded (saved in the file)."""
-        return replace(self, validation=self.validate(recording))
+    def validated(self, recording: Any, rollout: Any = None) -> "Fit":
+        """This fit with its validation on ``recording`` recorded (saved in the file); rollout: as :meth:`predict`."""
+        return replace(self, validation=self.validate(recording, rollout))
 
     def with_flags(self, flags: Sequence[Flag]) -> "Fit":
         """This fit with its plausibility flags recorded (saved in the file's ``flags``)."""
@@ -202,6 +216,8 @@ class Fit:
                     "flags": [f.to_json() for f in self.flags], "recordings": list(self.recordings),
                     "processing_choice": self.choice,
                     "baseline": self.baseline.to_json() if self.baseline is not None else None,
+                    "user_model": (self.user_model.to_json() if self.user_model is not None
+                                   else not_computed(self.user_model_note) if self.user_model_note else None),
                     "contact_thresholds_nm": (None if self.contact_thresholds is None
                                               else [float(v) for v in self.contact_thresholds])})
         return out
@@ -224,6 +240,7 @@ class Fit:
             bootstrap = Bootstrap.from_json(data)
             flags = tuple(Flag.from_json(f) for f in data.get("flags", []))
             baseline = PlainBaseline.from_json(data.get("baseline"))  # None in older files
+            user, note = UserModel.from_json(data.get("user_model"))  # None in files of schema 4 and older
         except (KeyError, TypeError, ValueError) as exc:
             raise ValueError(f"{path}: {exc}".replace(f"{path}: {path}: ", f"{path}: ")) from None
         rob = robot if isinstance(robot, rx90sym.Robot) else robot_of(model, robot)
@@ -242,7 +259,7 @@ class Fit:
                    delay_estimate_s=data.get("delay_estimate_s"), spring=data.get("spring"),
                    bootstrap=bootstrap, essential=essential, flags=flags,
                    recordings=tuple(data.get("recordings", [])), choice=data.get("processing_choice"),
-                   baseline=baseline,
+                   baseline=baseline, user_model=user, user_model_note=note,
                    contact_thresholds=(None if data.get("contact_thresholds_nm") is None
                                        else np.asarray(data["contact_thresholds_nm"], dtype=float)))
 

@@ -2,8 +2,9 @@
 
 The prediction uses the filtering of the fit (cut-off, decimation: pass the values the fit used)
 and is scored against the raw measured torques at the recording's own time stamps
-(:mod:`identify.fitting.raw_scoring`; beside the plain OLS baseline on the same samples when one is
-given, :mod:`identify.fitting.baseline`); given a rest threshold, it takes the Coulomb term as 0 where its joint (or motor) rests: at rest
+(:mod:`identify.fitting.raw_scoring`; beside the two yardsticks on the same samples when given: the
+plain OLS baseline, :mod:`identify.fitting.baseline`, and the model the user had,
+:mod:`identify.fitting.user_model`); given a rest threshold, it takes the Coulomb term as 0 where its joint (or motor) rests: at rest
 the static friction lies anywhere in [−FS, FS] and the sign of a noisy speed says nothing. The
 errors are reported on all samples and on the samples where each joint moves.
 """
@@ -21,7 +22,7 @@ from identify.observation.matrix import presliding_base
 from identify.observation.processing import RestPolicy, has_policy, predicted_rest
 from identify.estimation.results import IdentificationResult, json_number
 from identify.io.blocks import block_source, check_block
-from identify.fitting.baseline_blocks import baseline_at, streamed_baseline_prediction
+from identify.fitting.baseline_blocks import baseline_at, streamed_predictions
 from identify.fitting.raw_scoring import SCORE_TRIM_S, RawScores
 from identify.fitting.streamed_filtered import FilteredSums, streamed_filtered_rms
 from identify.signal.interpolate import onto
@@ -29,7 +30,7 @@ from identify.observation.matrix import column_regressor
 from identify.observation.offsets import offset_base, result_offsets
 from identify.observation.stream import DEFAULT_BLOCK, StreamSettings, piece, plan_windows, scan_all, windows_in_order
 
-__all__ = ["PREDICTION_OVERSAMPLING", "Validation", "predict", "prediction_rate", "validate"]
+__all__ = ["PREDICTION_OVERSAMPLING", "YARDSTICK_NAMES", "Validation", "predict", "prediction_rate", "validate"]
 
 #: A fit predicts at this many times its cut-off (or at the recording's own rate, when lower): its
 #: prediction, band-limited at the cut-off, is then interpolated onto the raw time stamps within about 1 %
@@ -37,6 +38,8 @@ __all__ = ["PREDICTION_OVERSAMPLING", "Validation", "predict", "prediction_rate"
 #: (50 Hz for a 20 Hz cut-off) the interpolation cut the steps of a trapezoidal motion: Panda twin joints
 #: 2 and 4 while moving 1.24x and 1.32x the plain baseline, 0.84x and 0.94x at the recording's rate.
 PREDICTION_OVERSAMPLING = 20.0
+#: The yardsticks' names in tables and verdicts: the plain OLS baseline, the model the user had.
+YARDSTICK_NAMES = ("plain OLS", "user model")
 
 
 def _rms(err: np.ndarray, mask: np.ndarray) -> np.ndarray:
@@ -63,7 +66,9 @@ class Validation:
     not added); t: (S,) their time [s]; moving: (S, n). cutoff [Hz], rate [Hz]: the filtering used.
     baseline_rms_error, baseline_rms_error_moving: (n,) the plain OLS baseline's RMS [N m] on the same
     samples (None: no baseline); beats_baseline: (n,) rms_error <= baseline_rms_error;
-    baseline_predicted: (S, n) its prediction. rms_error_filtered, rms_error_filtered_moving: (n,) [N m]
+    baseline_predicted: (S, n) its prediction. user_rms_error, user_rms_error_moving, user_predicted: the same
+    of the second yardstick, the model the user had (identify.fitting.user_model; None: not computed,
+    ``user_model_note`` says why). rms_error_filtered, rms_error_filtered_moving: (n,) [N m]
     the former figures, against the torques filtered and decimated like the fit's rows (what FIGAROH and
     the paper report; they differ between fits of other filters, the raw figures do not).
     """
@@ -86,7 +91,12 @@ class Validation:
     baseline_predicted: np.ndarray | None = None
     rms_error_filtered: np.ndarray | None = None
     rms_error_filtered_moving: np.ndarray | None = None
+    user_rms_error: np.ndarray | None = None
+    user_rms_error_moving: np.ndarray | None = None
+    user_predicted: np.ndarray | None = None
+    user_model_note: str = ""  # why there is no model the user had ("" when there is, or no yardstick at all)
     t0_s: float = 0.0  # the log's own clock at the recording's first sample (t counts from it) [s]
+    rollout: Any = None  # the model rolled out in MuJoCo (identify.rollout.result.Rollout), None: not asked
     not_predicted: tuple[int, ...] = ()  # joints (1-based) whose torque the fit left out: NaN, not scored
 
     def without_joints(self, joints: Sequence[int]) -> "Validation":
@@ -103,8 +113,8 @@ class Validation:
             return out
 
         names = ("relative_error_pct", "rms_error", "predicted", "relative_error_pct_moving", "rms_error_moving",
-                 "baseline_rms_error", "baseline_rms_error_moving", "baseline_predicted", "rms_error_filtered",
-                 "rms_error_filtered_moving")
+                 "baseline_rms_error", "baseline_rms_error_moving", "baseline_predicted", "user_rms_error",
+                 "user_rms_error_moving", "user_predicted", "rms_error_filtered", "rms_error_filtered_moving")
         return replace(self, **{k: cut(getattr(self, k)) for k in names},
                        not_predicted=tuple(sorted(set(self.not_predicted) | set(joints))))
 
@@ -113,6 +123,33 @@ class Validation:
         """(n,) per joint: the toolkit's RMS on all samples scored at most the plain baseline's."""
         return None if self.baseline_rms_error is None else self.rms_error <= self.baseline_rms_error
 
+    def yardsticks(self, moving: bool = False) -> dict[str, np.ndarray]:
+        """The yardsticks' RMS [N m] per joint by name (:data:`YARDSTICK_NAMES`; those computed), on all
+        samples scored or while the joint moves."""
+        rms = ((self.baseline_rms_error_moving, self.user_rms_error_moving) if moving
+               else (self.baseline_rms_error, self.user_rms_error))
+        return {name: v for name, v in zip(YARDSTICK_NAMES, rms) if v is not None}
+
+    def yardstick_ratio(self, moving: bool = False) -> tuple[np.ndarray, list[str | None]] | None:
+        """(ratio (n,) of the toolkit's RMS to the better yardstick's, the better one's name per joint), on all
+        samples or while moving; None without yardsticks (nan and None where a joint never moves)."""
+        sticks = self.yardsticks(moving)
+        if not sticks:
+            return None
+        names = list(sticks)
+        table = np.vstack([sticks[k] for k in names])
+        best = np.argmin(np.where(np.isnan(table), np.inf, table), axis=0)
+        own = self.rms_error_moving if moving and self.rms_error_moving is not None else self.rms_error
+        better = table[best, np.arange(table.shape[1])]
+        with np.errstate(divide="ignore", invalid="ignore"):
+            return own / better, [names[k] if np.isfinite(v) else None for k, v in zip(best, better)]
+
+    @property
+    def beats_both(self) -> np.ndarray | None:
+        """(n,) per joint: the toolkit's RMS on all samples scored at most every yardstick's (None: none)."""
+        done = self.yardstick_ratio()
+        return None if done is None else done[0] <= 1.0
+
     def table(self) -> str:
         head = ("joint  rms error [N m]  relative error [%]  rms moving [N m]  relative moving [%]"
                 "  moving [%]")
@@ -120,29 +157,45 @@ class Validation:
         rel_m = self.relative_error_pct_moving if self.relative_error_pct_moving is not None else self.relative_error_pct
         rms_m = self.rms_error_moving if self.rms_error_moving is not None else self.rms_error
         frac = self.moving_fraction if self.moving_fraction is not None else np.ones(n)
-        base = self.baseline_rms_error is not None
-        if base:
-            head += "  baseline rms [N m]  baseline moving [N m]"
+        extra = []  # (header, values) of the yardsticks' columns
+        for name in self.yardsticks():
+            extra += [(f"{name} rms [N m]", self.yardsticks()[name]),
+                      (f"{name} moving [N m]", self.yardsticks(True)[name])]
+        head += "".join(f"  {h}" for h, _ in extra)
         rows = [f"{j + 1:5d}  not predicted: its torque was left out of the fit (constant: a channel not logged)"
                 if j + 1 in self.not_predicted else
                 f"{j + 1:5d}  {self.rms_error[j]:15.3f}  {self.relative_error_pct[j]:18.2f}  "
                 f"{rms_m[j]:16.3f}  {rel_m[j]:19.2f}  {100 * frac[j]:10.1f}"
-                + (f"  {self.baseline_rms_error[j]:18.3f}  {self.baseline_rms_error_moving[j]:21.3f}" if base else "")
+                + "".join(f"  {v[j]:{len(h)}.3f}" for h, v in extra)
                 for j in range(n)]
         thr = ("no rest threshold" if self.moving_threshold is None
                else f"moving: |q̇j| ≥ {self.moving_threshold:g} rad/s")
         lines = [f"Validation on {self.source} against the raw measured torques ({self.t.size} samples; cut-off "
                  f"{self.cutoff:.4g} Hz, rate {self.rate:.6g} Hz, {thr})", head, *rows]
-        return "\n".join(lines + ([self.baseline_verdict()] if base else []))
+        return "\n".join(lines + self.verdict() + ([self.rollout.table()] if self.rollout is not None else []))
 
-    def baseline_verdict(self) -> str:
-        """"beats the plain baseline on joints ..." (RMS on all samples scored, per joint)."""
-        beats = self.beats_baseline
-        won = ", ".join(str(j + 1) for j in np.flatnonzero(beats)) or "none"
-        lost = ", ".join(f"{j + 1} ({self.rms_error[j] / self.baseline_rms_error[j]:.3f}x)"
-                         for j in np.flatnonzero(~beats) if j + 1 not in self.not_predicted)
-        return (f"beats the plain baseline (OLS, 10 Hz, same samples) on joints {won}"
-                + (f"; not on joints {lost}" if lost else ""))
+    def verdict(self) -> list[str]:
+        """"beats both yardsticks on joints ..." on all samples scored and while moving (per joint, RMS), with
+        the better yardstick and the ratio where it does not; the model the user had's absence said."""
+        out = []
+        both = len(self.yardsticks()) == 2
+        for label, moving in (("all samples", False), ("while moving", True)):
+            done = self.yardstick_ratio(moving)
+            if done is None:
+                continue
+            ratio, better = done
+            what = ("both yardsticks (the plain OLS, 10 Hz, and the model the user had; same samples)" if both
+                    else "the plain baseline (OLS, 10 Hz, same samples)") if not out else "both" if both else "it"
+            won = ", ".join(str(j + 1) for j in np.flatnonzero(ratio <= 1.0)) or "none"
+            lost = ", ".join(f"{j + 1} ({better[j]} {ratio[j]:.3f}x)" for j in np.flatnonzero(ratio > 1.0))
+            still = ", ".join(str(j + 1) for j in np.flatnonzero(np.isnan(ratio)) if j + 1 not in self.not_predicted)
+            out.append(f"beats {what} on joints {won} ({label})" + (f"; not on joints {lost}" if lost else "")
+                       + (f"; joints {still} never move" if still else "")
+                       + (f"; joints {', '.join(map(str, self.not_predicted))} not predicted" if self.not_predicted
+                          else ""))
+        if self.user_model_note and self.yardsticks():
+            out.append(f"the model the user had: not computed ({self.user_model_note})")
+        return out
 
     def still_message(self) -> str | None:
         """What to say when joints never move in the recording (their while-moving errors are
@@ -171,9 +224,26 @@ class Validation:
                 "baseline_rms_error": listed(self.baseline_rms_error),
                 "baseline_rms_error_moving": listed(self.baseline_rms_error_moving),
                 "beats_baseline": None if self.beats_baseline is None else [bool(v) for v in self.beats_baseline],
+                "user_model_rms_error": listed(self.user_rms_error),
+                "user_model_rms_error_moving": listed(self.user_rms_error_moving),
+                "user_model_note": self.user_model_note or None,
+                **self._yardstick_dict(),
                 "rms_error_filtered": listed(self.rms_error_filtered),
                 "rms_error_filtered_moving": listed(self.rms_error_filtered_moving),
-                "not_predicted": list(self.not_predicted)}
+                "not_predicted": list(self.not_predicted),
+                **({"rollout": self.rollout.to_dict()} if self.rollout is not None else {})}
+
+    def _yardstick_dict(self) -> dict[str, Any]:
+        """The JSON's comparison with the yardsticks: per joint the ratio to the better one and its name, and
+        whether the toolkit beats both, on all samples and while moving (null without yardsticks)."""
+        out: dict[str, Any] = {}
+        for suffix, moving in (("", False), ("_moving", True)):
+            done = self.yardstick_ratio(moving)
+            ratio, better = done if done is not None else (None, None)
+            out.update({f"yardstick_ratio{suffix}": None if ratio is None else [json_number(v) for v in ratio],
+                        f"better_yardstick{suffix}": better,
+                        f"beats_both{suffix}": None if ratio is None else [bool(v <= 1.0) for v in ratio]})
+        return out
 
 
 def prediction_rate(cutoff: float, rate: float) -> float | None:
@@ -198,7 +268,8 @@ def predict(robot: rx90sym.Robot, result: IdentificationResult, recording: Any, 
             cutoff: float | None = None, decimate_to: float | None | str = DEFAULT_DECIMATE_TO, spring: bool = True,
             min_velocity: float | None = None, delay: float = 0.0, rest: RestPolicy = "zero-coulomb",
             baseline: Any = None, filtered_at: float | None | str = "prediction", block: int = DEFAULT_BLOCK,
-            convention: str | None = None, gains: Any = None) -> Validation:
+            convention: str | None = None, gains: Any = None, user_model: Any = None,
+            user_model_note: str = "", rollout: Any = None) -> Validation:
     """Predicted vs measured torques of ``recording`` (a recording, or a recording file) with the parameters
     of ``result``, block by block whatever its length.
 
@@ -208,12 +279,16 @@ def predict(robot: rx90sym.Robot, result: IdentificationResult, recording: Any, 
     delay [s]: torque lag compensated as in the fit; rest: the fit's rest policy, one or one per joint
     (every sample is predicted: "drop" takes Coulomb 0 at rest; "presliding" the presliding state
     times FPj; the others as in the fit); baseline: the fit's plain OLS baseline
-    (identify.fitting.baseline.PlainBaseline), predicted block by block and scored on the same raw
-    samples (None: none). Scored against the raw measured torques at the recording's own time stamps;
+    (identify.fitting.baseline.PlainBaseline), user_model: the model the user had
+    (identify.fitting.user_model.UserModel), both predicted in one pass block by block and scored on the
+    same raw samples (None: none; user_model_note: why there is none, shown beside the figures). Scored against the raw measured torques at the recording's own time stamps;
     the filtered figures (``rms_error_filtered``) on rows decimated to ``filtered_at`` [Hz] (None: not
     decimated; "prediction": the prediction's rate; :meth:`identify.Fit.predict` gives the fit's own).
     block: raw samples read, filtered and predicted at a time (memory: a block, the decimated
     prediction and the samples scored); convention, gains: how a recording file is read.
+    rollout: window lengths [s] ("0.25,0.5" or numbers): the bodies of ``result`` (a consistent fit's
+    ``standard``) rolled out in MuJoCo with this processing (identify.rollout.run.roll_out; the
+    validation's ``rollout``); None: not.
     """
     if base is None:  # the symbolic base, with the torque offsets the fit chose (OFFj in the result)
         base = offset_base(rx90sym.base_parameters(robot), result_offsets(result, robot))
@@ -232,9 +307,9 @@ def predict(robot: rx90sym.Robot, result: IdentificationResult, recording: Any, 
                          else replace(settings, decimate_to=filtered_at or None))  # the fit's own rows
     plans, _ = plan_windows(scans[0], fc, settings)
     names, regressor = column_regressor(robot, base)
-    bp = None
-    if baseline is not None:  # its own pass over the log, block by block (its own filter and margins)
-        bp = streamed_baseline_prediction(robot, baseline, src, scans[0], block)
+    sticks = [m for m in (baseline, user_model) if m is not None]
+    # The yardsticks' own pass over the log, block by block (their own filter and margins).
+    preds = streamed_predictions(robot, sticks, src, scans[0], block) if sticks else []
     sums = FilteredSums(beta, robot.n) if filtered_settings == settings else None
     length = {g.start: g.samples for g in scans[0].segments}
     groups: dict[int, list] = {}
@@ -260,24 +335,33 @@ def predict(robot: rx90sym.Robot, result: IdentificationResult, recording: Any, 
         tol = 1e-9 * max(1.0, abs(tp[-1]))
         # SCORE_TRIM_S from the segment's ends (the baseline's trim), inside the prediction.
         inside = (t <= tp[-1] + tol) & (t >= first + SCORE_TRIM_S - tol) & (t <= last - SCORE_TRIM_S + tol)
-        b = None
-        if bp is not None:  # only where the baseline predicts too
-            scored, b = baseline_at(bp, t)
+        at = [baseline_at(bp, t) for bp in preds]  # only where the yardsticks predict too
+        for scored, _ in at:
             inside &= scored
-            b = b[inside]
         t, tau = t[inside], tau[inside]
         nearest = np.clip(np.searchsorted(tp, t - 0.5 * (tp[1] - tp[0] if tp.size > 1 else 0.0)), 0, tp.size - 1)
-        parts.append((t, tau, onto(t, tp, pr), mv[nearest], b))
+        parts.append((t, tau, onto(t, tp, pr), mv[nearest], *(b[inside] for _, b in at)))
     if not any(p[0].size for p in parts):
         raise ValueError(f"{src.source}: no recorded sample lies inside the prediction"
-                         + (" and 0.5 s from the segments' ends (the plain baseline's trim)" if bp is not None else ""))
-    t, Y, pred, mov = (np.concatenate([p[k] for p in parts]) for k in range(4))
-    base_pred = None if bp is None else np.concatenate([p[4] for p in parts])
+                         + (" and 0.5 s from the segments' ends (the yardsticks' trim)" if preds else ""))
+    t, Y, pred, mov, *yard = (np.concatenate([p[k] for p in parts]) for k in range(4 + len(preds)))
+    base_pred = yard.pop(0) if baseline is not None else None
+    user_pred = yard.pop(0) if user_model is not None else None
     # The filtered figures on the fit's rows: from this pass when they are the prediction's, else a pass of their own.
     filtered = (sums.result() if sums is not None else
                 streamed_filtered_rms(robot, src, scans[0], fc, filtered_settings, regressor, names, beta))
-    return replace(scored_validation(RawScores(t, Y, pred, mov, base_pred), src.source, settings.min_velocity, fc,
-                                     plans[0].rate), **filtered, t0_s=log_clock(recording, src))
+    val = replace(scored_validation(RawScores(t, Y, pred, mov, base_pred, user_pred), src.source, settings.min_velocity,
+                                    fc, plans[0].rate), **filtered, t0_s=log_clock(recording, src),
+                  user_model_note=user_model_note if user_model is None else "")
+    if rollout is None:
+        return val
+    from identify.rollout.run import roll_out
+
+    standard = getattr(result, "standard", None)
+    if not standard:
+        raise ValueError(f"a {result.method} result holds base parameters, not physical bodies: nothing to roll out")
+    return replace(val, rollout=roll_out(robot, rx90sym.nominal_parameters(robot, dict(standard)), src, rollout,
+                                         cutoff=fc, delay=delay, min_velocity=min_velocity, block=block))
 
 
 def log_clock(recording: Any, source: Any = None) -> float:
@@ -293,17 +377,20 @@ def scored_validation(raw: RawScores, source: str, min_velocity: float | None, c
     Y, predicted, moving = raw.measured, raw.predicted, raw.moving
     err = Y - predicted
     every = np.ones_like(moving)
-    b_all = b_mov = None
+    b_all = b_mov = u_all = u_mov = None
     if raw.baseline is not None:
         b_err = Y - raw.baseline
         b_all, b_mov = _rms(b_err, every), _rms(b_err, moving)
+    if raw.user is not None:
+        u_err = Y - raw.user
+        u_all, u_mov = _rms(u_err, every), _rms(u_err, moving)
     return Validation(
         relative_error_pct=_relative(err, Y, every), rms_error=_rms(err, every),
         measured=Y, predicted=predicted, t=raw.t, source=source,
         relative_error_pct_moving=_relative(err, Y, moving), rms_error_moving=_rms(err, moving),
         moving_fraction=moving.mean(axis=0), moving_threshold=min_velocity, moving=moving,
         cutoff=cutoff, rate=rate, baseline_rms_error=b_all, baseline_rms_error_moving=b_mov,
-        baseline_predicted=raw.baseline)
+        baseline_predicted=raw.baseline, user_rms_error=u_all, user_rms_error_moving=u_mov, user_predicted=raw.user)
 
 
 def validate(robot: rx90sym.Robot, result: IdentificationResult, recording: Any, **options: Any) -> Validation:

@@ -21,7 +21,7 @@ from __future__ import annotations
 
 import os
 from pathlib import Path
-from typing import Any
+from typing import Any, Sequence
 
 import numpy as np
 
@@ -31,6 +31,7 @@ from rx90sym.recording import Recording, RecordingError
 from identify.io.columns import parse_columns
 from identify.io.gains import DriveGains
 from identify.io.log_stream import rows_to_recording
+from identify.io.torque_signs import parse_torque_signs
 from identify.io.gaps import DEFAULT_MAX_GAP
 
 __all__ = ["MissingExtra", "is_bag", "read_bag", "EXTRA"]
@@ -154,7 +155,7 @@ def _table(messages: list, names: tuple[str, ...], source: str, report: dict) ->
 def read_bag(path: str | os.PathLike[str], robot: rx90sym.Robot, topic: str = "/joint_states",
              effort: str = "torque", gains: DriveGains | str | None = None, resample: float | None = None,
              convention: str = "controller", max_gap: float = DEFAULT_MAX_GAP, segments: bool = True,
-             ) -> Recording:
+             torque_signs: str | Sequence[float] | None = None) -> Recording:
     """Read the ``sensor_msgs/JointState`` messages of ``topic`` in a ROS bag as a recording.
 
     Args:
@@ -162,7 +163,7 @@ def read_bag(path: str | os.PathLike[str], robot: rx90sym.Robot, topic: str = "/
         robot: the robot; its ROS joint names (:meth:`rx90sym.Robot.ros_joint_names`) match the
             message's names.
         effort: ``"torque"`` (joint torques, N·m) or ``"current"`` (motor currents, A).
-        gains, resample, convention, max_gap, segments: as for :func:`identify.read_log`.
+        gains, resample, convention, max_gap, segments, torque_signs: as for :func:`identify.read_log`.
 
     Returns:
         The recording (time 0 at the first header stamp); ``meta["log"]`` as for a log plus
@@ -175,6 +176,7 @@ def read_bag(path: str | os.PathLike[str], robot: rx90sym.Robot, topic: str = "/
         RecordingError: no such topic, no joint name matching, a bad message (named by number).
     """
     p = Path(path)
+    signs = parse_torque_signs(torque_signs, robot)
     if effort not in ("torque", "current"):
         raise ValueError(f"effort must be 'torque' or 'current', got {effort!r}")
     if gains is not None and effort == "torque":  # a bag has no column map: name its own option
@@ -207,6 +209,7 @@ def read_bag(path: str | os.PathLike[str], robot: rx90sym.Robot, topic: str = "/
         table = np.delete(table, np.s_[1 + n:1 + 2 * n], axis=1)
     spec = f"t,q1..q{n}," + (f"qd1..qd{n}," if has_qd else "") + f"{kind}1..{kind}{n}"
     rec = rows_to_recording(source, table, numbers, parse_columns(spec, robot), robot, convention,
-                            gains=gains, max_gap=max_gap, segments=segments, resample=resample, window=False)
+                            gains=gains, max_gap=max_gap, segments=segments, resample=resample, window=False,
+                            signs=signs)
     rec.meta["log"].update(report, t0_ns=t0, t0_s=t0 * 1e-9)  # the one time origin: 0 s at the first sample
     return rec

@@ -21,7 +21,7 @@ from __future__ import annotations
 
 import os
 from pathlib import Path
-from typing import Mapping
+from typing import Mapping, Sequence
 
 import numpy as np
 
@@ -34,6 +34,7 @@ from identify.io.columns import parse_columns
 from identify.io.csv_tables import _Table, _check_same_rows, _read_table
 from identify.io.gains import DriveGains
 from identify.io.log_stream import rows_to_recording
+from identify.io.torque_signs import parse_torque_signs
 
 __all__ = ["read_joint_files", "SIGNALS"]
 
@@ -63,6 +64,7 @@ def _joint_table(path: Path, prefix: str, option: str, robot: rx90sym.Robot) -> 
 def read_joint_files(
     robot: rx90sym.Robot, files: Mapping[str, str | os.PathLike[str]], period: float,
     gains: DriveGains | str | None = None, convention: str | None = None, resample: float | None = None,
+    torque_signs: str | Sequence[float] | None = None,
 ) -> Recording:
     """Read one file per signal (module docstring) as a recording.
 
@@ -74,6 +76,7 @@ def read_joint_files(
         gains: drive gains turning the currents into joint torques (:func:`identify.io.gains.read_gains`).
         convention: angles of the positions, ``"controller"`` (default) or ``"model"``.
         resample: rate, Hz, of a uniform grid to put the signals on (None: the period's).
+        torque_signs: one sign per joint (1 or -1) for the torques and currents (identify.read_log).
 
     Returns:
         A recording in model angles; ``meta["log"]`` as :func:`identify.read_log`'s, with
@@ -86,6 +89,7 @@ def read_joint_files(
         ValueError: a period <= 0, a bad signal name, gains without currents.
     """
     check_period(period)
+    signs = parse_torque_signs(torque_signs, robot)
     unknown = sorted(set(files) - set(SIGNALS))
     if unknown:
         raise ValueError(f"read_joint_files: unknown signal {unknown[0]!r} (expected {', '.join(SIGNALS)})")
@@ -110,6 +114,6 @@ def read_joint_files(
     numbers = list(range(first.first_data_line, first.first_data_line + first.values.shape[0]))
     source = "+".join(t.source for t in tables.values())
     rec = rows_to_recording(source, values, numbers, cmap, robot, conv, gains=gains, resample=resample,
-                            window=False, stale=False)
+                            window=False, stale=False, signs=signs)
     rec.meta["log"].update(files={s: tables[s].source for s in order}, period_s=float(period))
     return rec

@@ -36,6 +36,7 @@ from identify.io.log_fields import SPLITS_LISTED, file_fields
 from identify.io.log_rows import ABSURD, LogLines, check_header, header_cells, parse_rows
 from identify.io.log_stream import collected, log_parts, log_report
 from identify.io.logs import log_options
+from identify.io.torque_signs import parse_torque_signs
 
 __all__ = ["DEFAULT_LOG_BLOCK", "convert_log", "read_log"]
 
@@ -206,7 +207,8 @@ def read_log(path: str | os.PathLike[str], robot: rx90sym.Robot, columns: str | 
              header: bool = False, rows: tuple[int, int] | None = None, t_from: float | None = None,
              t_to: float | None = None, resample: float | None = None, gains: DriveGains | str | None = None,
              convention: str | None = None, max_gap: float = DEFAULT_MAX_GAP, segments: bool = True,
-             period: float | None = None, block: int = DEFAULT_LOG_BLOCK) -> Recording:
+             period: float | None = None, block: int = DEFAULT_LOG_BLOCK,
+             torque_signs: str | Sequence[float] | None = None) -> Recording:
     """Read a controller log (a CSV whose columns ``columns`` names, :mod:`identify.io.logs`) as a recording.
 
     Args:
@@ -233,6 +235,8 @@ def read_log(path: str | os.PathLike[str], robot: rx90sym.Robot, columns: str | 
             (no stale rows: the clock is the period's).
         block: lines read and checked at a time (the checks' median step is each block's:
             :mod:`identify.io.log_stream`).
+        torque_signs: one sign per joint, 1 (as logged) or -1: the torque (and current) columns of the
+            joints given -1 are negated (identify.io.torque_signs; a text "1,-1,..." or a sequence).
 
     Returns:
         A recording in model angles, with ``segment`` and ``measured`` (when resampled: bridged
@@ -242,22 +246,26 @@ def read_log(path: str | os.PathLike[str], robot: rx90sym.Robot, columns: str | 
         (:func:`identify.io.steps.step_figures`), ``largest_gap_s`` and ``largest_gap_lines``,
         ``irregular_steps``, ``gaps`` (:meth:`LogGaps.summary`), ``bridged_samples``,
         ``resampled_hz`` (or None), ``samples``, ``gains``, ``convention``, ``t0_s`` (the log's
-        clock at the first sample: the recording starts at 0 s), ``columns``, ``period_s``.
+        clock at the first sample: the recording starts at 0 s), ``columns``, ``period_s``,
+        ``torque_signs`` (or None).
 
     Raises:
         RecordingError: corrupt rows, irregular time without ``resample``, a gap over ``max_gap``
-            with ``segments=False`` (message names file and lines).
+            with ``segments=False``, a time column that counts samples (read it with ``period``)
+            (message names file and lines).
         ValueError: a bad column map, window or gains.
     """
     p = Path(path)
+    signs = parse_torque_signs(torque_signs, robot)
     cmap, conv, drive, blocks = _log_blocks(p, robot, columns, header, rows, t_from, t_to, gains, convention,
                                             period, block)
     report = BlockReport()
     rec = collected(log_parts(blocks, cmap, robot, conv, p.name, report, resample, max_gap, segments, drive,
-                              stale=period is None), resample is not None)
+                              stale=period is None, signs=signs), resample is not None)
     from dataclasses import replace
 
-    return replace(rec, meta={**rec.meta, "log": _report(report, cmap, max_gap, resample, drive, conv, period)})
+    return replace(rec, meta={**rec.meta, "log": _report(report, cmap, max_gap, resample, drive, conv, period,
+                                                         signs)})
 
 
 def convert_log(path: str | os.PathLike[str], robot: rx90sym.Robot, columns: str | Sequence[str] | None,
@@ -265,17 +273,18 @@ def convert_log(path: str | os.PathLike[str], robot: rx90sym.Robot, columns: str
                 t_from: float | None = None, t_to: float | None = None, resample: float | None = None,
                 gains: Any = None, convention: str | None = None, block: int = DEFAULT_LOG_BLOCK,
                 max_gap: float = DEFAULT_MAX_GAP, segments: bool = True,
-                period: float | None = None) -> dict[str, Any]:
+                period: float | None = None, torque_signs: str | Sequence[float] | None = None) -> dict[str, Any]:
     """Convert the log ``path`` (the arguments of :func:`read_log`) to the recording file ``out`` (CSV,
     controller angles), ``block`` lines at a time. Returns the ``meta["log"]`` report."""
     p = Path(path)
     if Path(out).suffix.lower() != ".csv":
         raise RecordingError(f"{p.name}: a log converted block by block is written as CSV")
+    signs = parse_torque_signs(torque_signs, robot)
     cmap, conv, drive, blocks = _log_blocks(p, robot, columns, header, rows, t_from, t_to, gains, convention,
                                             period, block)
     report = BlockReport()
     parts = log_parts(blocks, cmap, robot, conv, p.name, report, resample, max_gap, segments, drive,
-                      stale=period is None)
+                      stale=period is None, signs=signs)
 
     def write(fh: IO) -> None:
         fields_at = None
@@ -297,14 +306,14 @@ def convert_log(path: str | os.PathLike[str], robot: rx90sym.Robot, columns: str
                 fh.write(f"{values.get(key, ''):<{_FIELD_WIDTHS[key]}}")
 
     atomic_write(out, write, binary=False)
-    return {**_report(report, cmap, max_gap, resample, drive, conv, period), "blocks_of_lines": block}
+    return {**_report(report, cmap, max_gap, resample, drive, conv, period, signs), "blocks_of_lines": block}
 
 
 def _report(report: BlockReport, cmap: ColumnMap, max_gap: float, resample: float | None, drive: DriveGains | None,
-            conv: str, period: float | None) -> dict[str, Any]:
+            conv: str, period: float | None, signs: tuple[float, ...] | None = None) -> dict[str, Any]:
     """``meta["log"]``: :func:`identify.io.log_stream.log_report` with the column map read (the clock of
     ``period`` left out) and ``period_s``."""
-    log = log_report(report, max_gap, resample, drive, conv)
+    log = log_report(report, max_gap, resample, drive, conv, signs)
     log["columns"] = ",".join(cmap.names[:-1] if period is not None else cmap.names)
     if period is not None:
         log["period_s"] = float(period)

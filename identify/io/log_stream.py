@@ -8,7 +8,9 @@ kept row, so steps, jumps and gaps across blocks are checked too), gaps bridged 
 segments (:mod:`identify.io.gaps`; a segment shorter than ``MIN_SEGMENT_ROWS`` rows dropped unless it
 is the log's only one), each segment put on its own grid when resampling (:class:`_Resampler`), and
 currents turned into torques by the drive gains. :func:`log_parts` yields the parts in order, each with
-its segment number; :func:`collected` joins them into one recording, a converter writes them.
+its segment number; :func:`collected` joins them into one recording, a converter writes them. Torque
+signs (identify.io.torque_signs) are applied to each part before the drive gains. A time column of the
+log's own that counts samples (identify.io.units.sample_clock_refusal) is refused on the first block.
 
 The median time step of the checks (irregular steps, gaps, a gap's ``periods``) is each block's: a
 log of one block (every log read whole) is checked on its own median; a longer one by blocks, the
@@ -33,7 +35,8 @@ from identify.io.logs import (LISTED_ROWS, STILL, check_increasing, check_positi
                               irregular_refusal, log_drive, refuse_splits)
 from identify.io.recordings import RecordingWarning
 from identify.io.resampling import check_rate, concatenate, interpolate
-from identify.io.units import check_units
+from identify.io.torque_signs import with_torque_signs
+from identify.io.units import check_units, sample_clock_refusal
 from identify.io.unlogged import ColumnRange, constant_channels, constant_message
 
 __all__ = ["SPLINE_MARGIN", "collected", "log_parts", "log_report", "rows_to_recording"]
@@ -106,6 +109,7 @@ class _LogStream:
         self.held: list[Recording] = []  # its first rows, until it is
         self.held_rows, self.held_lines = 0, None
         self.t0: float | None = None  # the log's clock at its first sample [s]
+        self.clock_checked = False  # a time column counting samples is looked for once (first rows)
 
     def block(self, values: np.ndarray, numbers: list[int], last: bool) -> Iterator[tuple[Recording, int]]:
         report = self.report
@@ -137,6 +141,13 @@ class _LogStream:
                  else LogGaps((), np.zeros(t.size, np.int64), self.max_gap))
         if not self.segments:
             refuse_splits(found, self.source, self.window)
+        if self.stale and not self.clock_checked and t.size >= 3:  # the log's own clock (not a period's)
+            self.clock_checked = True
+            refusal = sample_clock_refusal(t, values[:, list(self.cmap.q)],
+                                           values[:, list(self.cmap.qd)] if self.cmap.qd else None, self.robot,
+                                           f"the time column (column {self.cmap.t + 1}, t)")
+            if refusal:
+                raise RecordingError(f"{self.source}: {refusal}")
         rec = _checked(values, numbers, self.cmap, self.robot, self.conv, self.source, self.window)
         self.report.span(rec.q)
         if self.resample is None and t.size >= 2:
@@ -219,12 +230,13 @@ def _checked(values: np.ndarray, numbers: list[int], cmap: ColumnMap, robot: rx9
 def log_parts(blocks: Iterator[tuple[np.ndarray, list[int]]], cmap: ColumnMap, robot: rx90sym.Robot, conv: str,
               source: str, report: BlockReport, resample: float | None = None, max_gap: float = DEFAULT_MAX_GAP,
               segments: bool = True, drive: DriveGains | None = None, window: bool = True,
-              stale: bool = True) -> Iterator[tuple[Recording, int]]:
+              stale: bool = True, signs: tuple[float, ...] | None = None) -> Iterator[tuple[Recording, int]]:
     """(part, segment number) of the log whose parsed rows ``blocks`` yields ((rows, columns) as ``cmap``
     names them, their line numbers), in order, by the module's rules; ``report`` gathers what
     :func:`log_report` returns. ``window``: the input form can select a window of lines (its refusals
     advise one; False for a bag); ``stale``: drop rows equal to the previous one (False when the clock
-    is a sampling period: every row is a sample)."""
+    is a sampling period: every row is a sample; True: the clock is the log's, checked for a sample
+    counter); ``signs``: torque signs per joint (identify.io.torque_signs), applied before ``drive``."""
     if not (np.isfinite(max_gap) and max_gap > 0):
         raise ValueError(f"max_gap must be a positive time in s, got {max_gap!r}")
     if resample is not None:
@@ -239,6 +251,7 @@ def log_parts(blocks: Iterator[tuple[np.ndarray, list[int]]], cmap: ColumnMap, r
         pending = next(blocks, None)
         for rec, segment in stream.block(values, numbers, pending is None):
             logged.add(rec.tau if rec.tau is not None else rec.current)
+            rec = with_torque_signs(rec, signs)
             if drive is not None:
                 rec = apply_gains(rec, drive, robot)
             report.samples += rec.n_samples
@@ -267,11 +280,12 @@ def _warn_constant(source: str, span: np.ndarray | None, cmap: ColumnMap) -> Non
 
 
 def log_report(report: BlockReport, max_gap: float, resample: float | None, drive: DriveGains | None,
-               conv: str) -> dict[str, Any]:
+               conv: str, signs: tuple[float, ...] | None = None) -> dict[str, Any]:
     """``meta["log"]`` of a log read by :func:`log_parts` (the keys :func:`identify.read_log` documents)."""
     return {**report.result(max_gap), "resampled_hz": float(resample) if resample else None,
             "gains": None if drive is None else gains_label(drive), "convention": conv,
-            "position_span_rad": report.position_span().tolist()}
+            "position_span_rad": report.position_span().tolist(),
+            "torque_signs": None if signs is None else [float(x) for x in signs]}
 
 
 def collected(parts: Iterator[tuple[Recording, int]], resampled: bool) -> Recording:
@@ -283,15 +297,15 @@ def collected(parts: Iterator[tuple[Recording, int]], resampled: bool) -> Record
 def rows_to_recording(source: str, values: np.ndarray, numbers: Any, cmap: ColumnMap, robot: rx90sym.Robot,
                       convention: str, gains: DriveGains | str | None = None, max_gap: float = DEFAULT_MAX_GAP,
                       segments: bool = True, resample: float | None = None, window: bool = True,
-                      stale: bool = True) -> Recording:
+                      stale: bool = True, signs: tuple[float, ...] | None = None) -> Recording:
     """The rows of a log held in memory (``values`` (N, columns) as ``cmap`` names them, ``numbers``
     their line or message numbers) as a recording, by the module's rules (one block)."""
     drive = log_drive(cmap, gains, robot)
     report = BlockReport()
     rec = collected(log_parts(iter([(np.asarray(values, dtype=float), list(numbers))]), cmap, robot, convention,
-                              source, report, resample, max_gap, segments, drive, window, stale),
+                              source, report, resample, max_gap, segments, drive, window, stale, signs),
                     resample is not None)
-    return _with_report(rec, log_report(report, max_gap, resample, drive, convention))
+    return _with_report(rec, log_report(report, max_gap, resample, drive, convention, signs))
 
 
 def _with_report(rec: Recording, log: dict[str, Any]) -> Recording:

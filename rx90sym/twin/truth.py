@@ -39,9 +39,24 @@ def _checked_parameters(robot: Robot, table: Any, where: str) -> dict[str, float
     return checked_values(table, robot.parameter_names, f"{where} (robot {robot.name!r})")
 
 
+def check_simulable(robot: Robot) -> None:
+    """Raise ValueError naming every moving link when the description's own bodies (the twin's truth
+    by default) are not physical rigid bodies: a simulator cannot move them (one message)."""
+    from ..description_prior import simulation_refusal
+    from ..nominal import twin_parameter_file
+
+    if twin_parameter_file(robot) is None:
+        refusal = simulation_refusal(robot)
+        if refusal:
+            raise ValueError(f"{refusal}; give the twin physical parameters (params=: a mapping, a vector or a "
+                             f"parameter file, e.g. the JSON of rx90 identify --method consistent)")
+
+
 def parameter_vector(robot: Robot, params: Mapping[str, float] | Any | None) -> np.ndarray:
-    """chi (n_params,) from None (the default set), a name -> value mapping or a vector."""
+    """chi (n_params,) from None (the default set: the description's bodies must be physical,
+    :func:`check_simulable`), a name -> value mapping or a vector."""
     if params is None:
+        check_simulable(robot)
         return robot.parameter_vector(default_parameters(robot))
     if isinstance(params, Mapping):
         return robot.parameter_vector(_checked_parameters(robot, dict(params), "params"))

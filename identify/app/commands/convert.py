@@ -22,7 +22,9 @@ Motor form (Stäubli CS8 / TX40 files)::
     rx90 convert --robot tx40 --motor-positions P.csv --motor-torques T.csv --period S --out REC.csv
 
 ``--period S`` also reads a LOG.csv without time column (its column map names no ``t``): sample k
-at ``t = k * S``, t = 0 at the first row read.
+at ``t = k * S``, t = 0 at the first row read; a time column that counts samples (0, 1, 2, ...) is
+refused with that fix. ``--torque-signs S1,...,Sn`` (every form) negates the torque and current
+columns of the joints given -1 (identify.io.torque_signs).
 """
 from __future__ import annotations
 
@@ -85,6 +87,9 @@ def register(sub: Any) -> None:
     sp.add_argument("--period", type=float, metavar="S",
                     help="sampling period [s] of files without a time column: the joint files and motor forms, "
                          "or a LOG.csv whose --columns names no t (sample k at t = k S, t = 0 at the first sample)")
+    sp.add_argument("--torque-signs", metavar="S1,...,Sn",
+                    help="one sign per joint, 1 (as logged) or -1: the torque (and current) columns of the joints "
+                         "given -1 are negated (a log whose torques count the other way than the robot's joints)")
     sp.add_argument("--out", required=True, help="recording file (.csv or .npz)")
     sp.add_argument("--block", metavar="LINES",  # checked by run: refused for a bag in one line, not by argparse
                     help=f"LOG.csv form: lines read and checked at a time: memory bounded by the block whatever "
@@ -122,10 +127,15 @@ def _rows(text: str | None) -> tuple[int, int] | None:
 
 
 def _robot(args: argparse.Namespace):
+    """The robot of --robot, and --torque-signs checked against it (args.torque_signs: the signs, or None)."""
+    from identify.io.torque_signs import parse_torque_signs
+
     if args.robot is None:
         raise UsageError("convert needs --robot NAME|FILE.toml|FILE.urdf: the robot the log was recorded "
                          "on (its joint count, limits and angle offsets; written into the recording)")
-    return load_robot(args)
+    robot = load_robot(args)
+    args.torque_signs = parse_torque_signs(args.torque_signs, robot, "--torque-signs")
+    return robot
 
 
 def run(args: argparse.Namespace) -> int:
@@ -164,7 +174,7 @@ def run(args: argparse.Namespace) -> int:
     rec = read_log(args.log, robot, args.columns, header=not args.no_header, rows=_rows(args.rows),
                    t_from=args.t_from, t_to=args.t_to, resample=args.resample, gains=args.gains,
                    convention=args.convention, max_gap=args.max_gap or DEFAULT_MAX_GAP,
-                   segments=not args.no_segments, period=args.period, block=block)
+                   segments=not args.no_segments, period=args.period, block=block, torque_signs=args.torque_signs)
     write_recording(args.out, rec, robot, convention="controller")
     print(_print_log(args.log, rec.meta["log"], "torques as logged" if rec.current is None else
                      "no gains: the file keeps currents (give --gains to identify with it)"))
@@ -181,7 +191,7 @@ def _convert_csv(args: argparse.Namespace, robot: Any, block: int) -> int:
     log = convert_log(args.log, robot, args.columns, args.out, header=not args.no_header, rows=_rows(args.rows),
                       t_from=args.t_from, t_to=args.t_to, resample=args.resample, gains=args.gains,
                       convention=args.convention, block=block, max_gap=args.max_gap or DEFAULT_MAX_GAP,
-                      segments=not args.no_segments, period=args.period)
+                      segments=not args.no_segments, period=args.period, torque_signs=args.torque_signs)
     print(_print_log(args.log, log, "no gains: the file keeps currents (give --gains to identify with it)"
                      if _holds_currents(log, robot) else "torques as logged"))
     print(f"converted {log['samples']} samples -> {args.out}")
@@ -210,7 +220,8 @@ def _run_bag(args: argparse.Namespace) -> int:
     try:
         rec = read_bag(args.log, robot, args.topic, effort=args.effort or "torque", gains=args.gains,
                        resample=args.resample, convention=args.convention or "controller",
-                       max_gap=args.max_gap or DEFAULT_MAX_GAP, segments=not args.no_segments)
+                       max_gap=args.max_gap or DEFAULT_MAX_GAP, segments=not args.no_segments,
+                       torque_signs=args.torque_signs)
     except MissingExtra as exc:
         raise UsageError(str(exc)) from None
     write_recording(args.out, rec, robot, convention="controller")
@@ -231,6 +242,10 @@ def _print_log(name: str, log: dict, what_else: str) -> str:
     grid = (f"resampled to {log['resampled_hz']:g} Hz: {log['samples']} samples"
             if log["resampled_hz"] else "not resampled")
     what = f"gains {log['gains']}: joint torques from the currents" if log["gains"] else what_else
+    if log.get("torque_signs"):
+        from identify.io.torque_signs import signs_text
+
+        what += f"; torque signs {signs_text(log['torque_signs'])} (columns of the joints given -1 negated)"
     gaps = log.get("gaps", {"gaps": []})
     lines = [f"read lines {log['lines'][0]}..{log['lines'][1]} of {name}: {log['rows']} rows, {steps}",
              f"largest step {log['largest_gap_s']:g} s (lines {log['largest_gap_lines'][0]}-"
@@ -302,7 +317,7 @@ def _run_files(args: argparse.Namespace) -> int:
     files = {k: getattr(args, k) for k in _FILE_OPTIONS if getattr(args, k) is not None}
     progress(f"reading {', '.join(files.values())}")
     rec = read_joint_files(robot, files, args.period, gains=args.gains, convention=args.convention,
-                           resample=args.resample)
+                           resample=args.resample, torque_signs=args.torque_signs)
     write_recording(args.out, rec, robot, convention="controller")
     print(_print_log(args.positions, rec.meta["log"], "torques as read" if rec.current is None else
                      "torques as read, currents kept" if args.torques else
@@ -326,8 +341,12 @@ def _run_motor(args: argparse.Namespace) -> int:
     robot = _robot(args)
     check_output(args.out)
     progress("reading the motor-side files")
+    from identify.io.torque_signs import signs_text, with_torque_signs
+
     rec = read_motor_recording(args.motor_positions, args.motor_torques, robot, period=args.period,
                                convention=args.convention or "controller")
+    rec = with_torque_signs(rec, args.torque_signs)  # joint side, as the other forms' columns
     write_recording(args.out, rec, robot, convention="controller")
-    print(f"converted {len(rec.t)} samples at {rec.rate:g} Hz -> {args.out}")
+    signs = f" (torque signs {signs_text(args.torque_signs)})" if args.torque_signs else ""
+    print(f"converted {len(rec.t)} samples at {rec.rate:g} Hz{signs} -> {args.out}")
     return 0

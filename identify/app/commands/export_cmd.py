@@ -97,7 +97,7 @@ def _model(args: argparse.Namespace, data: dict) -> int:
     from rx90sym.model_export import write_model
     from rx90sym.urdf_export import urdf_export
     from identify import load_fit
-    from identify.export.models import fit_standard
+    from identify.rollout.model import simulator_parameters
 
     if data.get("method") != "consistent":
         raise ValueError(f"{args.input}: a {data.get('method') or 'unknown'} fit holds base parameters, not "
@@ -108,7 +108,7 @@ def _model(args: argparse.Namespace, data: dict) -> int:
         raise ValueError(f"{args.input}: {warning}")
     if warning:
         progress(f"warning: {warning}")
-    params = fit_standard(fit)
+    robot, params = simulator_parameters(fit)
     payload = None
     if args.payload:
         pdata = _read(args.payload)
@@ -117,9 +117,9 @@ def _model(args: argparse.Namespace, data: dict) -> int:
         payload = {p["name"]: p["value"] for p in pdata["payload"]}
     artefacts = []  # every text first: a refused link or payload writes nothing
     if args.urdf:
-        artefacts.append((args.urdf, *urdf_export(fit.robot, params, args.urdf, payload)))
+        artefacts.append((args.urdf, *urdf_export(robot, params, args.urdf, payload)))
     if args.mjcf:
-        artefacts.append((args.mjcf, *mjcf_export(fit.robot, params, args.mjcf, payload)))
+        artefacts.append((args.mjcf, *mjcf_export(robot, params, args.mjcf, payload)))
     for path, text, side in artefacts:
         progress("wrote " + " and ".join(str(p) for p in write_model(path, text, side)))
     return 0

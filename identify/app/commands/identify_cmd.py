@@ -18,7 +18,7 @@ from ..flags import given_gain_flags, settle, with_hint
 from ..common import (UsageError, check_output, convention_option, progress, robot_option, robot_with_spring,
                       spring_options)
 
-from .identify_runs import block_option, fit_recordings
+from .identify_runs import block_option, fit_recordings, rollout_option
 
 if TYPE_CHECKING:  # the model and the method are imported when the command runs, not for its --help
     import rx90sym
@@ -101,6 +101,7 @@ def register(sub: Any) -> None:
                          "(a local cluster, one worker per core)")
     sp.add_argument("--bootstrap-seed", type=int, default=0, help="seed of the segment bootstrap (default 0)")
     sp.add_argument("--validate", help="recording used for cross-validation only")
+    rollout_option(sp, "the --validate recording (a fit with bodies: --method consistent)")
     sp.add_argument("--json", help="results as JSON")
     sp.add_argument("--report", help="self-contained HTML report")
     sp.add_argument("--urdf-out", help="with --method consistent: the URDF with the identified inertials "
@@ -159,6 +160,8 @@ def _check(args: argparse.Namespace) -> None:
         raise UsageError("--urdf-out needs --method consistent (a URDF holds physical bodies only)")
     if args.prior is not None and args.method != "consistent":
         raise UsageError("--prior is for --method consistent")
+    if args.rollout is not None and args.validate is None:
+        raise UsageError("--rollout rolls the model out over the --validate recording: give --validate")
     for out in (args.json, args.report, args.urdf_out):
         check_output(out)
 
@@ -228,7 +231,7 @@ def run(args: argparse.Namespace) -> int:
         if args.essential:
             result = result.with_essential()
         if val_rec is not None:
-            result = result.validated(val_rec)
+            result = result.validated(val_rec, rollout=args.rollout)
             if result.validation.still_message():
                 progress(f"warning: {result.validation.still_message()}")
     except Exception:
@@ -279,7 +282,7 @@ def _fit_flags(f: Fit, method: str, prior: Any = None) -> list:
                                for j in range(len(res.residual_rms))])
     flags = settle(residual_flags(res.residual_rms, torque_rms, f.robot.limits.tau_max[:torque_rms.size]))
     if method != "consistent":
-        flags += settle(estimate_flags(res.names, res.values, np.fmax(res.std, f.bootstrap.std)))
+        flags += settle(estimate_flags(res.names, res.values, np.fmax(res.std, f.bootstrap.std), f.flags))
     elif prior is not None:
         flags += settle(prior_flags(res.standard, prior.values, res.cost_increase_pct, f.robot.name))
     return flags

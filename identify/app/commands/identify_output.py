@@ -88,19 +88,14 @@ def spring_text(f: Fit, recs: list) -> str:
     return spring_summary(f.robot, f.base if isinstance(f.base, BaseWithSpring) else None, f.result, visited)[1]
 
 
-#: Points of the figures: a recording's positions and torques are thinned to at most this many.
-REPORT_POINTS = 20_000
-
-
 def write_report(path: str, f: Fit, recordings: list, convention: str | None, block: int) -> None:
     """The HTML report from the fit file's content (what --json writes) plus the recordings' extent and
     figures: the recordings (recordings or files) read again block by block, thinned to REPORT_POINTS
     samples (positions), the predictions to as many (torques)."""
-    from dataclasses import replace
-
     from identify.fitting.validation import log_clock
     from identify.io.blocks import block_source
 
+    from ..report.figures import REPORT_POINTS, thinned as shown
     from ..report.writers import write_identify_report
 
     sources = [block_source(r, f.robot, convention, f.gains) for r in recordings]
@@ -108,12 +103,6 @@ def write_report(path: str, f: Fit, recordings: list, convention: str | None, bl
     thin = [src.thinned(block, -(-(n or 1) // REPORT_POINTS))
             for src, n in zip(sources, samples or [getattr(src, "n_samples", None) for src in sources])]
     clocks = [log_clock(r, src) for r, src in zip(recordings, sources)]
-
-    def shown(v: Any) -> Any:  # the torques of the figures: every k-th sample scored
-        every = slice(None, None, -(-v.t.size // REPORT_POINTS))
-        return replace(v, t=v.t[every], measured=v.measured[every], predicted=v.predicted[every],
-                       moving=v.moving[every], baseline_predicted=None if v.baseline_predicted is None
-                       else v.baseline_predicted[every])
 
     record = {**f.to_json(), "data": data_record(thin, f.observation or f.streamed, f.validation, samples, clocks)}
     held = shown(f.validation) if f.validation is not None else None

@@ -49,3 +49,23 @@ def block_option(text: str, unit: str = "samples") -> int:
     if value < 1000:
         raise argparse.ArgumentTypeError(f"--block must be at least 1000 {unit}, got {value}")
     return value
+
+
+def rollout_option(sp: argparse.ArgumentParser, what: str) -> None:
+    """``--rollout L[,L2]``: window lengths [s] of the rollout validation (identify.rollout)."""
+    from identify.rollout.defaults import MAX_STEP_S
+
+    def lengths(text: str) -> tuple[float, ...]:
+        from identify.rollout.defaults import window_lengths
+
+        try:
+            return window_lengths(text)
+        except ValueError as exc:
+            raise argparse.ArgumentTypeError(str(exc)) from None
+
+    sp.add_argument("--rollout", metavar="L[,L2]", type=lengths,
+                    help=f"also roll the fit's model (the MJCF of rx90 export --mjcf) out in MuJoCo over {what} in "
+                         f"windows of L seconds while the arm moves, from the recorded state under the recorded "
+                         f"torques (steps of at most {1e3 * MAX_STEP_S:g} ms); per joint the RMS end-position and "
+                         f"end-velocity errors beside the constant-velocity guess and the description's bodies "
+                         f"(docs/rollout.md)")

@@ -12,7 +12,7 @@ from typing import Any
 from identify.io.defaults import DEFAULT_BLOCK
 
 from ..common import announce_robot, check_output, progress
-from .identify_runs import block_option
+from .identify_runs import block_option, rollout_option
 
 
 def register(sub: Any) -> None:
@@ -26,7 +26,10 @@ def register(sub: Any) -> None:
     sp.add_argument("--convention", choices=("controller", "model", "staubli", "khalil"), default=None,
                     help="joint angles of the file (default: the identification's, else the file's header)")
     sp.add_argument("--out", help="CSV: t, measured tau1..n, predicted pred1..n, moving1..n (1/0)")
-    sp.add_argument("--json", help="prediction errors as JSON")
+    sp.add_argument("--json", help="prediction errors as JSON (with --rollout: its figures under 'rollout')")
+    sp.add_argument("--report", metavar="FILE.html", help="self-contained HTML report: the held-out errors and, "
+                                                          "with --rollout, a few windows and the rollout's table")
+    rollout_option(sp, "the recording")
     sp.add_argument("--block", type=block_option, default=DEFAULT_BLOCK,
                     help=f"samples read, filtered and predicted at a time, at least 1000 (default {DEFAULT_BLOCK}; "
                          f"the fit's figures do not depend on it, the plain baseline's sign(q̇) at rest is the sign "
@@ -50,20 +53,25 @@ def run(args: argparse.Namespace) -> int:
     from rx90sym.files import write_json
     from identify.fitting.record import load_fit
 
-    for out in (args.out, args.json):
+    for out in (args.out, args.json, args.report):
         check_output(out)
     f = load_fit(args.identification, args.robot)
     announce_robot(f.robot, "from --robot" if args.robot else "recorded by the identification")
     warning = f.model.check_robot(f.robot)
     if warning:
         progress(f"warning: {warning}")
-    val = f.predict(args.recording, block=args.block, convention=args.convention)  # block by block, any length
+    # Block by block, any length; with --rollout the fit's model in MuJoCo too (every figure before any output).
+    val = f.predict(args.recording, block=args.block, convention=args.convention, rollout=args.rollout)
     if val.still_message():
         progress(f"warning: {val.still_message()}")
     print(val.table())
+    record = {"identification": str(args.identification), "robot_warning": warning, **val.to_dict()}
     if args.out:
         write_prediction(args.out, val)
     if args.json:
-        write_json(args.json, {"identification": str(args.identification), "robot_warning": warning,
-                               **val.to_dict()})
+        write_json(args.json, record)
+    if args.report:
+        from ..report.rollout_page import write_predict_report
+
+        write_predict_report(args.report, record, val)
     return 0

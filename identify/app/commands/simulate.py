@@ -37,6 +37,14 @@ def run(args: argparse.Namespace) -> int:
     note = acceleration_note(robot)
     if note:  # the trajectory is read against the robot's limits
         progress(f"warning: {note}")
+    from rx90sym.description_prior import simulation_refusal
+    from rx90sym.nominal import twin_parameter_file
+
+    # The description's own bodies as the twin's truth: physical, or every other link named at once.
+    refusal = simulation_refusal(robot) if args.params is None and twin_parameter_file(robot) is None else None
+    if refusal:
+        raise UsageError(f"{refusal}: pass --params FILE (physical parameters, e.g. the JSON of rx90 identify "
+                         f"--method consistent)")
     try:  # the twin's truth: the bundled RX90's own set, else the robot's nominal parameters
         params = rx90sym.default_parameters(robot, args.params)
     except ValueError as exc:

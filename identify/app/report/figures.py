@@ -18,6 +18,22 @@ def _pyplot():
     return plt
 
 
+#: Points of the figures: a recording's positions and torques are thinned to at most this many.
+REPORT_POINTS = 20_000
+
+
+def thinned(validation: Any, points: int = REPORT_POINTS) -> Any:
+    """A validation's samples for a figure: every k-th sample scored, at most ``points``."""
+    from dataclasses import replace
+
+    every = slice(None, None, -(-validation.t.size // points))
+    base, user = validation.baseline_predicted, validation.user_predicted
+    return replace(validation, t=validation.t[every], measured=validation.measured[every],
+                   predicted=validation.predicted[every], moving=validation.moving[every],
+                   baseline_predicted=None if base is None else base[every],
+                   user_predicted=None if user is None else user[every])
+
+
 def figure(fig_id: str, caption: str, fig: Any) -> Figure:
     """A page :class:`Figure` from a matplotlib figure (PNG at 90 dpi; the figure is closed)."""
     buf = io.BytesIO()

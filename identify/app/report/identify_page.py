@@ -9,8 +9,9 @@ from identify.fitting.rank_flags import has_rank_flag
 
 from .cells import fixed, fmt, number
 from .page import Column, Figure, Page, Section, Summary, Table, Text
+from .rollout_page import rollout_blocks
 from .summary import (REST_SHARE_CHECK, as_flag, flag, heldout_flags, heldout_table, next_steps,
-                      parameter_flags)
+                      parameter_flags, yardstick_flags)
 from .tables import bodies_table, gains_table, key_values, parameter_table, validation_table
 
 #: Largest gap [s] between the end of a fitted recording and the start of the held-out one for the
@@ -44,7 +45,7 @@ def _flags(record: Mapping[str, Any], data: Mapping[str, Any] | None) -> list[di
     flags = [as_flag(f) for f in record.get("flags") or ()]
     val = record.get("validation") or {}
     if val:
-        flags += heldout_flags(val)
+        flags += heldout_flags(val) + yardstick_flags(val)
     else:
         flags.append(flag("no-heldout", "warning", "no held-out data: the fit was not checked on samples it "
                           "did not see", "run again with --validate HELD_OUT.csv (another motion, or the "
@@ -132,7 +133,7 @@ def identify_summary(record: Mapping[str, Any]) -> Summary:
 
 def identify_page(record: Mapping[str, Any], figures: Mapping[str, Sequence[Figure]] | None = None,
                   prior: Mapping[str, float] | None = None, spring_text: str = "") -> Page:
-    """The identification report. figures: by section ("validation", "fit", "parameters",
+    """The identification report. figures: by section ("validation", "rollout", "fit", "parameters",
     "trajectory"); prior: standard parameters shown beside the consistent fit's bodies."""
     figures = figures or {}
     model = record.get("model") or {}
@@ -141,6 +142,9 @@ def identify_page(record: Mapping[str, Any], figures: Mapping[str, Sequence[Figu
     if val:
         sections.append(Section("validation", "Held-out validation",
                                 (validation_table(val), *figures.get("validation", ()))))
+    if val.get("rollout"):
+        sections.append(Section("rollout", "Rollout in MuJoCo (held-out)",
+                                (*rollout_blocks(val["rollout"]), *figures.get("rollout", ()))))
     boot = record.get("bootstrap_std")
     sections.append(Section("parameters", "Parameters", (
         parameter_table(record.get("parameters") or [], boot), *figures.get("parameters", ()))))

@@ -100,6 +100,25 @@ def heldout_flags(validation: Mapping[str, Any]) -> list[dict]:
     return out
 
 
+#: A held-out RMS above this many times the better yardstick's is flagged (the project's "never worse": 2 %).
+YARDSTICK_MARGIN = 1.02
+
+
+def yardstick_flags(validation: Mapping[str, Any]) -> list[dict]:
+    """A warning per joint whose held-out RMS on all samples is above YARDSTICK_MARGIN x the better yardstick's
+    (the plain OLS, the model the user had: the JSON's yardstick_ratio and better_yardstick)."""
+    ratio, better = validation.get("yardstick_ratio") or [], validation.get("better_yardstick") or []
+    out = []
+    for j, (r, b) in enumerate(zip(ratio, better), start=1):
+        if r is not None and r > YARDSTICK_MARGIN:
+            what = "the model the user had (the description's bodies, friction fitted)" if b == "user model" \
+                else "a plain OLS fit (10 Hz, rigid bodies and friction)"
+            out.append(flag("worse-than-yardstick", "warning", f"held-out RMS {r:.3f}x that of {what}",
+                            "compare the processing (cross-validation table) and the description's bodies; "
+                            "a longer or richer recording helps the fit most where the data sees little", j))
+    return out
+
+
 def parameter_flags(names: Sequence[str], rel_std_pct: Sequence[Any], boot: Sequence[Any] | None,
                     std: Sequence[Any], cond: Any, model_cause: bool = False) -> list[dict]:
     """Weakly identified parameters, coloured residuals (bootstrap σ ≫ eq. 13), a poor cond(W).

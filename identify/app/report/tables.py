@@ -89,8 +89,9 @@ def bodies_table(standard: Mapping[str, float], n: int, prior: Mapping[str, floa
 
 def validation_table(validation: Mapping[str, Any], table_id: str = "validation") -> Table:
     """The whole held-out record per joint, against the raw measured torques: RMS and relative error,
-    all samples and while moving; beside them the plain OLS baseline's RMS on the same samples (when
-    the fit file has it) and whether the toolkit beats it."""
+    all samples and while moving; beside them the two yardsticks' RMS on the same samples (the plain OLS
+    baseline, the model the user had: those the fit file has), the ratio to the better one and whether
+    the toolkit beats both."""
     keys = ("rms_error", "relative_error_pct", "rms_error_moving", "relative_error_pct_moving")
     cols = (Column("joint", decimals=0), Column("RMS all", "N·m", digits=3), Column("relative all", "%", decimals=2),
             Column("RMS moving", "N·m", digits=3), Column("relative moving", "%", decimals=2),
@@ -101,25 +102,52 @@ def validation_table(validation: Mapping[str, Any], table_id: str = "validation"
     rows = tuple((j + 1, lists[0][j], Cell(lists[1][j], mark(lists[1][j])), lists[2][j],
                   Cell(lists[3][j], mark(lists[3][j])), None if share[j] is None else 100 * share[j])
                  for j in range(n))
-    base, base_m, beats = (validation.get(k) for k in ("baseline_rms_error", "baseline_rms_error_moving",
-                                                        "beats_baseline"))
-    if base:
-        cols += (Column("baseline RMS all", "N·m", digits=3), Column("baseline RMS moving", "N·m", digits=3),
-                 Column("beats baseline", text=True))
-        rows = tuple(row + (base[j], (base_m or [None] * n)[j],
-                            Cell("yes" if beats[j] else "no", "" if beats[j] else "check"))
+    sticks = [(label, validation.get(f"{key}_rms_error"), validation.get(f"{key}_rms_error_moving"))
+              for label, key in (("plain OLS", "baseline"), ("user model", "user_model"))
+              if validation.get(f"{key}_rms_error")]
+    for label, every, moving in sticks:
+        cols += (Column(f"{label} RMS all", "N·m", digits=3), Column(f"{label} RMS moving", "N·m", digits=3))
+        rows = tuple(row + (every[j], (moving or [None] * n)[j]) for j, row in enumerate(rows))
+    ratio, better = validation.get("yardstick_ratio"), validation.get("better_yardstick")
+    ratio_m = validation.get("yardstick_ratio_moving") or [None] * n
+    if sticks and ratio and better:
+        cols += (Column("ratio to the better yardstick, all", digits=3),
+                 Column("ratio to the better yardstick, moving", digits=3), Column("beats both", text=True))
+        rows = tuple(row + (Cell(ratio[j], "" if ratio[j] is None or ratio[j] <= 1 else "check", better[j]),
+                            ratio_m[j], Cell("yes" if _beats(ratio[j]) else "no", "" if _beats(ratio[j]) else "check"))
                      for j, row in enumerate(rows))
     thr = validation.get("moving_threshold")
     note = (f"Against the raw measured torques (the prediction interpolated onto the recording's time stamps). "
             f"Filtering of the fit: cut-off {number(validation.get('cutoff_hz')):.4g} Hz, rate "
             f"{number(validation.get('rate_hz')):.4g} Hz; moving: |q̇j| ≥ {thr:g} rad/s." if thr is not None
             and number(validation.get("cutoff_hz")) is not None else "")
-    if base:
-        won = [str(j + 1) for j in range(n) if beats[j]]
-        note += (f" Baseline: plain OLS (q by a zero-phase 10 Hz Butterworth, numpy.gradient, rigid bodies + "
-                 f"viscous, Coulomb and offset per joint) fitted on the same recordings, scored on the same "
-                 f"samples; beats the plain baseline on joints {', '.join(won) or 'none'}.")
+    if sticks:
+        note += (" Yardsticks, fitted on the same recordings (q by a zero-phase 10 Hz Butterworth, numpy.gradient, "
+                 "viscous, Coulomb and offset per joint by least squares) and scored on the same samples: the plain "
+                 "OLS (the rigid bodies fitted too) and the model the user had (the description's rigid bodies as "
+                 "written). " + " ".join(_verdicts(validation, n, len(sticks))))
+    if validation.get("user_model_note") and sticks:
+        note += f" The model the user had: not computed ({validation['user_model_note']})."
     return Table(table_id, f"Held-out validation on {validation.get('source', '')}", cols, rows, note.strip())
+
+
+def _beats(ratio: Any) -> bool:
+    return ratio is not None and ratio <= 1.0
+
+
+def _verdicts(validation: Mapping[str, Any], n: int, count: int) -> list[str]:
+    """"Beats both on joints …" on all samples and while moving, with the better yardstick and the ratio
+    where it does not (from the JSON's yardstick_ratio[_moving] and better_yardstick[_moving])."""
+    out = []
+    for suffix, label in (("", "on all samples"), ("_moving", "while moving")):
+        ratio, better = validation.get(f"yardstick_ratio{suffix}"), validation.get(f"better_yardstick{suffix}")
+        if not ratio or not better:
+            continue
+        won = [str(j + 1) for j in range(n) if _beats(ratio[j])]
+        lost = [f"{j + 1} ({better[j]} {ratio[j]:.3f}×)" for j in range(n) if ratio[j] is not None and ratio[j] > 1]
+        out.append(f"Beats {'both' if count == 2 else 'the plain OLS'} {label} on joints {', '.join(won) or 'none'}"
+                   + (f"; not on joints {', '.join(lost)}." if lost else "."))
+    return out
 
 
 def gains_table(gains: Mapping[str, Any], table_id: str = "gains") -> Table:

@@ -14,6 +14,7 @@ from .figures import figure, parameter_figure, residual_figure, torque_figure, t
 from .identify_page import identify_page
 from .page import write_page
 from .payload_pages import gains_page, payload_page
+from .rollout_page import rollout_figures
 
 
 def _prior(robot: rx90sym.Robot, record: Mapping[str, Any]) -> dict[str, float] | None:
@@ -43,6 +44,7 @@ def write_identify_report(path: str | os.PathLike, robot: rx90sym.Robot, record:
     if validation is not None:
         figures["validation"] = [figure("fig-validation", f"Held-out torques on {validation.source} "
                                         "(grey: joint at rest)", torque_figure(validation, validation.source))]
+        figures["rollout"] = list(rollout_figures(validation.rollout))
     prior = _prior(robot, record) if record.get("standard") else None
     return write_page(path, identify_page(record, figures, prior, spring_text))
 
