@@ -7,6 +7,8 @@ refit with the same joint weights, and take the spread of the estimates.
 """
 from __future__ import annotations
 
+import warnings
+
 from typing import Sequence
 
 import numpy as np
@@ -65,6 +67,14 @@ def _estimates(M: np.ndarray, g: np.ndarray) -> np.ndarray:
         if np.linalg.matrix_rank(M[i]) == c:
             estimates[i] = np.linalg.solve(M[i], g[i])
     return estimates
+
+
+def _spread(M: np.ndarray, g: np.ndarray) -> np.ndarray:
+    """Standard deviation of the refits ``M_d⁻¹·g_d`` (NaN where every draw was rank deficient, said by the NaN,
+    not by numpy's warning)."""
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", RuntimeWarning)
+        return np.nanstd(_estimates(M, g), axis=0, ddof=1)
 
 
 class SegmentBootstrap:

@@ -6,6 +6,11 @@ the torques that minimises the residual of a first least-squares fit on the same
 a coarse grid of whole steps, then a parabola through the best three points (a fraction of a sample).
 The shifted torques are extra right-hand sides of the fit's per-joint factors, block by block
 (:func:`identify.estimate_delay`, :mod:`identify.fitting.streamed`).
+
+A least cost at either end of the grid is no estimate: the lag may lie beyond the bound, or the cost
+may have no minimum inside it at all (a coloured residual the shift trades against, with no lag in
+the log: on one real run the search ended at -20 ms, on another of the same arm at +20 ms). It is
+reported as not found and never applied: the fit keeps the lag given (0 by default) and says why.
 """
 from __future__ import annotations
 
@@ -19,18 +24,31 @@ __all__ = ["DelayEstimate", "delay_grid", "joint_log_rms", "refined_delay"]
 
 @dataclass(frozen=True, eq=False)
 class DelayEstimate:
-    """delay [s] (> 0: torques lag the positions; compensated by τ(t + delay)); grid [s] and cost
-    (sum over joints of log residual RMS of the fit) of the coarse search; at_bound: the best grid
-    point is at ±max_delay (the true lag may be larger)."""
+    """delay [s] (> 0: torques lag the positions; compensated by τ(t + delay); 0 when not found); grid [s]
+    and cost (sum over joints of log residual RMS of the fit) of the coarse search; at_bound: the best
+    grid point is at ±max_delay, the lag not found (module docstring)."""
 
     delay: float
     grid: np.ndarray
     cost: np.ndarray
     at_bound: bool
 
+    @property
+    def found(self) -> bool:
+        """Whether the least cost lies inside the search (else ``delay`` is 0, not an estimate)."""
+        return not self.at_bound
+
+    @property
+    def best(self) -> float:
+        """The grid's lag of least cost [s] (at a bound when not found)."""
+        return float(self.grid[int(np.argmin(self.cost))])
+
     def summary(self) -> str:
-        warn = " (at the search bound: the lag may be larger)" if self.at_bound else ""
-        return f"torque delay {1e3 * self.delay:.3g} ms{warn}"
+        if self.at_bound:
+            return (f"torque delay not found: the search's least cost is at its bound ({1e3 * self.best:+.3g} ms of "
+                    f"±{1e3 * float(np.max(np.abs(self.grid))):.3g} ms; the lag may lie beyond it, or the residual "
+                    f"trades against the shift with no lag inside): not applied (0 ms)")
+        return f"torque delay {1e3 * self.delay:.3g} ms"
 
 
 def delay_grid(period: float, max_delay: float = 0.02, steps: int = 41) -> tuple[np.ndarray, float]:
@@ -50,10 +68,10 @@ def joint_log_rms(systems: Sequence[Any]) -> float:
 
 
 def refined_delay(grid: np.ndarray, costs: np.ndarray, step: float) -> DelayEstimate:
-    """The grid's best lag refined by a parabola through the best three points."""
+    """The grid's best lag refined by a parabola through the best three points (0, not found, at a bound)."""
     k = int(np.argmin(costs))
     at_bound = k in (0, grid.size - 1)
-    delay = float(grid[k])
+    delay = 0.0 if at_bound else float(grid[k])
     if not at_bound:
         c0, c1, c2 = costs[k - 1:k + 2]
         curvature = c0 - 2 * c1 + c2

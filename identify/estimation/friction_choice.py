@@ -54,6 +54,7 @@ import numpy as np
 
 import rx90sym
 
+from identify.observation.candidates import joint_cells
 from identify.observation.cross_validation import (DEFAULT_BLOCKS, DEFAULT_ROW_CAP, Budget, Candidate, block_scores,
                                                    clearly_better, observation_rows)
 from identify.observation.friction import DEFAULT_FRICTION, FRICTION_FORMS
@@ -96,7 +97,7 @@ class FrictionChoice:
         rows = self.candidates + ((self.combined,) if self.combined is not None else ())
         for c in rows:
             score = "-" if math.isnan(c.score) else f"{c.score:.3f}"   # the note says why
-            joints = "".join(f"{v:7.2f}" for v in c.per_joint)
+            joints = joint_cells(c.per_joint)
             mark = " <- chosen" if c.label == self.chosen or (c is self.combined and not self.fallback) else ""
             note = f"  ({notes[c.label]})" if c.label in notes else ""
             lines.append(f"  {c.label:<9}  {score:>19}{joints}{note}{mark}")

@@ -161,6 +161,8 @@ class FoldColumns:
         where = {name: k for k, name in enumerate(self.names)}
         for f, scales in enumerate(self.scales):
             for t in self.smooth:
+                if not np.isfinite(scales[t.row]):  # no rows to search it on (a torque left out): nothing to fit
+                    continue
                 cols, _ = friction_columns(self.form_of(t.row), QD @ np.asarray(t.driver), scales[t.row])
                 out[:, t.row, where[f"FS{t.row + 1}_{f}"]] = cols[:, 0]
                 if cols.shape[1] > 1:

@@ -58,10 +58,6 @@ class JointFactors:
         out.rows = self.rows.copy()
         return out
 
-    def nonzero_columns(self) -> np.ndarray:
-        """(c,) whether each parameter's column holds a nonzero value on some row of some joint."""
-        return np.any([np.any(R[:, :self.columns] != 0.0, axis=0) for R in self.R], axis=0)
-
     def system(self, joint: int, rhs: int = 0) -> CompressedSystem:
         """The compressed system ``‖W_i·x − Y‖²`` of joint ``joint`` for right-hand side ``rhs``."""
         c = self.columns

@@ -21,6 +21,7 @@ import numpy as np
 
 from identify.estimation.compression import (DEFAULT_CHUNK_ROWS, CompressedSystem, check_system, compress, compress_rows,
                                   stack_systems)
+from identify.estimation.dependent_columns import NULL_SPACE_SHARE, RANK_RCOND, column_scaled, rank_and_null_share
 from identify.estimation.results import IdentificationResult
 from rx90sym.messages import plain
 
@@ -38,18 +39,8 @@ __all__ = [
     "joint_noise_std",
     "weighted_least_squares",
     "solve_joint_systems",
+    "joint_weights",
 ]
-
-#: Rank tolerance: a singular value of the column-scaled W (every column scaled to unit norm,
-#: so that the units of the parameters do not matter) below RANK_RCOND × the largest one counts
-#: as zero. 1e-10 is far above rounding (≈ 1e-16·√r) and far below any usable identification
-#: (a scaled condition number of 1e10 already makes eq. 13 meaningless in double precision).
-RANK_RCOND = 1e-10
-
-#: A parameter is named in a rank-deficiency error when the norm of its row in an orthonormal
-#: basis of the null space of the column-scaled W is at least this share (1 = its column is zero,
-#: 0.71 = one of two proportional columns). The row norm does not depend on the basis chosen.
-NULL_SPACE_SHARE = 0.1
 
 
 class IdentificationError(ValueError):
@@ -67,25 +58,9 @@ class IdentificationError(ValueError):
         self.rank = rank
 
 
-def _column_scaled(R: np.ndarray) -> np.ndarray:
-    """R with every column scaled to unit norm (columns at rounding level set to zero)."""
-    norms = np.linalg.norm(R, axis=0)
-    top = norms.max() if norms.size else 0.0
-    zero = norms <= top * np.finfo(float).eps
-    return np.where(zero, 0.0, R / np.where(zero, 1.0, norms))
-
-
-def _rank_and_null_share(R: np.ndarray, rcond: float) -> tuple[int, np.ndarray]:
-    """Numerical rank of the column-scaled R and each column's share of the null space (0..1)."""
-    _, s, vt = np.linalg.svd(_column_scaled(R))
-    rank = int(np.sum(s > rcond * s[0])) if s.size and s[0] > 0 else 0
-    share = np.linalg.norm(vt[rank:].T, axis=1)
-    return rank, share
-
-
 def _check_rank(system: CompressedSystem, names: Sequence[str], rcond: float) -> None:
     """Raise IdentificationError naming the non-excited parameters if W is rank deficient."""
-    rank, share = _rank_and_null_share(system.R, rcond)
+    rank, share = rank_and_null_share(system.R, rcond)
     c = system.columns
     if rank == c:
         return
@@ -169,7 +144,7 @@ def solve_system(
     std = np.sqrt(np.diag(cov))  # eq. 14
     n = len(joint_systems)
     if n:
-        residual_rms = np.array([np.sqrt(s.rss(x) / s.rows) for s in joint_systems])
+        residual_rms = np.array([np.sqrt(s.rss(x) / s.rows) if s.rows else np.nan for s in joint_systems])
         cond_unweighted = triangular_cond(stack_systems(joint_systems).R)
     else:
         residual_rms, cond_unweighted = np.full(0, np.nan), float("nan")
@@ -211,7 +186,7 @@ def joint_noise_std(joint_system: CompressedSystem, joint: int = 0, rcond: float
         σ_i in N·m.
     """
     R, z = joint_system.R, joint_system.z
-    u, s, _ = np.linalg.svd(_column_scaled(R))
+    u, s, _ = np.linalg.svd(column_scaled(R))
     rank = int(np.sum(s > rcond * s[0])) if s.size and s[0] > 0 else 0
     dof = joint_system.rows - rank
     if dof <= 0:
@@ -311,25 +286,35 @@ def weighted_least_squares(
 
 
 def solve_joint_systems(blocks: Sequence[CompressedSystem], names: Sequence[str], weighted: bool = True, *,
-                        rcond: float = RANK_RCOND) -> IdentificationResult:
+                        rcond: float = RANK_RCOND, weights: np.ndarray | None = None) -> IdentificationResult:
     """:func:`weighted_least_squares` from the joints' compressed systems (eqs. 9-15), wherever they
     come from: the QR of a whole W, or the block-by-block QR of a long log
     (:class:`identify.estimation.incremental_qr.JointFactors`). The per-joint residual of each
-    joint's own fit, hence its weight, follows from its system alone (:func:`joint_noise_std`)."""
+    joint's own fit, hence its weight, follows from its system alone (:func:`joint_noise_std`). A joint
+    without rows (its torque left out of a fit) weighs nothing: weight 0, residual RMS NaN. ``weights``:
+    eq. 11's weights already found (:func:`joint_weights`, e.g. on more columns), used as they are."""
     names = tuple(names)
-    empty = [i for i, b in enumerate(blocks) if b.rows == 0]
-    if empty:
-        raise ValueError(f"joint {empty[0]} has no rows")
+    live = [i for i, b in enumerate(blocks) if b.rows]
+    if not live:
+        raise ValueError("no joint has rows")
     if sum(b.rows for b in blocks) <= len(names):
         raise ValueError(f"need more equations than parameters: r = {sum(b.rows for b in blocks)}, c = {len(names)}")
     unweighted = stack_systems(blocks)
     _check_rank(unweighted, names, rcond)
     if not weighted:
-        return solve_system(unweighted, names, joint_systems=blocks, method="ols", rcond=rcond)
-    sigma = np.array([joint_noise_std(b, i, rcond) for i, b in enumerate(blocks)])
+        ones = np.array([1.0 if b.rows else 0.0 for b in blocks])
+        return solve_system(unweighted, names, joint_systems=blocks, weights=ones, method="ols", rcond=rcond)
+    weights = joint_weights(blocks, rcond) if weights is None else np.asarray(weights, dtype=float)
+    system = stack_systems(blocks, weights)
+    return solve_system(system, names, joint_systems=blocks, weights=weights, method="wls", rcond=rcond)
+
+
+def joint_weights(blocks: Sequence[CompressedSystem], rcond: float = RANK_RCOND) -> np.ndarray:
+    """Eq. 11's weights 1/σ_j [1/(N·m)] of the joints' compressed systems (:func:`joint_noise_std`, each
+    joint's own fit whatever the rank of the whole: a search that needs only the weights never stops on
+    columns the rows cannot separate); 0 for a joint without rows."""
+    sigma = np.array([joint_noise_std(b, i, rcond) if b.rows else np.inf for i, b in enumerate(blocks)])
     if np.any(sigma <= 0.0):
         i = int(np.flatnonzero(sigma <= 0.0)[0])
         raise ValueError(f"joint {i}: its own least-squares residual is zero, so its weight 1/σ is infinite; use weighted=False")
-    weights = 1.0 / sigma
-    system = stack_systems(blocks, weights)
-    return solve_system(system, names, joint_systems=blocks, weights=weights, method="wls", rcond=rcond)
+    return 1.0 / sigma

@@ -32,6 +32,7 @@ import numpy as np
 
 import rx90sym
 
+from identify.estimation.dependent_columns import reduce_columns
 from identify.estimation.incremental_qr import JointFactors
 from identify.observation.candidates import Candidate
 from identify.observation.cv_scoring import block_scores, fold_wls, time_folds
@@ -207,17 +208,34 @@ class RawFactors:
         factors = {(b, j): (self._columns(self.fitted[b].R[j], j, offsets), int(self.fitted[b].rows[j]))
                    for b in range(blocks) for j in range(n) if self.fitted[b].rows[j]}
         err2, ref2 = np.zeros((blocks, n)), np.zeros((blocks, n))
+        fitted = {j for (_, j) in factors}  # a joint without fitted rows (its torque left out) is not scored
         for b in range(blocks):
             beta = fold_wls(factors, b, n)
             if beta is None:
                 continue
-            for j in range(n):
+            for j in sorted(fitted):
                 S = self.scored[b].R[j]
                 x = np.r_[beta[:c], beta[c + offsets.index(j)] if j in offsets else 0.0, -1.0, 0.0]
                 err2[b, j], ref2[b, j] = np.sum((S @ x) ** 2), np.sum(S[:, -1] ** 2)  # ||W b - Y||², ||tau||²
         if not np.any(ref2 > 0):
             raise ValueError("no fold could be fitted and scored (too few rows left after the filters' edges)")
         return block_scores(err2, ref2)
+
+    def inseparable_offsets(self, offsets: Sequence[int]) -> tuple[int, ...]:
+        """The joints of ``offsets`` (0-based) whose torque offset the fitted rows cannot tell from the other
+        columns (a joint that moves one way only: its Coulomb column is +1 or -1 on every row, its offset's
+        1): the model with those offsets would be rank deficient (:func:`reduce_columns` of every fitted row
+        with an offset column per joint; an offset column it leaves out or merges into another)."""
+        offsets = tuple(offsets)
+        if not offsets:
+            return ()
+        c = self.c
+        parts = [self._columns(f.R[j], j, offsets)[:, :-1] for f in self.fitted for j in range(self.n) if f.rows[j]]
+        R = JointFactors.block_factor(np.vstack(parts))
+        names = [f"c{k}" for k in range(c)] + [f"OFF{j + 1}" for j in offsets]
+        reduction = reduce_columns(R, names)
+        out = set(reduction.zero) | set(reduction.absorbed)
+        return tuple(j for j in offsets if f"OFF{j + 1}" in out)
 
     def _columns(self, R: np.ndarray, joint: int, offsets: tuple[int, ...]) -> np.ndarray:
         return offset_columns_of(R, self.c, joint, offsets)

@@ -100,6 +100,9 @@ class IdentificationResult:
             (essential parameters, constrained LS); None when loaded from JSON.
         joint_systems: unweighted compressed system of each joint's rows; () when unknown.
         history: essential-parameter elimination trials, in order.
+        holds: (name, what its estimate holds) of the columns that hold others the fitted rows
+            cannot separate from them, e.g. ("FS5", "FS5 + OFF5")
+            (identify.estimation.dependent_columns); () when none.
     """
 
     names: tuple[str, ...]
@@ -117,6 +120,7 @@ class IdentificationResult:
     system: CompressedSystem | None = field(default=None, repr=False)
     joint_systems: tuple[CompressedSystem, ...] = field(default=(), repr=False)
     history: tuple[EliminationStep, ...] = ()
+    holds: tuple[tuple[str, str], ...] = ()
 
     def __post_init__(self) -> None:
         names = tuple(str(n) for n in self.names)
@@ -138,6 +142,11 @@ class IdentificationResult:
         set_("method", str(self.method))
         set_("joint_systems", tuple(self.joint_systems))
         set_("history", tuple(self.history))
+        held = dict(self.holds)
+        unknown = [k for k in held if k not in names]
+        if unknown:
+            raise ValueError(f"IdentificationResult.holds names {unknown[0]!r}, not a parameter of the result")
+        set_("holds", tuple((str(k), str(v)) for k, v in held.items()))
 
     # ------------------------------------------------------------------ access
 
@@ -161,11 +170,14 @@ class IdentificationResult:
     # ------------------------------------------------------------------ JSON
 
     def to_dict(self) -> dict[str, Any]:
-        """JSON-safe dictionary (inf and NaN become None); the compressed systems are omitted."""
+        """JSON-safe dictionary (inf and NaN become None); the compressed systems are omitted. A
+        parameter whose column holds others has ``"holds"`` (what its estimate is)."""
+        held = dict(self.holds)
         return {
             "method": self.method,
             "parameters": [
-                {"name": n, "value": json_number(v), "std": json_number(s), "rel_std_pct": json_number(p)}
+                {"name": n, "value": json_number(v), "std": json_number(s), "rel_std_pct": json_number(p),
+                 **({"holds": held[n]} if n in held else {})}
                 for n, v, s, p in zip(self.names, self.values, self.std, self.rel_std_pct)
             ],
             "sigma_rho": json_number(self.sigma_rho),
@@ -204,6 +216,7 @@ class IdentificationResult:
                 rows=int(d["rows"]),
                 method=str(d["method"]),
                 history=tuple(EliminationStep.from_dict(s) for s in d.get("history", [])),
+                holds=tuple((p["name"], str(p["holds"])) for p in params if p.get("holds")),
             )
         except KeyError as err:
             raise ValueError(f"identification result dictionary is missing field {err}") from None
@@ -224,9 +237,10 @@ class IdentificationResult:
         """Text table in the layout of the paper's Table 3 (plus 2σ), with a summary footer."""
         width = max([len("Parameter")] + [len(n) for n in self.names])
         lines = [f"{'Parameter':<{width}}  {'Estimate':>12}  {'2σ':>10}  {'σr %':>9}"]
+        held = dict(self.holds)
         for n, v, s, p in zip(self.names, self.values, self.std, self.rel_std_pct):
             rel = f"{p:9.3f}" if math.isfinite(p) else f"{'inf':>9}"
-            lines.append(f"{n:<{width}}  {v:12.6g}  {2.0 * s:10.3g}  {rel}")
+            lines.append(f"{n:<{width}}  {v:12.6g}  {2.0 * s:10.3g}  {rel}" + (f"  holds {held[n]}" if n in held else ""))
         lines.append(
             f"method {self.method}, {len(self.names)} parameters, {self.rows} equations, "
             f"σρ = {self.sigma_rho:.4g}, cond(W) = {self.cond:.4g} (unweighted {self.cond_unweighted:.4g})"

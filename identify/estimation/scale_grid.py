@@ -60,6 +60,11 @@ class ScaleSearch:
     lo: np.ndarray
 
 
+#: Rank tolerance on a column-scaled Gram matrix (its eigenvalues are the squared singular values of the
+#: column-scaled rows: 1e-14 is a singular value of 1e-7, as fine as rounding in the Gram allows).
+GRAM_RCOND = 1e-14
+
+
 class _Gram:
     """The weighted projected cost of any choice of tabulated scale per joint, from the factors' Gram matrices."""
 
@@ -111,8 +116,8 @@ class _Gram:
         varying = [t.own[j]] + ([self.fst[j]] if j in self.fst else [])
         A = sum(parts.values())   # joint j's X-X block does not depend on its scale
         X = np.array([x for x in range(C) if x not in varying and A[x, x] > 0])
-        L = np.linalg.cholesky(A[np.ix_(X, X)])
-        zy = np.linalg.solve(L, A[X, C])
+        white = _whitening(A[np.ix_(X, X)])
+        zy = white(A[X, C])
         rest = A[C, C] - zy @ zy
         # Joint j's table columns behind the global X columns (an FSTi of another joint is 0 in its rows).
         src, dst = self.indices(j, None)
@@ -124,7 +129,7 @@ class _Gram:
         Gj = self.G[j]
         GXf = np.zeros((X.size, tab.size))
         GXf[rows] = Gj[np.ix_(srcX, tab)]
-        Zf = np.linalg.solve(L, GXf).reshape(X.size, len(ks), m)
+        Zf = white(GXf).reshape(-1, len(ks), m)
         yc = t.width - 1
         num = Gj[tab, yc].reshape(len(ks), m) - np.einsum("xkm,x->km", Zf, zy)
         den = Gj[np.ix_(tab, tab)].reshape(len(ks), m, len(ks), m)[np.arange(len(ks)), :, np.arange(len(ks)), :] \
@@ -139,18 +144,37 @@ class _Gram:
 
 def _weights(table: ScaleTable, R: dict[int, np.ndarray], rows: dict[int, int], middle: dict[int, int]) -> np.ndarray:
     """eq. 11's weights (1/σ_j of each joint's own residual) of the fit at the tabulated scale ``middle[j]``."""
-    from identify.estimation.least_squares import solve_joint_systems
+    from identify.estimation.least_squares import joint_weights
 
     gram = _Gram(table, R, rows, np.ones(table.n))
-    blocks = []
-    for j in range(table.n):
+    blocks = {}
+    for j in sorted(R):  # the joints with rows (one whose torque is left out has none: weight 0)
         src, dst = gram.indices(j, middle.get(j))
         M = np.zeros((R[j].shape[0], gram.C + 1))
         M[:, dst] = R[j][:, src]
-        blocks.append(M)
-    live = np.flatnonzero(np.any(np.vstack(blocks)[:, :gram.C] != 0.0, axis=0))   # e.g. an FPj that never rests
-    systems = [_from_augmented_rows(M[:, list(live) + [gram.C]], rows[j]) for j, M in enumerate(blocks)]
-    return np.asarray(solve_joint_systems(systems, [f"c{k}" for k in live]).weights)
+        blocks[j] = M
+    live = np.flatnonzero(np.any(np.vstack(list(blocks.values()))[:, :gram.C] != 0.0, axis=0))  # e.g. an FPj never resting
+    weights = np.zeros(table.n)
+    weights[sorted(blocks)] = joint_weights([_from_augmented_rows(M[:, list(live) + [gram.C]], rows[j])
+                                             for j, M in blocks.items()])
+    return weights
+
+
+def _whitening(G: np.ndarray) -> Callable[[np.ndarray], np.ndarray]:
+    """``x -> L⁻¹x`` with G = LLᵀ (Cholesky), or, where G is singular (columns the rows cannot separate,
+    e.g. a one-way joint's Coulomb column and its offset), ``Λ⁻½VᵀDx`` over the eigenvectors of the
+    column-scaled Gram DGD above :data:`GRAM_RCOND` x its largest eigenvalue: the same projections
+    (``zᵀz = xᵀG⁺x``) on the columns' span."""
+    try:
+        L = np.linalg.cholesky(G)
+        return lambda x: np.linalg.solve(L, x)
+    except np.linalg.LinAlgError:
+        d = np.sqrt(np.diag(G))
+        D = np.where(d > 0, 1.0 / np.where(d > 0, d, 1.0), 0.0)
+        lam, V = np.linalg.eigh(G * np.outer(D, D))
+        keep = lam > GRAM_RCOND * max(lam.max(), 0.0)
+        M = (V[:, keep].T * D[None, :]) / np.sqrt(lam[keep])[:, None]
+        return lambda x: M @ x
 
 
 def _parabola(u: np.ndarray, f: np.ndarray, k: int) -> float:
@@ -186,10 +210,10 @@ def coarse_search(table: ScaleTable, folds: Sequence[int] | None = None,
     scales the parabolas' vertices (the centres of the fine grids), σ not computed; weights: eq. 11's
     (None: of the first fit at :data:`MIDDLE_SCALE`)."""
     folds = list(range(table.folds)) if folds is None else list(folds)
-    joints = tuple(sorted(table.forms))
     R, rows, counts = table.merged(folds)
-    if not joints or any(j not in R for j in range(table.n)):
-        raise ValueError("velocity-scale search: a joint has no rows")
+    joints = tuple(j for j in sorted(table.forms) if j in R)  # a joint without rows (its torque left out): Coulomb
+    if not joints:
+        raise ValueError("velocity-scale search: no joint of a smooth form has rows")
     lo = lower_bounds(counts, joints)
     if weights is None:
         middle = {j: int(np.argmin(np.abs(np.log(table.scales[j] / MIDDLE_SCALE)))) for j in joints}
@@ -278,7 +302,9 @@ def find_scales(feed: Callable[[ScaleTable], None], n: int, c: int, own: dict[in
     feed(coarse)
     first = [coarse_search(coarse, fs) for fs in fold_sets]
     grids = [fine_grids(x) for x in first]
-    fine = ScaleTable(n, c, own, forms, {j: np.concatenate([g[j] for g in grids]) for j in forms}, folds, std)
+    forms = {j: forms[j] for j in sorted({j for x in first for j in x.joints})}  # the joints with rows
+    fine = ScaleTable(n, c, own, forms, {j: np.concatenate([g.get(j, np.full(FINE_POINTS, MIDDLE_SCALE)) for g in grids])
+                                         for j in forms}, folds, std)
     feed(fine)
     return [fine_search(fine, x, fs, i) for i, (x, fs) in enumerate(zip(first, fold_sets))]
 

@@ -47,7 +47,7 @@ from identify.observation.matrix import DECIMATION_PASSBAND, DEFAULT_MIN_VELOCIT
 from identify.observation.defaults import DEFAULT_DECIMATE_TO
 from identify.observation.processing import RestPolicy, drops_rest
 from identify.observation.stream import (DEFAULT_BLOCK, Plan, Scan, StreamSettings, in_order, plan_windows, scan,
-                                         scanned_cutoff, windows_in_order)
+                                         scanned_cutoff, torque_left_out, windows_in_order)
 from identify.signal.filtering import EDGE_PERIODS
 
 __all__ = ["choose_processing", "choose_processing_streamed", "column_factors", "grid_of_scans", "scans_for_choice", "time_span"]
@@ -126,9 +126,10 @@ def choose_processing_streamed(robot: rx90sym.Robot, sources: Sequence[BlockSour
     choice = select_processing(lambda cand: _score(cand, context), knee, grid, RAW, blocks, min_velocity,
                                rest, budget, policies)
     chosen = kept.get(_key(choice.chosen))
+    offsets = tuple(j for j in offsets if j not in context.left_out)
     if not offsets or chosen is None:
         return choice
-    return _with_offsets(choice, chosen, tuple(offsets), budget)
+    return _with_offsets(choice, chosen, offsets, budget)
 
 
 def _with_offsets(choice: ProcessingChoice, factors: RawFactors, offsets: tuple[int, ...],
@@ -136,6 +137,11 @@ def _with_offsets(choice: ProcessingChoice, factors: RawFactors, offsets: tuple[
     """The choice with the torque offsets that clearly lower their joint's held-back error (the chosen
     processing scored with an offset on each joint allowed one, from its factors: no pass)."""
     free = Budget(budget.rows, None)
+    inseparable = factors.inseparable_offsets(offsets)  # a model the fitted rows cannot solve is never chosen
+    offsets = tuple(j for j in offsets if j not in inseparable)
+    choice = replace(choice, inseparable_offsets=inseparable)
+    if not offsets:
+        return choice
     with_offsets = score_candidates(lambda c: factors.scores(offsets), [replace(choice.chosen, label="offsets")],
                                     time.perf_counter(), free)[0]
     if not with_offsets.per_block:
@@ -184,6 +190,7 @@ class _Context:
         self.robot, self.sources, self.scans, self.base, self.span = robot, sources, scans, base, span
         self.min_velocity, self.spring, self.delay, self.block, self.client = min_velocity, spring, delay, block, client
         self.kept = kept
+        self.left_out = torque_left_out(scans)  # joints whose torque is constant: not fitted, not scored
 
 
 def _key(cand: Candidate) -> tuple:
@@ -196,7 +203,8 @@ def _score(cand: Candidate, ctx: _Context) -> tuple[float, tuple[float, ...], tu
     threshold = ctx.min_velocity if cand.rest is not None else None
     rest = cand.rest or "zero-coulomb"
     columns = presliding_base(ctx.robot, ctx.base, rest if threshold is not None else None)  # FPj with presliding
-    settings = StreamSettings(cand.cutoff, cand.decimate_to, threshold, rest, float(ctx.delay), ctx.spring, ctx.block)
+    settings = StreamSettings(cand.cutoff, cand.decimate_to, threshold, rest, float(ctx.delay), ctx.spring, ctx.block,
+                              ctx.left_out)
     factors = column_factors(ctx.robot, ctx.sources, ctx.scans, columns, settings, ctx.span, ctx.client)
     ctx.kept[_key(cand)] = factors
     return factors.scores()

@@ -33,7 +33,7 @@ def travels_from_factors(R: Sequence[np.ndarray], rows: Sequence[int], names: Se
     per-joint factors ``R`` (each (c + 1, c + 1) of ``[W_j | Y_j]``, ``rows`` their row counts) of the
     columns ``names``; ``columns``: joint -> its candidate columns (one per candidate). Columns that are 0
     on every row (no rest after a motion) are left out, as :func:`identify.observation.matrix.observation_matrix` does."""
-    from identify.estimation.least_squares import solve_joint_systems
+    from identify.estimation.least_squares import joint_weights
 
     c = len(names)
     grams = [Rj.T @ Rj for Rj in R]
@@ -44,7 +44,7 @@ def travels_from_factors(R: Sequence[np.ndarray], rows: Sequence[int], names: Se
     choice = {j: n_candidates // 2 for j in columns}
     first = fixed + [columns[j][choice[j]] for j in columns]
     systems = [_from_augmented_rows(Rj[:, first + [c]], rows[j]) for j, Rj in enumerate(R)]
-    weights = np.asarray(solve_joint_systems(systems, [names[k] for k in first]).weights)
+    weights = joint_weights(systems)
     G = sum((w ** 2) * g for w, g in zip(weights, grams))
 
     def cost(pick: dict[int, int]) -> float:

@@ -82,7 +82,9 @@ class FitModel:
     identify.estimation.separable.VelocityScales.to_json), the presliding travels; None: Coulomb;
     description: the robot description itself (EmbeddedRobot.to_json; None: a robot built in memory,
     or a file of schema version 3 or older); offset_joints: the joints (1-based) the cross-validated
-    choice gave a torque offset OFFj (None: none; an older file reads None).
+    choice gave a torque offset OFFj (None: none; an older file reads None); torque_left_out: the joints
+    (1-based) whose torque was constant in the fitted recordings (a channel not logged), left out of the
+    fit and not predicted (None: none; an older file reads None).
     """
 
     robot: str
@@ -106,6 +108,7 @@ class FitModel:
     snap_rad: float | None = None       # a URDF's joint origin tolerances (rx90sym.urdf_snap); None: not a
     snap_length_m: float | None = None  # URDF, or a file written before snapping (read as 1e-9 rad, 0 m)
     offset_joints: tuple[int, ...] | None = None
+    torque_left_out: tuple[int, ...] | None = None
 
     @classmethod
     def of(cls, robot: rx90sym.Robot, **fields: Any) -> "FitModel":
@@ -120,7 +123,7 @@ class FitModel:
 
     def to_json(self) -> dict[str, Any]:
         d = asdict(self)
-        for key in ("rest", "offset_joints"):  # tuples written as the lists they read back as
+        for key in ("rest", "offset_joints", "torque_left_out"):  # tuples written as the lists they read back as
             if isinstance(d.get(key), tuple):
                 d[key] = list(d[key])
         return d
@@ -137,8 +140,9 @@ class FitModel:
         values = {k: d[k] for k in names if k in d}
         if isinstance(values["rest"], list):  # one policy per joint
             values["rest"] = tuple(values["rest"])
-        if values.get("offset_joints") is not None:
-            values["offset_joints"] = tuple(int(j) for j in values["offset_joints"])
+        for key in ("offset_joints", "torque_left_out"):
+            if values.get(key) is not None:
+                values[key] = tuple(int(j) for j in values[key])
         return cls(**values)
 
     from_dict = from_json

@@ -28,9 +28,10 @@ from identify.observation.offsets import OffsetBase, offset_joints
 from rx90sym.base_parameters import BaseParameters
 from identify.observation.processing import Processing, has_policy, has_smooth_friction
 from identify.fitting.record import BOOTSTRAP_BLOCK_S, BOOTSTRAP_DRAWS, Bootstrap, Fit
-from identify.fitting.rank_flags import rank_flags
+from identify.fitting.rank_flags import column_flags, rank_flags
 
 if TYPE_CHECKING:
+    from identify.fitting.plausibility import Flag
     from identify.fitting.streamed import ProcessingChoice
 
 __all__ = ["fit"]
@@ -87,6 +88,13 @@ def fit(robot: rx90sym.Robot, recordings: Sequence[Any], processing: Processing 
     its flags hold the recorded-torque checks (identify.fitting.torque_checks: torque scale, gravity at
     rest, errors that rx90 identify stops on; the torques' sign against the description's inverse dynamics,
     a warning) and a rank that depends on the threshold.
+    The fit never stops on its own rows: columns they cannot separate are left out or merged
+    (identify.estimation.dependent_columns; flags column_left_out, columns_merged; ``result.holds``),
+    a joint whose torque holds one value on every sample of a recording (not logged) is left out
+    (flag torque_not_logged, ``model.torque_left_out``: not predicted), a recording too short for the
+    cross-validation's blocks gets the fixed defaults (``choice["skipped"]`` says why), a torque delay
+    at the search bound is not applied. An error raised once the processing is chosen carries the
+    choice as its attribute ``processing_choice`` (its ``table()``).
     """
     if method not in METHODS:
         raise ValueError(f"fit: method must be one of {METHODS}, got {method!r}")
@@ -192,7 +200,6 @@ def _fit_blocks(robot: rx90sym.Robot, recordings: Sequence[Any], processing: Any
     from identify.observation.spring_fit import BaseWithSpring, spring_summary
     from identify.io.blocks import block_source, check_block
     from identify.fitting.yardsticks import streamed_yardsticks
-    from identify.fitting.torque_checks import streamed_torque_flags, torque_sign_flags
 
     from identify.fitting.streamed_friction import FrictionHook
 
@@ -222,7 +229,8 @@ def _fit_blocks(robot: rx90sym.Robot, recordings: Sequence[Any], processing: Any
     model = FitModel.of(robot, convention=convention, gains=gains.to_dict() if gains is not None else None,
                         rest=rest, min_velocity=p.min_velocity, spring=spring_source or _spring_label(robot, base),
                         cutoff_hz=sf.cutoff, decimate_to_hz=sf.settings.decimate_to, rate_hz=sf.rate,
-                        delay_s=sf.delay, friction=sf.friction, offset_joints=_offset_record(base))
+                        delay_s=sf.delay, friction=sf.friction, offset_joints=_offset_record(base),
+                        torque_left_out=tuple(j + 1 for j in sf.settings.left_out) or None)
     angles = [SimpleNamespace(q=sf.q_range)]  # what the spring summary reads: the range visited
     spring = spring_summary(robot, base if isinstance(base, BaseWithSpring) else None, result, angles)[0]
     boot = (Bootstrap(sf.bootstrap_std, sf.bootstrap_block / sf.rate, spec.draws, spec.seed, tuple(sf.result.names))
@@ -230,12 +238,11 @@ def _fit_blocks(robot: rx90sym.Robot, recordings: Sequence[Any], processing: Any
     found = sf.delay_estimate
     # The yardsticks and the recorded-torque checks: a pass each over the logs, block by block, as on whole ones.
     sticks = streamed_yardsticks(robot, sources, sf.scans, p.spring, block, client, span)
-    return Fit(robot, result, p, model, base, sf.observation, found, found.delay if found is not None else None, spring,
+    return Fit(robot, result, p, model, base, sf.observation, found,
+               found.delay if found is not None and found.found else None, spring,
                boot, block=block, streamed=sf, recordings=sf.recordings,
                choice=_choice_record(sf.choice, getattr(hook, "choice", None)),
-               flags=tuple(streamed_torque_flags(robot, sources, sf.scans, block)
-                           + torque_sign_flags(robot, sf.result, base, spring_added=bool(p.spring))
-                           + model_flags(identified, sticks.folds)),
+               flags=_flags(robot, sources, sf, block, base, bool(p.spring)) + tuple(model_flags(identified, sticks.folds)),
                baseline=sticks.plain, user_model=sticks.user, user_model_note=sticks.user_note,
                identified=identified, ls_result=sf.result if result is not sf.result else None)
 
@@ -277,6 +284,19 @@ def model_flags(model: Any, folds: Any) -> list:
     kind, name = ("user", "the model the user had") if "user" in folds.err2 else ("plain", "the plain OLS")
     _, per_joint, per_block = folds.scores(kind)
     return heldout_flags(model.heldout["per_joint_pct"], model.heldout["per_block_pct"], per_joint, per_block, name)
+
+
+def _flags(robot: rx90sym.Robot, sources: Sequence[Any], sf: Any, block: int, base: Any,
+           spring_added: bool) -> tuple[Flag, ...]:
+    """The flags of a fit in blocks: the joints whose torque was left out (constant: not logged), the columns
+    left out or merged, the recorded-torque checks and the torques' sign (of the joints fitted)."""
+    from identify.fitting.torque_checks import not_logged_flags, streamed_torque_flags, torque_sign_flags
+
+    left = sf.settings.left_out
+    checks = [f for f in (streamed_torque_flags(robot, sources, sf.scans, block)
+                          + torque_sign_flags(robot, sf.result, base, spring_added=spring_added))
+              if f.joint is None or f.joint - 1 not in left]
+    return (*not_logged_flags(sf.scans, left), *column_flags(sf.reduction, [j + 1 for j in left]), *checks)
 
 
 def _choice_record(choice: ProcessingChoice | None, friction: Any) -> dict | None:

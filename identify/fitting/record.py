@@ -181,7 +181,7 @@ class Fit:
         or the presliding state with that rest policy (every sample is predicted, whatever the rest
         policy). rollout: window lengths [s] ("0.25,0.5" or numbers): the fit's own model, as ``rx90
         export --mjcf`` writes it, also rolled out in MuJoCo (identify.rollout.run.roll_out_fit; the
-        validation's ``rollout``)."""
+        validation's ``rollout``). A joint whose torque the fit left out is not predicted (NaN, said)."""
         # At 20 x the cut-off (identify.fitting.validation.prediction_rate), not at the fit's decimated rate.
         options = dict(self.filtering(), decimate_to="prediction", filtered_at=self.decimate_to)
         block = block if block is not None else (self.block or DEFAULT_BLOCK)
@@ -195,6 +195,8 @@ class Fit:
         val = predict(self.robot, result, recording, base=self.columns_of(result), baseline=self.baseline,
                       user_model=self.user_model, user_model_note=self.user_model_note,
                       block=block, convention=convention, gains=self.gains, **options)
+        # A joint whose torque the fit left out (constant: not logged) is not predicted (Validation.without_joints).
+        val = val.without_joints(self.model.torque_left_out) if self.model.torque_left_out else val
         return val if simulated is None else replace(val, rollout=simulated)
 
     def validate(self, recording: Any, rollout: Any = None) -> Validation:

@@ -24,22 +24,26 @@ import rx90sym
 
 from identify.estimation.bootstrap import BLOCK_S, DRAWS, SegmentBootstrap
 from identify.estimation.incremental_qr import JointFactors, stacked_rows
-from identify.estimation.least_squares import solve_joint_systems
+from identify.estimation.compression import stack_systems
+from identify.estimation.dependent_columns import ColumnReduction, reduce_columns
+from identify.estimation.least_squares import joint_weights, solve_joint_systems
 from identify.estimation.results import METHODS, IdentificationResult
 from identify.io.blocks import BlockSource, block_source, check_block
-from identify.observation.cross_validation import ProcessingChoice
-from identify.observation.matrix import DEFAULT_MIN_VELOCITY, DEFAULT_REST, Observation, presliding_base
-from identify.observation.friction_model import empty_presliding
+from identify.observation.candidates import DEFAULT_LABEL, Candidate
+from identify.observation.cross_validation import DEFAULT_BLOCKS, RAW, NoCandidateScored, ProcessingChoice
+from identify.observation.matrix import DECIMATION_PASSBAND, DEFAULT_MIN_VELOCITY, DEFAULT_REST, Observation, presliding_base
 from identify.observation.defaults import DEFAULT_DECIMATE_TO
 from identify.observation.offsets import offset_base
 from identify.observation.processing import RestPolicy, drops_rest
 from identify.observation.row_store import RowStore, keeps_rows
 from identify.observation.stream import (DEFAULT_BLOCK, Piece, Plan, Scan, StreamSettings, in_order, piece,
-                                         plan_windows, scan_all, windows_in_order)
+                                         plan_windows, scan_all, scanned_cutoff, torque_left_out,
+                                         windows_in_order)
+from identify.estimation.cv_length import too_short
 from identify.estimation.stream_cv import KEEP_SECONDS, choose_processing_streamed, scans_for_choice
 from identify.estimation.delay import DelayEstimate, delay_grid, joint_log_rms, refined_delay
 
-__all__ = ["BootstrapSpec", "StreamedFit", "estimate_delay", "fit_streamed"]
+__all__ = ["BootstrapSpec", "StreamedFit", "carry_choice", "estimate_delay", "fit_streamed"]
 
 
 @dataclass(frozen=True)
@@ -64,7 +68,9 @@ class StreamedFit:
     its samples, segments, bridged samples and stale rows (:meth:`identify.observation.stream.Scan.layout`);
     choice: the cross-validated processing (a :class:`~identify.observation.cross_validation.ProcessingChoice`;
     None when the processing was given); columns: the base fitted; friction: the fit file's
-    ``model.friction`` of the friction columns searched (None: none).
+    ``model.friction`` of the friction columns searched (None: none); reduction: the columns the fitted
+    rows cannot separate, left out or merged (:func:`identify.estimation.dependent_columns.reduce_columns`;
+    None: every column fitted).
     """
 
     result: IdentificationResult
@@ -88,6 +94,7 @@ class StreamedFit:
     columns: Any = None
     friction: dict | None = None
     bootstrap_draws: np.ndarray | None = None  # (draws, c) the bootstrap's refits (payload method 2 differences them)
+    reduction: ColumnReduction | None = None  # the columns left out or merged (None: every column fitted)
 
     def summary(self) -> str:
         """What was fitted, in the manner of :meth:`identify.Observation.summary`."""
@@ -174,13 +181,34 @@ def _choose(robot: rx90sym.Robot, sources: Sequence[BlockSource], base: Any, cut
             decimate_to: float | None, min_velocity: float | None, rest: RestPolicy | None, spring: bool, block: int,
             client: Any, delay: float, offsets: Sequence[int]) -> tuple[ProcessingChoice, list[Scan]]:
     """(the processing chosen by blocked cross-validation block by block, the scans it made: the fit
-    that follows reuses that pass)."""
+    that follows reuses that pass). Recordings too short for the blocks (:mod:`identify.estimation.cv_length`),
+    or on which no candidate could be scored, get the fixed defaults, said in the choice's record."""
     if cutoff is not None:
         raise ValueError("a cut-off is given and cross_validate asks to choose one: give one of them")
     scans = scans_for_choice(sources, block)
-    return choose_processing_streamed(robot, sources, base, min_velocity or None, rest, spring,
-                                      default_decimate=decimate_to or None, block=block, client=client,
-                                      scans=scans, delay=delay, offsets=offsets), scans
+    _left_out(robot, scans)
+    columns = len(base.names) if base is not None else len(rx90sym.base_parameters(robot).names)
+    why = too_short(scans, columns, decimate_to or None, DEFAULT_BLOCKS, delay)
+    if why is None:
+        try:
+            return choose_processing_streamed(robot, sources, base, min_velocity or None, rest, spring,
+                                              default_decimate=decimate_to or None, block=block, client=client,
+                                              scans=scans, delay=delay, offsets=offsets), scans
+        except NoCandidateScored as exc:
+            why = f"no candidate processing could be scored ({exc})"
+    floor = max(2.0, DECIMATION_PASSBAND * decimate_to) if decimate_to else 2.0
+    fixed = Candidate(scanned_cutoff(scans, floor), decimate_to or None, DEFAULT_REST if rest is None else rest,
+                      label=DEFAULT_LABEL)
+    return ProcessingChoice((), fixed, fixed.cutoff, RAW, DEFAULT_BLOCKS, 0.0, skipped=why), scans
+
+
+def _left_out(robot: rx90sym.Robot, scans: Sequence[Scan]) -> tuple[int, ...]:
+    """The joints whose torque is left out (constant over a recording: not logged); an error when all are."""
+    left = torque_left_out(scans)
+    if len(left) == robot.n:
+        raise ValueError(f"{', '.join(s.source for s in scans)}: every joint's torque holds one value on every sample "
+                         f"(channels not logged): nothing to fit; log the joint torques, or the currents with gains")
+    return left
 
 
 def estimate_delay(robot: rx90sym.Robot, recordings: Sequence[Any], base: Any = None, cutoff: float | None = None,
@@ -200,6 +228,7 @@ def estimate_delay(robot: rx90sym.Robot, recordings: Sequence[Any], base: Any = 
                               rest if min_velocity is not None else None)
     settings = StreamSettings(cutoff, decimate_to or None, min_velocity, rest, 0.0, spring, check_block(block))
     scans, fc = scan_all(sources, settings)
+    settings = replace(settings, left_out=_left_out(robot, scans))  # a torque not logged: its rows out
     plans, _ = _plans(scans, fc, replace(settings, delay=max_delay))
     grid, step = delay_grid(max(1.0 / s.rate for s in scans), max_delay, steps)
     factors = _accumulate(robot, sources, plans, fc, settings, columns, grid, client, None)[0]
@@ -233,10 +262,37 @@ def fit_streamed(robot: rx90sym.Robot, recordings: Sequence[Any], method: str = 
     cross-validation may give a torque offset (the columns OFFj of those it keeps are fitted:
     :class:`identify.observation.offsets.OffsetBase`); the candidates are scored at ``delay`` (0 when
     "auto": the lag is searched after the choice); friction: ``friction(robot, sources, scans, cutoff,
-    settings, base, client)`` -> (columns, record) called once the torques are in step (the delay
-    known): the friction columns searched block by block (:mod:`identify.fitting.streamed_friction`),
-    then fitted. The other arguments are those of :func:`identify.fit`.
+    settings, base, client, choose=...)`` -> (columns, record) called once the torques are in step (the delay
+    known; ``choose`` False where the processing's choice fell back on the fixed defaults: no friction
+    choice either): the friction columns searched block by block (:mod:`identify.fitting.streamed_friction`),
+    then fitted. The other arguments are those of :func:`identify.fit`. An error raised once the processing
+    is chosen carries the choice (:func:`carry_choice`: its ``processing_choice``, the table).
     """
+    made: list[ProcessingChoice] = []
+    try:
+        return _fit_streamed(made, robot, recordings, method, base, cutoff, decimate_to, min_velocity, rest, delay,
+                             spring, estimate, block, client, bootstrap, convention, gains, cross_validate, offsets,
+                             friction)
+    except Exception as exc:
+        carry_choice(exc, made[0] if made else None)
+        raise
+
+
+def carry_choice(exc: BaseException, choice: ProcessingChoice | None) -> BaseException:
+    """``exc`` with the processing ``choice`` made before it as its attribute ``processing_choice`` (when
+    it has none: the first choice made), for a caller to show the candidate table of a fit that then
+    stopped (``rx90 identify`` prints it before the error)."""
+    if choice is not None and getattr(exc, "processing_choice", None) is None:
+        exc.processing_choice = choice  # type: ignore[attr-defined]
+    return exc
+
+
+def _fit_streamed(made: list, robot: rx90sym.Robot, recordings: Sequence[Any], method: str, base: Any,
+                  cutoff: float | None, decimate_to: float | None, min_velocity: float | None, rest: RestPolicy | None,
+                  delay: float | str, spring: bool, estimate: bool, block: int, client: Any,
+                  bootstrap: BootstrapSpec | None, convention: str | None, gains: Any, cross_validate: bool | None,
+                  offsets: Sequence[int], friction: Any) -> StreamedFit:
+    """:func:`fit_streamed`, the processing choice appended to ``made`` once made."""
     if method not in METHODS:
         raise ValueError(f"method must be one of {METHODS}, got {method!r}")
     if not (delay == "auto" or isinstance(delay, (int, float))):
@@ -255,6 +311,7 @@ def fit_streamed(robot: rx90sym.Robot, recordings: Sequence[Any], method: str = 
                   if delay == "auto" else float(delay))
         choice, scans = _choose(robot, sources, base, cutoff, decimate_to, min_velocity, rest, spring, block,
                                 client, scored, offsets)
+        made.append(choice)
         cutoff, decimate_to, rest = choice.chosen.cutoff, choice.chosen.decimate_to, choice.chosen.rest or rest
         if choice.offsets:  # the torque offsets kept, as the whole-signal fit's columns
             base = offset_base(base if base is not None else rx90sym.base_parameters(robot), choice.offsets)
@@ -264,6 +321,7 @@ def fit_streamed(robot: rx90sym.Robot, recordings: Sequence[Any], method: str = 
                               0.0 if delay == "auto" else float(delay), spring, block)
     # Each segment's first and last seconds of times kept: the identified model's folds are cut on them.
     scans, fc = (scans, float(cutoff)) if scans is not None else scan_all(sources, settings, KEEP_SECONDS)
+    settings = replace(settings, left_out=_left_out(robot, scans))  # a torque not logged: its rows out of W
     search = estimate or delay == "auto"
     plans, skipped = _plans(scans, fc, replace(settings, delay=0.02 if search else settings.delay))
     flat = [p for src_plans in plans for p in src_plans]
@@ -289,19 +347,28 @@ def fit_streamed(robot: rx90sym.Robot, recordings: Sequence[Any], method: str = 
         settings = replace(settings, delay=found.delay)
     searched = base
     if friction is not None:
-        base, record = friction(robot, sources, scans, fc, settings, base, client)
+        # No friction choice where the processing's could not be made (the same blocks): the fixed form.
+        base, record = friction(robot, sources, scans, fc, settings, base, client,
+                                choose=choice is None or not choice.skipped)
     # A second pass with the torques in step, the friction columns (none when the first pass fitted these columns
     # at this delay: coulomb chosen, no presliding).
     if delay == "auto" or base is not searched or not (lags or friction is None):
         boot, store = make_boot(bootstrap), make_store()
         factors, moving, count = _accumulate(robot, sources, plans, fc, settings, base, (), client, boot, store)
-    # Presliding magnitudes FPj of joints that never rest after a motion: 0 on every row, left out (as in memory).
-    kept, empty = empty_presliding(factors.nonzero_columns(), base.names)
+    # Columns the fitted rows cannot separate (a joint that never moves, one that moves one way only, columns only a
+    # left-out joint's rows see): left out or merged, never refused (identify.estimation.dependent_columns).
+    # The weights of eq. 11 from every column (each joint's own fit: the same without the columns left out).
+    systems = factors.systems(0)
+    weights = joint_weights(systems) if method != "ols" else None
+    reduction = reduce_columns(stack_systems(systems).R, base.names,
+                               also=() if weights is None else (stack_systems(systems, weights).R,))
+    kept = None if reduction.full else list(reduction.kept)
     fitted = factors if kept is None else factors.subset(kept)
-    names = tuple(base.names) if kept is None else tuple(base.names[k] for k in kept)
-    # The (weighted) least squares of eqs. 9-15; the consistent model is made from it by the fit (identify.fit).
-    result = solve_joint_systems(fitted.systems(0), names, weighted=method != "ols")
-    notes = tuple(p.note for p in flat) + skipped + empty
+    # The (weighted) least squares of eqs. 9-15; the identified model is made from them by the fit (identify.fit).
+    result = solve_joint_systems(fitted.systems(0), reduction.kept_names, weighted=method != "ols", weights=weights)
+    if reduction.merged:
+        result = replace(result, holds=tuple(reduction.holds().items()))
+    notes = tuple(p.note for p in flat) + skipped
     observation = None if store is None else store.observation(
         [fc] * len(flat), [p.rate for p in flat], [p.source for p in flat], notes, settings.min_velocity, settings.rest,
         kept)
@@ -311,4 +378,5 @@ def fit_streamed(robot: rx90sym.Robot, recordings: Sequence[Any], method: str = 
                        None if draws is None else np.nanstd(draws, axis=0, ddof=1), bblock, settings, count,
                        np.vstack([np.min([s.q_range[0] for s in scans], axis=0),
                                   np.max([s.q_range[1] for s in scans], axis=0)]),
-                       tuple(s.layout() for s in scans), choice, observation, tuple(scans), base, record, draws)
+                       tuple(s.layout() for s in scans), choice, observation, tuple(scans), base, record, draws,
+                       None if reduction.full else reduction)

@@ -14,7 +14,7 @@ to rounding), and the fit then uses the form's exact columns at them. Memory: th
 """
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import Any, Callable, Sequence
 
 import numpy as np
@@ -74,6 +74,10 @@ def _columns(robot: rx90sym.Robot, sources: Sequence[Any], plans: Sequence[Any],
     probe = presliding_base(robot, probe, settings.rest if settings.min_velocity is not None else None)
     feed = streamed_feed(robot, sources, plans, cutoff, settings, probe, client)
     scales = as_velocity_scales(find_scales(feed, robot.n, len(probe.names), own, forms)[0], form, robot.n)
+    unsearched = [j for j in forms if not np.isfinite(scales.scales[j])]  # no rows: a torque left out
+    if unsearched:  # those joints keep Coulomb's sign column
+        form = tuple("coulomb" if j in unsearched else forms.get(j, "coulomb") for j in range(robot.n))
+        scales = replace(scales, form=form)
     if not scales.converged:  # a failed search is reported, never fitted with
         raise SolverError(f"fit: the velocity-scale search of friction form {friction_label(form)!r} did not "
                           f"converge; use friction 'coulomb'", status="not_converged", solver="grid")
@@ -119,12 +123,14 @@ class FrictionHook:
     choice: Any = None
 
     def __call__(self, robot: rx90sym.Robot, sources: Sequence[Any], scans: Sequence[Any], cutoff: float,
-                 settings: StreamSettings, base: Any, client: Any) -> tuple[Any, dict | None]:
+                 settings: StreamSettings, base: Any, client: Any, choose: bool = True) -> tuple[Any, dict | None]:
+        """(the columns, the fit file's ``model.friction``); ``choose`` False: the form given, not chosen (the
+        processing's choice fell back on the fixed defaults)."""
         from identify.observation.processing import has_policy
 
         plans = [plan_windows(s, cutoff, settings)[0] for s in scans]
         form = self.form
-        if self.choose:
+        if self.choose and choose:
             from identify.estimation.friction_choice import choose_friction_rows
             from identify.estimation.friction_folds import StreamRows
             from identify.estimation.stream_cv import time_span

@@ -19,9 +19,10 @@ import numpy as np
 import rx90sym
 
 from identify.fitting.plausibility import GravityAtRest, Flag, static_gravity_flags, torque_scale_flags
+from identify.io.unlogged import constant_channels
 
-__all__ = ["CODES", "SIGN_CORRELATION", "SIGN_SIGMAS", "recorded_torque_flags", "streamed_torque_flags",
-           "torque_sign_flags"]
+__all__ = ["CODES", "NOT_LOGGED", "SIGN_CORRELATION", "SIGN_SIGMAS", "not_logged_flags", "recorded_torque_flags",
+           "streamed_torque_flags", "torque_sign_flags"]
 
 #: The codes of the recorded-torque checks (``rx90 identify`` exits 2 on their errors, nothing written, and
 #: prints their warnings).
@@ -33,6 +34,8 @@ CODES = ("torque_scale", "static_gravity", "torque_sign")
 #: joint 4 of one seed) and >= 0.34 (Panda); the real TX40 record 0.47-0.99.
 SIGN_CORRELATION = -0.5
 SIGN_SIGMAS = 3.0
+#: The code of a joint whose torque is constant over a recording (a channel not logged), left out of the fit.
+NOT_LOGGED = "torque_not_logged"
 # Columns fitted freely beside the description's torques: friction, offsets (and what the description has
 # no value for: a spring's, the cross-validation's extra columns).
 _FREE = re.compile(r"^(FV|FS|OFF|FP)")
@@ -81,6 +84,21 @@ def streamed_torque_flags(robot: rx90sym.Robot, sources: Sequence[Any], scans: S
     lengths); the same flags and figures as the logs held whole."""
     nominal = rx90sym.nominal_parameters(robot) if isinstance(nominal, str) else nominal
     return _checked(robot, _source_blocks(sources, scans, block), nominal)
+
+
+def not_logged_flags(scans: Sequence[Any], joints: Sequence[int]) -> list[Flag]:
+    """A warning per joint (0-based ``joints``) whose torque is constant over a recording of ``scans``
+    (:func:`identify.observation.stream.torque_left_out`: a channel not logged), left out of the fit."""
+    out = []
+    for j in joints:
+        where = [f"{s.source} ({s.tau_range[0, j]:.6g} N·m)" for s in scans
+                 if s.tau_range is not None and constant_channels(s.tau_range[0, j:j + 1], s.tau_range[1, j:j + 1])]
+        out.append(Flag(NOT_LOGGED, "warning",
+                        f"joint {j + 1}'s torque holds one value on every sample of {', '.join(where)}: a channel "
+                        f"not logged; joint {j + 1} is left out of the fit (its rows out of W, its torque neither "
+                        f"fitted nor scored in the choices, not predicted)",
+                        "log the joint's torque (or its current with --gains) to identify it", joint=j + 1))
+    return out
 
 
 def _description_columns(base: Any, names: Sequence[str], chi: np.ndarray) -> tuple[np.ndarray, list[int]] | None:

@@ -11,7 +11,7 @@ errors are reported on all samples and on the samples where each joint moves.
 from __future__ import annotations
 
 from dataclasses import dataclass, replace
-from typing import Any
+from typing import Any, Sequence
 
 import numpy as np
 
@@ -97,6 +97,26 @@ class Validation:
     user_model_note: str = ""  # why there is no model the user had ("" when there is, or no yardstick at all)
     t0_s: float = 0.0  # the log's own clock at the recording's first sample (t counts from it) [s]
     rollout: Any = None  # the model rolled out in MuJoCo (identify.rollout.result.Rollout), None: not asked
+    not_predicted: tuple[int, ...] = ()  # joints (1-based) whose torque the fit left out: NaN, not scored
+
+    def without_joints(self, joints: Sequence[int]) -> "Validation":
+        """This validation with joints (1-based) not predicted: their predicted torques and every figure NaN
+        (a fit that left a joint's torque out fitted none of the columns only its rows see: a prediction
+        of that joint would lack them)."""
+        cols = [j - 1 for j in joints]
+
+        def cut(a: np.ndarray | None) -> np.ndarray | None:
+            if a is None:
+                return None
+            out = np.array(a, dtype=float)
+            out[..., cols] = np.nan
+            return out
+
+        names = ("relative_error_pct", "rms_error", "predicted", "relative_error_pct_moving", "rms_error_moving",
+                 "baseline_rms_error", "baseline_rms_error_moving", "baseline_predicted", "user_rms_error",
+                 "user_rms_error_moving", "user_predicted", "rms_error_filtered", "rms_error_filtered_moving")
+        return replace(self, **{k: cut(getattr(self, k)) for k in names},
+                       not_predicted=tuple(sorted(set(self.not_predicted) | set(joints))))
 
     @property
     def beats_baseline(self) -> np.ndarray | None:
@@ -142,7 +162,9 @@ class Validation:
             extra += [(f"{name} rms [N m]", self.yardsticks()[name]),
                       (f"{name} moving [N m]", self.yardsticks(True)[name])]
         head += "".join(f"  {h}" for h, _ in extra)
-        rows = [f"{j + 1:5d}  {self.rms_error[j]:15.3f}  {self.relative_error_pct[j]:18.2f}  "
+        rows = [f"{j + 1:5d}  not predicted: its torque was left out of the fit (constant: a channel not logged)"
+                if j + 1 in self.not_predicted else
+                f"{j + 1:5d}  {self.rms_error[j]:15.3f}  {self.relative_error_pct[j]:18.2f}  "
                 f"{rms_m[j]:16.3f}  {rel_m[j]:19.2f}  {100 * frac[j]:10.1f}"
                 + "".join(f"  {v[j]:{len(h)}.3f}" for h, v in extra)
                 for j in range(n)]
@@ -166,9 +188,11 @@ class Validation:
                     else "the plain baseline (OLS, 10 Hz, same samples)") if not out else "both" if both else "it"
             won = ", ".join(str(j + 1) for j in np.flatnonzero(ratio <= 1.0)) or "none"
             lost = ", ".join(f"{j + 1} ({better[j]} {ratio[j]:.3f}x)" for j in np.flatnonzero(ratio > 1.0))
-            still = ", ".join(str(j + 1) for j in np.flatnonzero(np.isnan(ratio)))
+            still = ", ".join(str(j + 1) for j in np.flatnonzero(np.isnan(ratio)) if j + 1 not in self.not_predicted)
             out.append(f"beats {what} on joints {won} ({label})" + (f"; not on joints {lost}" if lost else "")
-                       + (f"; joints {still} never move" if still else ""))
+                       + (f"; joints {still} never move" if still else "")
+                       + (f"; joints {', '.join(map(str, self.not_predicted))} not predicted" if self.not_predicted
+                          else ""))
         if self.user_model_note and self.yardsticks():
             out.append(f"the model the user had: not computed ({self.user_model_note})")
         return out
@@ -206,6 +230,7 @@ class Validation:
                 **self._yardstick_dict(),
                 "rms_error_filtered": listed(self.rms_error_filtered),
                 "rms_error_filtered_moving": listed(self.rms_error_filtered_moving),
+                "not_predicted": list(self.not_predicted),
                 **({"rollout": self.rollout.to_dict()} if self.rollout is not None else {})}
 
     def _yardstick_dict(self) -> dict[str, Any]:

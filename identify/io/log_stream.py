@@ -37,6 +37,7 @@ from identify.io.recordings import RecordingWarning
 from identify.io.resampling import check_rate, concatenate, interpolate
 from identify.io.torque_signs import with_torque_signs
 from identify.io.units import check_units, sample_clock_refusal
+from identify.io.unlogged import ColumnRange, constant_channels, constant_message
 
 __all__ = ["SPLINE_MARGIN", "collected", "log_parts", "log_report", "rows_to_recording"]
 
@@ -241,6 +242,7 @@ def log_parts(blocks: Iterator[tuple[np.ndarray, list[int]]], cmap: ColumnMap, r
     if resample is not None:
         check_rate(resample)
     stream = _LogStream(cmap, robot, conv, source, resample, max_gap, segments, report, window, stale)
+    logged = ColumnRange()  # the torque (or current) columns' values: one value on every row is a channel not logged
     pending = next(blocks, None)
     if pending is None:
         raise RecordingError(f"{source}: no data rows")
@@ -248,6 +250,7 @@ def log_parts(blocks: Iterator[tuple[np.ndarray, list[int]]], cmap: ColumnMap, r
         values, numbers = pending
         pending = next(blocks, None)
         for rec, segment in stream.block(values, numbers, pending is None):
+            logged.add(rec.tau if rec.tau is not None else rec.current)
             rec = with_torque_signs(rec, signs)
             if drive is not None:
                 rec = apply_gains(rec, drive, robot)
@@ -256,11 +259,24 @@ def log_parts(blocks: Iterator[tuple[np.ndarray, list[int]]], cmap: ColumnMap, r
             yield rec, segment
     if report.rows - report.stale < 2:
         raise RecordingError(f"{source}: line {report.first_line}: a log needs at least 2 rows")
+    _warn_constant(source, logged.value(), cmap)
     span = report.position_span()
     if np.all(span < STILL):
         warnings.warn(f"{source}: no joint moves in lines {report.first_line}..{report.last_line} (largest position "
                       f"span {span.max():g} rad): a recording at rest identifies gravity and offsets at most",
                       RecordingWarning, stacklevel=3)
+
+
+def _warn_constant(source: str, span: np.ndarray | None, cmap: ColumnMap) -> None:
+    """A warning naming the torque (or current) columns that hold one value on every row (identify.io.unlogged)."""
+    if span is None:
+        return
+    joints = constant_channels(span[0], span[1])
+    if joints:
+        what, cols = ("torque", cmap.tau) if cmap.tau else ("current", cmap.i)
+        warnings.warn(constant_message(source, joints, [float(span[0, j]) for j in joints], what,
+                                       [f"{cmap.names[cols[j]]} in column {cols[j] + 1}" for j in joints]),
+                      RecordingWarning, stacklevel=4)
 
 
 def log_report(report: BlockReport, max_gap: float, resample: float | None, drive: DriveGains | None,

@@ -70,7 +70,7 @@ from identify.observation.cv_scoring import block_factors, block_scores, fold_wl
 __all__ = ["Candidate", "ProcessingChoice", "GRID_FACTORS", "DEFAULT_BLOCKS", "SCORED_REST", "RAW", "NO_DECIMATION",
            "grid_around", "select_processing", "score_candidates", "time_folds",
            "time_blocks", "fold_wls", "clearly_better", "block_factors", "block_scores", "DEFAULT_ROW_CAP", "Budget",
-           "observation_rows"]
+           "observation_rows", "NoCandidateScored"]
 
 #: Cut-offs of the grid, as multiples of the position-spectrum knee. (0.5, 0.7, 1, 1.4, 2) until the
 #: candidates without decimation and with offsets came: 0.7 and 1.4 were dropped to keep the choice's
@@ -102,6 +102,11 @@ DEFAULT_ROW_CAP = 30_000_000
 #: and joint 5's while moving up 5 %; choose_processing(policies=...) scores it on request).
 SCORED_REST = tuple(r for r in REST_POLICIES if r not in ("drop", "none", "presliding"))
 
+
+
+class NoCandidateScored(ValueError):
+    """No candidate processing could be scored (each one's reason in the message): the fit falls back on the
+    fixed defaults (:func:`identify.fitting.streamed.fit_streamed`)."""
 
 
 def grid_around(knee: float, rate: float, default_cutoff: float, default_decimate: float | None) -> list[Candidate]:
@@ -223,8 +228,8 @@ def _best(scored: Sequence[Candidate]) -> Candidate:
     valid = [c for c in scored if not math.isnan(c.score)]
     if not valid:  # each reason once (a recording without torques fails every candidate alike)
         reasons = dict.fromkeys(c.label.partition("not scored: ")[2] or c.label for c in scored)
-        raise ValueError(next(iter(reasons)) if len(reasons) == 1 else
-                         "no candidate processing could be fitted: " + "; ".join(reasons))
+        raise NoCandidateScored(next(iter(reasons)) if len(reasons) == 1 else
+                                "no candidate processing could be fitted: " + "; ".join(reasons))
     return min(valid, key=lambda c: c.score)
 
 

@@ -55,9 +55,13 @@ def block_scores(err2: np.ndarray, ref2: np.ndarray) -> tuple[float, tuple[float
 
 def fold_wls(factors: dict[tuple[int, int], tuple[np.ndarray, int]], held: int, n: int) -> np.ndarray | None:
     """WLS (each joint weighted by 1 / its residual standard deviation, as the fit does) on every
-    block but ``held``, from the compressed blocks; None when a joint has too few rows."""
+    block but ``held``, from the compressed blocks; None when a joint has too few rows. A joint without
+    rows in any block (its torque left out of the fit) is not fitted."""
     systems = []
+    fitted = {jj for (_, jj) in factors}
     for j in range(n):
+        if j not in fitted:
+            continue
         parts = [f for (b, jj), f in factors.items() if jj == j and b != held]
         if not parts:
             return None

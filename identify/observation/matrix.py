@@ -113,11 +113,14 @@ class FilteredMotion:
     extra: np.ndarray | float = 0.0
     note: str = ""
     measured: np.ndarray | None = None
+    torque_kept: np.ndarray | None = None  # (n,) False for a joint whose torque is left out (None: all kept)
 
     def rows(self, drop_rest: bool) -> np.ndarray:
-        """(S, n) rows that enter W: measured samples, and with ``drop_rest`` only ``usable`` ones."""
+        """(S, n) rows that enter W: measured samples, and with ``drop_rest`` only ``usable`` ones; none of a
+        joint whose torque is left out (``torque_kept``)."""
         keep = self.usable if drop_rest else np.ones(self.usable.shape, dtype=bool)
-        return keep if self.measured is None else keep & self.measured[:, None]
+        keep = keep if self.measured is None else keep & self.measured[:, None]
+        return keep if self.torque_kept is None else keep & self.torque_kept[None, :]
 
 
 #: Pass band of the parallel decimation filter, as a fraction of the decimated rate (0.8 of its Nyquist).

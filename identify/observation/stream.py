@@ -32,6 +32,7 @@ import rx90sym
 
 from identify.io.blocks import DEFAULT_BLOCK, BlockSource
 from identify.io.log_fields import layout_fields
+from identify.io.unlogged import ColumnRange, constant_channels
 from identify.observation.matrix import DECIMATION_PASSBAND, SPECTRUM_SAMPLES, filtered_motion, shifted_torques
 from identify.observation.defaults import DEFAULT_DECIMATE_TO
 from identify.observation.processing import CROSSING_SECONDS, RestPolicy, has_policy
@@ -41,14 +42,15 @@ from identify.signal.filtering import EDGE_PERIODS, cutoff_from_spectrum, decima
 from identify.io.steps import StepCounts
 
 __all__ = ["DEFAULT_BLOCK", "Piece", "Plan", "Scan", "SegmentScan", "StreamSettings", "in_order", "pieces",
-           "plan_windows", "scan", "scan_all", "scanned_cutoff"]
+           "plan_windows", "scan", "scan_all", "scanned_cutoff", "torque_left_out"]
 
 
 
 @dataclass(frozen=True)
 class StreamSettings:
     """The processing of a streamed fit: cut-off [Hz] (None: chosen), decimate_to [Hz] (None: none),
-    min_velocity [rad/s] (None: no rest mask), rest policy, torque delay [s], spring, block [raw samples]."""
+    min_velocity [rad/s] (None: no rest mask), rest policy, torque delay [s], spring, block [raw samples],
+    the joints (0-based) whose torque is left out (their rows out of W: :func:`torque_left_out`)."""
 
     cutoff: float | None = None
     decimate_to: float | None = DEFAULT_DECIMATE_TO
@@ -57,6 +59,7 @@ class StreamSettings:
     delay: float = 0.0
     spring: bool = True
     block: int = DEFAULT_BLOCK
+    left_out: tuple[int, ...] = ()
 
 
 @dataclass(frozen=True)
@@ -95,7 +98,8 @@ class Scan:
     """What the first pass learnt of one recording: samples, rate [Hz] (1 / median step), its segments,
     the smallest and largest position of each joint ``q_range`` (2, n) [rad], the samples bridged over
     lost packets and what the file keeps of its log (``log``: stale rows, gaps that split it;
-    :mod:`identify.io.log_fields`; None: nothing)."""
+    :mod:`identify.io.log_fields`; None: nothing), the smallest and largest torque of each joint
+    ``tau_range`` (2, n) [N·m] (None: no torques)."""
 
     source: str
     samples: int
@@ -104,6 +108,7 @@ class Scan:
     q_range: np.ndarray | None = None
     bridged: int = 0
     log: dict | None = None
+    tau_range: np.ndarray | None = None
 
     def layout(self) -> dict[str, Any]:
         """As :func:`identify.io.recordings.layout_summary` for a recording in memory."""
@@ -192,6 +197,7 @@ def scan(src: BlockSource, block: int, floor: float | None, keep_s: float = 0.0)
     lowest automatic cut-off [Hz] (None: the cut-off is given, no spectrum); ``keep_s`` [s]: keep the
     times of each segment's first and last ``keep_s`` seconds (:meth:`SegmentScan.time_at`)."""
     lo = hi = None
+    torques = ColumnRange()
     steps = StepCounts()  # the rate is the whole log's, 1 / median step
     done: list[SegmentScan] = []
     current: _SegmentPass | None = None
@@ -201,6 +207,7 @@ def scan(src: BlockSource, block: int, floor: float | None, keep_s: float = 0.0)
         lo = rec.q.min(axis=0) if lo is None else np.minimum(lo, rec.q.min(axis=0))
         hi = rec.q.max(axis=0) if hi is None else np.maximum(hi, rec.q.max(axis=0))
         t, q, measured = rec.t[new:], rec.q[new:], rec.measured_mask[new:]
+        torques.add(None if rec.tau is None else rec.tau[new:])
         steps.add(np.diff(t if last_t is None else np.r_[last_t, t]))
         last_t = t[-1:]
         bridged += int(np.sum(~measured))
@@ -216,7 +223,17 @@ def scan(src: BlockSource, block: int, floor: float | None, keep_s: float = 0.0)
         at += t.size
     done.append(current.result())
     return Scan(src.source, int(src.n_samples), 1.0 / steps.median(), tuple(done), np.vstack([lo, hi]), bridged,
-                src.log)
+                src.log, torques.value())
+
+
+def torque_left_out(scans: Sequence[Scan]) -> tuple[int, ...]:
+    """The joints (0-based) whose torque is constant over a whole recording (:mod:`identify.io.unlogged`: a
+    channel not logged) in any of ``scans``: left out of a fit (their rows out of W, not scored)."""
+    out: set[int] = set()
+    for s in scans:
+        if s.tau_range is not None:
+            out.update(constant_channels(s.tau_range[0], s.tau_range[1]))
+    return tuple(sorted(out))
 
 
 def scan_all(sources: Sequence[BlockSource], settings: StreamSettings,
@@ -327,9 +344,13 @@ def piece(robot: rx90sym.Robot, rec: Any, window: Any, plan: Plan, cutoff: float
     for lag in lags:  # the delay search: only Y moves (identify.estimation.delay)
         Y = shifted_torques(rec, lag)[m.kept] + m.extra
         extra.append((decimate(Y, m.factor) if m.factor > 1 else Y)[core])
+    kept = None
+    if settings.left_out:  # joints whose torque is left out: none of their rows enters W
+        kept = np.ones(m.Phi.shape[1], dtype=bool)
+        kept[list(settings.left_out)] = False
     cut = type(m)(m.t[core], m.q[core], m.dq[core], m.ddq[core], m.Y[core], m.Phi[core], m.cutoff, m.rate,
                   m.source, m.moving[core], m.usable[core], m.factor, m.kept, 0.0, m.note,
-                  None if m.measured is None else m.measured[core])
+                  None if m.measured is None else m.measured[core], kept)
     return Piece(cut, first + window.core[0], tuple(extra))
 
 

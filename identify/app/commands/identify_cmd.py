@@ -219,7 +219,7 @@ def run(args: argparse.Namespace) -> int:
     from identify.io.gains import read_gains
 
     from ..spring_output import attach_spring
-    from .identify_output import print_choices, print_fit, write_report
+    from .identify_output import print_choices, print_fit, show_choice, write_report
 
     _check(args)
     robot, spring_model = _robot(args)
@@ -235,7 +235,12 @@ def run(args: argparse.Namespace) -> int:
     options = {"physical_prior": prior, "prior_weight": args.prior_weight, "divergence": args.divergence}
     # Every log read, filtered and fitted block by block (a log within one block is one block: docs/long-logs.md).
     val_rec = args.validate
-    result = fit_recordings(args, robot, processing_of(args, sb is None), sb, gains, **options)
+    # The processing choice's table is printed before any refusal that follows it (the fit's own errors carry it).
+    try:
+        result = fit_recordings(args, robot, processing_of(args, sb is None), sb, gains, **options)
+    except Exception as exc:
+        show_choice(getattr(exc, "processing_choice", None))
+        raise
     # What the fit chose, before any refusal: the processing's and the prior weight's tables.
     print_choices(result)
     # The recorded torques' scale, sign and gravity at rest, and the identified model against the model the user
@@ -243,8 +248,8 @@ def run(args: argparse.Namespace) -> int:
     # (exit 2, nothing written), a warning is printed.
     stopping = [f for f in result.flags if f.code in TORQUE_CODES or f.code in MODEL_CODES]
     settle(stopping)
-    for f in result.flags:  # the fit's other flags (a rank that depends on the threshold): fitted, never silent
-        if f not in stopping:
+    for f in result.flags:  # the fit's own findings (columns left out or merged, a rank that depends on the
+        if f not in stopping:  # threshold): fitted, never silent
             progress(f"{f.severity}: {with_hint(f)}")
     result = result.with_flags([*result.flags, *flags, *_fit_flags(result, args.method)])
     if args.essential:
@@ -311,7 +316,8 @@ def _fit_flags(f: Fit, method: str) -> list:
 
     obs, res = f.observation, f.result
     if obs is None:  # fitted in blocks: ‖Y_j‖² is the joint system's residual at x = 0
-        torque_rms = np.array([np.sqrt(s.rss(np.zeros(s.columns)) / s.rows) for s in f.streamed.result.joint_systems])
+        torque_rms = np.array([np.sqrt(s.rss(np.zeros(s.columns)) / s.rows) if s.rows else np.nan
+                               for s in f.least_squares.joint_systems])  # nan: a joint whose torque was left out
     else:
         torque_rms = np.array([np.sqrt(np.mean(obs.Y[obs.joint == j] ** 2)) if np.any(obs.joint == j) else np.inf
                                for j in range(len(res.residual_rms))])

@@ -43,7 +43,8 @@ def print_fit(f: Fit, recs: list, auto_delay: bool) -> None:
     from identify.observation.processing import rest_label
 
     obs, res = f.observation or f.streamed, f.result
-    progress(f.delay_estimate.summary() + ("" if auto_delay else " (not compensated: --delay auto does)"))
+    progress(f.delay_estimate.summary() + ("" if auto_delay or not f.delay_estimate.found
+                                           else " (not compensated: --delay auto does)"))
     progress(obs.summary().replace("\n", "\n  "))
     for lay in f.recordings:
         if lay["bridged_samples"] or lay["segments"] > 1 or lay["stale_rows"]:
@@ -92,6 +93,13 @@ def print_model(f: Fit) -> None:
         print(model.table())
     print(f"identified model: {model.split}; weighted RSS {model.cost_increase_pct:+.3f} % of the least squares'")
     print(bodies_table(f.robot.n, model.standard, rx90sym.nominal_parameters(f.robot) if model.prior else None))
+
+
+def show_choice(choice: Any) -> None:
+    """The processing choice's table on stdout (a ProcessingChoice, or the fit file's record; None: nothing):
+    what ``rx90 identify`` shows before a refusal that follows the choice."""
+    if choice is not None:
+        print(choice.table() if hasattr(choice, "table") else choice.get("table", ""), flush=True)
 
 
 def spring_text(f: Fit, recs: list) -> str:

@@ -194,7 +194,8 @@ def choice_blocks(record: Mapping[str, Any]) -> tuple:
         part = (choice.get(key) if key else choice) or {}
         # The friction's joint-combined candidate (the per-joint forms scored together) is a row too.
         candidates = [*(part.get("candidates") or []), *([part["combined"]] if key and part.get("combined") else [])]
-        if not candidates:
+        if not candidates:  # not cross-validated (a recording too short for the blocks): why, and the defaults used
+            blocks += [Text((f"{title}: {part['table']}",))] if part.get("skipped") else []
             continue
         n = max(len(c.get("per_joint_pct") or []) for c in candidates)
         chosen = part.get("chosen")
