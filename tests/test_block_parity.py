@@ -98,8 +98,9 @@ def test_the_baseline_block_by_block_is_the_whole_logs(rx90, log, consistent, tw
     # identify.predict at the fit's own rate in blocks of 1000 and in one block: those figures from its one pass,
     # the baseline beside them.
     f = consistent["whole"]
-    streamed = identify.predict(rx90, f.result, other, base=f.base, block=1000, baseline=f.baseline, **f.filtering())
-    memory = identify.predict(rx90, f.result, other, base=f.base, baseline=f.baseline, block=10 ** 7, **f.filtering())
+    base = f.columns_of(f.result)  # the identified model's columns: the fit's, with the offsets it adds
+    streamed = identify.predict(rx90, f.result, other, base=base, block=1000, baseline=f.baseline, **f.filtering())
+    memory = identify.predict(rx90, f.result, other, base=base, baseline=f.baseline, block=10 ** 7, **f.filtering())
     for name in ("rms_error", "rms_error_filtered", "rms_error_filtered_moving", "baseline_rms_error"):
         assert _rel(getattr(streamed, name), getattr(memory, name)) < 1e-8, name
 
@@ -216,9 +217,9 @@ def test_rx90_predict_on_a_long_log_is_the_fits_prediction(rx90, consistent, twi
 
 def test_the_consistent_fit_of_presliding_rest_is_the_same_on_both_paths(rx90, log):
     """The identified model holds the presliding magnitudes FPj beside the standard parameters (applied from
-    the fit by a simulator): block by block as on the whole log."""
+    the fit by a simulator): read from the file as held in memory."""
     rec, path = log
     fits = [identify.fit(rx90, recordings, Processing(cross_validate=False, rest="presliding"), "consistent",
-                         block=block) for recordings, block in (([rec], None), ([path], 1000))]
+                         block=block) for recordings, block in (([rec], None), ([path], rec.n_samples + 1))]
     assert any(k.startswith("FP") for k in fits[0].result.extras)
     assert _rel(fits[1].result.values, fits[0].result.values) < 1e-7

@@ -224,8 +224,8 @@ def consistent_fit(robot: rx90sym.Robot, wls: IdentificationResult, columns: Any
                 held_back_scores(factors, {False: make(False), True: make(True)} if prior is not None
                                  else {False: make(False)}, [weight], offsets)[0])
         if not math.isnan(done.score):
-            heldout = {"score_pct": done.score, "per_joint_pct": list(done.per_joint),
-                       "per_block_pct": [list(row) for row in done.per_block]}
+            heldout = {"score_pct": done.score, "per_joint_pct": [json_number(v) for v in done.per_joint],
+                       "per_block_pct": [[json_number(v) for v in row] for row in done.per_block]}
     problem = make(fixed)
     x = problem.solve(R, z, weight, scale)
     report = problem.check(x)

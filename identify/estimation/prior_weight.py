@@ -23,6 +23,7 @@ from typing import Any, Callable, Sequence
 import numpy as np
 
 from identify.estimation.consistency.errors import ConsistencyError
+from identify.estimation.results import json_number
 from identify.estimation.consistency.weighted_fit import PriorProblem
 from identify.estimation.raw_folds import offset_columns_of
 from identify.observation.candidates import Candidate
@@ -73,7 +74,7 @@ class WeightChoice:
                 "reason": self.reason,
                 "weights": [weight_label(w) for w in self.weights],
                 "scores_pct": [None if math.isnan(c.score) else c.score for c in self.scores],
-                "per_joint_pct": [list(c.per_joint) for c in self.scores], "table": self.table()}
+                "per_joint_pct": [[json_number(v) for v in c.per_joint] for c in self.scores], "table": self.table()}
 
 
 @dataclass(frozen=True, eq=False)

@@ -283,7 +283,9 @@ def model_flags(model: Any, folds: Any) -> list:
         return []
     kind, name = ("user", "the model the user had") if "user" in folds.err2 else ("plain", "the plain OLS")
     _, per_joint, per_block = folds.scores(kind)
-    return heldout_flags(model.heldout["per_joint_pct"], model.heldout["per_block_pct"], per_joint, per_block, name)
+    nan = lambda rows: [[float("nan") if v is None else v for v in row] for row in rows]  # noqa: E731 (null in JSON)
+    return heldout_flags(nan([model.heldout["per_joint_pct"]])[0], nan(model.heldout["per_block_pct"]), per_joint,
+                         per_block, name)
 
 
 def _flags(robot: rx90sym.Robot, sources: Sequence[Any], sf: Any, block: int, base: Any,
