@@ -69,9 +69,9 @@ def test_a_tanh_fit_predicts_better_than_coulomb_and_its_file_keeps_the_form(rx9
     np.testing.assert_allclose(again.predict(held).predicted, errors["tanh"].predicted, rtol=0, atol=1e-9)
     with pytest.raises(ValueError, match="friction must be one of"):
         Processing(friction="lugre")
-    with pytest.raises(ValueError, match="consistent method fits bodies with Coulomb") as refused:
-        fit(rx90, [fit_part], Processing(friction="tanh"), method="consistent")
-    assert "not friction form 'tanh':" in str(refused.value) and "None" not in str(refused.value)
+    # The identified model holds the smooth form's FS (physical: >= 0) beside the bodies, and predicts with it.
+    model = f.identified
+    assert all(model.standard[f"FS{j}"] >= 0 for j in range(1, 7))
 
 
 def test_on_the_ur10e_static_log_the_presliding_fit_errs_within_each_coulomb_level():

@@ -1,6 +1,5 @@
 """Payload method 1 with the robot's fit made with the defaults of rx90 identify (issue 38 item 1): its
-columns (the torque offsets its cross-validated processing chose) and its processing are those of
-eq. 22's known part, in the library (a Fit, its file, its result) and in ``rx90 payload --method 1
+identified model (with its torque offsets) and its processing are those of eq. 22's known part, in the library (a Fit, its file, its result) and in ``rx90 payload --method 1
 --robot-params FIT.json``, with the same numbers; a fit of another robot, or one processed otherwise
 than ``--filtering-from``, is refused (exit 2, nothing written).
 
@@ -58,8 +57,9 @@ def test_method_1_takes_a_defaults_fit_as_the_command_does(rx90, folder, capsys)
         np.testing.assert_allclose(res.values, [cmd[n]["value"] for n in res.names], rtol=1e-9, atol=1e-12)
         np.testing.assert_allclose(res.std, [cmd[n]["std"] for n in res.names], rtol=1e-9)
         np.testing.assert_allclose(res.bootstrap_std, [cmd[n]["bootstrap_std"] for n in res.names], rtol=1e-9)
-    # The result with the fit's processing given: the same (a result brings values and offsets, no processing).
-    by_result = identify.payload(rx90, 1, loaded=[loaded], robot_params=fit.result, **fit.filtering())
+    # The identified model's result with the fit's processing given: the same (a result brings values and offsets,
+    # no processing; what a Fit brings is its identified model).
+    by_result = identify.payload(rx90, 1, loaded=[loaded], robot_params=fit.model_result, **fit.filtering())
     if (fit.model.friction or {}).get("form", "coulomb") == "coulomb":
         np.testing.assert_allclose(by_result.values, by_fit.values, rtol=1e-9, atol=1e-12)
     # Against the truth: the payload of Table 4.

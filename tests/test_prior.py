@@ -131,10 +131,13 @@ def test_the_held_out_check_refuses_only_a_model_worse_than_the_description():
     from identify.fitting.plausibility import heldout_flags
 
     reference = np.array([[10.0, 20.0, 30.0]] * 5) + np.arange(5)[:, None] * 0.3
-    worse = reference * 1.1
+    slightly = reference * 1.1  # clearly worse, yet within REFUSE_RATIO: a warning per joint, no refusal
+    assert [(f.code, f.severity) for f in heldout_flags(slightly.mean(0), slightly, reference.mean(0), reference,
+                                                        "x")] == [("model_worse_on_joint", "warning")] * 3
+    worse = reference * 1.3
     (refusal,) = heldout_flags(worse.mean(0), worse, reference.mean(0), reference, "the model the user had")
     assert refusal.severity == "error" and refusal.code == "model_unexplained"
-    assert "22.66 % against 20.60 %" in refusal.message and "the model the user had" in refusal.message
+    assert "26.78 % against 20.60 %" in refusal.message and "the model the user had" in refusal.message
     one = reference.copy()
     one[:, 1] *= 1.05
     one[:, 0] *= 0.9

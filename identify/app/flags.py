@@ -73,15 +73,16 @@ def with_hint(flag: Flag) -> str:
 
 
 def settle(flags: Sequence[Flag]) -> list[Flag]:
-    """Raise on an error flag (exit 2; its message carries the option hint); print each warning."""
+    """Print each warning, then raise on an error flag (exit 2; its message carries the option hint)."""
     from identify.fitting.plausibility import raise_errors
 
     errors = [f for f in flags if f.severity == "error"]
+    warnings = [f for f in flags if f.severity != "error"]
+    for f in warnings:  # first: what they say may be the cause of the error (a torque sign, a gain)
+        progress(f"warning: {with_hint(f)}")
     if errors:
         raise ValueError("; ".join(with_hint(f) for f in errors))
-    warnings = raise_errors(flags)
-    for f in warnings:
-        progress(f"warning: {with_hint(f)}")
+    raise_errors(flags)
     return warnings
 
 

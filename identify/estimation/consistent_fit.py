@@ -225,7 +225,8 @@ def consistent_fit(robot: rx90sym.Robot, wls: IdentificationResult, columns: Any
                                  else {False: make(False)}, [weight], offsets)[0])
         if not math.isnan(done.score):
             heldout = {"score_pct": done.score, "per_joint_pct": [json_number(v) for v in done.per_joint],
-                       "per_block_pct": [[json_number(v) for v in row] for row in done.per_block]}
+                       "per_block_pct": [[json_number(v) for v in row] for row in done.per_block],
+                       "torque_rms": [json_number(v) for v in _torque_rms(factors)]}
     problem = make(fixed)
     x = problem.solve(R, z, weight, scale)
     report = problem.check(x)
@@ -339,6 +340,13 @@ def _admits_bodies(robot: rx90sym.Robot, columns: Any, names: Sequence[str], bet
                                        robot.parameter_names)[0] > 0)
     except ConsistencyError:  # the margin's solve failed: it says nothing either way (not claimed)
         return False
+
+
+def _torque_rms(factors: Any) -> np.ndarray:
+    """(n,) RMS [N m] of the raw torques the cross-validation scores, per joint (NaN: none scored)."""
+    sums = np.array([[float(np.sum(f.R[j][:, -1] ** 2)) for j in range(factors.n)] for f in factors.scored]).sum(0)
+    rows = np.array([[int(f.rows[j]) for j in range(factors.n)] for f in factors.scored]).sum(0)
+    return np.where(rows > 0, np.sqrt(sums / np.maximum(rows, 1)), np.nan)
 
 
 def _residuals(wls: IdentificationResult, system: Any, beta: np.ndarray) -> tuple[np.ndarray, np.ndarray, int]:

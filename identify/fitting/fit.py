@@ -242,7 +242,7 @@ def _fit_blocks(robot: rx90sym.Robot, recordings: Sequence[Any], processing: Any
                found.delay if found is not None and found.found else None, spring,
                boot, block=block, streamed=sf, recordings=sf.recordings,
                choice=_choice_record(sf.choice, getattr(hook, "choice", None)),
-               flags=_flags(robot, sources, sf, block, base, bool(p.spring)) + tuple(model_flags(identified, sticks.folds)),
+               flags=_flags(robot, sources, sf, block, base, bool(p.spring)) + tuple(model_flags(identified, sticks.folds, robot)),
                baseline=sticks.plain, user_model=sticks.user, user_model_note=sticks.user_note,
                identified=identified, ls_result=sf.result if result is not sf.result else None)
 
@@ -273,19 +273,20 @@ def _model_factors(robot: rx90sym.Robot, sources: Sequence[Any], sf: Any, span: 
     return column_factors(robot, sources, sf.scans, sf.columns, settings, span, client)
 
 
-def model_flags(model: Any, folds: Any) -> list:
+def model_flags(model: Any, folds: Any, robot: rx90sym.Robot) -> list:
     """The identified model's held-back errors against the yardstick's on the same time blocks
     (identify.fitting.plausibility.heldout_flags): the model the user had, or the plain OLS where the
     description has no bodies; none without held-back errors."""
-    from identify.fitting.plausibility import heldout_flags
+    from identify.fitting.plausibility import heldout_flags, judged_joints
 
     if model is None or model.heldout is None or folds is None:
         return []
     kind, name = ("user", "the model the user had") if "user" in folds.err2 else ("plain", "the plain OLS")
     _, per_joint, per_block = folds.scores(kind)
     nan = lambda rows: [[float("nan") if v is None else v for v in row] for row in rows]  # noqa: E731 (null in JSON)
+    judged = judged_joints(nan([model.heldout["torque_rms"]])[0], robot.limits.tau_max)
     return heldout_flags(nan([model.heldout["per_joint_pct"]])[0], nan(model.heldout["per_block_pct"]), per_joint,
-                         per_block, name)
+                         per_block, name, judged)
 
 
 def _flags(robot: rx90sym.Robot, sources: Sequence[Any], sf: Any, block: int, base: Any,

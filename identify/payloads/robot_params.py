@@ -1,7 +1,7 @@
 """The robot's known parameters of payload method 1 (eq. 22): from a fit, a fit file, its result, or values.
 
-A :class:`~identify.fitting.record.Fit` (or its file) brings its own columns (the torque offsets and
-friction columns its processing chose) and its processing (cut-off, decimation, rest threshold and
+A :class:`~identify.fitting.record.Fit` (or its file) brings its identified model (``Fit.model_result``:
+its columns, the torque offsets and friction columns with it) and its processing (cut-off, decimation, rest threshold and
 policy, torque delay, spring; its drive gains and angle convention for files): method 1 then moves
 exactly the fit's model of the robot to the right-hand side, on the rows that fit was made of. A
 result, or a dict of base or standard parameter values, brings values only: the columns are the
@@ -43,8 +43,9 @@ def _of_fit(robot: rx90sym.Robot, fit: Fit, where: str) -> KnownRobot:
                          f"{robot.name!r} ({robot.n} joints)")
     processing = {"cutoff": fit.cutoff, "decimate_to": fit.decimate_to, "min_velocity": fit.min_velocity,
                   "rest": fit.rest, "delay": fit.delay, "spring": fit.processing.spring}
-    return KnownRobot(fit.base, base_vector(fit.result, fit.base, fit.robot), processing, fit.gains,
-                      fit.model.convention)
+    model = fit.model_result  # the identified model: what predicts, and what the payload is set against
+    columns = fit.columns_of(model)
+    return KnownRobot(columns, base_vector(model, columns, fit.robot), processing, fit.gains, fit.model.convention)
 
 
 def _of_values(robot: rx90sym.Robot, base: Any, values: dict[str, float]) -> KnownRobot:
