@@ -6,7 +6,6 @@ is not the user's (a solver that did not converge is reported, never returned as
 from __future__ import annotations
 
 import argparse
-import os
 import re
 import sys
 import warnings
@@ -48,26 +47,19 @@ def join_negative_values(argv: Sequence[str]) -> list[str]:
     return out
 
 
-def one_blas_thread() -> None:
-    """OpenBLAS on one thread unless ``OPENBLAS_NUM_THREADS`` says otherwise, set before NumPy loads
-    it (a process that has loaded NumPy already keeps its own): the toolkit's least squares are tall
-    and thin (tens of columns, many small factorisations), where OpenBLAS's threads spin more than
-    they compute, the more so on a shared machine (benchmarks/bench_identify_command.py)."""
-    if "numpy" not in sys.modules:
-        os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
-
-
 def main(argv: Sequence[str] | None = None) -> int:
     parser = build_parser()
     args = parser.parse_args(join_negative_values(sys.argv[1:] if argv is None else argv))
-    one_blas_thread()
     from identify.estimation.consistency.errors import SolverError  # after --help and --version have exited
+    from rx90sym.threads import one_blas_thread
 
     def show_warning(message, category, filename, lineno, file=None, line=None) -> None:
         print(f"[{PROG}] warning: {message}", file=sys.stderr, flush=True)
 
     try:
-        with warnings.catch_warnings():
+        # The library's BLAS rule for the whole command (rx90sym.threads: one thread unless an
+        # environment variable such as OPENBLAS_NUM_THREADS names the count).
+        with warnings.catch_warnings(), one_blas_thread():
             warnings.showwarning = show_warning  # one plain line, restored on exit
             return int(args.func(args) or 0)
     except SolverError as exc:

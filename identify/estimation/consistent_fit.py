@@ -7,6 +7,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 import rx90sym
+from rx90sym.threads import one_blas_thread
 
 from identify.estimation.results import IdentificationResult
 
@@ -85,6 +86,7 @@ class ConsistentResult(IdentificationResult):
 
 
 
+@one_blas_thread()
 def consistent_fit(robot: rx90sym.Robot, wls: IdentificationResult, base: Any, physical_prior: Any = None,
                    covariance: np.ndarray | None = None, **options: Any) -> ConsistentResult:
     """Physically consistent refit of a (W)LS result on its compressed weighted system.
@@ -93,7 +95,8 @@ def consistent_fit(robot: rx90sym.Robot, wls: IdentificationResult, base: Any, p
     cannot see come from it (prior_fit: within PRIOR_BUDGET standard deviations of the best fit,
     ``covariance`` of the base parameters, e.g. the segment bootstrap's; eq. 13's without);
     without one the split is arbitrary (ConsistentResult.split says so). Other options go to
-    consistent_least_squares."""
+    consistent_least_squares.
+    BLAS on one thread inside the call, the caller's count back after it (rx90sym.threads)."""
     system = wls.system
     if system is None:
         raise ValueError("consistent fit needs a result that still holds its compressed system "

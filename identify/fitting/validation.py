@@ -15,6 +15,7 @@ from typing import Any
 import numpy as np
 
 import rx90sym
+from rx90sym.threads import one_blas_thread
 
 from identify.observation.defaults import DEFAULT_DECIMATE_TO
 from identify.observation.matrix import presliding_base
@@ -171,6 +172,7 @@ def base_vector(result: IdentificationResult, base: Any, robot: rx90sym.Robot) -
     return np.array([values.get(nm, 0.0) for nm in base.names])
 
 
+@one_blas_thread()
 def predict(robot: rx90sym.Robot, result: IdentificationResult, recording: Any, base: Any = None,
             cutoff: float | None = None, decimate_to: float | None | str = DEFAULT_DECIMATE_TO, spring: bool = True,
             min_velocity: float | None = None, delay: float = 0.0, rest: RestPolicy = "zero-coulomb",
@@ -191,6 +193,7 @@ def predict(robot: rx90sym.Robot, result: IdentificationResult, recording: Any, 
     decimated; "prediction": the prediction's rate; :meth:`identify.Fit.predict` gives the fit's own).
     block: raw samples read, filtered and predicted at a time (memory: a block, the decimated
     prediction and the samples scored); convention, gains: how a recording file is read.
+    BLAS on one thread inside the call, the caller's count back after it (rx90sym.threads).
     """
     if base is None:  # the symbolic base, with the torque offsets the fit chose (OFFj in the result)
         base = offset_base(rx90sym.base_parameters(robot), result_offsets(result, robot))
@@ -283,6 +286,7 @@ def scored_validation(raw: RawScores, source: str, min_velocity: float | None, c
         baseline_predicted=raw.baseline)
 
 
+@one_blas_thread()
 def validate(robot: rx90sym.Robot, result: IdentificationResult, recording: Any, **options: Any) -> Validation:
     """Cross-validation: torque error per joint on a recording not used in the fit (see :func:`predict`)."""
     return predict(robot, result, recording, **options)

@@ -29,6 +29,7 @@ import numpy as np
 import rx90sym
 from rx90sym.parameters import PAYLOAD_NAMES
 from rx90sym.recording import Recording, RecordingError
+from rx90sym.threads import one_blas_thread
 
 from identify.gains.defaults import DEFAULT_METHOD, FLAG_PCT, GAIN_METHODS
 from identify.signal.filtering import choose_cutoff
@@ -151,6 +152,7 @@ def _check_inputs(robot: rx90sym.Robot, empty: Sequence[Recording], loaded: Sequ
                          f"number of each)")
 
 
+@one_blas_thread()
 def drive_gains(robot: rx90sym.Robot, empty: Sequence[Recording], loaded: Sequence[Recording], mass: float,
                 method: str = DEFAULT_METHOD, fix: Mapping[int, float] | None = None, mass_std: float = 0.0,
                 side: str | None = None, offsets: bool = True, flag_pct: float = FLAG_PCT,
@@ -180,6 +182,8 @@ def drive_gains(robot: rx90sym.Robot, empty: Sequence[Recording], loaded: Sequen
             toward zero gains by the current noise).
         bootstrap_seed: seed of the segment bootstrap (identify.estimation.bootstrap) whose sigma,
             when larger than eq. 13's, is the gain's (coloured residuals, window-to-window spread).
+
+    BLAS on one thread inside the call, the caller's count back after it (rx90sym.threads).
 
     Raises:
         ValueError: bad arguments, recordings without currents, runs that do not pair.

@@ -26,6 +26,7 @@ import rx90sym
 from rx90sym.parameters import PAYLOAD_NAMES
 from rx90sym.physical import DEFAULT_MARGIN
 from rx90sym.rigid_body import RigidBody, physical_problem
+from rx90sym.threads import one_blas_thread
 
 from identify.estimation.consistency import ConsistencyError, pseudo_inertia
 from identify.estimation.consistency.fit import SOLVE_FACTOR
@@ -105,6 +106,7 @@ def _robot_vector(robot: rx90sym.Robot, base: Any, robot_params: Any) -> np.ndar
 # --------------------------------------------------------------------------------------------
 # The methods
 # --------------------------------------------------------------------------------------------
+@one_blas_thread()
 def payload(robot: rx90sym.Robot, method: int, empty: Sequence[Any] = (), loaded: Sequence[Any] = (),
             robot_params: Any = None, base: Any = None, a_priori: Mapping[str, float] | str | None = None,
             constrained: bool = False, mass: float | None = None, mass_tol: float = MASS_TOL,
@@ -120,6 +122,7 @@ def payload(robot: rx90sym.Robot, method: int, empty: Sequence[Any] = (), loaded
     min_velocity, delay (see identify.observation_matrix; an identification's are
     ``FitModel.filtering()``); bootstrap_seed: seed of the segment bootstrap beside eq. 13's sigma
     (identify.estimation.bootstrap; methods 1, 3 and 4; None: no bootstrap).
+    BLAS on one thread inside the call, the caller's count back after it (rx90sym.threads).
     """
     if method not in METHODS:
         raise ValueError(f"payload: method must be 1, 2, 3 or 4, got {method!r}")

@@ -1,0 +1,141 @@
+"""The library's BLAS rule (rx90sym.threads): one thread inside the fit's hot paths, the caller's
+count back after the call (also when it raises), an explicit choice kept, nested calls limited once.
+
+Each test sets the caller's count to 2 with threadpoolctl (numpy's and scipy's OpenBLAS both) and
+reads the counts threadpoolctl reports from inside an inner function the public call runs.
+"""
+from __future__ import annotations
+
+import pytest
+import scipy.linalg  # noqa: F401  (scipy's own BLAS loaded, so that both libraries are checked)
+from threadpoolctl import threadpool_info, threadpool_limits
+
+import identify
+import rx90sym
+import rx90sym.threads as threads
+from identify.fitting import streamed, validation
+
+CALLER = 2
+
+
+def blas_counts() -> list[int]:
+    """The thread count of every BLAS library threadpoolctl sees that can run threads."""
+    return [d["num_threads"] for d in threadpool_info()
+            if d["user_api"] == "blas" and d.get("threading_layer") != "disabled"]
+
+
+@pytest.fixture(scope="module")
+def short_run():
+    """A 6 s UR10e twin run at 100 Hz, and the fit's processing fixed (no choice: a fast fit)."""
+    from motions import multisine
+
+    robot = rx90sym.load_robot("ur10e")
+    rec = rx90sym.twin.simulate(robot, multisine(robot, 0, duration=6.0), duration=6.0, rate=100.0,
+                                noise="quantised", seed=0)
+    return robot, rec, identify.Processing(cutoff=8.0, estimate_delay=False, cross_validate=False)
+
+
+@pytest.fixture
+def no_thread_variables(monkeypatch):
+    """A process as a user starts one: no environment variable names the BLAS's thread count."""
+    for name in threads.BLAS_THREAD_VARIABLES:
+        monkeypatch.delenv(name, raising=False)
+
+
+def recorder(monkeypatch, module, name: str, seen: list, fail: bool = False) -> None:
+    """Replace ``module.name`` by a wrapper appending the BLAS counts to ``seen`` (then raising when ``fail``)."""
+    inner = getattr(module, name)
+
+    def wrapped(*args, **kwargs):
+        seen.append(blas_counts())
+        if fail:
+            raise RuntimeError("inner failure")
+        return inner(*args, **kwargs)
+
+    monkeypatch.setattr(module, name, wrapped)
+
+
+def test_fit_and_predict_run_blas_on_one_thread_and_give_the_caller_its_count_back(
+        short_run, no_thread_variables, monkeypatch):
+    robot, rec, processing = short_run
+    in_fit, in_predict = [], []
+    recorder(monkeypatch, streamed, "solve_joint_systems", in_fit)
+    recorder(monkeypatch, validation, "column_regressor", in_predict)
+    with threadpool_limits(limits=CALLER, user_api="blas"):
+        before = blas_counts()
+        fit = identify.fit(robot, [rec], processing)
+        between = blas_counts()
+        fit.predict(rec)
+        after = blas_counts()
+    assert len(before) >= 2 and set(before) == {CALLER}, before  # numpy's and scipy's, at the caller's count
+    assert in_fit and all(c == [1] * len(before) for c in in_fit), in_fit
+    assert in_predict and all(c == [1] * len(before) for c in in_predict), in_predict
+    assert between == before and after == before
+
+
+def test_the_callers_count_is_back_when_the_call_raises(short_run, no_thread_variables, monkeypatch):
+    robot, rec, processing = short_run
+    seen = []
+    recorder(monkeypatch, streamed, "solve_joint_systems", seen, fail=True)
+    with threadpool_limits(limits=CALLER, user_api="blas"):
+        before = blas_counts()
+        with pytest.raises(RuntimeError, match="inner failure"):
+            identify.fit(robot, [rec], processing)
+        assert blas_counts() == before
+    assert seen == [[1] * len(before)]
+
+
+@pytest.mark.parametrize("choice", ["environment", "blas_threads"])
+def test_an_explicit_choice_is_kept_inside_the_call(short_run, no_thread_variables, monkeypatch, choice):
+    """OPENBLAS_NUM_THREADS in the environment (as the command honours it) or the caller's own
+    rx90sym.blas_threads: the fit runs at the caller's count."""
+    robot, rec, processing = short_run
+    seen = []
+    recorder(monkeypatch, streamed, "solve_joint_systems", seen)
+    if choice == "environment":
+        monkeypatch.setenv("OPENBLAS_NUM_THREADS", str(CALLER))
+        with threadpool_limits(limits=CALLER, user_api="blas"):
+            identify.fit(robot, [rec], processing)
+    else:
+        with rx90sym.blas_threads(CALLER):
+            identify.fit(robot, [rec], processing)
+    assert seen and all(set(c) == {CALLER} for c in seen), seen
+
+
+def test_nested_calls_limit_once(short_run, no_thread_variables, monkeypatch):
+    """fit_fleet runs fit per robot: the pool is limited once, by the outer call."""
+    robot, rec, processing = short_run
+    import threadpoolctl
+
+    made = []
+    original = threadpoolctl.threadpool_limits
+
+    def counting(*args, **kwargs):
+        made.append(kwargs.get("limits", args[0] if args else None))
+        return original(*args, **kwargs)
+
+    monkeypatch.setattr(threadpoolctl, "threadpool_limits", counting)
+    identify.fit_fleet({"a": (robot, [rec]), "b": (robot, [rec])}, processing)
+    assert made == [1]
+
+
+def test_the_command_runs_blas_on_one_thread(short_run, no_thread_variables, monkeypatch, tmp_path, capsys):
+    """rx90 identify in this process (no thread variable): the same rule as the library."""
+    from identify.app import cli
+
+    robot, rec, _ = short_run
+    log = tmp_path / "run.csv"
+    identify.write_recording(log, rec, robot)
+    seen = []
+    recorder(monkeypatch, streamed, "solve_joint_systems", seen)
+    with threadpool_limits(limits=CALLER, user_api="blas"):
+        before = blas_counts()
+        assert cli.main(["identify", str(log), "--robot", "ur10e", "--cutoff", "8", "--delay", "0"]) == 0
+        assert blas_counts() == before
+    assert seen and all(c == [1] * len(before) for c in seen), seen
+
+
+def test_blas_threads_refuses_a_count_below_one():
+    with pytest.raises(ValueError, match="threads must be >= 1, got 0"):
+        with rx90sym.blas_threads(0):
+            pass
