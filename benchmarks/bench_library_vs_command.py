@@ -6,15 +6,16 @@ Whole processes, as a user starts them: ``python SCRIPT`` calling ``identify.fit
 with the defaults, and ``python -m identify.app.cli identify LOG --robot ur10e`` (start-up and
 imports included in both). Three settings:
 
-- plain: no thread variable in the environment (OPENBLAS_NUM_THREADS, OMP_NUM_THREADS,
-  MKL_NUM_THREADS, ... removed), as a notebook or a script starts;
+- plain: no thread variable in the environment (rx90sym.threads.BLAS_THREAD_VARIABLES:
+  OPENBLAS_NUM_THREADS, OMP_NUM_THREADS, MKL_NUM_THREADS, ... removed), as a notebook or a script starts;
 - OPENBLAS_NUM_THREADS=16 for both (an explicit choice, which both honour);
 - busy: as plain, beside ``--busy`` processes each spinning BLAS (one thread, a 300 x 300 matrix
   product in a loop) pinned to one of the last cores.
 
 Wall time, median of ``--repeat`` runs each (library and command alternate, after one untimed run
-each: the compiled regressor cached, the file in the page cache); CPU time (user + system of the
-child) beside it.
+each: the compiled regressor cached, the file in the page cache), the target's ratio; CPU time
+(user + system of the child) and its ratio beside it (on a shared machine the wall times move with
+the load, the CPU times much less).
 
     PYTHONPATH=. python benchmarks/bench_library_vs_command.py [--repeat 3] [--busy 1] [--duration 50]
 """
@@ -34,11 +35,9 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path[:0] = [str(ROOT), str(Path(__file__).resolve().parent)]
 
 from bench_identify_command import write_twin_log  # noqa: E402
+from rx90sym.threads import BLAS_THREAD_VARIABLES  # noqa: E402
 
 TARGET = 1.3
-#: The variables a BLAS or OpenMP runtime reads its thread count from.
-THREAD_VARIABLES = ("OPENBLAS_NUM_THREADS", "GOTO_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS",
-                    "BLIS_NUM_THREADS", "VECLIB_MAXIMUM_THREADS", "NUMEXPR_NUM_THREADS")
 
 LIBRARY = """
 import sys
@@ -58,7 +57,7 @@ while True:
 
 
 def plain_environment(**extra: str) -> dict[str, str]:
-    env = {k: v for k, v in os.environ.items() if k not in THREAD_VARIABLES}
+    env = {k: v for k, v in os.environ.items() if k not in BLAS_THREAD_VARIABLES}
     return {**env, "PYTHONPATH": str(ROOT), **extra}
 
 
@@ -122,15 +121,15 @@ def main() -> None:
     print(f"UR10e twin, {args.duration:g} s at 100 Hz ({samples} samples, 6 joints), seed {args.seed}; "
           f"{cores} cores (os.cpu_count() {os.cpu_count()}); median of {args.repeat} runs each; "
           f"load average at the start {load:.2f}\n")
-    head = (f"{'setting':<30} {'library [s]':>12} {'command [s]':>12} {'lib CPU [s]':>12} {'cmd CPU [s]':>12} "
-            f"{'library/command':>16}")
+    head = (f"{'setting':<30} {'library [s]':>12} {'command [s]':>12} {'library/command':>16} "
+            f"{'lib CPU [s]':>12} {'cmd CPU [s]':>12} {'CPU ratio':>10}")
     print(head + "\n" + "-" * len(head))
     worst = 0.0
     for label, t in rows:
         ratio = t["library"][0] / t["command"][0]
         worst = max(worst, ratio)
-        print(f"{label:<30} {t['library'][0]:12.2f} {t['command'][0]:12.2f} {t['library'][1]:12.2f} "
-              f"{t['command'][1]:12.2f} {ratio:16.2f}")
+        print(f"{label:<30} {t['library'][0]:12.2f} {t['command'][0]:12.2f} {ratio:16.2f} {t['library'][1]:12.2f} "
+              f"{t['command'][1]:12.2f} {t['library'][1] / t['command'][1]:10.2f}")
     print(f"\ntarget: library/command <= {TARGET:g} in every setting: {'within' if worst <= TARGET else 'ABOVE'} "
           f"(worst {worst:.2f})")
 

@@ -3,9 +3,10 @@
 The toolkit's linear algebra is tall and thin: least squares of tens of columns over thousands
 of rows, many small QR factorisations. A second BLAS thread there spins and waits more than it
 computes, and on a busy or many-core machine it costs far more than it gives (measured by
-benchmarks/bench_library_vs_command.py, docs/reliability.md). So the public calls that do the work (``identify.fit``, ``predict``, ``validate``,
-``payload``, ``drive_gains``, ...) run inside :func:`one_blas_thread`, and the ``rx90`` command
-runs each command inside it too: one rule for the library and the command.
+benchmarks/bench_library_vs_command.py, docs/reliability.md). So the public calls that do the work
+(``identify.fit``, ``predict``, ``validate``, ``payload``, ``drive_gains``, ...) run inside
+:func:`one_blas_thread`, and the ``rx90`` command applies the same rule to its whole process
+(:func:`command_blas_threads`): one rule for the library and the command.
 
 The rule, in order:
 
@@ -31,14 +32,20 @@ from __future__ import annotations
 import contextlib
 import contextvars
 import os
+import sys
 from typing import Iterator
 
-__all__ = ["BLAS_THREAD_VARIABLES", "blas_threads", "explicit_blas_variable", "one_blas_thread"]
+__all__ = ["BLAS_THREAD_VARIABLES", "blas_threads", "command_blas_threads", "explicit_blas_variable",
+           "one_blas_thread"]
 
 #: Environment variables a BLAS reads its thread count from (OpenBLAS, its GotoBLAS name, OpenMP
 #: builds and OpenBLAS's fallback, MKL, BLIS): one set, not empty, is the user's choice.
 BLAS_THREAD_VARIABLES = ("OPENBLAS_NUM_THREADS", "GOTO_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS",
                          "BLIS_NUM_THREADS")
+
+#: What a command's own process sets to 1 before any BLAS loads (not OMP_NUM_THREADS: the compiled
+#: regressor's OpenMP loop keeps its threads).
+COMMAND_VARIABLES = ("OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS", "BLIS_NUM_THREADS")
 
 # True inside a limit already set (the toolkit's or the caller's blas_threads): calls leave the pool as it is.
 _LIMITED = contextvars.ContextVar("rx90sym_blas_limited", default=False)
@@ -87,3 +94,20 @@ def blas_threads(threads: int) -> Iterator[None]:
         raise ValueError(f"blas_threads: threads must be >= 1, got {threads!r}")
     with _limit(int(threads)):
         yield
+
+
+@contextlib.contextmanager
+def command_blas_threads() -> Iterator[None]:
+    """The same rule for a command's whole process (``rx90``). Before NumPy is loaded and with no
+    variable naming the count, the process's own environment gets :data:`COMMAND_VARIABLES` = 1:
+    every BLAS it loads afterwards starts on one thread (its child processes too), and nothing is
+    imported for it (a threadpoolctl limit reaches only the libraries already loaded: it would load
+    SciPy first, doubling the time of a light command such as ``rx90 model``). Once NumPy is loaded
+    (the command run from Python): :func:`one_blas_thread` for the block."""
+    if "numpy" in sys.modules or explicit_blas_variable() is not None:
+        with one_blas_thread():
+            yield
+        return
+    for name in COMMAND_VARIABLES:
+        os.environ[name] = "1"
+    yield

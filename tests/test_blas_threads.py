@@ -6,6 +6,11 @@ reads the counts threadpoolctl reports from inside an inner function the public 
 """
 from __future__ import annotations
 
+import json
+import os
+import subprocess
+import sys
+
 import pytest
 import scipy.linalg  # noqa: F401  (scipy's own BLAS loaded, so that both libraries are checked)
 from threadpoolctl import threadpool_info, threadpool_limits
@@ -86,20 +91,19 @@ def test_the_callers_count_is_back_when_the_call_raises(short_run, no_thread_var
 
 
 @pytest.mark.parametrize("choice", ["environment", "blas_threads"])
-def test_an_explicit_choice_is_kept_inside_the_call(short_run, no_thread_variables, monkeypatch, choice):
+def test_an_explicit_choice_is_kept_inside_the_call(no_thread_variables, monkeypatch, choice):
     """OPENBLAS_NUM_THREADS in the environment (as the command honours it) or the caller's own
-    rx90sym.blas_threads: the fit runs at the caller's count."""
-    robot, rec, processing = short_run
-    seen = []
-    recorder(monkeypatch, streamed, "solve_joint_systems", seen)
+    rx90sym.blas_threads: the toolkit's rule (what the calls above run in) keeps the caller's count."""
+    with threads.one_blas_thread():
+        assert set(blas_counts()) == {1}  # the rule without a choice, for contrast
     if choice == "environment":
         monkeypatch.setenv("OPENBLAS_NUM_THREADS", str(CALLER))
-        with threadpool_limits(limits=CALLER, user_api="blas"):
-            identify.fit(robot, [rec], processing)
+        with threadpool_limits(limits=CALLER, user_api="blas"), threads.one_blas_thread():
+            inside = blas_counts()
     else:
-        with rx90sym.blas_threads(CALLER):
-            identify.fit(robot, [rec], processing)
-    assert seen and all(set(c) == {CALLER} for c in seen), seen
+        with rx90sym.blas_threads(CALLER), threads.one_blas_thread():
+            inside = blas_counts()
+    assert len(inside) >= 2 and set(inside) == {CALLER}, inside
 
 
 def test_nested_calls_limit_once(short_run, no_thread_variables, monkeypatch):
@@ -120,7 +124,7 @@ def test_nested_calls_limit_once(short_run, no_thread_variables, monkeypatch):
 
 
 def test_the_command_runs_blas_on_one_thread(short_run, no_thread_variables, monkeypatch, tmp_path, capsys):
-    """rx90 identify in this process (no thread variable): the same rule as the library."""
+    """rx90 identify run from Python (NumPy loaded, no thread variable): one thread inside it too."""
     from identify.app import cli
 
     robot, rec, _ = short_run
@@ -133,6 +137,37 @@ def test_the_command_runs_blas_on_one_thread(short_run, no_thread_variables, mon
         assert cli.main(["identify", str(log), "--robot", "ur10e", "--cutoff", "8", "--delay", "0"]) == 0
         assert blas_counts() == before
     assert seen and all(c == [1] * len(before) for c in seen), seen
+
+
+PROCESS = """
+import json, os
+from rx90sym.threads import command_blas_threads
+with {manager}:
+    import numpy, scipy.linalg
+    from threadpoolctl import threadpool_info
+    counts = [d["num_threads"] for d in threadpool_info()
+              if d["user_api"] == "blas" and d.get("threading_layer") != "disabled"]
+print(json.dumps([counts, os.environ.get("OPENBLAS_NUM_THREADS")]))
+"""
+
+
+def process_counts(manager: str, **variables: str) -> tuple[list[int], str | None]:
+    """A fresh process that loads numpy and scipy inside ``manager``: its BLAS counts and its
+    OPENBLAS_NUM_THREADS, with ``variables`` as the only thread variables of its environment."""
+    env = {k: v for k, v in os.environ.items() if k not in threads.BLAS_THREAD_VARIABLES} | variables
+    done = subprocess.run([sys.executable, "-c", PROCESS.format(manager=manager)], env=env, capture_output=True,
+                          text=True, timeout=300)
+    assert done.returncode == 0, done.stderr
+    return tuple(json.loads(done.stdout.splitlines()[-1]))
+
+
+def test_the_command_process_starts_every_blas_on_one_thread_unless_a_variable_names_the_count():
+    """rx90's process (numpy not loaded yet): one thread for every BLAS it loads later; with
+    OMP_NUM_THREADS given, what a plain process gets with it, and OPENBLAS_NUM_THREADS left unset."""
+    counts, openblas = process_counts("command_blas_threads()")
+    assert len(counts) >= 2 and set(counts) == {1} and openblas == "1"
+    given = process_counts("command_blas_threads()", OMP_NUM_THREADS="2")
+    assert given == process_counts("open(os.devnull)", OMP_NUM_THREADS="2") and given[1] is None
 
 
 def test_blas_threads_refuses_a_count_below_one():

@@ -50,16 +50,23 @@ def join_negative_values(argv: Sequence[str]) -> list[str]:
 def main(argv: Sequence[str] | None = None) -> int:
     parser = build_parser()
     args = parser.parse_args(join_negative_values(sys.argv[1:] if argv is None else argv))
-    from identify.estimation.consistency.errors import SolverError  # after --help and --version have exited
-    from rx90sym.threads import one_blas_thread
+    from rx90sym.threads import command_blas_threads  # after --help and --version have exited
+
+    # The library's BLAS rule for the whole command, entered before anything loads NumPy
+    # (rx90sym.threads: one thread unless an environment variable such as OPENBLAS_NUM_THREADS names the count).
+    with command_blas_threads():
+        return _run(args)
+
+
+def _run(args: argparse.Namespace) -> int:
+    """The parsed command run: its exit code (0, 1 a failed solver, 2 bad input, one line on stderr)."""
+    from identify.estimation.consistency.errors import SolverError
 
     def show_warning(message, category, filename, lineno, file=None, line=None) -> None:
         print(f"[{PROG}] warning: {message}", file=sys.stderr, flush=True)
 
     try:
-        # The library's BLAS rule for the whole command (rx90sym.threads: one thread unless an
-        # environment variable such as OPENBLAS_NUM_THREADS names the count).
-        with warnings.catch_warnings(), one_blas_thread():
+        with warnings.catch_warnings():
             warnings.showwarning = show_warning  # one plain line, restored on exit
             return int(args.func(args) or 0)
     except SolverError as exc:
