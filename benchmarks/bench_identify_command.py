@@ -36,6 +36,16 @@ from motions import multisine  # noqa: E402
 TARGET_S = 3.0
 
 
+def write_twin_log(path: Path, duration: float = 50.0, seed: int = 0) -> int:
+    """The benchmark's recording written to ``path`` (CSV): a UR10e twin run of ``duration`` s at
+    100 Hz (tests/motions.py multisine, quantised noise); returns its sample count."""
+    robot = rx90sym.load_robot("ur10e")
+    rec = simulate(robot, multisine(robot, seed, duration=duration), duration=duration, rate=100.0,
+                   noise="quantised", seed=seed)
+    write_recording(path, rec, robot)
+    return rec.t.size
+
+
 def run(argv: list[str]) -> tuple[float, float]:
     """(wall, CPU) seconds of one run of ``argv`` (CPU: user + system of the child and its own children)."""
     before = resource.getrusage(resource.RUSAGE_CHILDREN)
@@ -62,17 +72,14 @@ def main() -> None:
     ap.add_argument("--duration", type=float, default=50.0, help="twin run length [s], default 50")
     ap.add_argument("--seed", type=int, default=0)
     args = ap.parse_args()
-    robot = rx90sym.load_robot("ur10e")
-    rec = simulate(robot, multisine(robot, args.seed, duration=args.duration), duration=args.duration, rate=100.0,
-                   noise="quantised", seed=args.seed)
     with tempfile.TemporaryDirectory() as tmp:
         log, out = Path(tmp) / "run.csv", Path(tmp) / "fit.json"
-        write_recording(log, rec, robot)
+        samples = write_twin_log(log, args.duration, args.seed)
         identify = [sys.executable, "-m", "identify.app.cli", "identify", str(log), "--robot", "ur10e", "--json", str(out)]
         defaults = best(identify, args.repeat)
         cutoff = json.loads(out.read_text())["cutoff_hz"]
         fixed = best(identify + ["--cutoff", repr(cutoff)], args.repeat)
-    print(f"UR10e twin, {args.duration:g} s at 100 Hz ({rec.t.size} samples, 6 joints), seed {args.seed}; "
+    print(f"UR10e twin, {args.duration:g} s at 100 Hz ({samples} samples, 6 joints), seed {args.seed}; "
           f"best of {args.repeat} runs each; OPENBLAS_NUM_THREADS {os.environ.get('OPENBLAS_NUM_THREADS', 'unset')}\n")
     head = f"{'rx90 identify':<34} {'wall [s]':>9} {'CPU [s]':>9} {'CPU / fixed':>12} {'CPU / target':>13}"
     print(head + "\n" + "-" * len(head))

@@ -18,12 +18,15 @@ from typing import Any, Iterator, TextIO
 
 import numpy as np
 
+from rx90sym.threads import one_blas_thread
+
 from .model import ExcitationModel
 from .optimiser import StartResult, run_starts
 from .options import OptimiserOptions, check_request
 from .trajectory import Form, SolveInfo, Trajectory
 
 
+@one_blas_thread()
 def optimise_model(model: ExcitationModel, form: Form, *, seed: int = 0, starts: int = 4,
                    time_budget: float | None = None, options: OptimiserOptions | None = None,
                    progress: bool | TextIO = True, client: Any = None) -> Trajectory:
@@ -36,6 +39,7 @@ def optimise_model(model: ExcitationModel, form: Form, *, seed: int = 0, starts:
     client: a dask.distributed.Client to run the starts on its workers (None: in this process).
     Raises ValueError for requests that cannot be met (see optimiser.check_request) and when no
     start holds every limit on the fine grid and excites every base parameter.
+    BLAS on one thread inside the call, the caller's count back after it (rx90sym.threads).
     """
     options = options or OptimiserOptions()
     if starts < 1:

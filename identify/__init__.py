@@ -3,6 +3,11 @@
 Recordings and their checks, derivatives and parallel filtering, the observation matrix
 (eqs. 6-8), (weighted) least squares with statistics (eqs. 9-15), essential parameters,
 physically consistent least squares (LMIs, cvxpy), validation, and payload identification.
+
+The calls that do the work run numpy's and scipy's BLAS on one thread, as the ``rx90`` command
+does (tall, thin least squares: a second thread costs more than it gives), and give the caller
+its count back; an environment variable such as OPENBLAS_NUM_THREADS, or
+``rx90sym.blas_threads(n)`` around the calls, keeps the caller's count (:mod:`rx90sym.threads`).
 """
 from rx90sym.lazy import lazy_package
 

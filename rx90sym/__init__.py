@@ -40,6 +40,7 @@ _EXPORTS = {
     "default_parameters": "rx90sym.twin",
     "momentum_regressors": "rx90sym.momentum",
     "base_momentum_regressors": "rx90sym.momentum",
+    "blas_threads": "rx90sym.threads",
 }
 _SUBMODULES = ('datasets', 'twin')
 
@@ -51,6 +52,7 @@ __all__ = [
     "load_payload", "FlangePayload", "flange_payload", "ur_script", "franka_load", "twin", "datasets", "add_payload", "payload_regressor_columns", "default_parameters",
     "pinocchio_model", "nominal_parameters", "UrdfChain", "UrdfError", "load_urdf", "urdf_parameters",
     "write_urdf", "write_mjcf", "momentum_regressors", "base_momentum_regressors",
+    "blas_threads",
 ]
 
 lazy_package(__name__, _EXPORTS, _SUBMODULES)

@@ -6,7 +6,6 @@ is not the user's (a solver that did not converge is reported, never returned as
 from __future__ import annotations
 
 import argparse
-import os
 import re
 import sys
 import warnings
@@ -48,20 +47,20 @@ def join_negative_values(argv: Sequence[str]) -> list[str]:
     return out
 
 
-def one_blas_thread() -> None:
-    """OpenBLAS on one thread unless ``OPENBLAS_NUM_THREADS`` says otherwise, set before NumPy loads
-    it (a process that has loaded NumPy already keeps its own): the toolkit's least squares are tall
-    and thin (tens of columns, many small factorisations), where OpenBLAS's threads spin more than
-    they compute, the more so on a shared machine (benchmarks/bench_identify_command.py)."""
-    if "numpy" not in sys.modules:
-        os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
-
-
 def main(argv: Sequence[str] | None = None) -> int:
     parser = build_parser()
     args = parser.parse_args(join_negative_values(sys.argv[1:] if argv is None else argv))
-    one_blas_thread()
-    from identify.estimation.consistency.errors import SolverError  # after --help and --version have exited
+    from rx90sym.threads import command_blas_threads  # after --help and --version have exited
+
+    # The library's BLAS rule for the whole command, entered before anything loads NumPy
+    # (rx90sym.threads: one thread unless an environment variable such as OPENBLAS_NUM_THREADS names the count).
+    with command_blas_threads():
+        return _run(args)
+
+
+def _run(args: argparse.Namespace) -> int:
+    """The parsed command run: its exit code (0, 1 a failed solver, 2 bad input, one line on stderr)."""
+    from identify.estimation.consistency.errors import SolverError
 
     def show_warning(message, category, filename, lineno, file=None, line=None) -> None:
         print(f"[{PROG}] warning: {message}", file=sys.stderr, flush=True)

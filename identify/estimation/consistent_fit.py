@@ -17,6 +17,7 @@ import numpy as np
 
 import rx90sym
 from rx90sym.physical import DEFAULT_MARGIN
+from rx90sym.threads import one_blas_thread
 
 from identify.estimation.results import IdentificationResult, json_number
 
@@ -146,6 +147,7 @@ def data_share(A: np.ndarray, information: np.ndarray, prior_precision: np.ndarr
     return np.clip(np.where(np.any(A != 0, axis=1), share, 0.0), 0.0, 1.0)
 
 
+@one_blas_thread()
 def consistent_fit(robot: rx90sym.Robot, wls: IdentificationResult, columns: Any, prior: Any = None,
                    prior_weight: float | str = "auto", factors: Any = None, *, offsets: Sequence[int] = (),
                    margin: float = DEFAULT_MARGIN, solver: str = "CLARABEL", bounds: Mapping[str, Any] | None = None,

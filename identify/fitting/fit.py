@@ -16,6 +16,7 @@ from typing import TYPE_CHECKING, Any, Sequence
 import numpy as np
 
 import rx90sym
+from rx90sym.threads import one_blas_thread
 
 from identify.estimation.consistency.body_prior import DEFAULT_DIVERGENCE, BodyPrior, body_prior
 from identify.estimation.consistent_fit import check_prior_weight
@@ -45,6 +46,7 @@ def _spring_label(robot: rx90sym.Robot, base: Any) -> str:
     return "none" if robot.spring is None else "default"
 
 
+@one_blas_thread()
 def fit(robot: rx90sym.Robot, recordings: Sequence[Any], processing: Processing | None = None,
         method: str = "wls", *, base: Any = None, gains: DriveGains | None = None,
         convention: str | None = None, spring_source: str | None = None,
@@ -95,6 +97,11 @@ def fit(robot: rx90sym.Robot, recordings: Sequence[Any], processing: Processing 
     cross-validation's blocks gets the fixed defaults (``choice["skipped"]`` says why), a torque delay
     at the search bound is not applied. An error raised once the processing is chosen carries the
     choice as its attribute ``processing_choice`` (its ``table()``).
+    Threads: the BLAS runs on one thread inside the call, as in ``rx90 identify`` (the least squares
+    are tall and thin: a second thread spins more than it computes, the more so on a busy or
+    many-core machine); the caller's count is back after the call, also when it raises. An
+    environment variable naming the count (OPENBLAS_NUM_THREADS, OMP_NUM_THREADS, ...) or the
+    caller's ``rx90sym.blas_threads(n)`` keeps the caller's count instead (:mod:`rx90sym.threads`).
     """
     if method not in METHODS:
         raise ValueError(f"fit: method must be one of {METHODS}, got {method!r}")

@@ -10,6 +10,7 @@ from dataclasses import dataclass
 from typing import Any, Mapping, Sequence
 
 import rx90sym
+from rx90sym.threads import one_blas_thread
 
 from identify.fitting.fit import fit
 from identify.fitting.record import Fit
@@ -38,6 +39,7 @@ class FleetFit:
         return "\n".join(lines)
 
 
+@one_blas_thread()
 def fit_fleet(fleet: Mapping[str, tuple[rx90sym.Robot, Sequence[Any]]], processing: Processing | None = None,
               method: str = "wls", *, block: int = DEFAULT_BLOCK, client: Any = None, **options: Any) -> FleetFit:
     """Fit every robot of ``fleet`` (label -> (robot, its recordings or CSV paths)) on its own logs.
@@ -45,6 +47,7 @@ def fit_fleet(fleet: Mapping[str, tuple[rx90sym.Robot, Sequence[Any]]], processi
     processing, method and ``options`` (base, gains, convention, ...) go to :func:`identify.fit` for
     every robot, with ``block`` samples per block; ``client`` spreads every robot's blocks over a
     Dask cluster.
+    BLAS on one thread inside the call, the caller's count back after it (rx90sym.threads).
     """
     if not fleet:
         raise ValueError("fit_fleet: no robot given")

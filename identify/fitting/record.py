@@ -11,6 +11,7 @@ import numpy as np
 
 import rx90sym
 from rx90sym.files import write_json
+from rx90sym.threads import one_blas_thread
 
 from identify.estimation.bootstrap import BLOCK_S, DRAWS, segment_bootstrap_std
 from identify.estimation.consistent_fit import ConsistentResult
@@ -215,12 +216,14 @@ class Fit:
         """This fit with its plausibility flags recorded (saved in the file's ``flags``)."""
         return replace(self, flags=tuple(flags))
 
+    @one_blas_thread()
     def with_essential(self) -> "Fit":
         """This fit with its essential parameters (eqs. 16-17) computed."""
         from identify.estimation.essential import essential_parameters
 
         return replace(self, essential=essential_parameters(self.least_squares))
 
+    @one_blas_thread()
     def bootstrapped(self, seed: int = 0, draws: int = BOOTSTRAP_DRAWS, block_s: float = BOOTSTRAP_BLOCK_S) -> "Fit":
         """This fit with the segment-bootstrap σ of each estimate (blocks of ``block_s`` s)."""
         obs = self.observation

@@ -21,6 +21,7 @@ from typing import Any, Iterable, Sequence
 import numpy as np
 
 import rx90sym
+from rx90sym.threads import one_blas_thread
 
 from identify.estimation.bootstrap import BLOCK_S, DRAWS, SegmentBootstrap
 from identify.estimation.incremental_qr import JointFactors, stacked_rows
@@ -211,6 +212,7 @@ def _left_out(robot: rx90sym.Robot, scans: Sequence[Scan]) -> tuple[int, ...]:
     return left
 
 
+@one_blas_thread()
 def estimate_delay(robot: rx90sym.Robot, recordings: Sequence[Any], base: Any = None, cutoff: float | None = None,
                    decimate_to: float | None = DEFAULT_DECIMATE_TO, spring: bool = True,
                    min_velocity: float | None = None, rest: RestPolicy = "drop", max_delay: float = 0.02,
@@ -220,7 +222,8 @@ def estimate_delay(robot: rx90sym.Robot, recordings: Sequence[Any], base: Any = 
     within ±``max_delay`` s, read block by block: the torques shifted by each lag of a grid of ``steps``
     points (at least one sampling period apart) are extra right-hand sides of the per-joint factors, the
     best refined by a parabola (:mod:`identify.estimation.delay`). The filtering options are those of
-    :func:`identify.observation_matrix` (cutoff None: the automatic cut-off)."""
+    :func:`identify.observation_matrix` (cutoff None: the automatic cut-off).
+    BLAS on one thread inside the call, the caller's count back after it (rx90sym.threads)."""
     if not (max_delay > 0 and np.isfinite(max_delay)):
         raise ValueError(f"max_delay must be a positive duration in s, got {max_delay!r}")
     sources = [block_source(r, robot, convention, gains) for r in recordings]

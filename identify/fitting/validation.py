@@ -16,6 +16,7 @@ from typing import Any, Sequence
 import numpy as np
 
 import rx90sym
+from rx90sym.threads import one_blas_thread
 
 from identify.observation.defaults import DEFAULT_DECIMATE_TO
 from identify.observation.matrix import presliding_base
@@ -264,6 +265,7 @@ def base_vector(result: IdentificationResult, base: Any, robot: rx90sym.Robot) -
     return np.array([values.get(nm, 0.0) for nm in base.names])
 
 
+@one_blas_thread()
 def predict(robot: rx90sym.Robot, result: IdentificationResult, recording: Any, base: Any = None,
             cutoff: float | None = None, decimate_to: float | None | str = DEFAULT_DECIMATE_TO, spring: bool = True,
             min_velocity: float | None = None, delay: float = 0.0, rest: RestPolicy = "zero-coulomb",
@@ -289,6 +291,7 @@ def predict(robot: rx90sym.Robot, result: IdentificationResult, recording: Any, 
     rollout: window lengths [s] ("0.25,0.5" or numbers): the bodies of ``result`` (a consistent fit's
     ``standard``) rolled out in MuJoCo with this processing (identify.rollout.run.roll_out; the
     validation's ``rollout``); None: not.
+    BLAS on one thread inside the call, the caller's count back after it (rx90sym.threads).
     """
     if base is None:  # the symbolic base, with the torque offsets the fit chose (OFFj in the result)
         base = offset_base(rx90sym.base_parameters(robot), result_offsets(result, robot))
@@ -392,6 +395,7 @@ def scored_validation(raw: RawScores, source: str, min_velocity: float | None, c
         baseline_predicted=raw.baseline, user_rms_error=u_all, user_rms_error_moving=u_mov, user_predicted=raw.user)
 
 
+@one_blas_thread()
 def validate(robot: rx90sym.Robot, result: IdentificationResult, recording: Any, **options: Any) -> Validation:
     """Cross-validation: torque error per joint on a recording not used in the fit (see :func:`predict`)."""
     return predict(robot, result, recording, **options)

@@ -29,6 +29,7 @@ import numpy as np
 import rx90sym
 from rx90sym.parameters import PAYLOAD_NAMES
 from rx90sym.recording import RecordingError
+from rx90sym.threads import one_blas_thread
 
 from identify.estimation.bootstrap import BLOCK_S, DRAWS, SegmentBootstrap
 from identify.estimation.results import IdentificationResult, json_number
@@ -124,6 +125,7 @@ def _check_inputs(robot: rx90sym.Robot, empty: Sequence[Any], loaded: Sequence[A
                          f"number of each)")
 
 
+@one_blas_thread()
 def drive_gains(robot: rx90sym.Robot, empty: Sequence[Any], loaded: Sequence[Any], mass: float,
                 method: str = DEFAULT_METHOD, fix: Mapping[int, float] | None = None, mass_std: float = 0.0,
                 side: str | None = None, offsets: bool = True, flag_pct: float = FLAG_PCT,
@@ -161,6 +163,8 @@ def drive_gains(robot: rx90sym.Robot, empty: Sequence[Any], loaded: Sequence[Any
             when larger than eq. 13's, is the gain's (coloured residuals, window-to-window spread;
             None: none).
         client: a ``dask.distributed.Client`` running the blocks.
+
+    BLAS on one thread inside the call, the caller's count back after it (rx90sym.threads).
 
     Raises:
         ValueError: bad arguments, recordings without currents, runs that do not pair.

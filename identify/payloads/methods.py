@@ -27,6 +27,7 @@ import rx90sym
 from rx90sym.parameters import PAYLOAD_NAMES
 from rx90sym.physical import DEFAULT_MARGIN
 from rx90sym.rigid_body import RigidBody, physical_problem
+from rx90sym.threads import one_blas_thread
 
 from identify.estimation.consistency import ConsistencyError, pseudo_inertia
 from identify.estimation.consistency.fit import SOLVE_FACTOR
@@ -101,6 +102,7 @@ def processing_settings(options: Mapping[str, Any], block: int | None = None) ->
 # --------------------------------------------------------------------------------------------
 # The methods
 # --------------------------------------------------------------------------------------------
+@one_blas_thread()
 def payload(robot: rx90sym.Robot, method: int, empty: Sequence[Any] = (), loaded: Sequence[Any] = (),
             robot_params: Any = None, base: Any = None, a_priori: Mapping[str, float] | str | None = None,
             constrained: bool = False, mass: float | None = None, mass_tol: float = MASS_TOL,
@@ -122,6 +124,7 @@ def payload(robot: rx90sym.Robot, method: int, empty: Sequence[Any] = (), loaded
     [s], spring; an identification's are ``Fit.filtering()``); client: a ``dask.distributed.Client``
     running the blocks; bootstrap_seed: seed of the segment bootstrap beside eq. 13's sigma
     (identify.estimation.bootstrap; None: no bootstrap).
+    BLAS on one thread inside the call, the caller's count back after it (rx90sym.threads).
     """
     if method not in METHODS:
         raise ValueError(f"payload: method must be 1, 2, 3 or 4, got {method!r}")
