@@ -141,7 +141,9 @@ def test_the_command_runs_blas_on_one_thread(short_run, caller_pool, monkeypatch
     identify.write_recording(log, rec, robot)
     seen = []
     recorder(monkeypatch, streamed, "solve_joint_systems", seen)
-    assert cli.main(["identify", str(log), "--robot", "ur10e", "--cutoff", "8", "--delay", "0"]) == 0
+    # --min-velocity 0: the twin's Coulomb term follows sign(q̇) through every slow pass.
+    assert cli.main(["identify", str(log), "--robot", "ur10e", "--cutoff", "8", "--delay", "0", "--min-velocity",
+                     "0"]) == 0
     assert blas_counts() == caller_pool
     assert seen and all(c == [1] * len(caller_pool) for c in seen), seen
 

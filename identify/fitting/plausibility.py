@@ -270,7 +270,9 @@ def judged_joints(torque_rms: Sequence[float], torque_limit: Sequence[float]) ->
 
 #: What a model worse than the description's, or one that explains little, most often means.
 LIKELY_CAUSES = ("check the torque signs (rx90 convert --torque-signs), the drive gains (--gains, rx90 gains), the "
-                 "robot (is it the one recorded?), the joint order (swapped columns) and the units (rad, N m)")
+                 "robot (is it the one recorded?), the joint order (swapped columns) and the units (rad, N m); with "
+                 "a processing given, its rest policy (--rest crossing keeps the Coulomb term through short slow "
+                 "passes, as the model the user had does)")
 
 
 def heldout_flags(model: Sequence[float], model_blocks: Sequence[Sequence[float]], reference: Sequence[float],

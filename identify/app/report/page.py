@@ -154,7 +154,7 @@ figure{margin:0}figure img{max-width:100%;height:auto;display:block}
 figcaption{color:#57606a;font-size:.9em}
 footer{color:#57606a;font-size:.85em;margin:30px auto 20px;max-width:1500px;padding:0 24px}
 @media print{
- nav{display:none}body{font-size:9pt}header,main{max-width:none;padding:0}
+ nav{display:none}body{font-size:9pt}table{font-size:8pt}header,main{max-width:none;padding:0}
  .wrap{overflow:visible}th{cursor:auto;white-space:normal}td.text{white-space:normal}th,td{padding:1px 4px}
  .grid{grid-template-columns:1fr}
  h2{break-after:avoid}table,figure{break-inside:avoid}thead{display:table-header-group}
