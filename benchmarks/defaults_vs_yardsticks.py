@@ -142,14 +142,20 @@ def inside_fitted_data(f, fitted: list) -> None:
     from identify.io.blocks import block_source
 
     choice = f.choice
-    own = (choice["offset_candidate"] if choice.get("offsets") else choice["chosen"])["per_joint_pct"]
+    if choice.get("skipped"):
+        print(f"  inside the fitted data: not cross-validated ({choice['skipped']})")
+        return
+    held = f.identified.heldout if f.identified is not None else None
+    own = (held["per_joint_pct"] if held is not None else
+           (choice["offset_candidate"] if choice.get("offsets") else choice["chosen"])["per_joint_pct"])
     grid = [SimpleNamespace(cutoff=c["cutoff_hz"], decimate_to=c["decimate_to_hz"]) for c in choice["candidates"]]
     sources = [block_source(r, f.robot, f.model.convention, f.gains) for r in fitted]
     scans = scans_for_choice(sources, f.block)
     folds = yardstick_folds(f.robot, sources, scans, raw_span(scans, grid, choice["blocks"], f.delay),
                             f.processing.spring, f.block)
     print(f"  inside the fitted data ({choice['blocks']}-block cross-validation, held-back error [%]):")
-    print(_row("defaults (chosen processing)", own))
+    print(_row("defaults (identified model)" if held is not None else "defaults (chosen processing)",
+               [np.nan if v is None else v for v in own]))
     best = None
     for kind in ("plain", "user"):
         try:
@@ -158,7 +164,7 @@ def inside_fitted_data(f, fitted: list) -> None:
             continue
         print(_row("plain OLS" if kind == "plain" else "user model", per_joint))
         best = per_joint if best is None else np.fmin(best, per_joint)
-    print(_row("defaults / better", np.array(own, dtype=float) / best))
+    print(_row("defaults / better", np.array([np.nan if v is None else v for v in own], dtype=float) / best))
 
 
 # ----------------------------------------------------------------------------------------------- records
@@ -276,21 +282,24 @@ def timing() -> None:
           f"time: the machine is shared), of which the yardsticks' pass {base:.2f} s ({100 * base / total:.1f} %)")
 
 
-def twins(seeds: int, names: list[str] | None) -> bool:
-    """Per case the per-joint ratios to the better yardstick over the seeds; True when both twin targets hold."""
+def twins(seeds: int, names: list[str] | None, short: bool = False) -> bool:
+    """Per case the per-joint ratios to the better yardstick over the seeds; True when both twin targets hold.
+    short: the short point-to-point twins with the descriptions users hold (tests/twin_logs.py SHORT_CASES)."""
     sys.path.insert(0, str(ROOT / "tests"))
-    from twin_logs import CASES, twin_logs
+    from twin_logs import CASES, SHORT_CASES, short_logs, twin_logs
 
-    cases = [c for c in CASES if names is None or c.name in names]
+    cases = [c for c in (SHORT_CASES if short else CASES) if names is None or c.name in names]
     ok_all = True
-    print(f"\nTwins: chirp fitted, trapezoidal point-to-point motion predicted; seeds 0..{seeds - 1}; targets per "
+    what = ("short point-to-point motion fitted, another predicted; the description exact, 50 % off or not physical"
+            if short else "chirp fitted, trapezoidal point-to-point motion predicted")
+    print(f"\nTwins: {what}; seeds 0..{seeds - 1}; targets per "
           f"joint: median ratio to the better yardstick <= {TWIN_MEDIAN}, every run <= {TWIN_MAX}")
     with tempfile.TemporaryDirectory() as work:
         for case in cases:
             runs = {False: [], True: []}
             lines = []
             for seed in range(seeds):
-                logs = twin_logs(case, seed, Path(work))
+                logs = (short_logs if short else twin_logs)(case, seed, Path(work))
                 f = fit(logs.robot, [logs.fitted], Processing())
                 v = f.validate(logs.predicted)
                 for moving in runs:
@@ -304,8 +313,10 @@ def twins(seeds: int, names: list[str] | None) -> bool:
             med_m, top_m = np.nanmedian(moving, axis=0), np.nanmax(moving, axis=0)
             ok = bool(np.all(np.r_[med, med_m] <= TWIN_MEDIAN) and np.all(np.r_[top, top_m] <= TWIN_MAX))
             ok_all &= ok
-            print(f"\n  {case.name}: {logs.robot.n} joints, {case.rate:g} Hz, Stribeck static part "
-                  f"{case.stribeck:g} x FS, fit {case.fit_s:g} s chirp, predict {case.predict_s:g} s point-to-point")
+            print(f"\n  {case.name}: {logs.robot.n} joints, {case.rate:g} Hz, "
+                  + (f"description {case.kind}, fit {case.fit_s:g} s, predict {case.predict_s:g} s" if short else
+                     f"Stribeck static part {case.stribeck:g} x FS, fit {case.fit_s:g} s chirp, predict "
+                     f"{case.predict_s:g} s point-to-point"))
             print(f"  {'defaults / better':<30}" + "".join(f"{'j' + str(j + 1):>8}" for j in range(n)))
             for name, values in (("all samples, median", med), ("all samples, max", top),
                                  ("moving, median", med_m), ("moving, max", top_m)):
@@ -323,6 +334,8 @@ def main() -> int:
     ap.add_argument("--records", default=",".join(RECORDS), help=f"comma-separated (default all: {', '.join(RECORDS)})")
     ap.add_argument("--ur10e-gains", choices=("controller", "source", "identified"), default="controller")
     ap.add_argument("--twins", action="store_true", help="the twin cases (tests/twin_logs.py)")
+    ap.add_argument("--short-twins", action="store_true", help="the short point-to-point twins with the descriptions "
+                    "users hold (tests/twin_logs.py SHORT_CASES)")
     ap.add_argument("--seeds", type=int, default=5, help="twins: seeds 0..N-1 (default 5)")
     ap.add_argument("--cases", default=None, help="twins: comma-separated case names (default: all)")
     ap.add_argument("--timing", action="store_true", help="the default identification's time and the yardsticks'")
@@ -348,7 +361,9 @@ def main() -> int:
         timing()
     if args.twins:
         met.append(twins(args.seeds, args.cases.split(",") if args.cases else None))
-    print(f"\ntarget met on every joint of every record run{' and twin case' if args.twins else ''}: "
+    if args.short_twins:
+        met.append(twins(args.seeds, args.cases.split(",") if args.cases else None, short=True))
+    print(f"\ntarget met on every joint of every record run{' and twin case' if args.twins or args.short_twins else ''}: "
           f"{'yes' if all(met) else 'NO'}" + (f"; not run: {', '.join(failed)}" if failed else ""))
     return 0
 

@@ -175,6 +175,33 @@ def test_a_time_column_that_counts_samples_is_named_with_the_fix(tmp_path, tx40,
     assert code == 2 and not out.exists() and "counts samples" in err and "--period S" in err
 
 
+def test_a_counted_clock_is_retimed_from_the_motion(tmp_path, tx40):
+    """A 1 kHz log counted in samples whose logger lost cycles and logged others twice (as the Gen3's):
+    with --period, the rows repeated are dropped and those after a loss moved by the cycles lost
+    (identify.io.gaps.sample_periods), so the positions sit at their true times; read by the count,
+    they lag behind by every cycle lost."""
+    seconds = _log(tmp_path / "true.csv", 1000.0, 2.0)
+    table = np.loadtxt(seconds, delimiter=",", skiprows=1)
+    rng = np.random.default_rng(3)
+    lost = np.sort(rng.choice(np.arange(50, table.shape[0] - 50), 12, replace=False))
+    twice = np.sort(rng.choice(np.setdiff1d(np.arange(50, table.shape[0] - 50), lost), 7, replace=False))
+    rows = np.repeat(np.arange(table.shape[0]), np.where(np.isin(np.arange(table.shape[0]), twice), 2, 1))
+    logged = table[rows[~np.isin(rows, lost)]]
+    logged[:, 0] = np.arange(logged.shape[0])  # the counter
+    path = tmp_path / "counted.csv"
+    np.savetxt(path, logged, delimiter=",", header=seconds.read_text().splitlines()[0], comments="", fmt="%.10g")
+    rec = read_log(path, tx40, "_" + COLUMNS[1:], header=True, period=0.001)
+    log = rec.meta["log"]
+    assert log["lost_cycles"] == lost.size and log["stale_rows"] == twice.size, log
+    def truth(t):  # the controller angles of _log's motion
+        w = 2 * np.pi * np.array([0.3, 0.2, 0.25, 0.4, 0.35, 0.5])
+        return 0.4 * np.sin(np.outer(t, w)) + np.array([0.0, np.pi / 2, -np.pi / 2, 0.0, 0.0, 0.0])
+
+    retimed = np.abs(tx40.to_controller(rec.q) - truth(rec.t)).max()
+    counted = np.abs(logged[:, 1:7] - truth(logged[:, 0] / 1000.0)).max()
+    assert retimed < 1e-6 and counted > 1e3 * retimed, (retimed, counted)
+
+
 GEN3_LOG = SHARED / "data" / "kinova_gen3" / "RunTrajectory1.csv"
 GEN3 = Path(__file__).resolve().parent / "data" / "kinova_gen3" / "gen3.urdf"
 

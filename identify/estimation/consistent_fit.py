@@ -25,9 +25,11 @@ __all__ = ["ConsistentResult", "check_prior_weight", "consistent_fit", "data_sha
 
 #: A base parameter the data determine: least-squares relative σ under this [%] (eq. 15).
 DETERMINED_PCT = 10.0
-#: How far the prior may move a parameter the data determine from its least-squares estimate [σ]
+#: How far the model may move a base parameter the data determine from its least-squares estimate [σ]
 #: (or no further than the data alone move it, where physical consistency alone moves it more).
 DATA_BUDGET = 2.0
+#: λ = ∞ in the data share: the prior's weight this many times the data's information.
+_HELD = 1e10
 
 
 @dataclass(frozen=True, eq=False)
@@ -126,17 +128,13 @@ def _pct(v: float) -> str:
     return "—" if not np.isfinite(v) else f"{100 * v:.0f} %"
 
 
-def data_share(A: np.ndarray, information: np.ndarray, prior_precision: np.ndarray,
-               fixed: np.ndarray | None = None) -> np.ndarray:
+def data_share(A: np.ndarray, information: np.ndarray, prior_precision: np.ndarray) -> np.ndarray:
     """Per fit column β_i = a_iᵀ x the share the data determined: 1 − var_post / var_prior, with
     var = a_iᵀ P⁻¹ a_i, P_post = ``information`` + ``prior_precision``, P_prior = ``prior_precision``
-    (the quadratic approximation of the cost around the model); ``fixed``: the variables the prior
-    holds exactly (λ = ∞: they vary in neither; a column of those alone is the prior's, share 0)."""
-    free = np.ones(A.shape[1], bool) if fixed is None else ~np.asarray(fixed, bool)
-    A = A[:, free]
+    (the quadratic approximation of the cost around the model)."""
 
     def variances(P: np.ndarray) -> np.ndarray:
-        P = 0.5 * (P + P.T)[np.ix_(free, free)]
+        P = 0.5 * (P + P.T)
         d = np.sqrt(np.maximum(np.diag(P), 1e-300))
         lam, V = np.linalg.eigh(P / np.outer(d, d))  # Jacobi-scaled: the units of the variables do not matter
         inv = (V / np.maximum(lam, lam.max() * 1e-15)) @ V.T / np.outer(d, d)
@@ -151,7 +149,8 @@ def data_share(A: np.ndarray, information: np.ndarray, prior_precision: np.ndarr
 def consistent_fit(robot: rx90sym.Robot, wls: IdentificationResult, columns: Any, prior: Any = None,
                    prior_weight: float | str = "auto", factors: Any = None, *, offsets: Sequence[int] = (),
                    margin: float = DEFAULT_MARGIN, solver: str = "CLARABEL", bounds: Mapping[str, Any] | None = None,
-                   reference: Mapping[str, float] | None = None, spread: np.ndarray | None = None) -> ConsistentResult:
+                   reference: Mapping[str, float] | None = None, spread: np.ndarray | None = None,
+                   still: Sequence[int] = ()) -> ConsistentResult:
     """The identified model of a (W)LS fit on ``columns`` (module docstring).
 
     prior: a :class:`~identify.estimation.consistency.body_prior.BodyPrior` (None: the data alone, the
@@ -164,10 +163,14 @@ def consistent_fit(robot: rx90sym.Robot, wls: IdentificationResult, columns: Any
     ``total_mass``, ``com_boxes`` of :func:`identify.estimation.consistency.consistent_least_squares`;
     reference: values the tie-break pulls unseen variables toward (e.g. the description's rotor inertias);
     spread: σ of ``wls``'s estimates beside eq. 13's (the segment bootstrap's: their median ratio
-    inflates the σ of the least squares on the model's columns).
-    With "auto", no λ is chosen whose model moves a base parameter the data determine (relative σ of
-    the least squares on the same columns under :data:`DETERMINED_PCT` %) more than
-    :data:`DATA_BUDGET` σ from its estimate, or further than the data alone (λ = 0) move it.
+    inflates the σ of the least squares on the model's columns); still: the joints (0-based) that never move in
+    the fitted rows: their friction and rotor inertia are held at the description's (``reference``; 0
+    without), since no row weighs them (a prediction of their motion then carries no friction fitted to noise).
+    The base parameters the data determine (relative σ of the least squares on the same columns under
+    :data:`DETERMINED_PCT` %) are the data's at any λ: a Gaussian prior weighs only the deviations that
+    leave them unchanged (identify.estimation.consistency.weighted_fit), and with "auto" no λ is chosen
+    whose model (held physical) moves one more than :data:`DATA_BUDGET` σ from its estimate, or further
+    than the data alone move it.
     The result's names are the fit's columns then the offsets added.
     """
     from identify.estimation.consistency.errors import ConsistencyError
@@ -195,12 +198,16 @@ def consistent_fit(robot: rx90sym.Robot, wls: IdentificationResult, columns: Any
     cmap = column_map(robot, offset_base(columns, offsets), names)
     rows = int(sum(system.rows)) if system is not None else wls.rows
     least, least_std = _least_squares(R, z, scale, rows, wls, spread)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        determined = np.flatnonzero((100 * least_std / np.abs(least) < DETERMINED_PCT) & (least_std > 0))
     carried = {body: p10 for body, (p10, _) in carried_bodies(robot).items()} or None
     extra = _bounds(cmap, bounds)
+    held = _still_drives(cmap.names, still, reference)
 
     def make(fixed: bool, at: float | None = None) -> PriorProblem:
         return PriorProblem(cmap, prior, fixed=fixed, carried=carried, margin=margin, reference=reference,
-                            solver=solver, solve_margin=at, bounds=extra)
+                            solver=solver, solve_margin=at, bounds=extra, determined=cmap.A[determined],
+                            held=held)
 
     choice = None
     if prior is None:
@@ -211,11 +218,10 @@ def consistent_fit(robot: rx90sym.Robot, wls: IdentificationResult, columns: Any
         free, fixed_problem = make(False), make(True)
 
         def beta_at(w: float) -> np.ndarray:
-            problem = fixed_problem if math.isinf(w) else free
-            return cmap.beta(problem.solve(R, z, w, scale))
+            return cmap.beta((fixed_problem if math.isinf(w) else free).solve(R, z, w, scale))
 
-        keeps = _data_budget(names, least, least_std, beta_at)
-        choice = choose_prior_weight(factors, free, fixed_problem, offsets, keeps=keeps)
+        choice = choose_prior_weight(factors, free, fixed_problem, offsets,
+                                     keeps=_data_budget(names, least, least_std, determined, beta_at))
         weight = choice.chosen
     else:
         weight = float(prior_weight)
@@ -247,9 +253,9 @@ def consistent_fit(robot: rx90sym.Robot, wls: IdentificationResult, columns: Any
     beta = cmap.beta(x)
     info = cmap.A.T @ (R.T @ R) @ cmap.A
     tie = np.diag(scale * TIE_BREAK / problem.typical ** 2)
-    H = prior.hessian(cmap.names) if prior is not None else np.zeros_like(info)
-    held = np.isin(cmap.names, prior.names()) if fixed else None
-    share = data_share(cmap.A, info, 0.5 * (0.0 if fixed else weight) * H + tie, held)
+    # λ = ∞: the prior's directions held, as by a weight far above the data's information.
+    held = (_HELD * np.trace(info) / max(np.trace(problem.prior_precision(1.0)), 1e-300)) if fixed else weight
+    share = data_share(cmap.A, info, problem.prior_precision(held) + tie)
     residual_rms, weights, rows = _residuals(wls, system, beta)
     record = None
     if prior is not None:
@@ -258,6 +264,8 @@ def consistent_fit(robot: rx90sym.Robot, wls: IdentificationResult, columns: Any
                   "weight_label": "inf" if math.isinf(weight) else f"{weight:g}",
                   "links": [int(b) for b in prior.links], "notes": list(prior.notes),
                   "divergence_value": json_number(prior.value(dict(zip(cmap.names, x)))),
+                  "prior_term": json_number(problem.prior_term(x)),
+                  "determined": [names[k] for k in determined],
                   "choice": None if choice is None else choice.to_dict()}
     std = least_std
     cost = float(np.sum((R @ beta - z) ** 2))
@@ -295,25 +303,51 @@ def _least_squares(R: np.ndarray, z: np.ndarray, scale: float, rows: int, wls: I
     return beta, std
 
 
-def _data_budget(names: Sequence[str], least: np.ndarray, std: np.ndarray, beta_at: Any) -> Any:
-    """``keeps(λ)`` of :func:`~identify.estimation.prior_weight.choose_prior_weight`: why the model at λ
-    overrides a base parameter the data determine (None: it does not)."""
-    with np.errstate(divide="ignore", invalid="ignore"):
-        rel = 100 * std / np.abs(least)
-    determined = [k for k in range(len(names)) if rel[k] < DETERMINED_PCT and std[k] > 0]
-    if not determined:
+def _data_budget(names: Sequence[str], least: np.ndarray, std: np.ndarray, determined: np.ndarray,
+                 beta_at: Any) -> Any:
+    """``keeps(λ)`` of :func:`~identify.estimation.prior_weight.choose_prior_weight`: why the model at λ moves
+    a base parameter the data determine (indices ``determined``) more than :data:`DATA_BUDGET` σ from its
+    least-squares estimate, and further than the data alone move it (None: it does not)."""
+    if determined.size == 0:
         return None
-    alone = beta_at(0.0)
-    allowed = {k: max(DATA_BUDGET * std[k], abs(alone[k] - least[k])) for k in determined}
+    cache: dict[float, np.ndarray] = {}
+
+    def at(w: float) -> np.ndarray:
+        if w not in cache:
+            cache[w] = beta_at(w)
+        return cache[w]
 
     def keeps(weight: float) -> str | None:
-        beta = alone if weight == 0.0 else beta_at(weight)
-        k = max(determined, key=lambda i: (abs(beta[i] - least[i]) - allowed[i]) / std[i])
-        if abs(beta[k] - least[k]) <= allowed[k] * (1 + 1e-9):
+        from identify.estimation.consistency.errors import ConsistencyError
+
+        try:
+            alone, beta = at(0.0), at(weight)
+        except ConsistencyError as exc:
+            return f"has no solution ({exc})"
+        allowed = np.maximum(DATA_BUDGET * std[determined], np.abs(alone - least)[determined])
+        over = (np.abs(beta - least)[determined] - allowed) / std[determined]
+        k = int(np.argmax(over))
+        if over[k] <= 1e-9 * DATA_BUDGET:
             return None
-        return (f"moves {names[k]} {abs(beta[k] - least[k]) / std[k]:.1f} σ from its least-squares estimate "
-                f"(at most {allowed[k] / std[k]:.1f} σ)")
+        i = determined[k]
+        return (f"moves {names[i]} {abs(beta[i] - least[i]) / std[i]:.1f} σ from its least-squares estimate "
+                f"(at most {allowed[k] / std[i]:.1f} σ)")
     return keeps
+
+
+#: A joint's drive parameters: what a joint that never moves in the fitted rows holds at the description's.
+_DRIVES = ("IA", "FV", "FS", "FSP", "FSN", "FST", "FP")
+
+
+def _still_drives(names: Sequence[str], still: Sequence[int], reference: Mapping[str, float] | None) -> dict:
+    """name -> value of the drive parameters (rotor inertia, friction) of the joints ``still`` (0-based)."""
+    out = {}
+    for j in still:
+        for kind in _DRIVES:
+            name = f"{kind}{j + 1}"
+            if name in names:
+                out[name] = float((reference or {}).get(name, 0.0))
+    return out
 
 
 def check_prior_weight(value: Any) -> None:

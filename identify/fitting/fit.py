@@ -129,16 +129,19 @@ def model_prior(robot: rx90sym.Robot, physical_prior: Any, divergence: str = DEF
         return physical_prior if physical_prior.divergence == divergence else physical_prior.with_divergence(divergence)
     if physical_prior is None or (isinstance(physical_prior, str) and physical_prior == "none"):
         return None
+    from rx90sym.urdf_carried import carried_bodies
+
+    carried = {link: body for link, (body, _) in carried_bodies(robot).items()}
     if isinstance(physical_prior, str) and physical_prior == "description":
         from rx90sym.description_prior import description_prior
 
         described = description_prior(robot)
         if described is None:
             return None
-        return body_prior(described.values, robot.n, described.source, divergence, described.notes)
+        return body_prior(described.values, robot.n, described.source, divergence, described.notes, carried)
     values = rx90sym.nominal_parameters(robot, physical_prior)
     label = str(physical_prior) if not isinstance(physical_prior, dict) else "given parameters"
-    return body_prior(values, robot.n, label, divergence)
+    return body_prior(values, robot.n, label, divergence, carried=carried)
 
 
 def _fit_observation(robot: rx90sym.Robot, recordings: Sequence[Any], obs: Observation, p: Processing, method: str,
@@ -168,7 +171,8 @@ def _fit_observation(robot: rx90sym.Robot, recordings: Sequence[Any], obs: Obser
 
 
 def _identified(robot: rx90sym.Robot, wls: IdentificationResult, columns: Any, factors: Any,
-                options: dict[str, Any], given: bool = False, spread: np.ndarray | None = None) -> Any:
+                options: dict[str, Any], given: bool = False, spread: np.ndarray | None = None,
+                moving: np.ndarray | None = None) -> Any:
     """The identified model of the least-squares fit ``wls`` (identify.estimation.consistent_fit), fitted
     on ``factors`` with a torque offset on every joint that may have one (as the description's model:
     the prior's bodies with each joint's friction and offset fitted), unless the columns were ``given``."""
@@ -178,9 +182,10 @@ def _identified(robot: rx90sym.Robot, wls: IdentificationResult, columns: Any, f
     reference = {f"IA{j + 1}": v for j in range(robot.n) if (v := _description_value(robot, f"IA{j + 1}"))}
     offsets = [] if given else [j for j in offset_joints(robot, rx90sym.base_parameters(robot))
                                 if f"OFF{j + 1}" not in columns.names]
+    still = () if moving is None else tuple(int(j) for j in np.flatnonzero(np.asarray(moving) == 0))
     return consistent_fit(robot, wls, columns, options["prior"], options["prior_weight"], factors, offsets=offsets,
                           solver=options.get("solver", "CLARABEL"), bounds=bounds or None, reference=reference,
-                          spread=spread)
+                          spread=spread, still=still)
 
 
 def _description_value(robot: rx90sym.Robot, name: str) -> float:
@@ -231,7 +236,7 @@ def _fit_blocks(robot: rx90sym.Robot, recordings: Sequence[Any], processing: Any
     sources = [block_source(r, robot, convention, gains) for r in recordings]
     span = _model_span(sf)
     identified = _identified(robot, sf.result, base, _model_factors(robot, sources, sf, span, client), options,
-                             given=columns_given, spread=sf.bootstrap_std)
+                             given=columns_given, spread=sf.bootstrap_std, moving=sf.moving_fraction)
     result = identified if method == "consistent" else sf.result
     model = FitModel.of(robot, convention=convention, gains=gains.to_dict() if gains is not None else None,
                         rest=rest, min_velocity=p.min_velocity, spring=spring_source or _spring_label(robot, base),

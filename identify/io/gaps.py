@@ -20,6 +20,8 @@ and a 1 rad sine at 2 Hz, 4e-4 rad on samples that are not used as measurements 
 """
 from __future__ import annotations
 
+import warnings
+
 from dataclasses import dataclass
 from typing import Sequence
 
@@ -29,7 +31,7 @@ from rx90sym.recording import RecordingError
 
 from identify.io.defaults import DEFAULT_MAX_GAP
 
-__all__ = ["EDGE_PERIODS", "DEFAULT_MAX_GAP", "LOST_STEPS", "MIN_SEGMENT_ROWS", "SPLITS_LISTED", "Gap", "LogGaps", "stale_rows", "find_gaps",
+__all__ = ["RETIME_SPEED", "RETIME_TOLERANCE", "sample_periods", "EDGE_PERIODS", "DEFAULT_MAX_GAP", "LOST_STEPS", "MIN_SEGMENT_ROWS", "SPLITS_LISTED", "Gap", "LogGaps", "stale_rows", "find_gaps",
            "all_segments_short"]
 
 #: Samples dropped at each end by :func:`identify.signal.filtering.derivatives`, in periods of the cut-off frequency.
@@ -105,6 +107,34 @@ def stale_rows(values: np.ndarray, t_col: int, used: Sequence[int]) -> np.ndarra
     cols = [c for c in used if c != t_col]
     same = np.all(values[1:, cols] == values[:-1, cols], axis=1)
     return np.r_[False, same]
+
+
+#: Re-timing a clock that counts samples: a joint's speed must be at least this [rad/s] (over both rows)
+#: for its position step to time the row, and the steps of the joints that time it must agree on a whole
+#: number of periods within this share of a period.
+RETIME_SPEED, RETIME_TOLERANCE = 0.05, 0.3
+
+
+def sample_periods(q: np.ndarray, dq: np.ndarray, period: float) -> np.ndarray:
+    """(N - 1,) the whole number of periods [s] between consecutive rows of a log whose clock counts samples,
+    from the positions (N, n) [rad] and the recorded velocities (N, n) [rad/s]: each joint moving at
+    least RETIME_SPEED over both rows times the step by its position change over its mean recorded speed,
+    the median of those rounded when it is a whole number within RETIME_TOLERANCE (0: the same cycle
+    logged again; 2 and more: cycles the logger lost), else 1 (no joint moving: the clock as it counts)."""
+    v = 0.5 * (dq[1:] + dq[:-1])
+    moving = (np.abs(dq[1:]) >= RETIME_SPEED) & (np.abs(dq[:-1]) >= RETIME_SPEED) & (np.sign(dq[1:]) == np.sign(dq[:-1]))
+    with np.errstate(divide="ignore", invalid="ignore"):
+        ratio = np.where(moving, np.diff(q, axis=0) / (v * period), np.nan)
+    out = np.ones(ratio.shape[0], dtype=int)
+    timed = moving.any(axis=1)
+    if timed.any():
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", RuntimeWarning)  # rows with no joint moving: NaN, kept at 1
+            k = np.nanmedian(ratio[timed], axis=1)
+        whole = np.round(k)
+        sure = (np.abs(k - whole) <= RETIME_TOLERANCE) & (whole >= 0)
+        out[np.flatnonzero(timed)[sure]] = whole[sure].astype(int)
+    return out
 
 
 def find_gaps(t: np.ndarray, numbers: Sequence[int], max_gap: float = DEFAULT_MAX_GAP) -> LogGaps:

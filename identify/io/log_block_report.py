@@ -22,6 +22,7 @@ class BlockReport:
     def __init__(self) -> None:
         self.first_line = self.last_line = None
         self.rows = self.samples = self.stale = self.bridged = 0
+        self.retimed_lost = 0  # cycles a counted clock lost, found from the positions (identify.io.gaps.sample_periods)
         self.stale_lines: list[int] = []
         self.steps = StepCounts()  # every step of the log: the figures of the whole-log reader
         self.gap, self.gap_lines = -1.0, [0, 0]
@@ -74,4 +75,4 @@ class BlockReport:
         return {"lines": [self.first_line, self.last_line], "rows": self.rows, "stale_rows": self.stale,
                 "stale_lines": self.stale_lines, **step_figures(self.steps, TIME_RTOL), "largest_gap_s": self.gap,
                 "largest_gap_lines": self.gap_lines, "gaps": gaps, "bridged_samples": self.bridged,
-                "samples": self.samples, "t0_s": self.t0_s}
+                "samples": self.samples, "t0_s": self.t0_s, "lost_cycles": self.retimed_lost}

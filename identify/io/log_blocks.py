@@ -34,7 +34,7 @@ from identify.io.gaps import DEFAULT_MAX_GAP
 from identify.io.log_block_report import BlockReport
 from identify.io.log_fields import SPLITS_LISTED, file_fields
 from identify.io.log_rows import ABSURD, LogLines, check_header, header_cells, parse_rows
-from identify.io.log_stream import collected, log_parts, log_report
+from identify.io.log_stream import collected, log_parts, log_report, retimed_rate
 from identify.io.logs import log_options
 from identify.io.torque_signs import parse_torque_signs
 
@@ -260,8 +260,9 @@ def read_log(path: str | os.PathLike[str], robot: rx90sym.Robot, columns: str | 
     cmap, conv, drive, blocks = _log_blocks(p, robot, columns, header, rows, t_from, t_to, gains, convention,
                                             period, block)
     report = BlockReport()
+    resample = retimed_rate(resample, period, cmap)
     rec = collected(log_parts(blocks, cmap, robot, conv, p.name, report, resample, max_gap, segments, drive,
-                              stale=period is None, signs=signs), resample is not None)
+                              stale=period is None, signs=signs, period=period), resample is not None)
     from dataclasses import replace
 
     return replace(rec, meta={**rec.meta, "log": _report(report, cmap, max_gap, resample, drive, conv, period,
@@ -283,8 +284,9 @@ def convert_log(path: str | os.PathLike[str], robot: rx90sym.Robot, columns: str
     cmap, conv, drive, blocks = _log_blocks(p, robot, columns, header, rows, t_from, t_to, gains, convention,
                                             period, block)
     report = BlockReport()
+    resample = retimed_rate(resample, period, cmap)
     parts = log_parts(blocks, cmap, robot, conv, p.name, report, resample, max_gap, segments, drive,
-                      stale=period is None, signs=signs)
+                      stale=period is None, signs=signs, period=period)
 
     def write(fh: IO) -> None:
         fields_at = None

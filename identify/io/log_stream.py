@@ -29,7 +29,8 @@ from rx90sym.recording import Recording, RecordingError
 
 from identify.io.columns import ColumnMap
 from identify.io.gains import DriveGains, apply_gains
-from identify.io.gaps import DEFAULT_MAX_GAP, MIN_SEGMENT_ROWS, LogGaps, all_segments_short, find_gaps, stale_rows
+from identify.io.gaps import (DEFAULT_MAX_GAP, MIN_SEGMENT_ROWS, LogGaps, all_segments_short, find_gaps, sample_periods,
+                              stale_rows)
 from identify.io.log_block_report import BlockReport
 from identify.io.logs import (LISTED_ROWS, STILL, check_increasing, check_positions, check_velocities, gains_label,
                               irregular_refusal, log_drive, refuse_splits)
@@ -39,7 +40,7 @@ from identify.io.torque_signs import with_torque_signs
 from identify.io.units import check_units, sample_clock_refusal
 from identify.io.unlogged import ColumnRange, constant_channels, constant_message
 
-__all__ = ["SPLINE_MARGIN", "collected", "log_parts", "log_report", "rows_to_recording"]
+__all__ = ["retimed_rate", "SPLINE_MARGIN", "collected", "log_parts", "log_report", "rows_to_recording"]
 
 #: Samples beyond a resampled block's end: the not-a-knot spline's dependence on far samples decays
 #: by ≈ 0.27 per sample, so 40 samples change an interpolated value by < 1e-20 of the signal.
@@ -97,10 +98,13 @@ class _LogStream:
 
     def __init__(self, cmap: ColumnMap, robot: rx90sym.Robot, conv: str, source: str, resample: float | None,
                  max_gap: float, segments: bool, report: BlockReport, window: bool = True,
-                 stale: bool = True) -> None:
+                 stale: bool = True, period: float | None = None) -> None:
         self.cmap, self.robot, self.conv, self.source = cmap, robot, conv, source
         self.resample, self.max_gap, self.segments, self.report = resample, max_gap, segments, report
         self.window, self.stale = window, stale
+        # A clock that counts samples (its period given) is re-timed from the positions and recorded velocities.
+        self.period = period if period is not None and cmap.qd else None
+        self.shift = 0  # the periods the re-timed clock is ahead of the counted one
         self.used = [c for c, name in enumerate(cmap.names) if name != "_"]
         self.last_raw: np.ndarray | None = None
         self.last_kept: tuple[np.ndarray, list[int]] | None = None
@@ -118,6 +122,8 @@ class _LogStream:
         stale = (stale_rows(both, self.cmap.t, self.used)[both.shape[0] - values.shape[0]:] if self.stale
                  else np.zeros(values.shape[0], dtype=bool))
         self.last_raw = values[-1:]
+        if self.period is not None:
+            values, stale = self._retimed(both, values, stale)
         report.stale += int(stale.sum())
         report.stale_lines += [numbers[k] for k in np.flatnonzero(stale)[:max(0, LISTED_ROWS - len(report.stale_lines))]]
         values, numbers = values[~stale], [n for n, s in zip(numbers, stale) if not s]
@@ -132,6 +138,20 @@ class _LogStream:
             yield from self._kept(values, numbers, new)
         if last:
             yield from self._end(final=True)
+
+    def _retimed(self, both: np.ndarray, values: np.ndarray, stale: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """The block's rows on the clock of the motion (identify.io.gaps.sample_periods): a row logged again
+        within one cycle is stale (dropped), the rows after cycles the logger lost are that many periods
+        later (a gap, bridged)."""
+        q, qd = both[:, list(self.cmap.q)], both[:, list(self.cmap.qd)]
+        k = sample_periods(q, qd, self.period)
+        k = k if both.shape[0] > values.shape[0] else np.r_[1, k]
+        shifts = self.shift + np.cumsum(k - 1)
+        self.shift = int(shifts[-1]) if shifts.size else self.shift
+        self.report.retimed_lost += int(np.sum(np.maximum(k - 1, 0)))
+        values = values.copy()
+        values[:, self.cmap.t] += shifts * self.period
+        return values, stale | (k == 0)
 
     def _kept(self, values: np.ndarray, numbers: list[int], new: int) -> Iterator[tuple[Recording, int]]:
         t = values[:, self.cmap.t]
@@ -227,21 +247,32 @@ def _checked(values: np.ndarray, numbers: list[int], cmap: ColumnMap, robot: rx9
                      aux={name: values[:, col] for name, col in cmap.aux})
 
 
+def retimed_rate(resample: float | None, period: float | None, cmap: ColumnMap) -> float | None:
+    """The rate a log is resampled at: ``resample`` [Hz], or with a clock that counts samples of ``period``
+    [s] and recorded velocities (re-timed: :func:`log_parts`), the period's own grid (its lost cycles
+    bridged)."""
+    return resample if resample is not None or period is None or not cmap.qd else 1.0 / period
+
+
 def log_parts(blocks: Iterator[tuple[np.ndarray, list[int]]], cmap: ColumnMap, robot: rx90sym.Robot, conv: str,
               source: str, report: BlockReport, resample: float | None = None, max_gap: float = DEFAULT_MAX_GAP,
               segments: bool = True, drive: DriveGains | None = None, window: bool = True,
-              stale: bool = True, signs: tuple[float, ...] | None = None) -> Iterator[tuple[Recording, int]]:
+              stale: bool = True, signs: tuple[float, ...] | None = None,
+              period: float | None = None) -> Iterator[tuple[Recording, int]]:
     """(part, segment number) of the log whose parsed rows ``blocks`` yields ((rows, columns) as ``cmap``
     names them, their line numbers), in order, by the module's rules; ``report`` gathers what
     :func:`log_report` returns. ``window``: the input form can select a window of lines (its refusals
     advise one; False for a bag); ``stale``: drop rows equal to the previous one (False when the clock
     is a sampling period: every row is a sample; True: the clock is the log's, checked for a sample
-    counter); ``signs``: torque signs per joint (identify.io.torque_signs), applied before ``drive``."""
+    counter); ``signs``: torque signs per joint (identify.io.torque_signs), applied before ``drive``;
+    ``period`` [s]: the clock counts samples of this period (the time column made from it): with recorded
+    velocities, the rows are re-timed from the positions (cycles logged twice dropped, cycles lost bridged:
+    identify.io.gaps.sample_periods)."""
     if not (np.isfinite(max_gap) and max_gap > 0):
         raise ValueError(f"max_gap must be a positive time in s, got {max_gap!r}")
     if resample is not None:
         check_rate(resample)
-    stream = _LogStream(cmap, robot, conv, source, resample, max_gap, segments, report, window, stale)
+    stream = _LogStream(cmap, robot, conv, source, resample, max_gap, segments, report, window, stale, period)
     logged = ColumnRange()  # the torque (or current) columns' values: one value on every row is a channel not logged
     pending = next(blocks, None)
     if pending is None:

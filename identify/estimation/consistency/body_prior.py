@@ -137,11 +137,13 @@ def _scales(body: RigidBody, link: str) -> dict[str, float]:
 
 
 def body_prior(values: Mapping[str, float] | None, n: int, source: str, divergence: str = DEFAULT_DIVERGENCE,
-               notes: Sequence[str] = ()) -> BodyPrior | None:
+               notes: Sequence[str] = (), carried: Mapping[str, np.ndarray] | None = None) -> BodyPrior | None:
     """The prior of the links 1..n from standard parameters ``values`` (the description's): a link with a
     mass above 0 is informed, its body made physical with :data:`PRIOR_MARGIN` where it is not (the
     nearest physical body with its mass and centre of mass, said in the notes); any other link contributes
-    nothing (named in the notes); None when no link is informed. ``notes``: the description's own."""
+    nothing (named in the notes); None when no link is informed. ``notes``: the description's own;
+    ``carried``: link -> XX..M of what it carries besides its own body (rx90sym.urdf_carried.carried_bodies):
+    the own body (the link's minus it) is the one made physical, as the consistent fit checks it."""
     if values is None:
         return None
     links, notes, scales, kept = [], list(notes), {}, {}
@@ -155,9 +157,11 @@ def body_prior(values: Mapping[str, float] | None, n: int, source: str, divergen
         if not body.m > PRIOR_MARGIN:
             notes.append(f"link {j}: no mass in the description: no prior")
             continue
-        if physical_problem(body, PRIOR_MARGIN):
-            problem = physical_problem(body, 0.0)
-            body = nearest_physical_body(body, PRIOR_MARGIN)
+        extra = RigidBody.from_vector(np.asarray((carried or {}).get(key, np.zeros(10)), dtype=float))
+        own = RigidBody.from_vector(body.vector() - extra.vector())
+        if own.m > PRIOR_MARGIN and physical_problem(own, PRIOR_MARGIN):
+            problem = physical_problem(own, 0.0)
+            body = RigidBody.from_vector(nearest_physical_body(own, PRIOR_MARGIN).vector() + extra.vector())
             if problem:
                 notes.append(f"link {j}: not a physical body ({problem}): the nearest physical body is the prior")
         links.append(key)

@@ -107,19 +107,41 @@ def _typical(names: Sequence[str], prior: BodyPrior | None) -> np.ndarray:
     return out
 
 
+def _off_determined(determined: np.ndarray | None, informed: np.ndarray, scales: np.ndarray) -> np.ndarray:
+    """(m, k) rows of an orthonormal basis of the prior's scaled deviations u = (x_I - θ0) / s that leave every
+    determined base parameter unchanged (the orthogonal complement of their directions a_i,I s): what the
+    prior may weigh. The identity without determined parameters."""
+    k = informed.size
+    if determined is None or determined.size == 0 or k == 0:
+        return np.eye(k)
+    B = (np.asarray(determined, dtype=float)[:, informed] * scales).T
+    B = B[:, np.any(B != 0.0, axis=0)]
+    if B.size == 0:
+        return np.eye(k)
+    U, sv, _ = np.linalg.svd(B, full_matrices=True)
+    rank = int(np.sum(sv > sv[0] * 1e-10))
+    return U[:, rank:].T
+
+
 class PriorProblem:
     """The compiled problem of the module docstring for one set of variables and one prior.
 
     cmap: the columns; prior: the description's bodies (None: the data alone, the tie-break toward
-    0); fixed: λ = ∞ (the informed links' bodies held at the prior's; λ unused); carried: what
-    links carry that an export writes apart (the consistent fit's ``carried``); reference: x_ref
-    beyond the prior (e.g. the description's rotor inertias), name -> value.
+    0); fixed: λ = ∞ (the prior's directions held at its values; λ unused); carried: what links carry
+    that an export writes apart (the consistent fit's ``carried``); reference: x_ref beyond the prior
+    (e.g. the description's rotor inertias), name -> value; determined: rows (k, p) of the base
+    parameters the data determine (β_i = a_i x): a Gaussian prior leaves their directions to the data
+    (it penalises the prior's scaled deviation only orthogonally to them), so that no weight lets the
+    description override what the data determine; held: variables held at a value (name -> value: the
+    friction and rotor inertia of a joint that never moves in the fitted rows, which neither the data
+    nor the description give).
     """
 
     def __init__(self, cmap: ColumnMap, prior: BodyPrior | None, *, fixed: bool = False,
                  carried: Mapping[str, np.ndarray] | None = None, margin: float = DEFAULT_MARGIN,
                  nonnegative: Sequence[str] = NONNEGATIVE, reference: Mapping[str, float] | None = None,
-                 solver: str = "CLARABEL", solve_margin: float | None = None, bounds: Sequence[Any] = ()) -> None:
+                 solver: str = "CLARABEL", solve_margin: float | None = None, bounds: Sequence[Any] = (),
+                 determined: np.ndarray | None = None, held: Mapping[str, float] | None = None) -> None:
         self.cmap, self.prior, self.fixed, self.margin = cmap, prior, fixed and prior is not None, margin
         self.solve_margin = SOLVE_FACTOR * margin if solve_margin is None else float(solve_margin)
         self.carried, self.nonnegative, self.solver = carried, tuple(nonnegative), solver.upper()
@@ -143,33 +165,75 @@ class PriorProblem:
         extra_nonneg = [i for i in range(cmap.standard, p) if names[i].startswith(self.nonnegative)]
         if extra_nonneg:
             constraints.append(self.x[np.array(extra_nonneg)] >= self.solve_margin)
+        # Variables the data cannot see and no prior gives (a still joint's friction): held at a value.
+        held = {n: v for n, v in (held or {}).items() if n in index}
+        self.held = np.array([index[n] for n in held], dtype=int)
+        self.held_values = np.array([max(float(held[n]), self.solve_margin) if n.startswith(self.nonnegative)
+                                     else float(held[n]) for n in held])
+        if self.held.size:
+            constraints.append(self.x[self.held] == self.held_values)
+        # The prior as a quadratic form on the informed variables' scaled deviation u = (x_I - θ0) / s: its rows
+        # G (Gaussian: u projected off the directions the data determine; G u = 0 at λ = ∞).
+        self.informed = np.array([index[n] for n in prior.names()], dtype=int) if prior is not None else np.zeros(0, int)
+        self.gram = np.zeros((0, p))
+        if prior is not None and prior.divergence == "gaussian":
+            scales = np.array([prior.scales[n] for n in prior.names()])
+            P = _off_determined(determined, self.informed, scales)
+            self.gram = np.zeros((P.shape[0], p))
+            self.gram[:, self.informed] = P / scales
         if prior is not None and self.fixed:
-            idx = np.array([index[n] for n in prior.names()])
-            constraints.append(self.x[idx] == np.array([prior.values[n] for n in prior.names()]))
+            theta0 = self.ref[self.informed]
+            if prior.divergence == "gaussian":
+                constraints.append(self.gram[:, self.informed] @ (self.x[self.informed] - theta0) == 0)
+            else:
+                constraints.append(self.x[self.informed] == theta0)
         elif prior is not None:
-            objective += self.weight * prior.expression(self.x, index)
+            prior_term = (cp.sum_squares(self.gram @ (self.x - self.ref)) if prior.divergence == "gaussian"
+                          else prior.expression(self.x, index))
+            objective += self.weight * prior_term
         self.problem = cp.Problem(cp.Minimize(objective), constraints)
-        # The objective is quadratic (a Gaussian prior, or none) and, without bounds, its unconstrained minimiser
-        # solves the problem whenever it is physical: a linear solve instead of the conic solver.
+        # The objective is quadratic (a Gaussian prior, or none) and, without bounds, its minimiser without the
+        # physical constraints solves the problem whenever it is physical: a linear solve, not the conic solver.
         self.quadratic = (prior is None or prior.divergence == "gaussian") and not bounds
-        self.curvature = np.zeros(p)  # the Gaussian's 1/s² on the informed variables
-        self.held = np.zeros(p, bool)  # the variables λ = ∞ holds at the prior's values
-        if prior is not None:
-            for n in prior.names():
-                self.curvature[index[n]] = 1.0 / prior.scales[n] ** 2 if prior.divergence == "gaussian" else 0.0
-                self.held[index[n]] = self.fixed
         self.extra_nonneg = np.array(extra_nonneg, dtype=int)
 
     def _unconstrained(self, M: np.ndarray, t: np.ndarray, w: float) -> np.ndarray:
-        """The minimiser of the quadratic objective without the physical constraints (module docstring)."""
+        """The minimiser of the quadratic objective without the physical constraints (module docstring); at
+        λ = ∞ under the prior's equality (G (x - x_ref) = 0), by its KKT system."""
         tie = TIE_BREAK / self.typical ** 2
-        H = M.T @ M + np.diag(tie + w * self.curvature)
-        b = M.T @ t + tie * self.ref + w * self.curvature * self.ref
-        x = self.ref.copy()
-        free = ~self.held
-        rhs = b[free] - H[np.ix_(free, self.held)] @ self.ref[self.held]
-        x[free] = np.linalg.solve(H[np.ix_(free, free)], rhs)
-        return x
+        G = self.gram
+        H = M.T @ M + np.diag(tie) + (0.0 if self.fixed else w) * G.T @ G
+        b = M.T @ t + tie * self.ref + (0.0 if self.fixed else w) * G.T @ (G @ self.ref)
+        # Equalities C x = d: the held variables, and at λ = ∞ the prior's (KKT system).
+        p = H.shape[0]
+        C = np.zeros((self.held.size, p))
+        C[np.arange(self.held.size), self.held] = 1.0
+        d = self.held_values.copy()
+        if self.fixed and G.shape[0]:
+            C, d = np.vstack([C, G]), np.r_[d, G @ self.ref]
+        if C.shape[0] == 0:
+            return np.linalg.solve(H, b)
+        kkt = np.block([[H, C.T], [C, np.zeros((C.shape[0], C.shape[0]))]])
+        return np.linalg.lstsq(kkt, np.r_[b, d], rcond=None)[0][:p]
+
+    def prior_term(self, x: np.ndarray) -> float:
+        """The prior's term of the objective at ``x`` without its weight: D(θ ‖ θ0), for the Gaussian the
+        squared scaled deviation off the directions the data determine (0 at λ = ∞)."""
+        if self.prior is None:
+            return 0.0
+        if self.prior.divergence == "gaussian":
+            return float(np.sum((self.gram @ (np.asarray(x) - self.ref)) ** 2))
+        return self.prior.value(dict(zip(self.cmap.names, x)))
+
+    def prior_precision(self, weight: float) -> np.ndarray:
+        """(p, p) the prior's curvature at λ = ``weight`` in the cost ‖·‖² + λ D (Gaussian: λ GᵀG; the
+        log-det divergence: λ/2 times its Hessian at θ0); zero without a prior."""
+        p = len(self.cmap.names)
+        if self.prior is None:
+            return np.zeros((p, p))
+        if self.prior.divergence == "gaussian":
+            return weight * self.gram.T @ self.gram
+        return 0.5 * weight * self.prior.hessian(self.cmap.names)
 
     def _physical(self, x: np.ndarray) -> bool:
         """Whether ``x`` meets the constraints at the solve's margin."""
