@@ -32,7 +32,7 @@ import numpy as np  # noqa: E402
 import rx90sym  # noqa: E402
 from identify import Processing, fit  # noqa: E402
 from identify.estimation.consistency.prior import PhysicalPrior  # noqa: E402
-from identify.estimation.consistent_fit import consistent_fit  # noqa: E402
+from identify.fitting.consistent_fit import consistent_fit  # noqa: E402
 from identify.io.recordings import recording_from_arrays  # noqa: E402
 from rx90sym.mjcf_export import mjcf_export  # noqa: E402
 from rx90sym.urdf_export import urdf_export  # noqa: E402

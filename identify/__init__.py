@@ -40,7 +40,7 @@ _EXPORTS = {
     "weighted_least_squares": "identify.estimation.least_squares",
     "essential_parameters": "identify.estimation.essential",
     "segment_bootstrap_std": "identify.estimation.bootstrap",
-    "consistent_fit": "identify.estimation.consistent_fit",
+    "consistent_fit": "identify.fitting.consistent_fit",
     "consistency_report": "identify.estimation.consistency",
     "pseudo_inertia": "identify.estimation.consistency",
     # the fit and its file; prediction and validation
@@ -91,7 +91,7 @@ _EXPORTS.update({
     "CompressedSystem": "identify.estimation.least_squares",
     "compress": "identify.estimation.least_squares",
     "EliminationStep": "identify.estimation.results",
-    "ConsistentResult": "identify.estimation.consistent_fit",
+    "ConsistentResult": "identify.fitting.consistent_fit",
     "BodyConsistency": "identify.estimation.consistency",
     "ConsistencyError": "identify.estimation.consistency",
     "ConsistencyReport": "identify.estimation.consistency",

@@ -15,18 +15,19 @@ ROOT = Path(__file__).resolve().parents[1]
 IDENTIFY_FLOW = {
     "io": 0,            # files in: recordings, logs (their clocks, gaps, resampling), column maps, bags, gains files
     "signal": 1,        # filtering, derivatives, pairing of runs
-    "observation": 2,   # one Processing, W and Y (eqs. 6-8), rest, friction and spring columns
-    "estimation": 3,    # (W)LS, sigma, essential, bootstrap, consistency, torque delay, cross-validated choices
+    "observation": 2,   # one Processing, W and Y (eqs. 6-8), rest rows, spring and offset columns, logs read block by block
+    "estimation": 3,    # (W)LS, sigma, essential, bootstrap, consistency, the torque delay
+    "selection": 4,     # the blocked cross-validation against the raw torques and what it chooses: processing, prior weight
     # The exported MJCF rolled out in MuJoCo against the recorded motion: a validation the Fit runs
     # (Fit.predict(..., rollout=...)), so before it; it needs only the model's MJCF writer (rx90sym),
     # the signals and the torque shift, and the parameters and processing a fit hands it.
-    "rollout": 4,
-    "fitting": 5,       # the Fit, its file, prediction and validation, plausibility, fleets
-    "payloads": 6,      # section IV
-    "gains": 6,         # drive gains from a payload of known mass
-    "export": 7,        # URDF, MJCF
-    "monitor": 7,       # the model at work: payload and contact monitors
-    "app": 8,           # the rx90 command, demo, report
+    "rollout": 5,
+    "fitting": 6,       # the Fit, its file, the identified model, prediction and validation, plausibility, fleets
+    "payloads": 7,      # section IV
+    "gains": 7,         # drive gains from a payload of known mass
+    "export": 8,        # URDF, MJCF
+    "monitor": 8,       # the model at work: payload and contact monitors
+    "app": 9,           # the rx90 command, demo, report
 }
 #: Packages in the order they may import each other: the model knows neither trajectories nor
 #: data, the method (excitation, identify) knows no application, the application knows all.

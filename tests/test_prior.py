@@ -1,5 +1,5 @@
 """The identified model on the RX90 twin: the description's bodies as a prior weighed against the data
-(identify.estimation.consistent_fit), its weight λ chosen by blocked cross-validation."""
+(identify.fitting.consistent_fit), its weight λ chosen by blocked cross-validation."""
 from __future__ import annotations
 
 import math

@@ -2,7 +2,7 @@
 
 :func:`consistent_fit` solves the prior-weighted problem of
 :mod:`identify.estimation.consistency.weighted_fit` on the (W)LS fit's weighted compressed system,
-at the prior weight λ given or chosen by blocked cross-validation (:mod:`identify.estimation.prior_weight`),
+at the prior weight λ given or chosen by blocked cross-validation (:mod:`identify.selection.prior_weight`),
 and returns a :class:`ConsistentResult`: the base parameters β = A x of a physical x, the standard
 parameters, and per base parameter the share the data determined (1 − posterior / prior variance of
 the quadratic approximation: 1 where the prior says nothing, 0 where it fixes the value).
@@ -157,7 +157,7 @@ def consistent_fit(robot: rx90sym.Robot, wls: IdentificationResult, columns: Any
     unseen directions by the tie-break); prior_weight: λ ≥ 0 (inf: the description's bodies) or "auto":
     chosen by the blocked cross-validation on ``factors``; factors: the per-(time block, joint) factors of
     ``columns`` (:class:`~identify.estimation.raw_folds.RawFactors`, or
-    :func:`~identify.estimation.prior_weight.observation_folds`): the model is fitted on them, with a
+    :func:`~identify.selection.prior_weight.observation_folds`): the model is fitted on them, with a
     torque offset on each joint of ``offsets`` (0-based; its column after the fit's, named OFFj); None:
     on ``wls``'s own weighted system (no offsets added, λ given). bounds: ``mass_bounds``,
     ``total_mass``, ``com_boxes`` of :func:`identify.estimation.consistency.consistent_least_squares`;
@@ -175,7 +175,7 @@ def consistent_fit(robot: rx90sym.Robot, wls: IdentificationResult, columns: Any
     """
     from identify.estimation.consistency.errors import ConsistencyError
     from identify.estimation.consistency.weighted_fit import TIE_BREAK, PriorProblem, column_map
-    from identify.estimation.prior_weight import choose_prior_weight, fold_system, held_back_scores
+    from identify.selection.prior_weight import choose_prior_weight, fold_system, held_back_scores
     from identify.observation.offsets import offset_base
     from rx90sym.urdf_carried import carried_bodies
 
@@ -305,7 +305,7 @@ def _least_squares(R: np.ndarray, z: np.ndarray, scale: float, rows: int, wls: I
 
 def _data_budget(names: Sequence[str], least: np.ndarray, std: np.ndarray, determined: np.ndarray,
                  beta_at: Any) -> Any:
-    """``keeps(λ)`` of :func:`~identify.estimation.prior_weight.choose_prior_weight`: why the model at λ moves
+    """``keeps(λ)`` of :func:`~identify.selection.prior_weight.choose_prior_weight`: why the model at λ moves
     a base parameter the data determine (indices ``determined``) more than :data:`DATA_BUDGET` σ from its
     least-squares estimate, and further than the data alone move it (None: it does not)."""
     if determined.size == 0:

@@ -19,7 +19,7 @@ import rx90sym
 from rx90sym.threads import one_blas_thread
 
 from identify.estimation.consistency.body_prior import DEFAULT_DIVERGENCE, BodyPrior, body_prior
-from identify.estimation.consistent_fit import check_prior_weight
+from identify.fitting.consistent_fit import check_prior_weight
 from identify.estimation.results import METHODS, IdentificationResult
 from identify.fitting.file import FitModel
 from identify.io.gains import DriveGains
@@ -66,7 +66,7 @@ def fit(robot: rx90sym.Robot, recordings: Sequence[Any], processing: Processing 
     rest policy per joint, torque offsets), the friction form per joint too where it is left open;
     method: "ols" or "wls" (paper: each joint's rows weighted by 1/σ of its own residual): ``Fit.result``
     holds those estimates with eq. 13's σ; "consistent": ``Fit.result`` is the identified model itself.
-    Every fit carries the identified model (``Fit.identified``, :mod:`identify.estimation.consistent_fit`):
+    Every fit carries the identified model (``Fit.identified``, :mod:`identify.fitting.consistent_fit`):
     physically consistent standard parameters minimising the weighted residual plus λ·D(θ ‖ θ₀), θ₀ the
     prior's bodies: it is what :meth:`Fit.predict`, the exports, the monitor and the payload methods use.
     physical_prior: "description" (the robot's URDF inertials or robot-file [nominal] bodies; a link
@@ -149,7 +149,7 @@ def _fit_observation(robot: rx90sym.Robot, recordings: Sequence[Any], obs: Obser
                      bootstrap_seed: int | None, options: dict[str, Any]) -> Fit:
     """The fit of a given observation matrix (eqs. 9-15 and the identified model)."""
     from identify.estimation.least_squares import weighted_least_squares
-    from identify.estimation.prior_weight import observation_folds
+    from identify.selection.prior_weight import observation_folds
     from identify.observation.spring_fit import BaseWithSpring, spring_summary
 
     base = base if base is not None else rx90sym.base_parameters(robot)
@@ -173,10 +173,10 @@ def _fit_observation(robot: rx90sym.Robot, recordings: Sequence[Any], obs: Obser
 def _identified(robot: rx90sym.Robot, wls: IdentificationResult, columns: Any, factors: Any,
                 options: dict[str, Any], given: bool = False, spread: np.ndarray | None = None,
                 moving: np.ndarray | None = None) -> Any:
-    """The identified model of the least-squares fit ``wls`` (identify.estimation.consistent_fit), fitted
+    """The identified model of the least-squares fit ``wls`` (identify.fitting.consistent_fit), fitted
     on ``factors`` with a torque offset on every joint that may have one (as the description's model:
     the prior's bodies with each joint's friction and offset fitted), unless the columns were ``given``."""
-    from identify.estimation.consistent_fit import consistent_fit
+    from identify.fitting.consistent_fit import consistent_fit
 
     bounds = {k: options[k] for k in ("mass_bounds", "total_mass", "com_boxes") if options.get(k) is not None}
     reference = {f"IA{j + 1}": v for j in range(robot.n) if (v := _description_value(robot, f"IA{j + 1}"))}

@@ -14,7 +14,7 @@ from rx90sym.files import write_json
 from rx90sym.threads import one_blas_thread
 
 from identify.estimation.bootstrap import BLOCK_S, DRAWS, segment_bootstrap_std
-from identify.estimation.consistent_fit import ConsistentResult
+from identify.fitting.consistent_fit import ConsistentResult
 from identify.fitting.plausibility import Flag
 from identify.estimation.results import IdentificationResult, json_number
 from identify.fitting.file import SCHEMA_VERSION, FitModel, gains_of, read_fit_file, robot_of
@@ -96,7 +96,7 @@ class Fit:
     (:func:`identify.io.recordings.layout_summary`); choice: the cross-validated processing's
     candidate table (:meth:`ProcessingChoice.to_dict`), None when the processing was given;
     identified: the identified model — physically consistent bodies weighed between the description and
-    the data (:func:`identify.estimation.consistent_fit.consistent_fit`) — which predicts, exports and
+    the data (:func:`identify.fitting.consistent_fit.consistent_fit`) — which predicts, exports and
     monitors (``result`` keeps the paper's (W)LS estimates and σ unless the method was "consistent").
     """
 
@@ -121,7 +121,7 @@ class Fit:
     user_model: Any = None          # the model the user had (identify.fitting.user_model.UserModel) or None
     user_model_note: str = ""       # why there is no model the user had ("" when there is)
     contact_thresholds: np.ndarray | None = None  # contact monitor's per joint [N·m] (identify.monitor)
-    identified: ConsistentResult | None = None  # the identified model (identify.estimation.consistent_fit)
+    identified: ConsistentResult | None = None  # the identified model (identify.fitting.consistent_fit)
     result_validation: Validation | None = None  # the (W)LS estimates' own validation, beside the model's
     ls_result: IdentificationResult | None = None  # the (W)LS estimates when the result is the model (consistent)
 

@@ -17,7 +17,7 @@ objective is divided by the weighted residual of the least-squares fit, so the s
 of order one whatever the log's length.
 
 One :class:`PriorProblem` is compiled once (cvxpy parameters: the data, λ) and solved for every fold
-and weight of the cross-validation (:mod:`identify.estimation.prior_weight`).
+and weight of the cross-validation (:mod:`identify.selection.prior_weight`).
 """
 from __future__ import annotations
 
