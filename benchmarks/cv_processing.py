@@ -3,11 +3,11 @@
 Twin of a 7-joint arm (Panda, 1 kHz, open loop, 2^19-count encoders) at three torque-noise levels;
 fit on the first 2/3 of a 20 s run, predict the last 1/3; every figure is the relative RMS error
 of the predicted torques against the **noise-free** torques (%). Per run: the cross-validated
-choice (identify.observation.cross_validation, rest policy chosen per joint), the best candidate
+choice (identify.selection.cross_validation, rest policy chosen per joint), the best candidate
 of its grid, the toolkit's defaults (``identify.fit`` with ``Processing()``: the cross-validation
 runs inside the fit), the former defaults (automatic cut-off, zero-coulomb, no cross-validation),
 and the plain least squares of benchmarks/plain_ls.py (the reference measured in the same run); the
-friction form the defaults chose (identify.estimation.friction_choice; the twin's is Coulomb + viscous).
+friction form the defaults chose (identify.friction.choice; the twin's is Coulomb + viscous).
 
 Two scorings of the held-out third: each processing on the samples it keeps (its own filter's edges
 dropped, as `rx90 predict` does: a 2 Hz cut-off keeps the central 55 %, 20 Hz 95 %), and every one
@@ -31,7 +31,7 @@ sys.path[:0] = [str(ROOT), str(ROOT / "benchmarks"), str(ROOT / "tests")]
 
 import rx90sym  # noqa: E402
 from identify import Processing, fit, predict, split  # noqa: E402
-from identify.estimation.stream_cv import choose_processing  # noqa: E402
+from identify.selection.processing_choice import choose_processing  # noqa: E402
 from identify.observation.processing import friction_label, rest_label  # noqa: E402
 from identify.signal.filtering import EDGE_PERIODS  # noqa: E402
 from motions import multisine, panda_truth  # noqa: E402

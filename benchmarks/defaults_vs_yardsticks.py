@@ -136,8 +136,8 @@ def inside_fitted_data(f, fitted: list) -> None:
     yardsticks' on the same time blocks, each fitted on the other blocks."""
     if f.choice is None:
         return
-    from identify.estimation.raw_folds import raw_span
-    from identify.estimation.stream_cv import scans_for_choice
+    from identify.selection.raw_torque_scores import raw_span
+    from identify.selection.processing_choice import scans_for_choice
     from identify.fitting.yardsticks import yardstick_folds
     from identify.io.blocks import block_source
 

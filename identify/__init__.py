@@ -32,8 +32,8 @@ _EXPORTS = {
     "Observation": "identify.observation.matrix",
     "observation_matrix": "identify.observation.matrix",
     "FRICTION_FORMS": "identify.observation.defaults",
-    "velocity_scales": "identify.estimation.separable",
-    "presliding_travels": "identify.estimation.separable",
+    "velocity_scales": "identify.friction.scales",
+    "presliding_travels": "identify.friction.scales",
     # estimation: (weighted) least squares (eqs. 9-15), essential parameters, bootstrap, consistency
     "IdentificationResult": "identify.estimation.results",
     "IdentificationError": "identify.estimation.least_squares",

@@ -7,8 +7,8 @@ import pytest
 
 import rx90sym
 from identify import Processing, fit, load_fit, split
-from identify.estimation.stream_cv import choose_processing
-from identify.observation.cross_validation import NO_DECIMATION
+from identify.selection.processing_choice import choose_processing
+from identify.selection.cross_validation import NO_DECIMATION
 from identify.observation.offsets import offset_joints
 from motions import multisine
 

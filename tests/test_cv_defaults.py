@@ -12,7 +12,7 @@ import pytest
 import rx90sym
 from conftest import benchmark_module
 from identify import Processing, fit, load_fit, predict, split
-from identify.estimation.stream_cv import choose_processing
+from identify.selection.processing_choice import choose_processing
 from motions import multisine
 from rx90sym.recording import Recording
 from test_presliding import dahl, stop_and_go

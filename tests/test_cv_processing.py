@@ -1,4 +1,4 @@
-"""Processing chosen by blocked cross-validation (identify.observation.cross_validation), judged
+"""Processing chosen by blocked cross-validation (identify.selection.cross_validation), judged
 against the noise-free torques of a twin run that the choice never sees."""
 from __future__ import annotations
 
@@ -9,9 +9,9 @@ import pytest
 
 import rx90sym
 from identify import Processing, fit, predict, split
-import identify.estimation.stream_cv as scv
-from identify.estimation.stream_cv import choose_processing
-from identify.observation.cross_validation import Candidate
+import identify.selection.processing_choice as scv
+from identify.selection.processing_choice import choose_processing
+from identify.selection.cross_validation import Candidate
 from motions import multisine
 
 
@@ -63,7 +63,7 @@ def test_a_uniform_first_stage_policy_does_not_override_the_per_joint_rule(rx90,
     the cut-off is then chosen among candidates with that policy only. Scores are given by hand
     (the fits are tested above): crossing is lower on average at the knee but within the blocks'
     spread, so zero-coulomb stays, and the chosen candidate must carry it."""
-    import identify.observation.cross_validation as cv
+    import identify.selection.cross_validation as cv
 
     blocks = {"zero-coulomb": (5.0, 5.5, 4.5, 5.2, 4.8), "crossing": (4.2, 5.9, 4.0, 5.6, 4.8)}
     default = (5.2, 5.4, 4.7, 5.3, 4.9)
@@ -94,7 +94,7 @@ def test_the_choice_does_not_depend_on_the_wall_clock(rx90, rx90_base, monkeypat
     """A slow or loaded machine scores the same candidates and makes the same choice: the default cap
     counts observation rows, not seconds (the former 60 s wall-clock cap scored 5 of 5 cut-offs of one
     10.5 min log in one run and 4 of 5 in another). Here the clock jumps 1000 s at every reading."""
-    import identify.observation.cross_validation as cv
+    import identify.selection.cross_validation as cv
 
     monkeypatch.setattr(scv, "_score", _fake_scores)
     rec = rx90sym.twin.simulate(rx90, multisine(rx90, 3), duration=4.0, noise="realistic", seed=3)
@@ -114,7 +114,7 @@ def test_the_choice_does_not_depend_on_the_wall_clock(rx90, rx90_base, monkeypat
 def test_the_row_cap_stops_the_cut_offs_after_the_rest_policies_and_the_first(rx90, rx90_base, monkeypatch):
     """With a cap below two passes, the rest policies (always scored) and the first cut-off are scored,
     the others listed as not scored with the count that stopped them; without a cap, all are."""
-    import identify.observation.cross_validation as cv
+    import identify.selection.cross_validation as cv
 
     monkeypatch.setattr(scv, "_score", _fake_scores)
     rec = rx90sym.twin.simulate(rx90, multisine(rx90, 3), duration=4.0, noise="realistic", seed=3)

@@ -60,7 +60,7 @@ def _without(d: dict, keys) -> dict:
         choice["chosen"] = {k: v for k, v in choice["chosen"].items() if k != "seconds"}
         if choice.get("offset_candidate"):  # the chosen processing scored with torque offsets
             choice["offset_candidate"] = {k: v for k, v in choice["offset_candidate"].items() if k != "seconds"}
-        if "friction" in choice:  # the friction form's choice (identify.estimation.friction_choice)
+        if "friction" in choice:  # the friction form's choice (identify.friction.choice)
             forms = {k: v for k, v in choice["friction"].items() if k != "seconds"}
             forms["candidates"] = [{k: v for k, v in c.items() if k != "seconds"} for c in forms["candidates"]]
             if forms.get("combined"):  # the per-joint forms scored together

@@ -8,9 +8,9 @@ import numpy as np
 import pytest
 
 import identify
-from identify.estimation.friction_choice import choose_friction, choose_friction_rows
-from identify.estimation.friction_folds import StreamRows
-from identify.estimation.stream_cv import scans_for_choice, time_span
+from identify.friction.choice import choose_friction, choose_friction_rows
+from identify.friction.folds import StreamRows
+from identify.selection.processing_choice import scans_for_choice, time_span
 from identify.io.blocks import block_source
 from identify.observation.stream import StreamSettings, plan_windows
 

@@ -11,8 +11,8 @@ import pytest
 import identify
 import rx90sym
 from identify import Processing, fit, load_fit, split
-from identify.observation.cross_validation import Candidate
-from identify.estimation.friction_choice import _check_mix, _per_joint_forms, _Scored, _single_choice, choose_friction
+from identify.selection.cross_validation import Candidate
+from identify.friction.choice import _Scored, _check_mix, _per_joint_forms, _single_choice, choose_friction
 from rx90sym.recording import Recording
 from test_friction_forms import TRUE_SCALE, friction_twin
 
@@ -58,7 +58,7 @@ def test_the_forms_scored_do_not_depend_on_the_wall_clock_and_the_row_cap_is_sai
     """A slow machine scores the same forms (the cap counts observation rows, not seconds: here the
     clock jumps 1000 s at every reading, which stopped the former 60 s cap after coulomb); a row cap
     below one pass leaves tanh unscored and the note names the count."""
-    import identify.observation.cross_validation as cv
+    import identify.selection.cross_validation as cv
 
     rec = friction_twin(rx90, "tanh", 0, 10.0, 100.0)
     clock = iter(range(0, 10 ** 9, 1000))

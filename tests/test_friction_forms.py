@@ -10,7 +10,7 @@ import pytest
 import rx90sym
 from conftest import SHARED, benchmark_module
 from identify import Processing, fit, load_fit, split
-from identify.estimation.separable import velocity_scales
+from identify.friction.scales import velocity_scales
 from rx90sym.recording import Recording
 
 from motions import multisine
@@ -97,7 +97,7 @@ def test_a_scale_search_that_did_not_converge_is_reported_not_fitted(rx90, rx90_
     with one line, writing nothing (the search's result is replaced by one that says it failed)."""
     from dataclasses import replace
 
-    import identify.fitting.streamed_friction as streamed_friction
+    import identify.friction.fitted_columns as streamed_friction
     from identify.app.cli import main
     from identify.estimation.consistency.errors import SolverError
 

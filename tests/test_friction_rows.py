@@ -1,4 +1,4 @@
-"""The friction choice's columns of every fold in one pass (identify.estimation.friction_folds.FoldColumns:
+"""The friction choice's columns of every fold in one pass (identify.friction.folds.FoldColumns:
 a column FSj_f per fold f, resting like FSj): the same numbers as the rows of the form's own FrictionBase
 at that fold's scales, whatever the rest policy; and the tanh columns within an ulp of CasADi's
 expression of the form."""
@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 import rx90sym
-from identify.estimation.friction_folds import FoldColumns
+from identify.friction.folds import FoldColumns
 from identify.observation.friction import friction_columns, friction_function
 from identify.observation.friction_model import coulomb_terms, friction_base, own_terms
 from identify.observation.matrix import filtered_motions

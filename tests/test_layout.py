@@ -18,16 +18,17 @@ IDENTIFY_FLOW = {
     "observation": 2,   # one Processing, W and Y (eqs. 6-8), rest rows, spring and offset columns, logs read block by block
     "estimation": 3,    # (W)LS, sigma, essential, bootstrap, consistency, the torque delay
     "selection": 4,     # the blocked cross-validation against the raw torques and what it chooses: processing, prior weight
+    "friction": 5,      # forms and columns, velocity scales and presliding travels searched, the form chosen per joint
     # The exported MJCF rolled out in MuJoCo against the recorded motion: a validation the Fit runs
     # (Fit.predict(..., rollout=...)), so before it; it needs only the model's MJCF writer (rx90sym),
     # the signals and the torque shift, and the parameters and processing a fit hands it.
-    "rollout": 5,
-    "fitting": 6,       # the Fit, its file, the identified model, prediction and validation, plausibility, fleets
-    "payloads": 7,      # section IV
-    "gains": 7,         # drive gains from a payload of known mass
-    "export": 8,        # URDF, MJCF
-    "monitor": 8,       # the model at work: payload and contact monitors
-    "app": 9,           # the rx90 command, demo, report
+    "rollout": 6,
+    "fitting": 7,       # the Fit, its file, the identified model, prediction and validation, plausibility, fleets
+    "payloads": 8,      # section IV
+    "gains": 8,         # drive gains from a payload of known mass
+    "export": 9,        # URDF, MJCF
+    "monitor": 9,       # the model at work: payload and contact monitors
+    "app": 10,          # the rx90 command, demo, report
 }
 #: Packages in the order they may import each other: the model knows neither trajectories nor
 #: data, the method (excitation, identify) knows no application, the application knows all.

@@ -10,11 +10,11 @@ import pytest
 
 import rx90sym
 from identify import Processing, fit
-import identify.estimation.stream_cv as scv
-from identify.estimation.stream_cv import choose_processing
-from identify.observation.cross_validation import Candidate, block_factors, fold_wls
+import identify.selection.processing_choice as scv
+from identify.selection.processing_choice import choose_processing
+from identify.selection.cross_validation import Candidate, block_factors, fold_wls
 from identify.observation.matrix import observation_matrix
-from identify.estimation.friction_choice import choose_friction
+from identify.friction.choice import choose_friction
 from motions import multisine
 from rx90sym.recording import Recording
 from test_friction_choice import OPTIONS, coulomb_twin

@@ -1,5 +1,5 @@
 """The processing chosen by blocked cross-validation on a log read block by block
-(identify.estimation.stream_cv.choose_processing_streamed) against the same choice on the recording
+(identify.selection.processing_choice.choose_processing_streamed) against the same choice on the recording
 in memory (one block), against a direct computation of one candidate's raw-torque score on the whole
 recording, and through ``rx90 identify``."""
 from __future__ import annotations
@@ -15,11 +15,11 @@ import rx90sym
 from identify.app.cli import main
 from identify.io.blocks import block_source
 from identify import read_log
-from identify.observation.cross_validation import Candidate, block_factors, fold_wls, time_folds
+from identify.selection.cross_validation import Candidate, block_factors, fold_wls, time_folds
 from identify.observation.matrix import column_regressor, filtered_motions, stack_rows
 from identify.observation.offsets import offset_joints
 from identify.observation.stream import StreamSettings, plan_windows, scan
-from identify.estimation.stream_cv import choose_processing, choose_processing_streamed, scans_for_choice
+from identify.selection.processing_choice import choose_processing, choose_processing_streamed, scans_for_choice
 from identify.signal.filtering import EDGE_PERIODS
 from motions import multisine
 from rx90sym.host_log import HostFaults, host_log, write_host_log

@@ -17,11 +17,11 @@ import rx90sym
 from identify.app.report.tables import validation_table
 from conftest import plain_signals_by_hand, robot_file_without
 from identify import Processing, fit, load_fit, split
-from identify.estimation.raw_folds import RawSpan
+from identify.selection.raw_torque_scores import RawSpan
 from identify.fitting.baseline import baseline_regressor, memory_windows, window_signals
 from identify.fitting.yardsticks import fit_yardsticks, yardstick_folds
 from identify.io.blocks import MemorySource
-from identify.observation.cv_scoring import block_scores, time_folds
+from identify.selection.folds import block_scores, time_folds
 from identify.observation.stream import scan
 from motions import multisine
 from twin_logs import URDF_DIR, UR5_DRIVES, chirp, point_to_point

@@ -22,7 +22,7 @@ import rx90sym
 from identify.estimation.incremental_qr import JointFactors
 from identify.fitting.baseline import (BASELINE_RCOND, BASELINE_TRIM_S, CHUNK, BaselineSegment, PlainBaseline,
                                        baseline_names, baseline_regressor, memory_windows, window_signals)
-from identify.observation.cv_scoring import time_folds
+from identify.selection.folds import time_folds
 from identify.signal.blocks import Window
 
 __all__ = ["BaselineFactors", "TimeBlocks", "baseline_factors", "fit_baseline", "fit_baseline_windows",
@@ -38,8 +38,8 @@ def fit_baseline(robot: rx90sym.Robot, recordings: Sequence[Any], spring: bool =
 
 @dataclass(frozen=True)
 class TimeBlocks:
-    """The time blocks of a blocked cross-validation (:class:`identify.estimation.raw_folds.RawSpan`'s
-    ``start`` [s], ``span`` [s], ``blocks``: :func:`identify.observation.cv_scoring.time_folds`) and, for one
+    """The time blocks of a blocked cross-validation (:class:`identify.selection.raw_torque_scores.RawSpan`'s
+    ``start`` [s], ``span`` [s], ``blocks``: :func:`identify.selection.folds.time_folds`) and, for one
     segment, the times [s] between which its samples are scored (None: none of them)."""
 
     start: float
@@ -141,7 +141,7 @@ def plain_solution(stacked: np.ndarray, c: int) -> tuple[np.ndarray, int]:
 def baseline_factors(robot: rx90sym.Robot, windows: Iterable[tuple], spring: bool = True,
                      run: Callable[..., Iterable[tuple]] | None = None, blocks: Any = None) -> BaselineFactors:
     """The :class:`BaselineFactors` of the cores of ``windows`` ((segment, window, raw samples)). blocks: a
-    cross-validation's time blocks (an :class:`identify.estimation.raw_folds.RawSpan`: its ``start``, ``span``,
+    cross-validation's time blocks (an :class:`identify.selection.raw_torque_scores.RawSpan`: its ``start``, ``span``,
     ``blocks`` and, per segment ``key``, the times scored; None: one block, nothing scored). run: how the
     windows' :func:`window_factors` run (``run(task, arguments)`` yielding the results in order, e.g.
     identify.observation.stream.in_order on Dask; None: here)."""

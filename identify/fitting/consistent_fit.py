@@ -156,7 +156,7 @@ def consistent_fit(robot: rx90sym.Robot, wls: IdentificationResult, columns: Any
     prior: a :class:`~identify.estimation.consistency.body_prior.BodyPrior` (None: the data alone, the
     unseen directions by the tie-break); prior_weight: λ ≥ 0 (inf: the description's bodies) or "auto":
     chosen by the blocked cross-validation on ``factors``; factors: the per-(time block, joint) factors of
-    ``columns`` (:class:`~identify.estimation.raw_folds.RawFactors`, or
+    ``columns`` (:class:`~identify.selection.raw_torque_scores.RawFactors`, or
     :func:`~identify.selection.prior_weight.observation_folds`): the model is fitted on them, with a
     torque offset on each joint of ``offsets`` (0-based; its column after the fit's, named OFFj); None:
     on ``wls``'s own weighted system (no offsets added, λ given). bounds: ``mass_bounds``,

@@ -79,7 +79,7 @@ class FitModel:
     tolerances its joint origins were snapped with (rx90sym.urdf_snap; reused when the robot is
     rebuilt); friction: the smooth friction form (one, or
     a list of one per joint) and its velocity scales (null on a Coulomb joint;
-    identify.estimation.separable.VelocityScales.to_json), the presliding travels; None: Coulomb;
+    identify.friction.scales.VelocityScales.to_json), the presliding travels; None: Coulomb;
     description: the robot description itself (EmbeddedRobot.to_json; None: a robot built in memory,
     or a file of schema version 3 or older); offset_joints: the joints (1-based) the cross-validated
     choice gave a torque offset OFFj (None: none; an older file reads None); torque_left_out: the joints

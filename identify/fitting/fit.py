@@ -213,7 +213,7 @@ def _fit_blocks(robot: rx90sym.Robot, recordings: Sequence[Any], processing: Any
     from identify.io.blocks import block_source, check_block
     from identify.fitting.yardsticks import streamed_yardsticks
 
-    from identify.fitting.streamed_friction import FrictionHook
+    from identify.friction.fitted_columns import FrictionHook
 
     p = processing if processing is not None else Processing()
     smooth = has_smooth_friction(p.friction_form)
@@ -262,10 +262,10 @@ def _fit_blocks(robot: rx90sym.Robot, recordings: Sequence[Any], processing: Any
 def _model_span(sf: Any) -> Any:
     """The time blocks of the identified model's cross-validation and of the yardsticks' held-out errors:
     the fit's own processing (its cut-off's filter edges, its decimation and delay from each segment's
-    ends), :data:`identify.observation.cross_validation.DEFAULT_BLOCKS` of them."""
-    from identify.estimation.raw_folds import raw_span
-    from identify.observation.candidates import Candidate
-    from identify.observation.cross_validation import DEFAULT_BLOCKS
+    ends), :data:`identify.selection.cross_validation.DEFAULT_BLOCKS` of them."""
+    from identify.selection.raw_torque_scores import raw_span
+    from identify.selection.candidates import Candidate
+    from identify.selection.cross_validation import DEFAULT_BLOCKS
 
     return raw_span(sf.scans, [Candidate(sf.cutoff, sf.settings.decimate_to)], DEFAULT_BLOCKS, sf.settings.delay)
 
@@ -277,7 +277,7 @@ def _model_factors(robot: rx90sym.Robot, sources: Sequence[Any], sf: Any, span: 
     predict: what the identified model is fitted and its prior weight cross-validated on (one pass)."""
     from dataclasses import replace
 
-    from identify.estimation.stream_cv import column_factors
+    from identify.selection.processing_choice import column_factors
     from identify.fitting.validation import prediction_rate
 
     rate = min(s.rate for s in sf.scans)

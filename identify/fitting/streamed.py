@@ -7,7 +7,7 @@ bootstrap, without ever holding a full-rate array of a whole log: recordings are
 into decimated rows block by block (:mod:`identify.observation.stream`) and folded into the
 per-joint triangular factors (:mod:`identify.estimation.incremental_qr`) from which eqs. 9-15 follow.
 Without a cut-off the processing is first chosen by blocked cross-validation, block by block too
-(:mod:`identify.estimation.stream_cv`).
+(:mod:`identify.selection.processing_choice`).
 
 With a Dask ``client`` every block is a task (filtering, regressor, parallel decimation and the
 block's QR run on the workers); the client folds the factors in block order, so the result is the
@@ -30,8 +30,8 @@ from identify.estimation.dependent_columns import ColumnReduction, reduce_column
 from identify.estimation.least_squares import joint_weights, solve_joint_systems
 from identify.estimation.results import METHODS, IdentificationResult
 from identify.io.blocks import BlockSource, block_source, check_block
-from identify.observation.candidates import DEFAULT_LABEL, Candidate
-from identify.observation.cross_validation import DEFAULT_BLOCKS, RAW, NoCandidateScored, ProcessingChoice
+from identify.selection.candidates import Candidate, DEFAULT_LABEL
+from identify.selection.cross_validation import DEFAULT_BLOCKS, NoCandidateScored, ProcessingChoice, RAW
 from identify.observation.matrix import DECIMATION_PASSBAND, DEFAULT_MIN_VELOCITY, DEFAULT_REST, Observation, presliding_base
 from identify.observation.defaults import DEFAULT_DECIMATE_TO
 from identify.observation.offsets import offset_base
@@ -40,8 +40,8 @@ from identify.observation.row_store import RowStore, keeps_rows
 from identify.observation.stream import (DEFAULT_BLOCK, Piece, Plan, Scan, StreamSettings, in_order, piece,
                                          plan_windows, scan_all, scanned_cutoff, torque_left_out,
                                          windows_in_order)
-from identify.estimation.cv_length import too_short
-from identify.estimation.stream_cv import KEEP_SECONDS, choose_processing_streamed, scans_for_choice
+from identify.selection.required_length import too_short
+from identify.selection.processing_choice import KEEP_SECONDS, choose_processing_streamed, scans_for_choice
 from identify.estimation.delay import DelayEstimate, delay_grid, joint_log_rms, refined_delay
 
 __all__ = ["BootstrapSpec", "StreamedFit", "carry_choice", "estimate_delay", "fit_streamed"]
@@ -67,7 +67,7 @@ class StreamedFit:
     bootstrap block; settings: the processing; blocks: number of blocks processed; q_range: (2, n)
     smallest and largest position of each joint over the recordings [rad]; recordings: per recording
     its samples, segments, bridged samples and stale rows (:meth:`identify.observation.stream.Scan.layout`);
-    choice: the cross-validated processing (a :class:`~identify.observation.cross_validation.ProcessingChoice`;
+    choice: the cross-validated processing (a :class:`~identify.selection.cross_validation.ProcessingChoice`;
     None when the processing was given); columns: the base fitted; friction: the fit file's
     ``model.friction`` of the friction columns searched (None: none); reduction: the columns the fitted
     rows cannot separate, left out or merged (:func:`identify.estimation.dependent_columns.reduce_columns`;
@@ -182,7 +182,7 @@ def _choose(robot: rx90sym.Robot, sources: Sequence[BlockSource], base: Any, cut
             decimate_to: float | None, min_velocity: float | None, rest: RestPolicy | None, spring: bool, block: int,
             client: Any, delay: float, offsets: Sequence[int]) -> tuple[ProcessingChoice, list[Scan]]:
     """(the processing chosen by blocked cross-validation block by block, the scans it made: the fit
-    that follows reuses that pass). Recordings too short for the blocks (:mod:`identify.estimation.cv_length`),
+    that follows reuses that pass). Recordings too short for the blocks (:mod:`identify.selection.required_length`),
     or on which no candidate could be scored, get the fixed defaults, said in the choice's record."""
     if cutoff is not None:
         raise ValueError("a cut-off is given and cross_validate asks to choose one: give one of them")
@@ -259,7 +259,7 @@ def fit_streamed(robot: rx90sym.Robot, recordings: Sequence[Any], method: str = 
     blocks on (None: here); bootstrap: also the segment-bootstrap σ; convention, gains: how CSV files
     are read; cross_validate: choose the cut-off, decimation and (``rest`` None) the rest policy per
     joint by blocked cross-validation, block by block
-    (:func:`identify.estimation.stream_cv.choose_processing_streamed`); None: whenever ``cutoff`` is
+    (:func:`identify.selection.processing_choice.choose_processing_streamed`); None: whenever ``cutoff`` is
     None, as :class:`identify.Processing`; ``decimate_to`` is then the default candidate's. rest: None
     is open (chosen by the cross-validation, else zero-coulomb); offsets: the joints (0-based) the
     cross-validation may give a torque offset (the columns OFFj of those it keeps are fitted:
@@ -267,7 +267,7 @@ def fit_streamed(robot: rx90sym.Robot, recordings: Sequence[Any], method: str = 
     "auto": the lag is searched after the choice); friction: ``friction(robot, sources, scans, cutoff,
     settings, base, client, choose=...)`` -> (columns, record) called once the torques are in step (the delay
     known; ``choose`` False where the processing's choice fell back on the fixed defaults: no friction
-    choice either): the friction columns searched block by block (:mod:`identify.fitting.streamed_friction`),
+    choice either): the friction columns searched block by block (:mod:`identify.friction.fitted_columns`),
     then fitted. The other arguments are those of :func:`identify.fit`. An error raised once the processing
     is chosen carries the choice (:func:`carry_choice`: its ``processing_choice``, the table).
     """

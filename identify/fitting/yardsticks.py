@@ -4,10 +4,10 @@
 and folds the baseline's rows into per-(time block, joint) factors
 (:mod:`identify.fitting.baseline_factors`); from them come the plain OLS baseline
 (:mod:`identify.fitting.baseline`), the model the user had (:mod:`identify.fitting.user_model`) and, given
-the time blocks of the blocked cross-validation (:class:`identify.estimation.raw_folds.RawSpan`: the
+the time blocks of the blocked cross-validation (:class:`identify.selection.raw_torque_scores.RawSpan`: the
 processing choice's), both yardsticks' held-out errors per (block, joint) (:class:`YardstickFolds`): each
 fitted on the other blocks' samples, scored on the block's raw measured torques, against the same
-reference as the fit's own held-back errors (:meth:`identify.estimation.raw_folds.RawFactors.scores`).
+reference as the fit's own held-back errors (:meth:`identify.selection.raw_torque_scores.RawFactors.scores`).
 
 The yardsticks score their own samples (0.5 s from each segment's ends, measured) within the
 cross-validation's bounds (``RawSpan.bounds``: the filters' edges of its lowest cut-off from each end);
@@ -23,12 +23,12 @@ import numpy as np
 
 import rx90sym
 
-from identify.estimation.raw_folds import RawSpan
+from identify.selection.raw_torque_scores import RawSpan
 from identify.fitting.baseline import PlainBaseline, baseline_names, memory_windows
 from identify.fitting.baseline_blocks import source_windows
 from identify.fitting.baseline_factors import BaselineFactors, baseline_factors, plain_solution
 from identify.fitting.user_model import UserModel, described_bodies, user_model, user_values
-from identify.observation.cv_scoring import block_scores
+from identify.selection.folds import block_scores
 
 __all__ = ["KINDS", "Yardsticks", "YardstickFolds", "fit_yardsticks", "held_out", "streamed_yardsticks",
            "yardstick_folds"]
@@ -52,7 +52,7 @@ class YardstickFolds:
 
     def scores(self, kind: str = "plain") -> tuple[float, tuple[float, ...], tuple[tuple[float, ...], ...]]:
         """(score, per joint, per held-back block and joint) of yardstick ``kind``: relative errors
-        100 sqrt(err2 / ref2) in %, exactly as :meth:`identify.estimation.raw_folds.RawFactors.scores`."""
+        100 sqrt(err2 / ref2) in %, exactly as :meth:`identify.selection.raw_torque_scores.RawFactors.scores`."""
         if kind not in KINDS:
             raise ValueError(f"yardstick must be one of {KINDS}, got {kind!r}")
         if kind not in self.err2:
@@ -139,7 +139,7 @@ def streamed_yardsticks(robot: rx90sym.Robot, sources: Sequence[Any], scans: Seq
 def yardstick_folds(robot: rx90sym.Robot, sources: Sequence[Any], scans: Sequence[Any], span: RawSpan,
                     spring: bool, block: int, client: Any = None) -> YardstickFolds:
     """Both yardsticks' held-out errors per (time block, joint) of the blocked cross-validation whose time
-    blocks are ``span`` (:func:`identify.estimation.raw_folds.raw_span`), from logs read block by block
+    blocks are ``span`` (:func:`identify.selection.raw_torque_scores.raw_span`), from logs read block by block
     (:func:`streamed_yardsticks`). ValueError where the baseline cannot be fitted."""
     done = streamed_yardsticks(robot, sources, scans, spring, block, client, span)
     if done.folds is None:

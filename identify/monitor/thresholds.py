@@ -20,13 +20,13 @@ from identify.io.blocks import BlockSource, MemorySource, block_source
 from identify.monitor.contact import CALIBRATION_MARGIN, CALIBRATION_QUANTILE
 from identify.monitor.defaults import DEFAULT_MONITOR_BLOCK
 from identify.monitor.log import MonitorInputError, calibrate, check_fit, excess
-from identify.observation.cross_validation import DEFAULT_BLOCKS
+from identify.selection.cross_validation import DEFAULT_BLOCKS
 from identify.estimation.least_squares import IdentificationError, weighted_least_squares
-from identify.observation.cv_scoring import time_folds
+from identify.selection.folds import time_folds
 
 __all__ = ["HELD_OUT_BLOCKS", "held_out_thresholds", "with_contact_thresholds"]
 
-#: Blocks of the held-out thresholds: the cross-validation's (identify.observation.cross_validation).
+#: Blocks of the held-out thresholds: the cross-validation's (identify.selection.cross_validation).
 HELD_OUT_BLOCKS = DEFAULT_BLOCKS
 
 

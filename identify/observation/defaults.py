@@ -24,6 +24,6 @@ DEFAULT_REST = "zero-coulomb"
 #: Friction forms of the moving rows (docs/real-logs.md): "coulomb" FS·sign(q̇); "tanh" the smooth
 #: Coulomb FS·tanh(q̇/vs); "stribeck" (FS + (FST − FS)·exp(−(q̇/vs)²))·sign(q̇). The last two are
 #: linear in FS (FST) for a given velocity scale vs [rad/s], found by separable least squares
-#: (identify.estimation.separable). The cross-validation grid iterates this tuple.
+#: (identify.friction.scales). The cross-validation grid iterates this tuple.
 FRICTION_FORMS = ("coulomb", "tanh", "stribeck")
 DEFAULT_FRICTION = "coulomb"

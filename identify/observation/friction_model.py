@@ -10,7 +10,7 @@
   the joint's positions (identify.observation.friction, travel ``travels[j]``), kept on the rest
   rows only (identify.observation.matrix, ``rest="presliding"``), so the rest torque is z·FPj with
   its own magnitude and the moving rows keep the Coulomb model; with ``candidates``, one column
-  FPj_k per candidate travel k instead (the travel search, identify.estimation.separable);
+  FPj_k per candidate travel k instead (the travel search, identify.friction.scales);
 - form "probe" (internal): the Coulomb columns hold the driver speed itself, so that one
   observation matrix gives separable least squares the (filtered, decimated) speed of every row.
 """

@@ -1,7 +1,7 @@
 """Torque offsets on chosen joints: a constant OFFj in joint j's equation, as columns of the base.
 
 ``Robot(offsets=True)`` puts an offset on every joint; the cross-validated choice
-(:func:`identify.estimation.stream_cv.choose_processing`) gives one to the joints whose
+(:func:`identify.selection.processing_choice.choose_processing`) gives one to the joints whose
 held-back error it clearly lowers, through :class:`OffsetBase`. Asymmetric Coulomb friction
 (FSPj, FSNj) and an offset are collinear on moving samples: a joint with the asymmetric form never
 gets an offset (:func:`offset_joints`).

@@ -114,13 +114,13 @@ class Processing:
     spring: add the robot's spring torque to the measured torque (False when the spring is
     identified with the other parameters);
     friction: the friction form of the moving rows, one of FRICTION_FORMS ("coulomb"; "tanh",
-    "stribeck": velocity scale per joint by separable least squares, identify.estimation.separable),
+    "stribeck": velocity scale per joint by separable least squares, identify.friction.scales),
     or a tuple of them, one per joint (the same on every joint is kept as one name); None: open
-    (chosen per joint by the cross-validation, :mod:`identify.estimation.friction_choice`, else
+    (chosen per joint by the cross-validation, :mod:`identify.friction.choice`, else
     :data:`DEFAULT_FRICTION`);
     cross_validate: choose the cut-off, the decimation and (where ``rest`` is None) the rest
     policy per joint on the torques by blocked cross-validation
-    (:mod:`identify.observation.cross_validation`; ``cutoff`` must be None); None (default): on
+    (:mod:`identify.selection.cross_validation`; ``cutoff`` must be None); None (default): on
     whenever no cut-off is given (:attr:`cross_validates`); the fit records the choice and its
     candidate table.
     """

@@ -1,6 +1,6 @@
 """The prior's weight λ chosen by blocked cross-validation against the raw measured torques.
 
-For each held-back time block b (the processing choice's blocks: :mod:`identify.estimation.raw_folds`),
+For each held-back time block b (the processing choice's blocks: :mod:`identify.selection.raw_torque_scores`),
 the prior-weighted model (:mod:`identify.estimation.consistency.weighted_fit`) is fitted on the
 other blocks' rows — each joint weighted by 1/σ_j of its own least-squares residual there, as eq. 11
 — at every weight λ of the grid, and predicts the held-back block's raw torques (the same quadratic
@@ -10,7 +10,7 @@ form in β as the processing choice's scores). The grid holds both ends: λ = 0 
 The choice: the largest λ whose held-back error the best weight does not clearly beat, so that the
 description is kept unless the data clearly improve on it (what the data determine is theirs at any λ:
 :mod:`identify.estimation.consistency.weighted_fit`). Clearly: beyond one standard error of the paired
-difference over the blocks (:func:`~identify.observation.cross_validation.clearly_better`), on all blocks
+difference over the blocks (:func:`~identify.selection.cross_validation.clearly_better`), on all blocks
 but one at most, and by :data:`WEIGHT_MARGIN` of the larger λ's error. Nor is a λ chosen whose model moves
 a base parameter the data determine further than they allow (``keeps``: the physical constraints can,
 where the description's bodies are held in the directions the data do not see). Why so strict: the blocks of a
@@ -29,10 +29,10 @@ import numpy as np
 from identify.estimation.consistency.errors import ConsistencyError
 from identify.estimation.results import json_number
 from identify.estimation.consistency.weighted_fit import PriorProblem
-from identify.estimation.raw_folds import offset_columns_of
-from identify.observation.candidates import Candidate
-from identify.observation.cross_validation import clearly_better
-from identify.observation.cv_scoring import block_scores
+from identify.selection.raw_torque_scores import offset_columns_of
+from identify.selection.candidates import Candidate
+from identify.selection.cross_validation import clearly_better
+from identify.selection.folds import block_scores
 
 __all__ = ["WEIGHT_GRID", "WEIGHT_MARGIN", "FoldSystem", "ObservationFolds", "WeightChoice", "choose_prior_weight", "fold_system",
            "held_back_scores", "observation_folds"]
@@ -175,7 +175,7 @@ def choose_prior_weight(factors: Any, free: PriorProblem, fixed: PriorProblem, o
                         weights: Sequence[float] = WEIGHT_GRID,
                         keeps: Callable[[float], str | None] | None = None) -> WeightChoice:
     """The λ of the module docstring: ``factors`` the fit's columns' per-(block, joint) factors of
-    fitted rows and raw samples scored (:class:`~identify.estimation.raw_folds.RawFactors`), with a
+    fitted rows and raw samples scored (:class:`~identify.selection.raw_torque_scores.RawFactors`), with a
     torque offset on the joints ``offsets``; ``free``/``fixed`` the compiled problems for finite λ and
     for λ = ∞; ``keeps(λ)``: why the model at λ overrides what the data determine (None: it does not),
     such a λ never chosen."""
@@ -228,7 +228,7 @@ class _Span:
 @dataclass(frozen=True, eq=False)
 class ObservationFolds:
     """The folds of an observation matrix held in memory, in the layout of
-    :class:`~identify.estimation.raw_folds.RawFactors` (fitted rows ``[W | 1 | Y]``; scored
+    :class:`~identify.selection.raw_torque_scores.RawFactors` (fitted rows ``[W | 1 | Y]``; scored
     ``[W | 1 | Y | Y]``: the held-back error against the observation's own filtered torques)."""
 
     fitted: tuple
@@ -242,7 +242,7 @@ def observation_folds(obs: Any, blocks: int = 5) -> ObservationFolds:
     """:class:`ObservationFolds` of ``obs`` (an :class:`identify.Observation` with its sample times):
     its rows cut into ``blocks`` contiguous blocks of equal duration."""
     from identify.estimation.incremental_qr import JointFactors
-    from identify.observation.cv_scoring import time_blocks
+    from identify.selection.folds import time_blocks
 
     if obs.t is None:
         raise ValueError("the observation has no sample times: the prior weight cannot be cross-validated")

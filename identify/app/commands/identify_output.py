@@ -51,7 +51,7 @@ def print_fit(f: Fit, recs: list, auto_delay: bool) -> None:
             print(f"{lay['source']}: {lay['segments']} segment(s){split_text(lay)}, {lay['bridged_samples']} samples "
                   f"bridged over lost packets (not fitted), {lay['stale_rows'] or 0} stale rows dropped when read")
     if f.model.friction is not None and "velocity_scale" in f.model.friction:
-        from identify.estimation.separable import VelocityScales
+        from identify.friction.scales import VelocityScales
 
         print(VelocityScales.from_json(f.model.friction).summary())
     if f.model.friction is not None and "presliding_travel" in f.model.friction:

@@ -2,7 +2,7 @@
 
 :func:`choose_processing_streamed` is the cross-validated choice of the cut-off, the decimation, the rest
 policy per joint and the torque offsets (the grid, the folds and the selection of
-:mod:`identify.observation.cross_validation`: :func:`~identify.observation.cross_validation.select_processing`),
+:mod:`identify.selection.cross_validation`: :func:`~identify.selection.cross_validation.select_processing`),
 without holding a log in memory; :func:`choose_processing` is the same choice on recordings in memory
 (each read as one block):
 
@@ -10,19 +10,19 @@ without holding a log in memory; :func:`choose_processing` is the same choice on
    its position-spectrum cut-off with the 2 Hz floor (the knee; the default candidate's cut-off is
    the same spectrum with the decimation's floor, :func:`~identify.observation.stream.scanned_cutoff`)
    and the times of its first and last seconds (where the raw samples scored start and end, hence the
-   time blocks: :func:`identify.estimation.raw_folds.raw_span`);
+   time blocks: :func:`identify.selection.raw_torque_scores.raw_span`);
 2. each candidate streams the recordings through the streamed fit's own row code
    (:func:`identify.observation.stream.piece`: segments, bridged rows, rest masks, parallel
    decimation to the candidate's own rate) and folds its fitted rows and the raw samples it scores into
-   per-(time block, joint) triangular factors (:mod:`identify.estimation.raw_folds`): memory
+   per-(time block, joint) triangular factors (:mod:`identify.selection.raw_torque_scores`): memory
    blocks x joints x (c + 3)^2 doubles per candidate;
-3. the fold fits are :func:`~identify.observation.cross_validation.fold_wls` on those factors, each
+3. the fold fits are :func:`~identify.selection.cross_validation.fold_wls` on those factors, each
    candidate scored against the raw measured torques, its held-back prediction interpolated onto the
    recordings' own time stamps: no second pass over the data, and none for the torque offsets (a column
    of ones is in every factor).
 
 Each candidate costs one pass over the recordings (reading, filtering, regressor, decimation), about
-what the fit itself costs: the row cap (:data:`~identify.observation.cross_validation.DEFAULT_ROW_CAP`
+what the fit itself costs: the row cap (:data:`~identify.selection.cross_validation.DEFAULT_ROW_CAP`
 observation rows, about 60 s of passes on the reference machine; a count, so the same log gets the
 same choice on any machine) then leaves the cut-offs after the first unscored on a long log, listed
 as such in the table. With a Dask client every block of a candidate is
@@ -38,11 +38,11 @@ from typing import Any, Sequence
 
 import rx90sym
 
-from identify.estimation.raw_folds import RawFactors, RawSpan, raw_span, window_factors
+from identify.selection.raw_torque_scores import RawFactors, RawSpan, raw_span, window_factors
 from identify.io.blocks import BlockSource, block_source
-from identify.observation.cross_validation import (DEFAULT_BLOCKS, DEFAULT_ROW_CAP, RAW, SCORED_REST, Budget, Candidate,
-                                                   ProcessingChoice, clearly_better, grid_around, score_candidates,
-                                                   select_processing)
+from identify.selection.cross_validation import (Budget, Candidate, DEFAULT_BLOCKS, DEFAULT_ROW_CAP, ProcessingChoice,
+                                                 RAW, SCORED_REST, clearly_better, grid_around, score_candidates,
+                                                 select_processing)
 from identify.observation.matrix import DECIMATION_PASSBAND, DEFAULT_MIN_VELOCITY, presliding_base
 from identify.observation.defaults import DEFAULT_DECIMATE_TO
 from identify.observation.processing import RestPolicy, drops_rest
@@ -59,7 +59,7 @@ KEEP_SECONDS = 2.0 * EDGE_PERIODS / LOWEST_CUTOFF
 
 
 def grid_of_scans(scans: Sequence[Scan], default_decimate: float | None) -> tuple[float, list[Candidate]]:
-    """(knee [Hz], candidates of :func:`~identify.observation.cross_validation.grid_around`) from scans
+    """(knee [Hz], candidates of :func:`~identify.selection.cross_validation.grid_around`) from scans
     made with the 2 Hz floor: the knee the largest segment cut-off over segments of 64 samples or more,
     the rate the lowest segment rate, the default cut-off the automatic one with ``default_decimate``."""
     segments = [g for s in scans for g in s.segments]
@@ -76,12 +76,12 @@ def choose_processing(robot: rx90sym.Robot, recordings: Sequence[Any], base: Any
                       candidates: Sequence[Candidate] | None = None, policies: Sequence[str] = SCORED_REST,
                       delay: float = 0.0, offsets: Sequence[int] = ()) -> ProcessingChoice:
     """Score the candidate processings of recordings in memory and choose the lowest held-back error
-    (:mod:`identify.observation.cross_validation`): :func:`choose_processing_streamed` with each
+    (:mod:`identify.selection.cross_validation`): :func:`choose_processing_streamed` with each
     recording one block.
 
     min_velocity [rad/s], spring: the fit's rest threshold (None: no rest handling) and spring (the
     rows of W); rest: the fit's rest policy, one or one per joint, or None (open: chosen per joint
-    among ``policies``, default :data:`~identify.observation.cross_validation.SCORED_REST`); blocks:
+    among ``policies``, default :data:`~identify.selection.cross_validation.SCORED_REST`); blocks:
     contiguous blocks (>= 2); row_cap: no cut-off is started once the candidates scored have processed
     that many observation rows (None: no cap; the first is always scored); time_cap [s]: the same on
     the wall clock, on request (None: off, the default: the choice then never depends on the machine's

@@ -8,7 +8,7 @@ the position filter, with the decimation to about 2.5 fc so that the parallel fi
 1. the recordings' time span is cut into ``blocks`` contiguous blocks of equal duration;
 2. for each block, the base parameters are fitted (WLS) on the rows of the other blocks and the
    torques of the held-back block are predicted;
-3. every candidate is scored against the **raw measured torques** (:mod:`identify.estimation.raw_folds`):
+3. every candidate is scored against the **raw measured torques** (:mod:`identify.selection.raw_torque_scores`):
    its held-back prediction, at its own cut-off and decimation, is interpolated (linearly) onto the
    recordings' own time stamps and compared with the torques the log holds, unfiltered, on the same
    samples for every candidate (measured, beyond the edges of the grid's lowest cut-off): no
@@ -48,7 +48,7 @@ and 4 of 5 in another). ``time_cap`` adds a wall-clock cap on request. The rest 
 first cut-off are always scored. Bridged samples and rest rows follow the fit's rules (the
 same rows as W). :func:`select_processing` is this selection whatever scores the candidates; the
 choice itself, on recordings in memory or read block by block (one implementation), is
-:mod:`identify.estimation.stream_cv` (``choose_processing``, ``choose_processing_streamed``).
+:mod:`identify.selection.processing_choice` (``choose_processing``, ``choose_processing_streamed``).
 """
 from __future__ import annotations
 
@@ -63,9 +63,9 @@ import rx90sym
 
 from identify.observation.matrix import DECIMATION_PASSBAND
 from identify.observation.processing import DEFAULT_REST, REST_POLICIES, RestPolicy
-from identify.observation.candidates import CLEAR_MARGIN, DEFAULT_LABEL, Candidate, ProcessingChoice
+from identify.selection.candidates import CLEAR_MARGIN, Candidate, DEFAULT_LABEL, ProcessingChoice
 # The fold helpers (other choices import them from here).
-from identify.observation.cv_scoring import block_factors, block_scores, fold_wls, time_blocks, time_folds
+from identify.selection.folds import block_factors, block_scores, fold_wls, time_blocks, time_folds
 
 __all__ = ["Candidate", "ProcessingChoice", "GRID_FACTORS", "DEFAULT_BLOCKS", "SCORED_REST", "RAW", "NO_DECIMATION",
            "grid_around", "select_processing", "score_candidates", "time_folds",
@@ -165,7 +165,7 @@ Scorer = Callable[[Candidate], tuple[float, tuple[float, ...], tuple[tuple[float
 def select_processing(score: Scorer, knee: float, grid: Sequence[Candidate], reference: float | None, blocks: int,
                       min_velocity: float | None, rest: RestPolicy | None, budget: Budget,
                       policies: Sequence[str] = SCORED_REST) -> ProcessingChoice:
-    """The selection of the cross-validated choice (:mod:`identify.estimation.stream_cv`) whatever
+    """The selection of the cross-validated choice (:mod:`identify.selection.processing_choice`) whatever
     computes the scores: the rest policy per joint at the knee where it is open, the cut-offs from
     the knee outwards within the ``budget``, the default unless clearly beaten. ``grid``: the knee's
     candidate first, the default among them; ``reference``: what the candidates were scored against

@@ -1,5 +1,5 @@
 """A candidate processing of the cross-validated choice and the choice's record (table, reason, JSON):
-:mod:`identify.observation.cross_validation` scores them."""
+:mod:`identify.selection.cross_validation` scores them."""
 from __future__ import annotations
 
 import math

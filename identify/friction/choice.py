@@ -1,25 +1,25 @@
 """Friction form chosen per joint by the blocked cross-validation, where the fit leaves it open (issue 21, item 4).
 
-After :func:`identify.estimation.stream_cv.choose_processing` has fixed the cut-off, the
+After :func:`identify.selection.processing_choice.choose_processing` has fixed the cut-off, the
 decimation and the rest policy, each friction form of :data:`DEFAULT_FORMS` (Coulomb sign(q̇), the
 smooth tanh(q̇/vs); Stribeck on request) is scored the same way, on the same contiguous blocks
-(:func:`~identify.observation.cross_validation.time_blocks`: cut by time over the recordings'
+(:func:`~identify.selection.cross_validation.time_blocks`: cut by time over the recordings'
 common span):
 
 The rows are read in passes, from recordings in memory or block by block from a log of any length
-(:mod:`identify.estimation.friction_folds`: one implementation, everything from per-(time block,
+(:mod:`identify.friction.folds`: one implementation, everything from per-(time block,
 joint) triangular factors, so the choice does not depend on the blocks):
 
 1. the probe columns, whose own Coulomb columns hold the filtered, decimated driver speed v
    (:class:`~identify.observation.friction_model.FrictionBase` form "probe"): the speeds the scale
-   search needs, tabulated on grids of scales (:mod:`identify.estimation.scale_grid`, two passes);
+   search needs, tabulated on grids of scales (:mod:`identify.friction.scale_search`, two passes);
 2. for each held-back block, the velocity scales of a smooth form are searched **on the other
-   blocks only** (separable least squares, :func:`identify.estimation.friction_folds.fold_scales_of`),
+   blocks only** (separable least squares, :func:`identify.friction.folds.fold_scales_of`),
    the base parameters fitted (WLS, eq. 11's weights, the processing's fold solver) on those rows,
    the held-back torques predicted;
 3. every form is scored with the fit's **exact** columns (one pass for Coulomb, one per smooth form
    holding every fold's columns at that fold's scales,
-   :class:`~identify.estimation.friction_folds.FoldColumns`). Evaluating the forms on the
+   :class:`~identify.friction.folds.FoldColumns`). Evaluating the forms on the
    probe's decimated speed (sign(Dv), tanh(Dv/vs)) handicapped Coulomb against the fit's smooth
    D·sign(v) (TX40: 10.655 % instead of 8.427 %) and chose tanh where the held-out errors got worse.
 
@@ -40,7 +40,7 @@ blocks, the Coulomb joints keep sign(q̇)); the mix is kept when that score is n
 single form's (Coulomb unless a form clearly beats it on the mean over joints), else that single
 form is chosen and the record says why (``FrictionChoice.fallback``). Forms after the first, and
 the combined check, are not started once the passes scored exceed the processing choice's row cap
-(:class:`~identify.observation.cross_validation.Budget`: a count of observation rows, never the
+(:class:`~identify.selection.cross_validation.Budget`: a count of observation rows, never the
 wall clock unless asked).
 """
 from __future__ import annotations
@@ -54,9 +54,9 @@ import numpy as np
 
 import rx90sym
 
-from identify.observation.candidates import joint_cells
-from identify.observation.cross_validation import (DEFAULT_BLOCKS, DEFAULT_ROW_CAP, Budget, Candidate, block_scores,
-                                                   clearly_better, observation_rows)
+from identify.selection.candidates import joint_cells
+from identify.selection.cross_validation import (Budget, Candidate, DEFAULT_BLOCKS, DEFAULT_ROW_CAP, block_scores,
+                                                 clearly_better, observation_rows)
 from identify.observation.friction import DEFAULT_FRICTION, FRICTION_FORMS
 from identify.observation.friction_model import friction_probe
 from identify.observation.processing import FrictionForm, friction_label, has_smooth_friction, uniform
@@ -156,7 +156,7 @@ class _Scored:
 
     def why(self) -> str | None:
         """Why the form cannot be chosen for the whole robot (None: it can)."""
-        from identify.estimation.separable import SCALE_BOUNDS
+        from identify.friction.scales import SCALE_BOUNDS
 
         why = ([f"velocity scale on its upper bound {SCALE_BOUNDS[1]:g} rad/s for joint(s) "
                 f"{', '.join(map(str, sorted(self.bound)))}"] if self.bound else []) + \
@@ -166,11 +166,11 @@ class _Scored:
 
 def _score_form(rows: Any, robot: rx90sym.Robot, inner: Any, probe: Any, terms: Sequence[Any], form: FrictionForm,
                 label: str) -> _Scored:
-    """``form`` (one, or one per joint) scored on the folds of ``rows`` (:mod:`identify.estimation.friction_folds`):
+    """``form`` (one, or one per joint) scored on the folds of ``rows`` (:mod:`identify.friction.folds`):
     each fold's scales searched on its fitting blocks only (the held-back block unseen), the form's exact
     columns at them, the held-back errors."""
-    from identify.estimation.friction_folds import fold_scales_of, held_back_errors
-    from identify.estimation.separable import SCALE_BOUNDS
+    from identify.friction.folds import fold_scales_of, held_back_errors
+    from identify.friction.scales import SCALE_BOUNDS
 
     n = robot.n
     bound, failed, floor = set(), set(), set()
@@ -219,7 +219,7 @@ def choose_friction(robot: rx90sym.Robot, recordings: Sequence[Any], base: Any, 
                          f"{FRICTION_FORMS}, got {tuple(forms)!r}")
     if blocks < 2:
         raise ValueError(f"cross-validation needs at least 2 blocks, got {blocks}")
-    from identify.estimation.friction_folds import MemoryRows
+    from identify.friction.folds import MemoryRows
 
     return choose_friction_rows(robot, MemoryRows(robot, recordings, options, blocks), base,
                                 observation_rows(robot, recordings), forms, row_cap, time_cap)
@@ -228,8 +228,8 @@ def choose_friction(robot: rx90sym.Robot, recordings: Sequence[Any], base: Any, 
 def choose_friction_rows(robot: rx90sym.Robot, rows: Any, base: Any, total_rows: int,
                          forms: Sequence[str] = DEFAULT_FORMS, row_cap: int | None = DEFAULT_ROW_CAP,
                          time_cap: float | None = None) -> FrictionChoice:
-    """:func:`choose_friction` on the fit's ``rows`` (:class:`~identify.estimation.friction_folds.MemoryRows`,
-    or :class:`~identify.estimation.friction_folds.StreamRows` for a log read block by block: the same
+    """:func:`choose_friction` on the fit's ``rows`` (:class:`~identify.friction.folds.MemoryRows`,
+    or :class:`~identify.friction.folds.StreamRows` for a log read block by block: the same
     choice); total_rows: the observation rows of one pass (the row cap's unit)."""
     blocks = rows.blocks
     start = time.perf_counter()

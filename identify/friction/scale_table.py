@@ -5,7 +5,7 @@ A smooth form's column of joint j (tanh(v/s), or Stribeck's pair) is evaluated o
 decimated driver speed v of every row (the probe observation's own Coulomb column) at each scale s_k
 listed for the joint, beside W_j (own Coulomb column sign(v)) and Y_j, and the rows are folded into
 ``R_j = qr([W_j | F_j(s_1) … F_j(s_K) | Y_j])`` block after block (incremental QR, per
-cross-validation time block when asked): what :mod:`identify.estimation.scale_grid` searches the
+cross-validation time block when asked): what :mod:`identify.friction.scale_search` searches the
 scales from, whatever the blocks. The histogram of |v| on fixed bins gives each joint's lower bound
 (:func:`lower_bounds`).
 """

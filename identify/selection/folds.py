@@ -1,7 +1,7 @@
-"""The folds of the blocked cross-validations (:mod:`identify.observation.cross_validation`, the friction
+"""The folds of the blocked cross-validations (:mod:`identify.selection.cross_validation`, the friction
 choice): the folds by time, the per-(block, joint) compressed rows, the fold fits (WLS, eq. 11's weights)
 and the scores from the held-back squared errors. A candidate processing's held-back error against the
-raw measured torques is :mod:`identify.estimation.raw_folds`'."""
+raw measured torques is :mod:`identify.selection.raw_torque_scores`'."""
 from __future__ import annotations
 
 from typing import Sequence

@@ -2,12 +2,12 @@
 
 :class:`FrictionHook` gives :func:`identify.fitting.streamed.fit_streamed` the friction columns once
 the torques are in step: the form chosen per joint by the cross-validation where it is left open
-(:mod:`identify.estimation.friction_folds`), a smooth form's (tanh, Stribeck, or one per joint)
-velocity scales, and the presliding travels (:mod:`identify.estimation.travel_search`). The probe observation's
+(:mod:`identify.friction.folds`), a smooth form's (tanh, Stribeck, or one per joint)
+velocity scales, and the presliding travels (:mod:`identify.friction.travels`). The probe observation's
 rows (each own Coulomb column the filtered, decimated driver speed,
 :class:`~identify.observation.friction_model.FrictionBase` form "probe") are made block by block by
 the streamed fit's own row code (:func:`identify.observation.stream.piece`) and folded into the
-tables of :mod:`identify.estimation.scale_grid` (two passes: the coarse grid, then the fine one);
+tables of :mod:`identify.friction.scale_search` (two passes: the coarse grid, then the fine one);
 the scales are those the whole-signal fit finds (the same search on the same rows, the factors equal
 to rounding), and the fit then uses the form's exact columns at them. Memory: the tables, per joint
 (c + 37)² doubles, whatever the log's length.
@@ -22,9 +22,9 @@ import numpy as np
 import rx90sym
 
 from identify.estimation.consistency.errors import SolverError
-from identify.estimation.scale_grid import find_scales
-from identify.estimation.scale_table import ScaleTable
-from identify.estimation.separable import as_velocity_scales, smooth_joints, smooth_probe
+from identify.friction.scale_search import find_scales
+from identify.friction.scale_table import ScaleTable
+from identify.friction.scales import as_velocity_scales, smooth_joints, smooth_probe
 from identify.observation.friction_model import coulomb_terms, friction_base, friction_probe, presliding_base
 from identify.observation.processing import FrictionForm, drops_rest, friction_label, has_smooth_friction
 from identify.observation.stream import StreamSettings, in_order, piece, plan_windows, windows_in_order
@@ -35,7 +35,7 @@ __all__ = ["FrictionHook", "streamed_feed"]
 def _probe_task(robot: rx90sym.Robot, rec: Any, window: Any, plan: Any, cutoff: float, settings: StreamSettings,
                 probe: Any, table: ScaleTable, folds: tuple[float, float, int] | None) -> list[tuple]:
     """One block of probe rows: per (time block, joint) the table's factor, row count and |v| histogram."""
-    from identify.observation.cv_scoring import time_folds
+    from identify.selection.folds import time_folds
 
     m = piece(robot, rec, window, plan, cutoff, settings, probe.regressor_batch, probe.names, 0).motion
     keep = m.rows(settings.min_velocity is not None and drops_rest(settings.rest))
@@ -88,9 +88,9 @@ def _columns(robot: rx90sym.Robot, sources: Sequence[Any], plans: Sequence[Any],
 def _travels(robot: rx90sym.Robot, sources: Sequence[Any], plans: Sequence[Any], cutoff: float,
              settings: StreamSettings, base: Any, client: Any) -> tuple[Any, dict]:
     """(``base`` with the presliding travels chosen per joint, their record): one pass of the
-    :func:`~identify.estimation.separable.travel_columns` rows into per-joint factors."""
+    :func:`~identify.friction.scales.travel_columns` rows into per-joint factors."""
     from identify.estimation.incremental_qr import JointFactors, stacked_rows
-    from identify.estimation.separable import travel_columns, travels_of
+    from identify.friction.scales import travel_columns, travels_of
     from identify.observation.friction import defaulted_travels
 
     columns = travel_columns(robot, base)
@@ -113,8 +113,8 @@ class FrictionHook:
     """The ``friction`` argument of :func:`~identify.fitting.streamed.fit_streamed`: the friction columns of a
     fit read block by block, as :class:`identify.observation.friction_model.FrictionBase` makes them.
     form: the form given (one, or one per joint); choose: the form chosen per joint by the cross-validation
-    block by block instead (:func:`identify.estimation.friction_choice.choose_friction_rows` on
-    :class:`~identify.estimation.friction_folds.StreamRows`: the in-memory choice's code and time blocks);
+    block by block instead (:func:`identify.friction.choice.choose_friction_rows` on
+    :class:`~identify.friction.folds.StreamRows`: the in-memory choice's code and time blocks);
     then a smooth form's velocity scales, and with the rest policy "presliding" the travels.
     ``choice``: the :class:`FrictionChoice` once called (None: the form was given)."""
 
@@ -131,10 +131,10 @@ class FrictionHook:
         plans = [plan_windows(s, cutoff, settings)[0] for s in scans]
         form = self.form
         if self.choose and choose:
-            from identify.estimation.friction_choice import choose_friction_rows
-            from identify.estimation.friction_folds import StreamRows
-            from identify.estimation.stream_cv import time_span
-            from identify.observation.cross_validation import DEFAULT_BLOCKS
+            from identify.friction.choice import choose_friction_rows
+            from identify.friction.folds import StreamRows
+            from identify.selection.processing_choice import time_span
+            from identify.selection.cross_validation import DEFAULT_BLOCKS
 
             first, last = time_span(scans, plans)
             rows = StreamRows(robot, sources, plans, cutoff, settings, (first, last - first + 1e-9, DEFAULT_BLOCKS),

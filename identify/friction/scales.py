@@ -10,7 +10,7 @@ gradient needs only ∂W/∂s at β̂ (β̂ optimal), CasADi's derivative of the
 Procedure (:func:`velocity_scales`): one observation matrix whose Coulomb columns hold the
 filtered, decimated driver speed v of every row (``FrictionBase`` form "probe"); the scales searched
 on grids of scales tabulated as extra columns of per-joint triangular factors
-(:mod:`identify.estimation.scale_grid`: the same code reads a log block by block), bounded to
+(:mod:`identify.friction.scale_search`: the same code reads a log block by block), bounded to
 :data:`SCALE_BOUNDS` (the lower bound raised to half the 2nd percentile of the joint's speeds: below
 it a column fits a handful of rows). The columns are evaluated on the decimated speed (f(Dv) for the
 parallel-filtered D·f(v): equal where the speed changes slowly over the decimation filter, i.e. for
@@ -29,8 +29,8 @@ from typing import Any, Sequence
 import numpy as np
 
 import rx90sym
-from identify.estimation.scale_grid import ScaleSearch, find_scales
-from identify.estimation.scale_table import LOW_SPEED_SHARE, SCALE_BOUNDS
+from identify.friction.scale_search import ScaleSearch, find_scales
+from identify.friction.scale_table import LOW_SPEED_SHARE, SCALE_BOUNDS
 from identify.observation.friction_model import PRESLIDING_PREFIX, FrictionBase, friction_probe
 from identify.observation.matrix import Observation, observation_matrix
 
@@ -113,7 +113,7 @@ def scales_from_observation(obs: Observation, terms: Sequence[Any], form: str | 
                             n: int) -> VelocityScales:
     """The velocity scales of ``form`` (one smooth form, or one form per joint: only the smooth
     joints' scales are searched, a Coulomb joint keeps sign(v)) from a probe observation (Coulomb
-    columns = driver speed): :func:`identify.estimation.scale_grid.find_scales` on its rows."""
+    columns = driver speed): :func:`identify.friction.scale_search.find_scales` on its rows."""
     own, forms = smooth_joints(terms, form)
     found = find_scales(observation_feed(obs), n, obs.W.shape[1], own, forms)[0]
     return as_velocity_scales(found, form, n)
@@ -179,7 +179,7 @@ def travel_columns(robot: rx90sym.Robot, base: Any, candidates: Sequence[float] 
 def travels_of(robot: rx90sym.Robot, R: Sequence[np.ndarray], rows: Sequence[int], names: Sequence[str],
                candidates: Sequence[float] = TRAVEL_CANDIDATES) -> PreslidingTravels:
     """The travels chosen from the per-joint factors of the :func:`travel_columns` rows (whatever read them)."""
-    from identify.estimation.travel_search import travels_from_factors
+    from identify.friction.travels import travels_from_factors
 
     names = list(names)
     columns = {j: [names.index(f"{PRESLIDING_PREFIX}{j + 1}_{k}") for k in range(len(candidates))]
@@ -197,7 +197,7 @@ def presliding_travels(robot: rx90sym.Robot, recordings: Sequence[Any], base: An
     one of ``candidates`` [rad]. One observation matrix holds a column FPj_k per candidate (rest
     policy "presliding" in ``options``, the fit's other observation options); each joint's δ chosen by
     coordinate descent on the weighted cost from its per-joint factors
-    (:func:`identify.estimation.travel_search.travels_from_factors`, as block by block)."""
+    (:func:`identify.friction.travels.travels_from_factors`, as block by block)."""
     from identify.estimation.incremental_qr import JointFactors
 
     obs = observation_matrix(robot, recordings, base=travel_columns(robot, base, candidates), **options)

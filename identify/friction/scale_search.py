@@ -4,7 +4,7 @@ The smooth Coulomb FS·tanh(q̇/vs) and Stribeck (FS + (FST − FS)·exp(−(q̇
 (identify.observation.friction) are linear in every parameter but each joint's velocity scale vs
 [rad/s]. Their columns, evaluated on the filtered, decimated driver speed v of every row at a list
 of scales per joint, are tabulated as extra columns of the per-joint triangular factors
-(:class:`identify.estimation.scale_table.ScaleTable`, block after block). Any choice of one tabulated
+(:class:`identify.friction.scale_table.ScaleTable`, block after block). Any choice of one tabulated
 scale per joint then gives the projected cost F(s) = ½‖D(Y − W(s)·β̂(s))‖² (variable projection,
 Golub & Pereyra; D eq. 11's weights of a first fit at a middle scale) from the factors' Gram matrices
 alone: nothing of the rows is kept, so the search reads a log of any length block by block and its
@@ -22,7 +22,7 @@ at the fine grid's best point, the columns' derivatives in ln s tabulated beside
 σ² = 2F / (rows − parameters).
 
 Lower bound of each joint's scale: half the :data:`LOW_SPEED_SHARE` quantile of its moving speeds
-(below it a column fits a handful of rows; :func:`identify.estimation.scale_table.lower_bounds`).
+(below it a column fits a handful of rows; :func:`identify.friction.scale_table.lower_bounds`).
 """
 from __future__ import annotations
 
@@ -32,7 +32,7 @@ from typing import Callable, Sequence
 import numpy as np
 
 from identify.estimation.compression import _from_augmented_rows
-from identify.estimation.scale_table import LOW_SPEED_SHARE, SCALE_BOUNDS, ScaleTable, lower_bounds
+from identify.friction.scale_table import LOW_SPEED_SHARE, SCALE_BOUNDS, ScaleTable, lower_bounds
 
 __all__ = ["COARSE_GRID", "LOW_SPEED_SHARE", "SCALE_BOUNDS", "ScaleSearch", "coarse_search", "find_scales",
            "fine_grids", "fine_search"]

@@ -1,6 +1,6 @@
 """How long the recordings must be for the cross-validated processing choice, and why a shorter one is not.
 
-The choice (:mod:`identify.estimation.stream_cv`) fits every candidate processing on all time blocks but
+The choice (:mod:`identify.selection.processing_choice`) fits every candidate processing on all time blocks but
 one and scores it on the one held back. Each fold's fit weights a joint by the residual of its own fit
 (eq. 11), which needs more rows per joint than the model has columns. A recording is long enough when
 every fold of the default candidate (the one kept unless clearly beaten) has that many: its rows are
@@ -22,11 +22,11 @@ from typing import Sequence
 
 import numpy as np
 
-from identify.estimation.raw_folds import raw_span
-from identify.estimation.stream_cv import grid_of_scans
-from identify.observation.candidates import DEFAULT_LABEL, Candidate
-from identify.observation.cross_validation import MIN_GRID_CUTOFF
-from identify.observation.cv_scoring import time_folds
+from identify.selection.raw_torque_scores import raw_span
+from identify.selection.processing_choice import grid_of_scans
+from identify.selection.candidates import Candidate, DEFAULT_LABEL
+from identify.selection.cross_validation import MIN_GRID_CUTOFF
+from identify.selection.folds import time_folds
 from identify.observation.stream import Scan, StreamSettings, plan_windows
 from identify.signal.filtering import EDGE_PERIODS, decimation_plan
 

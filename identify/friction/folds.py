@@ -1,6 +1,6 @@
 """The friction choice's passes over the rows, in memory or block by block: one implementation.
 
-The friction choice (:mod:`identify.estimation.friction_choice`) reads the fit's rows in passes, each
+The friction choice (:mod:`identify.friction.choice`) reads the fit's rows in passes, each
 pass a sequence of filtered motions (:class:`~identify.observation.matrix.FilteredMotion`) with the
 time block of each row: :class:`MemoryRows` (recordings in memory: one motion per segment,
 :func:`~identify.observation.matrix.filtered_motions`) or :class:`StreamRows` (a log read block by
@@ -8,10 +8,10 @@ block: one motion per block, :func:`identify.observation.stream.piece`). Everyth
 from per-(time block, joint) triangular factors, so it is the same whatever the blocks:
 
 - :func:`fold_scales_of`: per held-back block the velocity scales searched on the other blocks
-  (:mod:`identify.estimation.scale_grid`, two passes of the probe columns);
+  (:mod:`identify.friction.scale_search`, two passes of the probe columns);
 - :func:`held_back_errors`: the form's exact (parallel-filtered) columns at each fold's scales, all folds
   in one pass (:class:`FoldColumns`: a column FSj_f per fold f, resting like FSj), the fold fits
-  (eq. 11's weights, :func:`~identify.observation.cv_scoring.fold_wls`) and the held-back errors from
+  (eq. 11's weights, :func:`~identify.selection.folds.fold_wls`) and the held-back errors from
   the factors.
 """
 from __future__ import annotations
@@ -25,9 +25,9 @@ import numpy as np
 import rx90sym
 
 from identify.estimation.compression import _qr_r
-from identify.estimation.scale_grid import find_scales
-from identify.estimation.separable import VelocityScales, as_velocity_scales, smooth_joints
-from identify.observation.cv_scoring import fold_wls, time_blocks, time_folds
+from identify.friction.scale_search import find_scales
+from identify.friction.scales import VelocityScales, as_velocity_scales, smooth_joints
+from identify.selection.folds import fold_wls, time_blocks, time_folds
 from identify.observation.friction import friction_columns
 from identify.observation.friction_model import STRIBECK_PREFIX
 from identify.observation.processing import FrictionForm, drops_rest

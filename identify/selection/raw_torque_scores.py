@@ -1,6 +1,6 @@
 """One candidate processing of the cross-validated choice, scored against the raw measured torques block by block.
 
-For each held-back time block b the fit of the other blocks (:func:`~identify.observation.cross_validation.fold_wls`,
+For each held-back time block b the fit of the other blocks (:func:`~identify.selection.cross_validation.fold_wls`,
 eq. 11's weights) predicts the torques at the candidate's own cut-off and decimation; that prediction,
 ``Phi(t_k) beta - spring(t_k)`` at the decimated rows t_k (shifted by the fit's torque delay), is
 interpolated linearly onto the recording's own time stamps and compared with the unfiltered torques
@@ -34,8 +34,8 @@ import rx90sym
 
 from identify.estimation.dependent_columns import reduce_columns
 from identify.estimation.incremental_qr import JointFactors
-from identify.observation.candidates import Candidate
-from identify.observation.cv_scoring import block_scores, fold_wls, time_folds
+from identify.selection.candidates import Candidate
+from identify.selection.folds import block_scores, fold_wls, time_folds
 from identify.observation.stream import Plan, Scan, StreamSettings, piece
 from identify.signal.filtering import EDGE_PERIODS
 from identify.signal.interpolate import onto, onto_weights
