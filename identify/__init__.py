@@ -33,7 +33,7 @@ _EXPORTS = {
     "observation_matrix": "identify.observation.matrix",
     "FRICTION_FORMS": "identify.observation.defaults",
     "velocity_scales": "identify.friction.scales",
-    "presliding_travels": "identify.friction.scales",
+    "presliding_travels": "identify.friction.travels",
     # estimation: (weighted) least squares (eqs. 9-15), essential parameters, bootstrap, consistency
     "IdentificationResult": "identify.estimation.results",
     "IdentificationError": "identify.estimation.least_squares",

@@ -113,7 +113,8 @@ def test_observer_uses_the_fits_own_model(form):
 
     from identify.estimation.results import IdentificationResult
     from identify.monitor.observer import observer_model
-    from identify.observation.friction_model import coulomb_terms, friction_base
+    from identify.observation.rest import coulomb_terms
+    from identify.friction.columns import friction_base
 
     F = twin_fit("rx90")
     robot = F.robot

@@ -91,7 +91,7 @@ def test_a_per_joint_rest_policy_round_trips_through_the_fit_file(rx90, rx90_bas
 
 
 def test_crossing_keeps_short_or_travelling_passes_and_zeroes_still_rests():
-    from identify.observation.friction import crossing_passes
+    from identify.observation.rest import crossing_passes
 
     mask = np.array([0, 1, 1, 0, 1, 1, 1, 1, 1, 0, 1, 1, 1, 1, 1], dtype=bool)
     q = np.r_[np.zeros(10), 0.0, 0.001, 0.002, 0.003, 0.004]  # still rest, then a slow motion

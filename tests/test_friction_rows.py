@@ -9,8 +9,9 @@ import pytest
 
 import rx90sym
 from identify.friction.folds import FoldColumns
-from identify.observation.friction import friction_columns, friction_function
-from identify.observation.friction_model import coulomb_terms, friction_base, own_terms
+from identify.friction.forms import friction_columns, friction_function
+from identify.observation.rest import coulomb_terms, own_terms
+from identify.friction.columns import friction_base
 from identify.observation.matrix import filtered_motions
 from rx90sym.twin import simulate
 

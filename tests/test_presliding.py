@@ -1,4 +1,4 @@
-"""Friction at rest from the position history (identify.observation.friction): the play operator
+"""Friction at rest from the position history (identify.observation.rest): the play operator
 against hand-computed values, and on a stop-and-go twin whose joints are held at rest by a Dahl
 friction state the presliding rest policy (its own magnitude FPj) predicts held-out torques better
 than Coulomb = 0 and finds the true magnitude."""
@@ -9,7 +9,7 @@ import pytest
 
 import rx90sym
 from identify import Processing, fit, split
-from identify.observation.friction import presliding_state
+from identify.observation.rest import presliding_state
 from rx90sym.recording import Recording
 
 

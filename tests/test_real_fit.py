@@ -62,10 +62,10 @@ def test_rest_mask_and_moving_metrics(rx90, rx90_base, stop_go):
 
 def test_coupled_coulomb_rest_is_per_motor(tx40):
     robot = tx40.with_options(coupling=rx90sym.Coupling((4, 5), "motor"))
-    terms = identify.observation.matrix.coulomb_terms(robot, robot.parameter_names)
+    terms = identify.observation.rest.coulomb_terms(robot, robot.parameter_names)
     fsm = [t for t in terms if t.name == "FSM6"]
     assert [t.row for t in fsm] == [4, 5] and all(t.driver == (0, 0, 0, 0, 1, 1) for t in fsm)
-    paper = identify.observation.matrix.coulomb_terms(tx40.with_options(coupling=rx90sym.Coupling((4, 5), "paper")),
+    paper = identify.observation.rest.coulomb_terms(tx40.with_options(coupling=rx90sym.Coupling((4, 5), "paper")),
                                                tx40.parameter_names)
     assert [(t.row, t.driver.index(1)) for t in paper if t.name == "FSM6"] == [(4, 5), (5, 4)]
 

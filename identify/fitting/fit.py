@@ -24,7 +24,7 @@ from identify.estimation.results import METHODS, IdentificationResult
 from identify.fitting.file import FitModel
 from identify.io.gains import DriveGains
 from identify.observation.matrix import Observation
-from identify.observation.friction_model import FrictionBase
+from identify.friction.columns import inner_columns
 from identify.observation.offsets import OffsetBase, offset_joints
 from rx90sym.base_parameters import BaseParameters
 from identify.observation.processing import Processing, has_policy, has_smooth_friction
@@ -199,7 +199,7 @@ def _description_value(robot: rx90sym.Robot, name: str) -> float:
 
 def _offset_record(base: Any) -> tuple[int, ...] | None:
     """The joints (1-based) given a torque offset by the cross-validated choice (None: none)."""
-    inner = base.base if isinstance(base, FrictionBase) else base
+    inner = inner_columns(base)
     return tuple(j + 1 for j in inner.joints) if isinstance(inner, OffsetBase) else None
 
 

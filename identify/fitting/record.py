@@ -19,10 +19,11 @@ from identify.fitting.plausibility import Flag
 from identify.estimation.results import IdentificationResult, json_number
 from identify.fitting.file import SCHEMA_VERSION, FitModel, gains_of, read_fit_file, robot_of
 from identify.io.gains import DriveGains
-from identify.observation.friction_model import friction_base
-from identify.observation.matrix import Observation, coulomb_terms
+from identify.friction.columns import friction_base
+from identify.observation.matrix import Observation
+from identify.observation.rest import coulomb_terms
 from identify.observation.processing import Processing
-from identify.observation.friction import defaulted_travels
+from identify.observation.rest import defaulted_travels
 from identify.estimation.delay import DelayEstimate
 from identify.fitting.validation import Validation, predict
 from identify.io.blocks import DEFAULT_BLOCK

@@ -32,7 +32,8 @@ from identify.estimation.results import METHODS, IdentificationResult
 from identify.io.blocks import BlockSource, block_source, check_block
 from identify.selection.candidates import Candidate, DEFAULT_LABEL
 from identify.selection.cross_validation import DEFAULT_BLOCKS, NoCandidateScored, ProcessingChoice, RAW
-from identify.observation.matrix import DECIMATION_PASSBAND, DEFAULT_MIN_VELOCITY, DEFAULT_REST, Observation, presliding_base
+from identify.observation.matrix import DECIMATION_PASSBAND, DEFAULT_MIN_VELOCITY, DEFAULT_REST, Observation
+from identify.observation.rest import presliding_base
 from identify.observation.defaults import DEFAULT_DECIMATE_TO
 from identify.observation.offsets import offset_base
 from identify.observation.processing import RestPolicy, drops_rest

@@ -19,7 +19,7 @@ import rx90sym
 from rx90sym.threads import one_blas_thread
 
 from identify.observation.defaults import DEFAULT_DECIMATE_TO
-from identify.observation.matrix import presliding_base
+from identify.observation.rest import presliding_base
 from identify.observation.processing import RestPolicy, has_policy, predicted_rest
 from identify.estimation.results import IdentificationResult, json_number
 from identify.io.blocks import block_source, check_block

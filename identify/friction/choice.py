@@ -11,7 +11,7 @@ The rows are read in passes, from recordings in memory or block by block from a 
 joint) triangular factors, so the choice does not depend on the blocks):
 
 1. the probe columns, whose own Coulomb columns hold the filtered, decimated driver speed v
-   (:class:`~identify.observation.friction_model.FrictionBase` form "probe"): the speeds the scale
+   (:class:`~identify.friction.columns.FrictionBase` form "probe"): the speeds the scale
    search needs, tabulated on grids of scales (:mod:`identify.friction.scale_search`, two passes);
 2. for each held-back block, the velocity scales of a smooth form are searched **on the other
    blocks only** (separable least squares, :func:`identify.friction.folds.fold_scales_of`),
@@ -57,8 +57,8 @@ import rx90sym
 from identify.selection.candidates import joint_cells
 from identify.selection.cross_validation import (Budget, Candidate, DEFAULT_BLOCKS, DEFAULT_ROW_CAP, block_scores,
                                                  clearly_better, observation_rows)
-from identify.observation.friction import DEFAULT_FRICTION, FRICTION_FORMS
-from identify.observation.friction_model import friction_probe
+from identify.friction.forms import DEFAULT_FRICTION, FRICTION_FORMS
+from identify.friction.columns import friction_probe
 from identify.observation.processing import FrictionForm, friction_label, has_smooth_friction, uniform
 
 __all__ = ["DEFAULT_FORMS", "FrictionChoice", "choose_friction"]

@@ -5,7 +5,7 @@ the torques are in step: the form chosen per joint by the cross-validation where
 (:mod:`identify.friction.folds`), a smooth form's (tanh, Stribeck, or one per joint)
 velocity scales, and the presliding travels (:mod:`identify.friction.travels`). The probe observation's
 rows (each own Coulomb column the filtered, decimated driver speed,
-:class:`~identify.observation.friction_model.FrictionBase` form "probe") are made block by block by
+:class:`~identify.friction.columns.FrictionBase` form "probe") are made block by block by
 the streamed fit's own row code (:func:`identify.observation.stream.piece`) and folded into the
 tables of :mod:`identify.friction.scale_search` (two passes: the coarse grid, then the fine one);
 the scales are those the whole-signal fit finds (the same search on the same rows, the factors equal
@@ -25,7 +25,8 @@ from identify.estimation.consistency.errors import SolverError
 from identify.friction.scale_search import find_scales
 from identify.friction.scale_table import ScaleTable
 from identify.friction.scales import as_velocity_scales, smooth_joints, smooth_probe
-from identify.observation.friction_model import coulomb_terms, friction_base, friction_probe, presliding_base
+from identify.observation.rest import coulomb_terms, presliding_base
+from identify.friction.columns import friction_base, friction_probe
 from identify.observation.processing import FrictionForm, drops_rest, friction_label, has_smooth_friction
 from identify.observation.stream import StreamSettings, in_order, piece, plan_windows, windows_in_order
 
@@ -88,10 +89,10 @@ def _columns(robot: rx90sym.Robot, sources: Sequence[Any], plans: Sequence[Any],
 def _travels(robot: rx90sym.Robot, sources: Sequence[Any], plans: Sequence[Any], cutoff: float,
              settings: StreamSettings, base: Any, client: Any) -> tuple[Any, dict]:
     """(``base`` with the presliding travels chosen per joint, their record): one pass of the
-    :func:`~identify.friction.scales.travel_columns` rows into per-joint factors."""
+    :func:`~identify.friction.travels.travel_columns` rows into per-joint factors."""
     from identify.estimation.incremental_qr import JointFactors, stacked_rows
-    from identify.friction.scales import travel_columns, travels_of
-    from identify.observation.friction import defaulted_travels
+    from identify.friction.travels import travel_columns, travels_of
+    from identify.observation.rest import defaulted_travels
 
     columns = travel_columns(robot, base)
     factors = JointFactors(robot.n, len(columns.names))
@@ -111,7 +112,7 @@ def _travels(robot: rx90sym.Robot, sources: Sequence[Any], plans: Sequence[Any],
 @dataclass(eq=False)
 class FrictionHook:
     """The ``friction`` argument of :func:`~identify.fitting.streamed.fit_streamed`: the friction columns of a
-    fit read block by block, as :class:`identify.observation.friction_model.FrictionBase` makes them.
+    fit read block by block, as :class:`identify.friction.columns.FrictionBase` makes them.
     form: the form given (one, or one per joint); choose: the form chosen per joint by the cross-validation
     block by block instead (:func:`identify.friction.choice.choose_friction_rows` on
     :class:`~identify.friction.folds.StreamRows`: the in-memory choice's code and time blocks);

@@ -28,8 +28,8 @@ from identify.estimation.compression import _qr_r
 from identify.friction.scale_search import find_scales
 from identify.friction.scales import VelocityScales, as_velocity_scales, smooth_joints
 from identify.selection.folds import fold_wls, time_blocks, time_folds
-from identify.observation.friction import friction_columns
-from identify.observation.friction_model import STRIBECK_PREFIX
+from identify.friction.forms import friction_columns
+from identify.observation.rest import STRIBECK_PREFIX
 from identify.observation.processing import FrictionForm, drops_rest
 
 __all__ = ["FoldColumns", "MemoryRows", "StreamRows", "fold_scales_of", "held_back_errors"]
@@ -110,7 +110,7 @@ def fold_scales_of(rows: Any, probe: Any, terms: Sequence[Any], form: FrictionFo
                    n: int) -> list[VelocityScales]:
     """Per held-back time block the scales of ``form`` searched on the other blocks only (probe columns
     ``probe``: own Coulomb columns holding the driver speed; ``terms`` its own Coulomb terms)."""
-    from identify.observation.friction_model import presliding_base
+    from identify.observation.rest import presliding_base
 
     own, forms = smooth_joints(terms, form)
     blocks = rows.blocks
@@ -175,7 +175,7 @@ def held_back_errors(rows: Any, inner: Any, terms: Sequence[Any], form: Friction
     """(squared held-back errors, squared held-back torques) (blocks, n) of ``form`` with its exact
     columns at each fold's ``scales`` (None: the Coulomb form, ``inner``'s own columns): per fold the
     WLS on the other blocks (eq. 11's weights), the held-back block predicted; one pass."""
-    from identify.observation.friction_model import presliding_base
+    from identify.observation.rest import presliding_base
 
     blocks = rows.blocks
     inner = presliding_base(rows.robot, inner, rows.presliding_rest)   # FPj columns with "presliding", as in the fit

@@ -1,7 +1,7 @@
 """Velocity scales of smooth friction from per-joint factors tabulated on grids of scales.
 
 The smooth Coulomb FS·tanh(q̇/vs) and Stribeck (FS + (FST − FS)·exp(−(q̇/vs)²))·sign(q̇)
-(identify.observation.friction) are linear in every parameter but each joint's velocity scale vs
+(identify.friction.forms) are linear in every parameter but each joint's velocity scale vs
 [rad/s]. Their columns, evaluated on the filtered, decimated driver speed v of every row at a list
 of scales per joint, are tabulated as extra columns of the per-joint triangular factors
 (:class:`identify.friction.scale_table.ScaleTable`, block after block). Any choice of one tabulated

@@ -17,7 +17,7 @@ from typing import Sequence
 import numpy as np
 
 from identify.estimation.compression import _qr_r
-from identify.observation.friction import friction_columns
+from identify.friction.forms import friction_columns
 
 __all__ = ["LOW_SPEED_SHARE", "SCALE_BOUNDS", "SPEED_EDGES", "ScaleTable", "lower_bounds"]
 

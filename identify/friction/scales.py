@@ -1,11 +1,11 @@
 """Separable least squares for friction nonlinear in a velocity scale (variable projection).
 
 The smooth Coulomb FS·tanh(q̇/vs) and Stribeck (FS + (FST − FS)·exp(−(q̇/vs)²))·sign(q̇)
-(identify.observation.friction) are linear in every parameter but the joint's velocity scale vs
+(identify.friction.forms) are linear in every parameter but the joint's velocity scale vs
 [rad/s]. For given scales the linear parameters β are the least-squares solution (eq. 10); the
 scales minimise the projected cost F(s) = ½‖D(Y − W(s)·β̂(s))‖² (Golub & Pereyra): the
 gradient needs only ∂W/∂s at β̂ (β̂ optimal), CasADi's derivative of the form
-(identify.observation.friction.friction_columns; tanh's evaluated in NumPy). D holds the paper's per-joint weights (eq. 11) of a first fit.
+(identify.friction.forms.friction_columns; tanh's evaluated in NumPy). D holds the paper's per-joint weights (eq. 11) of a first fit.
 
 Procedure (:func:`velocity_scales`): one observation matrix whose Coulomb columns hold the
 filtered, decimated driver speed v of every row (``FrictionBase`` form "probe"); the scales searched
@@ -17,9 +17,7 @@ parallel-filtered D·f(v): equal where the speed changes slowly over the decimat
 vs above the speed change in a few decimated periods); the fit itself then uses the exact
 parallel-filtered columns.
 
-The presliding travel δ per joint (:func:`presliding_travels`) is separable the same way: the
-magnitude FPj is linear, δ_j one of :data:`TRAVEL_CANDIDATES`, chosen by coordinate descent on the
-projected cost (z is piecewise linear in 1/δ: a grid, not a gradient).
+The presliding travel δ per joint is separable the same way (:mod:`identify.friction.travels`).
 """
 from __future__ import annotations
 
@@ -31,11 +29,11 @@ import numpy as np
 import rx90sym
 from identify.friction.scale_search import ScaleSearch, find_scales
 from identify.friction.scale_table import LOW_SPEED_SHARE, SCALE_BOUNDS
-from identify.observation.friction_model import PRESLIDING_PREFIX, FrictionBase, friction_probe
+from identify.friction.columns import FrictionBase, friction_probe
 from identify.observation.matrix import Observation, observation_matrix
 
-__all__ = ["LOW_SPEED_SHARE", "SCALE_BOUNDS", "TRAVEL_CANDIDATES", "PreslidingTravels", "VelocityScales",
-           "presliding_travels", "smooth_probe", "travel_columns", "travels_of", "scales_from_observation", "smooth_joints", "velocity_scales"]
+__all__ = ["LOW_SPEED_SHARE", "SCALE_BOUNDS", "VelocityScales", "smooth_probe", "scales_from_observation", "smooth_joints",
+           "velocity_scales"]
 
 
 @dataclass(frozen=True)
@@ -142,67 +140,3 @@ def velocity_scales(robot: rx90sym.Robot, recordings: Sequence[Any], base: Any, 
     probe, terms = smooth_probe(robot, base, form)
     obs = observation_matrix(robot, recordings, base=probe, **options)
     return scales_from_observation(obs, terms, form, robot.n)
-
-
-# ---------------------------------------------------------------- presliding travel per joint
-#: Presliding travels δ tried for every joint [rad] (docs/real-logs.md: the UR10e prefers the short
-#: ones, the twin's Dahl state has 5 mrad).
-TRAVEL_CANDIDATES = (0.25e-3, 0.5e-3, 1e-3, 2e-3, 5e-3, 10e-3)
-
-
-@dataclass(frozen=True)
-class PreslidingTravels:
-    """The presliding travel δ [rad] per joint (nan: no presliding column, e.g. never at rest),
-    chosen among ``candidates`` [rad] by the fit's weighted cost (``cost``: per joint, per
-    candidate, the others at their choice)."""
-
-    travels: tuple[float, ...]
-    candidates: tuple[float, ...]
-    cost: tuple[tuple[float, ...], ...]
-
-    def to_json(self) -> dict[str, Any]:
-        return {"presliding_travel": [float(v) if np.isfinite(v) else None for v in self.travels],
-                "presliding_candidates": list(self.candidates),
-                "presliding_cost": [[float(c) if np.isfinite(c) else None for c in row] for row in self.cost]}
-
-
-def travel_columns(robot: rx90sym.Robot, base: Any, candidates: Sequence[float] = TRAVEL_CANDIDATES) -> FrictionBase:
-    """The columns of the travel search: ``base``'s (its friction form and scales kept) with one column FPj_k
-    per joint with a Coulomb term and per candidate travel k [rad]."""
-    inner, _, terms, _ = friction_probe(robot, base)
-    form = base.form if isinstance(base, FrictionBase) else "coulomb"
-    scales = base.scales if isinstance(base, FrictionBase) else None
-    return FrictionBase(inner, tuple((t.row, t.column, t.driver) for t in terms), form, scales, True,
-                        None, tuple(float(d) for d in candidates))
-
-
-def travels_of(robot: rx90sym.Robot, R: Sequence[np.ndarray], rows: Sequence[int], names: Sequence[str],
-               candidates: Sequence[float] = TRAVEL_CANDIDATES) -> PreslidingTravels:
-    """The travels chosen from the per-joint factors of the :func:`travel_columns` rows (whatever read them)."""
-    from identify.friction.travels import travels_from_factors
-
-    names = list(names)
-    columns = {j: [names.index(f"{PRESLIDING_PREFIX}{j + 1}_{k}") for k in range(len(candidates))]
-               for j in range(robot.n)
-               if all(f"{PRESLIDING_PREFIX}{j + 1}_{k}" in names for k in range(len(candidates)))}
-    choice, table = travels_from_factors(R, rows, names, columns, len(candidates))
-    travels = tuple(float(candidates[choice[j]]) if j in choice else np.nan for j in range(robot.n))
-    return PreslidingTravels(travels, tuple(float(c) for c in candidates),
-                             tuple(tuple(table.get(j, [np.nan] * len(candidates))) for j in range(robot.n)))
-
-
-def presliding_travels(robot: rx90sym.Robot, recordings: Sequence[Any], base: Any,
-                       candidates: Sequence[float] = TRAVEL_CANDIDATES, **options: Any) -> PreslidingTravels:
-    """The presliding travel per joint, separable like the velocity scales: FPj is linear, δ_j
-    one of ``candidates`` [rad]. One observation matrix holds a column FPj_k per candidate (rest
-    policy "presliding" in ``options``, the fit's other observation options); each joint's δ chosen by
-    coordinate descent on the weighted cost from its per-joint factors
-    (:func:`identify.friction.travels.travels_from_factors`, as block by block)."""
-    from identify.estimation.incremental_qr import JointFactors
-
-    obs = observation_matrix(robot, recordings, base=travel_columns(robot, base, candidates), **options)
-    factors = JointFactors(robot.n, len(obs.names))
-    for j in range(robot.n):
-        rows = obs.joint == j
-        factors.add(j, np.column_stack([obs.W[rows], obs.Y[rows]]))
-    return travels_of(robot, factors.R, factors.rows, obs.names, candidates)

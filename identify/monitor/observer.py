@@ -149,12 +149,12 @@ class ObserverModel:
 
 
 def _rigid_base(base: Any) -> Any:
-    """The symbolic base inside a fit's columns (a FrictionBase's smooth forms, the offsets the
-    cross-validated choice added: identify.observation.offsets.OffsetBase)."""
-    from identify.observation.friction_model import FrictionBase
+    """The symbolic base inside a fit's columns (its friction columns, the offsets the cross-validated choice
+    added: identify.observation.offsets.OffsetBase)."""
+    from identify.friction.columns import inner_columns
     from identify.observation.offsets import OffsetBase
 
-    base = base.base if isinstance(base, FrictionBase) else base
+    base = inner_columns(base)
     return base.base if isinstance(base, OffsetBase) else base
 
 
@@ -169,11 +169,12 @@ def _friction(fit: Any, q: ca.SX, qd: ca.SX) -> tuple[ca.SX, ca.SX, ca.SX, ca.SX
     of the same robot and model); the uncertain Coulomb level per joint (the terms whose driver is
     below the slack band); the most the slack reaches per joint (SLACK_FACTOR × the sum of the
     magnitudes of FS, FSP/FSN, FSM, FST on the joint's row); returns (f, slack, fv, most, names)."""
-    from identify.observation.friction import friction_function
-    from identify.observation.friction_model import FrictionBase, coulomb_terms
+    from identify.friction.columns import form_columns
+    from identify.friction.forms import friction_function
+    from identify.observation.rest import coulomb_terms
 
-    robot, base = fit.robot, fit.base
-    inner = _rigid_base(base)
+    robot, forms = fit.robot, form_columns(fit.base)
+    inner = _rigid_base(fit.base)
     phi = inner.regressor(q, qd, ca.SX.zeros(robot.n, 1))
     names = list(inner.names)
     # Offsets the cross-validated choice added (OFFj beyond the robot's columns): a constant on joint j.
@@ -199,9 +200,9 @@ def _friction(fit: Any, q: ca.SX, qd: ca.SX) -> tuple[ca.SX, ca.SX, ca.SX, ca.SX
     for t in terms:
         v = ca.mtimes(ca.DM(t.driver).T, qd)
         own = sum(abs(d) for d in t.driver) == 1 and t.driver[t.row] == 1
-        form = base.form_of(t.row) if isinstance(base, FrictionBase) and own else "coulomb"
+        form = forms.form_of(t.row) if forms is not None and own else "coulomb"
         cols = [phi[t.row, t.column]] if form == "coulomb" else ca.vertsplit(
-            friction_function(form)(v, base.scales[t.row])[0])
+            friction_function(form)(v, forms.scales[t.row])[0])
         term = cols[0] * sym[t.name]
         level = ca.fabs(sym[t.name])
         if form == "stribeck" and f"FST{t.row + 1}" in sym:

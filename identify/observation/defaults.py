@@ -11,7 +11,7 @@ DEFAULT_DELAY = 0.0
 #: Rest threshold [rad/s]: a joint slower than this is at rest (its Coulomb sign is unknown).
 DEFAULT_MIN_VELOCITY = 0.05
 #: What rest samples do: their rows are dropped, kept with a Coulomb term of 0, kept with the
-#: presliding state of the position history (identify.observation.friction), kept as they are
+#: presliding state of the position history (identify.observation.rest), kept as they are
 #: ("none": the Coulomb entry keeps the sign of the filtered speed, as without a rest threshold),
 #: or "crossing": as they are through a pass below the threshold shorter than
 #: :data:`identify.observation.processing.CROSSING_SECONDS` or travelling

@@ -6,9 +6,9 @@ decimated by the same zero-phase filter (parallel filtering), and rows grouped p
 
 Rest phases: a joint whose speed is below ``min_velocity`` (rad/s) is at rest; the sign of its
 Coulomb term is then the sign of noise. ``rest="drop"`` leaves those rows out of the fit,
-``rest="zero-coulomb"`` keeps them with the Coulomb entries set to 0 (see :func:`coulomb_terms`),
+``rest="zero-coulomb"`` keeps them with the Coulomb entries set to 0 (see :func:`identify.observation.rest.coulomb_terms`),
 ``rest="presliding"`` with the presliding state of the position history
-(:mod:`identify.observation.friction`), ``rest="none"`` as they are (the sign of the filtered
+(:mod:`identify.observation.rest`), ``rest="none"`` as they are (the sign of the filtered
 speed); a tuple gives one policy per joint (the Coulomb entries of joint j's rows follow its policy).
 The speed is the recorded one when the recording has it (``Recording.dq``), else the filtered
 derivative; it decides the mask only, W keeps the filtered derivatives.
@@ -27,16 +27,15 @@ import numpy as np
 
 import rx90sym
 
-from identify.observation.friction import crossing_passes, presliding_state
-from identify.observation.friction_model import (PRESLIDING_PREFIX, STRIBECK_PREFIX, CoulombTerm, coulomb_terms, own_terms,
-                                                presliding_base, without_empty_presliding)
 from identify.observation.defaults import DEFAULT_DECIMATE_TO
-from identify.observation.processing import (CROSSING_SECONDS, CROSSING_TRAVEL, DEFAULT_MIN_VELOCITY, DEFAULT_REST,
-                                             REST_POLICIES, RestPolicy, drops_rest, rest_label, rest_per_joint)
+from identify.observation.processing import (DEFAULT_MIN_VELOCITY, DEFAULT_REST, REST_POLICIES, RestPolicy, drops_rest,
+                                             rest_label, rest_per_joint)
+from identify.observation.rest import presliding_base, rest_rows, without_empty_presliding
 from identify.signal.filtering import EDGE_PERIODS, choose_cutoff, decimate, decimation_plan, derivatives
 
-__all__ = ["DECIMATION_PASSBAND", "SPECTRUM_SAMPLES", "automatic_cutoff", "DEFAULT_MIN_VELOCITY", "DEFAULT_REST", "REST_POLICIES", "CoulombTerm", "FilteredMotion", "Observation",
-           "coulomb_terms", "filtered_motion", "filtered_motions", "observation_matrix", "presliding_base", "stack_rows"]
+__all__ = ["DECIMATION_PASSBAND", "SPECTRUM_SAMPLES", "automatic_cutoff", "DEFAULT_MIN_VELOCITY", "DEFAULT_REST",
+           "REST_POLICIES", "FilteredMotion", "Observation", "filtered_motion", "filtered_motions", "observation_matrix",
+           "stack_rows"]
 
 # Rest threshold and policy (measured on the TX40 and the twin: docs/real-data-identification.md):
 # defined once, with the other processing defaults, in identify.observation.processing.
@@ -212,7 +211,7 @@ def filtered_motion(robot: rx90sym.Robot, rec: Any, cutoff: float | None = None,
             w_speed = np.asarray(rec.dq, dtype=float)[w.kept] if getattr(rec, "dq", None) is not None else w.dq
             start = d.kept.start - w.kept.start
             context = (w_speed, w.q, slice(start, start + d.dq.shape[0]))
-        usable = _rest_rows(robot, names, speed, d.q, Phi, min_velocity, policies, d.rate, context)
+        usable = rest_rows(robot, names, speed, d.q, Phi, min_velocity, policies, d.rate, context)
         dropped = np.array([r == "drop" for r in policies])
         usable[:, dropped] &= moving[:, dropped]
     plan = decimation_plan(d.rate, decimate_to)
@@ -235,57 +234,6 @@ def filtered_motion(robot: rx90sym.Robot, rec: Any, cutoff: float | None = None,
 #: filter spans (± the factor) were bridged over lost packets (scattered stale rows pass, a burst
 #: of lost packets does not).
 BRIDGED_SHARE = 0.25
-
-
-def _rest_rows(robot: rx90sym.Robot, names: Sequence[str] | None, speed: np.ndarray, q: np.ndarray,
-               Phi: np.ndarray, min_velocity: float, policies: tuple[str, ...], rate: float,
-               context: tuple[np.ndarray, np.ndarray, slice] | None = None) -> np.ndarray:
-    """(S, n) rows kept: for a "drop" joint those whose Coulomb drivers all move, every row of the
-    others; sets the Coulomb entries of ``Phi`` (in place) where their driver rests, after the
-    policy of the row's joint: 0 ("zero-coulomb"), the presliding state of the filtered positions
-    ``q`` ("presliding"; the position history, never the torque), 0 over rests longer than
-    CROSSING_SECONDS at ``rate`` [Hz] ("crossing"; the runs measured on ``context``: (speed, q) of wider
-    samples and the slice of these rows in them), unchanged ("none", "drop")."""
-    usable = np.ones(speed.shape, dtype=bool)
-    names = tuple(names if names is not None else robot.parameter_names)
-    for term in coulomb_terms(robot, names):
-        driver_moving = np.abs(speed @ np.asarray(term.driver)) >= min_velocity
-        rest = policies[term.row]
-        if rest == "drop":
-            usable[:, term.row] &= driver_moving
-            still = np.zeros_like(driver_moving)  # rows dropped; an FPj column (another joint's policy) is 0
-        elif rest == "none":
-            still = np.zeros_like(driver_moving)
-        elif rest == "crossing":
-            c_speed, c_q, inner = context if context is not None else (speed, q, slice(None))
-            c_moving = np.abs(c_speed @ np.asarray(term.driver)) >= min_velocity
-            passes = crossing_passes(~c_moving, c_q @ np.asarray(term.driver), CROSSING_SECONDS * rate, CROSSING_TRAVEL)
-            still = ~driver_moving & ~passes[inner]
-        else:
-            still = ~driver_moving
-        # The moving friction (Coulomb, smooth or Stribeck) says nothing at rest.
-        # A form's columns at several scales (FSj_k, the friction choice's folds) rest like FSj.
-        variants = [c for c in _named(names, "FS", term.row) if c != term.column] if own_terms([term]) else []
-        for column in [term.column] + variants + _named(names, STRIBECK_PREFIX, term.row):
-            Phi[still, term.row, column] = 0.0
-        own = _named(names, PRESLIDING_PREFIX, term.row) if own_terms([term]) else []
-        if own:
-            # FPj holds z of the joint's own positions (FrictionBase): kept at rest only, with this policy.
-            for column in own:
-                Phi[driver_moving if rest == "presliding" else slice(None), term.row, column] = 0.0
-        elif rest == "presliding" and not _named(names, PRESLIDING_PREFIX, term.row):
-            # Columns built by hand, without FPj: z in FS's column (shared magnitude). A motor's
-            # Coulomb term (the coupling's FSM) beside an FPj adds nothing at rest.
-            z = presliding_state(q @ np.asarray(term.driver))
-            Phi[still, term.row, term.column] = z[still]
-    return usable
-
-
-def _named(names: Sequence[str], prefix: str, row: int) -> list[int]:
-    """The column(s) of parameter ``prefix`` of joint ``row`` + 1 among ``names``: the name itself,
-    or its candidates ``NAME_k`` ([] when absent)."""
-    name = f"{prefix}{row + 1}"
-    return [c for c, n in enumerate(names) if n == name or (n.startswith(name + "_") and n[len(name) + 1:].isdigit())]
 
 
 def _measured_rows(measured: np.ndarray | None, kept: slice, factor: int) -> np.ndarray | None:

@@ -22,7 +22,7 @@ __all__ = ["OffsetBase", "offset_base", "offset_columns", "offset_joints", "resu
 @dataclass(frozen=True, eq=False)
 class OffsetBase:
     """``base`` with one column OFFj (a 1 in joint j's row) per joint of ``joints`` (0-based), after
-    its own columns; usable as ``base`` everywhere (a FrictionBase may wrap it)."""
+    its own columns; usable as ``base`` everywhere (friction columns may wrap it)."""
 
     base: Any
     joints: tuple[int, ...]
@@ -65,8 +65,8 @@ def offset_joints(robot: rx90sym.Robot, base: Any) -> tuple[int, ...]:
 
 def offset_base(base: Any, joints: Sequence[int]) -> Any:
     """``base`` with offsets on ``joints`` (0-based; ``base`` itself when none), added to those it has:
-    the offsets of an OffsetBase are joined, and inside a FrictionBase the columns it wraps get them
-    (its own columns stay after them)."""
+    the offsets of an OffsetBase are joined, and inside friction columns (a presliding or friction form's
+    wrapping) the columns they wrap get them (their own columns stay after them)."""
     from dataclasses import replace
 
     joints = tuple(sorted(int(j) for j in joints))
@@ -74,7 +74,7 @@ def offset_base(base: Any, joints: Sequence[int]) -> Any:
         return base
     if isinstance(base, OffsetBase):
         return OffsetBase(base.base, tuple(sorted(set(base.joints) | set(joints))))
-    if hasattr(base, "terms") and hasattr(base, "form"):  # a FrictionBase: its Coulomb terms index the inner columns
+    if hasattr(base, "terms") and hasattr(base, "base"):  # friction columns: their Coulomb terms index the inner ones
         return replace(base, base=offset_base(base.base, joints))
     return OffsetBase(base, joints)
 

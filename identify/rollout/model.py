@@ -24,7 +24,7 @@ from rx90sym.model_export import parameter_vector
 from rx90sym.parameters import INERTIAL, split_name
 
 from identify.io.bags import MissingExtra
-from identify.observation.friction import friction_columns
+from identify.friction.forms import friction_columns
 
 __all__ = ["SimulatorModel", "SmoothFriction", "load_mujoco", "nominal_model", "simulator_model",
            "simulator_parameters", "result_parameters"]
@@ -74,7 +74,7 @@ def result_parameters(robot: rx90sym.Robot, result: Any) -> tuple[rx90sym.Robot,
 class SmoothFriction:
     """A joint's smooth Coulomb friction applied from the fit: ``form`` "tanh" (FS tanh(q̇/vs)) or
     "stribeck" ((FS (1 - e) + FST e) sign(q̇), e = exp(-(q̇/vs)²)); joint 0-based, scale vs [rad/s],
-    fs, fst [N m] (identify.observation.friction.friction_columns)."""
+    fs, fst [N m] (identify.friction.forms.friction_columns)."""
 
     joint: int
     form: str

@@ -43,7 +43,8 @@ from identify.io.blocks import BlockSource, block_source
 from identify.selection.cross_validation import (Budget, Candidate, DEFAULT_BLOCKS, DEFAULT_ROW_CAP, ProcessingChoice,
                                                  RAW, SCORED_REST, clearly_better, grid_around, score_candidates,
                                                  select_processing)
-from identify.observation.matrix import DECIMATION_PASSBAND, DEFAULT_MIN_VELOCITY, presliding_base
+from identify.observation.matrix import DECIMATION_PASSBAND, DEFAULT_MIN_VELOCITY
+from identify.observation.rest import presliding_base
 from identify.observation.defaults import DEFAULT_DECIMATE_TO
 from identify.observation.processing import RestPolicy, drops_rest
 from identify.observation.stream import (DEFAULT_BLOCK, Plan, Scan, StreamSettings, in_order, plan_windows, scan,
