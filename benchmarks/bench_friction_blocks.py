@@ -56,7 +56,7 @@ def main() -> None:
         if ref.choice is not None and "friction" in ref.choice:
             same = same and got.choice["friction"]["chosen"] == ref.choice["friction"]["chosen"]
         for name, f, t, d in ((label, ref, t_ref, "-"), ("", got, t_got, f"{diff:.1e}")):
-            blocks = f.streamed.blocks if f.streamed is not None else 1
+            blocks = f.passes.blocks if f.passes is not None else 1
             print(f"{name:<13} {f.block or n:>7} {blocks:>6} {t:8.2f} {t / t_ref:6.2f} {d:>13}  "
                   f"{'' if f is ref else same}")
 

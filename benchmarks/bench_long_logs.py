@@ -159,11 +159,12 @@ def run_length(folder: Path, rec, seconds: float, env: dict, reference: bool, lo
 
 
 def dask_throughput(folder: Path, rec, env: dict) -> None:
-    """Streamed fit of a 3.5 min log on a local Dask cluster of 1 and of 2 workers (same result)."""
+    """The fit's passes over a 3.5 min log on a local Dask cluster of 1 and of 2 workers (same result)."""
     import rx90sym  # noqa: F401
     from dask.distributed import Client, LocalCluster
 
-    from identify.fitting.streamed import fit_streamed
+    from identify.fitting.passes import run_passes
+    from identify.observation.processing import Processing
 
     log = folder / "dask_rec.csv"
     rec_long = _long_recording(rec, 10)
@@ -176,10 +177,10 @@ def dask_throughput(folder: Path, rec, env: dict) -> None:
         with LocalCluster(n_workers=workers, threads_per_worker=1, processes=True, dashboard_address=None) as c, \
                 Client(c) as client:
             start = time.perf_counter()
-            fit = fit_streamed(arm, [log], block=20_000, client=client)
+            fit = run_passes(arm, [log], Processing(estimate_delay=False), block=20_000, client=client)
             results[workers] = (time.perf_counter() - start, fit.result.values)
     serial_start = time.perf_counter()
-    serial = fit_streamed(arm, [log], block=20_000)
+    serial = run_passes(arm, [log], Processing(estimate_delay=False), block=20_000)
     serial_s = time.perf_counter() - serial_start
     rel = max(float(np.max(np.abs(v / serial.result.values - 1))) for _, v in results.values())
     print(f"\nDask, 3.5 min log, blocks of 20,000 samples: serial {serial_s:.1f} s; 1 worker "

@@ -17,7 +17,7 @@ import pytest
 
 import rx90sym
 from identify.app.cli import main
-from identify.fitting.record import load_fit
+from identify.fitting.fit_result import load_fit
 from identify.io.recordings import write_recording
 from identify.fitting.plausibility import (RESIDUAL_SHARE, Flag, estimate_flags, gain_flags, margin_flags, mass_bound_flags,
                                    payload_flags,

@@ -18,7 +18,7 @@ from threadpoolctl import threadpool_info, threadpool_limits
 import identify
 import rx90sym
 import rx90sym.threads as threads
-from identify.fitting import streamed, validation
+from identify.fitting import passes, validation
 
 CALLER = 2
 
@@ -75,7 +75,7 @@ def test_fit_and_predict_run_blas_on_one_thread_and_give_the_caller_its_count_ba
         short_run, caller_pool, monkeypatch):
     robot, rec, processing = short_run
     in_fit, in_predict = [], []
-    recorder(monkeypatch, streamed, "solve_joint_systems", in_fit)
+    recorder(monkeypatch, passes, "solve_joint_systems", in_fit)
     recorder(monkeypatch, validation, "column_regressor", in_predict)
     before = caller_pool
     fit = identify.fit(robot, [rec], processing)
@@ -90,7 +90,7 @@ def test_fit_and_predict_run_blas_on_one_thread_and_give_the_caller_its_count_ba
 def test_the_callers_count_is_back_when_the_call_raises(short_run, caller_pool, monkeypatch):
     robot, rec, processing = short_run
     seen = []
-    recorder(monkeypatch, streamed, "solve_joint_systems", seen, fail=True)
+    recorder(monkeypatch, passes, "solve_joint_systems", seen, fail=True)
     before = caller_pool
     with pytest.raises(RuntimeError, match="inner failure"):
         identify.fit(robot, [rec], processing)
@@ -140,7 +140,7 @@ def test_the_command_runs_blas_on_one_thread(short_run, caller_pool, monkeypatch
     log = tmp_path / "run.csv"
     identify.write_recording(log, rec, robot)
     seen = []
-    recorder(monkeypatch, streamed, "solve_joint_systems", seen)
+    recorder(monkeypatch, passes, "solve_joint_systems", seen)
     # --min-velocity 0: the twin's Coulomb term follows sign(q̇) through every slow pass.
     assert cli.main(["identify", str(log), "--robot", "ur10e", "--cutoff", "8", "--delay", "0", "--min-velocity",
                      "0"]) == 0

@@ -18,7 +18,7 @@ from identify.fitting.torque_checks import (CODES, _source_blocks, recorded_torq
                                            streamed_torque_flags)
 from identify.io.blocks import MemorySource
 from identify.observation.processing import Processing
-from identify.observation.stream import scan
+from identify.observation.scan import scan
 from motions import multisine
 
 #: The processing given (the choices block by block are the cross-validation's and friction's own tests).

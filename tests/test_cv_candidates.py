@@ -70,7 +70,7 @@ def test_a_fit_in_blocks_takes_the_offsets_the_whole_fit_takes(tx40, offset_twin
     p = Processing(estimate_delay=False, friction="coulomb")
     whole = fit(tx40, [fit_part], p)
     blocks = fit(tx40, [fit_part], p, block=1000)
-    assert blocks.streamed.blocks >= 2 and whole.streamed.blocks == 1  # one pipeline, two block sizes
+    assert blocks.passes.blocks >= 2 and whole.passes.blocks == 1  # one pipeline, two block sizes
     assert set(whole.model.offset_joints) >= {1, 3, 5} and blocks.model.offset_joints == whole.model.offset_joints
     assert blocks.result.names == whole.result.names and any(n.startswith("OFF") for n in blocks.result.names)
     np.testing.assert_allclose(blocks.result.values, whole.result.values, rtol=1e-8,

@@ -35,7 +35,7 @@ def test_the_cross_validated_choice_is_near_the_best_of_its_grid(rx90, rx90_base
     clean = rx90sym.twin.simulate(rx90, motion, duration=20.0, noise=replace(profile, torque_noise=0.0), seed=7)
     fit_part, _ = split(rec, 2 / 3)
     _, clean_test = split(clean, 2 / 3)
-    choice = choose_processing(rx90, [fit_part], base=rx90_base, min_velocity=0.05, blocks=3)
+    choice = choose_processing(rx90, [fit_part], base=rx90_base, blocks=3)
     scored = [c for c in choice.candidates if np.isfinite(c.score)]
     assert {c.rest for c in scored} >= {"zero-coulomb", "crossing"}
     assert any(c.label == "(default)" for c in choice.candidates) and "<- chosen" in choice.table()
@@ -76,7 +76,7 @@ def test_a_uniform_first_stage_policy_does_not_override_the_per_joint_rule(rx90,
     monkeypatch.setattr(scv, "_score", fake_score)
     rec = rx90sym.twin.simulate(rx90, multisine(rx90, 3), duration=4.0, noise="realistic", seed=3)
     grid = [Candidate(10.0, 25.0), Candidate(20.0, 50.0, label=cv.DEFAULT_LABEL)]
-    choice = choose_processing(rx90, [rec], base=rx90_base, min_velocity=0.05, rest=None, candidates=grid)
+    choice = choose_processing(rx90, [rec], base=rx90_base, candidates=grid)
     assert choice.chosen.rest == "zero-coulomb", choice.table()
     # Crossing at the knee scored 4.90 (below the default's 5.10 by more than 2 %): before the rule
     # was kept it won the cut-off stage.
@@ -98,16 +98,16 @@ def test_the_choice_does_not_depend_on_the_wall_clock(rx90, rx90_base, monkeypat
 
     monkeypatch.setattr(scv, "_score", _fake_scores)
     rec = rx90sym.twin.simulate(rx90, multisine(rx90, 3), duration=4.0, noise="realistic", seed=3)
-    calm = choose_processing(rx90, [rec], base=rx90_base, min_velocity=0.05)
+    calm = choose_processing(rx90, [rec], base=rx90_base)
     clock = iter(range(0, 10 ** 9, 1000))
     monkeypatch.setattr(cv.time, "perf_counter", lambda: float(next(clock)))
-    slow = choose_processing(rx90, [rec], base=rx90_base, min_velocity=0.05)
+    slow = choose_processing(rx90, [rec], base=rx90_base)
     assert [c.score for c in slow.candidates] == [c.score for c in calm.candidates]
     assert all(np.isfinite(c.score) for c in calm.candidates), calm.table()
     assert (slow.chosen.cutoff, slow.chosen.decimate_to, slow.chosen.rest) == \
         (calm.chosen.cutoff, calm.chosen.decimate_to, calm.chosen.rest)
     # The wall-clock cap stays available on request, and then says so.
-    capped = choose_processing(rx90, [rec], base=rx90_base, min_velocity=0.05, time_cap=60.0)
+    capped = choose_processing(rx90, [rec], base=rx90_base, time_cap=60.0)
     assert any("not scored (time cap: 60 s)" in c.label for c in capped.candidates), capped.table()
 
 
@@ -118,14 +118,13 @@ def test_the_row_cap_stops_the_cut_offs_after_the_rest_policies_and_the_first(rx
 
     monkeypatch.setattr(scv, "_score", _fake_scores)
     rec = rx90sym.twin.simulate(rx90, multisine(rx90, 3), duration=4.0, noise="realistic", seed=3)
-    rows = cv.observation_rows(rx90, [rec])
-    assert rows == rx90.n * rec.n_samples
-    capped = choose_processing(rx90, [rec], base=rx90_base, min_velocity=0.05, row_cap=rows)
+    rows = rx90.n * rec.n_samples  # observation rows of one pass
+    capped = choose_processing(rx90, [rec], base=rx90_base, row_cap=rows)
     policies = len(cv.SCORED_REST)
     scored = [c for c in capped.candidates if np.isfinite(c.score)]
     left = [c for c in capped.candidates if not np.isfinite(c.score)]
     assert len(scored) == policies + 1 and left, capped.table()
     assert all(f"not scored (row cap: {(policies + 1) * rows:,} rows processed > {rows:,})" in c.label
                for c in left), capped.table()
-    free = choose_processing(rx90, [rec], base=rx90_base, min_velocity=0.05, row_cap=None)
+    free = choose_processing(rx90, [rec], base=rx90_base, row_cap=None)
     assert all(np.isfinite(c.score) for c in free.candidates)

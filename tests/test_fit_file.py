@@ -83,7 +83,7 @@ def test_library_defaults_and_command_defaults_give_the_same_file(cli_fit, lib_f
     chosen = cli["processing_choice"]["chosen"]
     assert cli["model"]["cutoff_hz"] == chosen["cutoff_hz"] and cli["model"]["rest"] == chosen["rest"]
     assert cli["delay_estimate_s"] is not None and cli["model"]["delay_s"] == 0.0
-    assert cli["schema_version"] == identify.fitting.file.SCHEMA_VERSION
+    assert cli["schema_version"] == identify.fitting.fit_file.SCHEMA_VERSION
 
 
 def test_former_keys_of_the_identification_json_are_kept(cli_fit):
@@ -149,7 +149,7 @@ def test_a_bootstrap_sigma_the_draws_could_not_estimate_is_null_in_the_file_and_
     """A spring coefficient's bootstrap σ can be NaN (rank-deficient draws): the file stays JSON."""
     import json as _json
 
-    from identify.fitting.record import Bootstrap
+    from identify.fitting.fit_result import Bootstrap
     b = Bootstrap(np.array([0.5, np.nan, 2.0]), 0.5, 200, 0)
     text = _json.dumps(b.to_json(), allow_nan=False)      # raised "Out of range float values" before
     back = Bootstrap.from_json(_json.loads(text))

@@ -51,7 +51,7 @@ def travelled(tmp_path_factory):
 def test_the_fit_file_embeds_its_description(travelled):
     b, fit, _, _, _ = travelled
     model = json.loads((b / "fit.json").read_text())["model"]
-    assert json.loads((b / "fit.json").read_text())["schema_version"] == identify.fitting.file.SCHEMA_VERSION
+    assert json.loads((b / "fit.json").read_text())["schema_version"] == identify.fitting.fit_file.SCHEMA_VERSION
     assert model["description"]["robot_text"] == UR5.read_text()
     assert model["description"]["robot_format"] == "urdf" and model["description"]["acceleration"] == [6.0] * 6
     assert Path(model["robot_file"]).is_absolute() and model["tip"] == "tool0"

@@ -8,13 +8,9 @@ import numpy as np
 import pytest
 
 import identify
-from identify.friction.choice import choose_friction, choose_friction_rows
-from identify.friction.folds import StreamRows
-from identify.selection.processing_choice import scans_for_choice, time_span
-from identify.io.blocks import block_source
-from identify.observation.stream import StreamSettings, plan_windows
+from identify.friction.choice import choose_friction
 
-from test_friction_choice import OPTIONS, mixed_twin
+from test_friction_choice import fold_rows, mixed_twin
 from test_friction_forms import TRUE_SCALE, friction_twin
 
 
@@ -32,40 +28,32 @@ def test_a_smooth_form_fitted_in_blocks_equals_the_whole_signal_fit(rx90, rx90_b
     processing = identify.Processing(friction=form, min_velocity=None, estimate_delay=False, cutoff=10.0,
                                      decimate_to=None)
     whole = identify.fit(rx90, [rec], processing, base=rx90_base, block=n)
-    assert whole.streamed.blocks == 1   # a log within one block is one block
+    assert whole.passes.blocks == 1   # a log within one block is one block
     scales = np.array(whole.model.friction["velocity_scale"])
     np.testing.assert_allclose(scales, TRUE_SCALE, rtol=0.15)
     for block in (1000, n - 1):
         got = identify.fit(rx90, [rec], processing, base=rx90_base, block=block)
-        assert got.block == block and got.streamed is not None and (block > 1000 or got.streamed.blocks >= 2)
+        assert got.block == block and got.passes is not None and (block > 1000 or got.passes.blocks >= 2)
         assert got.model.friction["velocity_scale"] == whole.model.friction["velocity_scale"]
         assert got.result.names == whole.result.names
         assert _relative(got.result.values, whole.result.values) < 1e-8
 
 
-def _stream_rows(robot, rec, block):
-    """The choice's rows of ``rec`` read in blocks of ``block`` samples, with OPTIONS' processing."""
-    sources = [block_source(rec, robot, None, None)]
-    scans = scans_for_choice(sources, block)
-    settings = StreamSettings(OPTIONS["cutoff"], OPTIONS["decimate_to"], OPTIONS["min_velocity"], OPTIONS["rest"],
-                              OPTIONS["delay"], OPTIONS["spring"], block)
-    plans = [plan_windows(s, OPTIONS["cutoff"], settings)[0] for s in scans]
-    first, last = time_span(scans, plans)
-    return StreamRows(robot, sources, plans, OPTIONS["cutoff"], settings, (first, last - first + 1e-9, 5)), plans
-
-
-def test_the_friction_form_chosen_block_by_block_is_the_in_memory_choice(rx90, rx90_base):
-    """A twin with tanh on joints 1, 3, 6 (10 s at 100 Hz): read in 3 blocks and in one, the same forms
-    per joint and held-back scores equal to the in-memory choice's to 1e-8 (measured 1e-12)."""
+def test_the_friction_form_chosen_block_by_block_is_the_one_block_choice(rx90, rx90_base):
+    """A twin with tanh on joints 1, 3, 6 (10 s at 100 Hz): read in 3 blocks and in 4 (the last one short),
+    the same forms per joint and held-back scores equal to those of the log read as one block to 1e-8
+    (measured 1e-12)."""
     rec = mixed_twin(rx90, ("tanh", "coulomb", "tanh", "coulomb", "coulomb", "tanh"), 1)
-    memory = choose_friction(rx90, [rec], rx90_base, OPTIONS)
-    assert memory.chosen[0] == memory.chosen[2] == "tanh", memory.table()   # the truth, where it is clear
-    for block in (400, 2 * rec.n_samples):
-        rows, plans = _stream_rows(rx90, rec, block)
-        assert sum(len(p.windows) for p in plans[0]) == (3 if block < rec.n_samples else 1)
-        got = choose_friction_rows(rx90, rows, rx90_base, rx90.n * rec.n_samples)
-        assert got.chosen == memory.chosen, got.table()
-        for a, b in zip(got.candidates + (got.combined,), memory.candidates + (memory.combined,)):
+    rows = rx90.n * rec.n_samples
+    whole = choose_friction(rx90, fold_rows(rx90, [rec], block=2 * rec.n_samples), rx90_base, rows)
+    assert whole.chosen[0] == whole.chosen[2] == "tanh", whole.table()   # the truth, where it is clear
+    assert sum(len(p.windows) for p in fold_rows(rx90, [rec], block=2 * rec.n_samples).plans[0]) == 1
+    for block in (400, 300):
+        split = fold_rows(rx90, [rec], block=block)
+        assert sum(len(p.windows) for p in split.plans[0]) >= 3
+        got = choose_friction(rx90, split, rx90_base, rows)
+        assert got.chosen == whole.chosen, got.table()
+        for a, b in zip(got.candidates + (got.combined,), whole.candidates + (whole.combined,)):
             assert a.label == b.label
             np.testing.assert_allclose(a.per_block, b.per_block, rtol=1e-8)
 
@@ -103,7 +91,7 @@ def test_presliding_travels_and_a_smooth_form_in_blocks_equal_the_whole_signal_f
     processing = identify.Processing(rest="presliding", friction="tanh", estimate_delay=False, cutoff=10.0)
     whole = identify.fit(rx90, [rec], processing, base=rx90_base, block=rec.n_samples)
     got = identify.fit(rx90, [rec], processing, base=rx90_base, block=1000)
-    assert whole.streamed.blocks == 1 and got.streamed.blocks >= 2
+    assert whole.passes.blocks == 1 and got.passes.blocks >= 2
     for key in ("presliding_travel", "velocity_scale"):
         assert got.model.friction[key] == whole.model.friction[key], key
     assert set(whole.model.friction["presliding_travel"]) <= {0.005, 0.01}

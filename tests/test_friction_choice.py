@@ -11,14 +11,30 @@ import pytest
 import identify
 import rx90sym
 from identify import Processing, fit, load_fit, split
+from identify.friction.choice import FrictionChoice, _Scored, _check_mix, _per_joint_forms, _single_choice, choose_friction
+from identify.friction.folds import FoldRows
+from identify.io.blocks import DEFAULT_BLOCK, block_source
 from identify.selection.cross_validation import Candidate
-from identify.friction.choice import _Scored, _check_mix, _per_joint_forms, _single_choice, choose_friction
+from identify.selection.processing_choice import scans_for_choice
 from rx90sym.recording import Recording
 from test_friction_forms import TRUE_SCALE, friction_twin
 
 from motions import multisine
 
-OPTIONS = dict(cutoff=10.0, decimate_to=None, min_velocity=0.02, rest="zero-coulomb", spring=True, delay=0.0)
+OPTIONS = Processing(cutoff=10.0, decimate_to=None, min_velocity=0.02, rest="zero-coulomb", spring=True, delay=0.0)
+
+
+def fold_rows(robot: rx90sym.Robot, recordings: list, processing: Processing = OPTIONS,
+              block: int = DEFAULT_BLOCK) -> FoldRows:
+    """The friction choice's rows of ``recordings`` read in blocks of ``block`` samples, as a fit reads them."""
+    sources = [block_source(r, robot) for r in recordings]
+    return FoldRows.of(robot, sources, scans_for_choice(sources, block), processing, block)
+
+
+def choose(robot: rx90sym.Robot, recordings: list, base, **options) -> FrictionChoice:
+    """:func:`choose_friction` on the rows of ``recordings`` with OPTIONS (the row cap counts their samples)."""
+    rows = robot.n * sum(r.n_samples for r in recordings)
+    return choose_friction(robot, fold_rows(robot, recordings), base, rows, **options)
 
 
 def coulomb_twin(robot: rx90sym.Robot, seed: int, duration: float = 10.0, rate: float = 100.0) -> Recording:
@@ -35,9 +51,9 @@ def coulomb_twin(robot: rx90sym.Robot, seed: int, duration: float = 10.0, rate: 
 # coulomb's 2.39-2.60 %; Coulomb twin (seeds 0-4) coulomb 4.17-5.46 % against tanh 4.21-5.54 %.
 @pytest.mark.parametrize("seed", range(3))
 def test_a_tanh_twin_chooses_tanh_and_a_coulomb_twin_keeps_coulomb(rx90, rx90_base, seed):
-    tanh = choose_friction(rx90, [friction_twin(rx90, "tanh", seed, 10.0, 100.0)], rx90_base, OPTIONS)
+    tanh = choose(rx90, [friction_twin(rx90, "tanh", seed, 10.0, 100.0)], rx90_base)
     assert tanh.chosen == "tanh", tanh.table()
-    coulomb = choose_friction(rx90, [coulomb_twin(rx90, seed)], rx90_base, OPTIONS)
+    coulomb = choose(rx90, [coulomb_twin(rx90, seed)], rx90_base)
     assert coulomb.chosen == "coulomb", coulomb.table()
 
 
@@ -50,7 +66,7 @@ def test_the_fit_records_the_friction_choice_and_a_given_form_is_not_chosen(rx90
     given = fit(rx90, [rec], Processing(estimate_delay=False, friction="coulomb"), base=rx90_base)
     assert "friction" not in given.choice and given.model.friction is None
     with pytest.raises(ValueError, match="forms must include 'coulomb'"):
-        choose_friction(rx90, [rec], rx90_base, OPTIONS, forms=("tanh",))
+        choose(rx90, [rec], rx90_base, forms=("tanh",))
 
 
 
@@ -63,10 +79,10 @@ def test_the_forms_scored_do_not_depend_on_the_wall_clock_and_the_row_cap_is_sai
     rec = friction_twin(rx90, "tanh", 0, 10.0, 100.0)
     clock = iter(range(0, 10 ** 9, 1000))
     monkeypatch.setattr(cv.time, "perf_counter", lambda: float(next(clock)))
-    slow = choose_friction(rx90, [rec], rx90_base, OPTIONS)
+    slow = choose(rx90, [rec], rx90_base)
     assert slow.chosen == "tanh" and all(np.isfinite(c.score) for c in slow.candidates), slow.table()
-    capped = choose_friction(rx90, [rec], rx90_base, OPTIONS, row_cap=100)
-    rows = cv.observation_rows(rx90, [rec])
+    capped = choose(rx90, [rec], rx90_base, row_cap=100)
+    rows = rx90.n * rec.n_samples
     assert capped.chosen == "coulomb"
     assert dict(capped.notes)["tanh"] == f"not scored: row cap: {rows:,} rows processed > 100", capped.table()
 
@@ -94,7 +110,7 @@ def mixed_twin(robot: rx90sym.Robot, forms: tuple[str, ...], seed: int, duration
 # ...) on 3 of 5: a misfit tanh joint next to a Coulomb one shifts the shared parameters.
 @pytest.mark.parametrize("seed", range(3))
 def test_a_twin_with_tanh_on_some_joints_gets_the_mix_back(rx90, rx90_base, seed):
-    c = choose_friction(rx90, [mixed_twin(rx90, MIX, seed)], rx90_base, OPTIONS)
+    c = choose(rx90, [mixed_twin(rx90, MIX, seed)], rx90_base)
     assert c.chosen == MIX, c.table()
     assert c.combined is not None and c.combined.score <= min(x.score for x in c.candidates), c.table()
     record = c.to_dict()

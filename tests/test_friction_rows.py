@@ -13,6 +13,7 @@ from identify.friction.forms import friction_columns, friction_function
 from identify.observation.rest import coulomb_terms, own_terms
 from identify.friction.columns import friction_base
 from identify.observation.matrix import filtered_motions
+from identify.observation.processing import Processing
 from rx90sym.twin import simulate
 
 from motions import multisine, stop_and_go
@@ -28,8 +29,7 @@ def ur10e_run():
 
 def _rows(robot, rec, columns, options):
     """(Phi, usable) of the recording's motion with ``columns``."""
-    m = filtered_motions(robot, [rec], options["cutoff"], options["decimate_to"], True, columns.regressor_batch,
-                         columns.names, options["min_velocity"], options["rest"], options.get("delay", 0.0))[0][0]
+    m = filtered_motions(robot, [rec], Processing(**options), columns.regressor_batch, columns.names)[0][0]
     return m.Phi, m.usable
 
 

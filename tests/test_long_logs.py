@@ -21,7 +21,7 @@ from identify.io.log_blocks import convert_log
 from identify.observation.processing import Processing
 from identify.signal.blocks import WelchAccumulator, decimation_margin, lowpass_margin, motion_windows
 from identify.signal.filtering import decimate, lowpass
-from identify.fitting.streamed import BootstrapSpec, fit_streamed
+from identify.fitting.passes import BootstrapSpec, run_passes
 from identify.fitting.validation import predict
 
 RX90 = str(Path(sys.executable).parent / "rx90")
@@ -107,8 +107,8 @@ def test_streamed_fit_equals_the_whole_fit(rx90, rx90_base, twin_empty, whole_fi
     and validation equal the whole-signal path's."""
     obs = whole_fit.observation
     boot = segment_bootstrap_std(obs.W, obs.Y, obs.joint, obs.samples, whole_fit.result.weights, 25, 50, 0)
-    fit = fit_streamed(rx90, twin_empty[:1], base=rx90_base, estimate=True, block=1000,
-                       bootstrap=BootstrapSpec(0.5, 50, 0), cross_validate=False)
+    fit = run_passes(rx90, twin_empty[:1], Processing(cross_validate=False), columns=rx90_base, block=1000,
+                     bootstrap=BootstrapSpec(0.5, 50, 0))
     assert fit.blocks >= 4 and fit.cutoff == whole_fit.cutoff and fit.result.rows == whole_fit.result.rows
     _close(fit.result.values, whole_fit.result.values, 1e-8)
     _close(fit.result.std, whole_fit.result.std, 1e-8)
@@ -126,7 +126,8 @@ def test_streamed_fit_of_several_recordings_with_rest_dropped(rx90, rx90_base, t
     """80 s in four recordings, rest rows dropped and the cut-off chosen: equal to the whole path."""
     # The processing fixed on both paths (the choice block by block: tests/test_stream_cv.py).
     whole = identify.fit(rx90, twin_empty, Processing(rest="drop", delay="auto", cross_validate=False), base=rx90_base)
-    fit = fit_streamed(rx90, twin_empty, base=rx90_base, rest="drop", delay="auto", block=2000, cross_validate=False)
+    fit = run_passes(rx90, twin_empty, Processing(rest="drop", delay="auto", cross_validate=False), columns=rx90_base,
+                     block=2000)
     assert fit.cutoff == whole.cutoff and fit.result.rows == whole.result.rows
     assert fit.delay == pytest.approx(whole.delay, abs=1e-9)
     _close(fit.result.values, whole.result.values, 1e-8)
@@ -145,7 +146,7 @@ def test_dask_blocks_equal_serial(rx90, rx90_base, twin_empty, whole_fit, tmp_pa
     np.testing.assert_allclose(spread.bootstrap.std, serial.bootstrap.std, rtol=1e-10)
     for stick in ("baseline", "user_model"):  # the yardsticks' windows on the workers too
         np.testing.assert_allclose(getattr(spread, stick).values, getattr(serial, stick).values, rtol=1e-10)
-    assert spread.streamed.blocks == serial.streamed.blocks >= 4 and serial.observation is not None  # rows kept (few)
+    assert spread.passes.blocks == serial.passes.blocks >= 4 and serial.observation is not None  # rows kept (few)
     _close(serial.result.values, whole_fit.result.values, 1e-8)
     assert serial.bootstrapped(0) is serial
     loaded = identify.load_fit(serial.save(tmp_path / "fit.json"))
@@ -239,7 +240,7 @@ def test_a_log_within_one_block_is_one_block(rx90, twin_empty):
     assert ref.choice is not None and ref.baseline is not None and ref.observation is not None
     for block in (n // 3, n - 1, n + 1, 100 * n):
         got = identify.fit(rx90, [rec], block=block)
-        assert got.streamed.blocks >= (3 if block == n // 3 else 1)
+        assert got.passes.blocks >= (3 if block == n // 3 else 1)
         a, b = got.choice["chosen"], ref.choice["chosen"]
         assert got.result.names == ref.result.names
         assert (a["cutoff_hz"], a["decimate_to_hz"], a["rest"]) == (b["cutoff_hz"], b["decimate_to_hz"], b["rest"])

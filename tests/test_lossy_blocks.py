@@ -89,7 +89,7 @@ def test_block_fit_of_a_lossy_log_equals_the_in_memory_fit(panda, lossy, tmp_pat
     p = identify.Processing(estimate_delay=False, cross_validate=False)
     ref = identify.fit(panda, [whole], p, base=base).bootstrapped(0)
     blocks = identify.fit(panda, [str(out)], p, base=base, block=SAMPLES)
-    assert blocks.streamed.blocks >= 6 and blocks.cutoff == ref.cutoff
+    assert blocks.passes.blocks >= 6 and blocks.cutoff == ref.cutoff
     assert blocks.result.rows == ref.result.rows
     scale = np.abs(ref.result.values).max()
     np.testing.assert_allclose(blocks.result.values, ref.result.values, rtol=1e-8, atol=1e-10 * scale)

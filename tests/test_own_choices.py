@@ -19,7 +19,7 @@ import identify
 from identify.app.cli import main
 from identify.estimation.delay import refined_delay
 from identify.estimation.dependent_columns import reduce_columns
-from identify.fitting import streamed
+from identify.fitting import passes
 from identify.io.recordings import RecordingWarning
 from identify.io.unlogged import constant_channels
 
@@ -160,7 +160,7 @@ def test_an_error_after_the_choice_carries_its_table(capsys, tmp_path, monkeypat
     def failing(*args, **kwargs):
         raise ValueError("the solve fails")
 
-    monkeypatch.setattr(streamed, "solve_joint_systems", failing)
+    monkeypatch.setattr(passes, "solve_joint_systems", failing)
     with pytest.raises(ValueError, match="the solve fails") as info:
         identify.fit(tw.robot, [tw.recording])
     assert "processing chosen by 5-block cross-validation" in info.value.processing_choice.table()

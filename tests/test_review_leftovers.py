@@ -14,17 +14,16 @@ import identify.selection.processing_choice as scv
 from identify.selection.processing_choice import choose_processing
 from identify.selection.cross_validation import Candidate, block_factors, fold_wls
 from identify.observation.matrix import observation_matrix
-from identify.friction.choice import choose_friction
 from motions import multisine
 from rx90sym.recording import Recording
-from test_friction_choice import OPTIONS, coulomb_twin
+from test_friction_choice import OPTIONS, choose, coulomb_twin
 
 
 def _time_fold_blocks(robot, recordings, base):
     """Per-block relative errors [%] of OPTIONS' processing, its rows cut into 5 blocks of equal
     duration over the span of both recordings' times (a row's block is that of its time, whichever
     recording it comes from), each held back in turn and predicted by the WLS fit of the others."""
-    obs = observation_matrix(robot, recordings, base=base, **{k: v for k, v in OPTIONS.items() if k != "delay"})
+    obs = observation_matrix(robot, recordings, base=base, **OPTIONS.observation_options())
     t = obs.t[obs.samples]
     ids = np.minimum((5 * (t - t.min()) / (t.max() - t.min() + 1e-9)).astype(int), 4)
     factors = block_factors(obs.W, obs.Y, obs.joint, ids, range(5), robot.n)
@@ -42,7 +41,7 @@ def test_the_friction_choice_cuts_its_folds_by_time_over_all_recordings(rx90, rx
     folds cut by time over both (the same rows, weights and folds). Cut by sample index, the friction
     choice's first block held most of the first recording and a block's error differed by up to 140 %."""
     recordings = [coulomb_twin(rx90, 0, duration=4.0), coulomb_twin(rx90, 1, duration=10.0)]
-    friction = choose_friction(rx90, recordings, rx90_base, OPTIONS, forms=("coulomb",))
+    friction = choose(rx90, recordings, rx90_base, forms=("coulomb",))
     coulomb = np.asarray(friction.candidates[0].per_block)
     np.testing.assert_allclose(coulomb, _time_fold_blocks(rx90, recordings, rx90_base), rtol=1e-9)
 
@@ -78,7 +77,7 @@ def test_the_processing_is_scored_at_the_fits_delay(rx90, rx90_base, monkeypatch
     chosen = fit(rx90, [late], p, base=rx90_base).choice["chosen"]["score_pct"]
 
     def score(rec):
-        return choose_processing(rx90, [rec], base=rx90_base, min_velocity=0.02, rest="zero-coulomb",
+        return choose_processing(rx90, [rec], Processing(min_velocity=0.02, rest="zero-coulomb"), rx90_base,
                                  candidates=[cand]).chosen.score
 
     in_step, at_zero = score(truth), score(late)

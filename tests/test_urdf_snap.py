@@ -17,7 +17,7 @@ import identify
 import rx90sym
 from identify.app.report.identify_page import identify_summary
 from identify.io.recordings import recording_from_arrays, write_recording
-from rx90sym.rank_gap import GAP_TOP, rank_gap
+from rx90sym.near_dependent_columns import GAP_TOP, rank_gap
 from rx90sym.urdf_export import urdf_export
 from rx90sym.urdf_snap import SNAP_RAD, nearest_axis_aligned, snap_origin
 

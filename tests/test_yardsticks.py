@@ -22,7 +22,7 @@ from identify.fitting.baseline import baseline_regressor, memory_windows, window
 from identify.fitting.yardsticks import fit_yardsticks, yardstick_folds
 from identify.io.blocks import MemorySource
 from identify.selection.folds import block_scores, time_folds
-from identify.observation.stream import scan
+from identify.observation.scan import scan
 from motions import multisine
 from twin_logs import URDF_DIR, UR5_DRIVES, chirp, point_to_point
 

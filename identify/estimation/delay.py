@@ -5,7 +5,7 @@ uncompensated lag of a few ms biases inertia and friction. The lag is estimated 
 the torques that minimises the residual of a first least-squares fit on the same W (only Y moves):
 a coarse grid of whole steps, then a parabola through the best three points (a fraction of a sample).
 The shifted torques are extra right-hand sides of the fit's per-joint factors, block by block
-(:func:`identify.estimate_delay`, :mod:`identify.fitting.streamed`).
+(:func:`estimate_delay`, :mod:`identify.fitting.passes`).
 
 A least cost at either end of the grid is no estimate: the lag may lie beyond the bound, or the cost
 may have no minimum inside it at all (a coloured residual the shift trades against, with no lag in
@@ -19,7 +19,16 @@ from typing import Any, Sequence
 
 import numpy as np
 
-__all__ = ["DelayEstimate", "delay_grid", "joint_log_rms", "refined_delay"]
+import rx90sym
+from rx90sym.threads import one_blas_thread
+
+from identify.estimation.joint_factors import joint_factors, plans_of
+from identify.io.blocks import DEFAULT_BLOCK, block_source, check_block
+from identify.observation.processing import Processing
+from identify.observation.rest import presliding_base
+from identify.observation.scan import scan_all, torque_left_out
+
+__all__ = ["DelayEstimate", "delay_grid", "estimate_delay", "joint_log_rms", "lag_estimate", "refined_delay"]
 
 
 @dataclass(frozen=True, eq=False)
@@ -52,13 +61,13 @@ class DelayEstimate:
 
 
 def delay_grid(period: float, max_delay: float = 0.02, steps: int = 41) -> tuple[np.ndarray, float]:
-    """The coarse grid of lags [s] of :func:`identify.estimate_delay` for a sampling ``period`` [s], and its step [s]."""
+    """The coarse grid of lags [s] of :func:`estimate_delay` for a sampling ``period`` [s], and its step [s]."""
     step = max(period, 2 * max_delay / (steps - 1))
     return np.arange(-max_delay, max_delay + step / 2, step), step
 
 
 def joint_log_rms(systems: Sequence[Any]) -> float:
-    """The cost of :func:`identify.estimate_delay` from the joints' compressed systems of one lag: plain LS on
+    """The cost of :func:`estimate_delay` from the joints' compressed systems of one lag: plain LS on
     all joints, then the sum over joints of the log of each joint's residual RMS."""
     from identify.estimation.compression import stack_systems
 
@@ -78,3 +87,36 @@ def refined_delay(grid: np.ndarray, costs: np.ndarray, step: float) -> DelayEsti
         if curvature > 0:
             delay += float(np.clip(0.5 * (c0 - c2) / curvature, -1, 1) * step)
     return DelayEstimate(delay, grid, costs, at_bound)
+
+
+def lag_estimate(factors: Any, grid: np.ndarray, step: float) -> DelayEstimate:
+    """The lag of least cost on ``grid`` [s] (the torques shifted by each: right-hand sides 1.. of the
+    per-joint factors, :class:`~identify.estimation.incremental_qr.JointFactors`), refined by a parabola."""
+    return refined_delay(grid, np.array([joint_log_rms(factors.systems(k + 1)) for k in range(len(grid))]), step)
+
+
+@one_blas_thread()
+def estimate_delay(robot: rx90sym.Robot, recordings: Sequence[Any], processing: Processing | None = None,
+                   base: Any = None, max_delay: float = 0.02, steps: int = 41, block: int = DEFAULT_BLOCK,
+                   client: Any = None, convention: str | None = None, gains: Any = None) -> DelayEstimate:
+    """Torque-to-position lag [s] of ``recordings`` (recordings, files or block sources; one lag for all),
+    within ±``max_delay`` s, read block by block: the torques shifted by each lag of a grid of ``steps``
+    points (at least one sampling period apart) are extra right-hand sides of the per-joint factors, the
+    best refined by a parabola (module docstring). processing: the filtering and rest handling of the rows
+    (None: the defaults without a rest threshold, every row a moving one; cut-off None: the automatic one;
+    its delay is the search's; :func:`identify.fit` gives its own); base: the columns (default: the
+    symbolic base parameters); block, client, convention, gains: as :func:`identify.fit`.
+    BLAS on one thread inside the call, the caller's count back after it (rx90sym.threads)."""
+    if not (max_delay > 0 and np.isfinite(max_delay)):
+        raise ValueError(f"max_delay must be a positive duration in s, got {max_delay!r}")
+    processing = (processing if processing is not None else Processing(min_velocity=None)).chosen(delay=0.0)
+    block = check_block(block)
+    sources = [block_source(r, robot, convention, gains) for r in recordings]
+    columns = presliding_base(robot, base if base is not None else rx90sym.base_parameters(robot),
+                              processing.rest if processing.min_velocity is not None else None)
+    scans, processing = scan_all(sources, processing, block)
+    left_out = torque_left_out(scans, robot.n)  # a torque not logged: its rows out
+    plans, _ = plans_of(scans, processing.chosen(delay=max_delay), block)
+    grid, step = delay_grid(max(1.0 / s.rate for s in scans), max_delay, steps)
+    factors = joint_factors(robot, sources, plans, processing, columns, grid, left_out, client)[0]
+    return lag_estimate(factors, grid, step)

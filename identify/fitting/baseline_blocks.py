@@ -2,7 +2,7 @@
 
 :mod:`identify.fitting.baseline` filters each segment in blocks with margins (one block: the whole
 segment in memory); here the blocks come from a :class:`identify.io.blocks.BlockSource` after the
-first pass over it (:func:`identify.observation.stream.scan`: each segment's start, samples, rate and
+first pass over it (:func:`identify.observation.scan.scan`: each segment's start, samples, rate and
 first and last times), so a log of any length gets the yardsticks (the plain OLS baseline, the model
 the user had: :mod:`identify.fitting.yardsticks`) of the same recording held whole (to ~1e-12 relative)
 with memory bounded by the block.
@@ -35,7 +35,7 @@ def _segments(scan: Any, index: int) -> list[tuple[int, BaselineSegment]]:
 
 def source_windows(sources: Sequence[Any], scans: Sequence[Any], block: int) -> Iterator[tuple]:
     """(segment, window, its raw samples) of every segment of every source, in blocks of at most ``block``
-    samples (``scans``: the sources' first pass, :func:`identify.observation.stream.scan`)."""
+    samples (``scans``: the sources' first pass, :func:`identify.observation.scan.scan`)."""
     for index, (src, scan) in enumerate(zip(sources, scans)):
         planned = [(start, segment, w) for start, segment in _segments(scan, index) for w in segment.windows(block)]
         spans = [(start + w.raw[0], start + w.raw[1]) for start, _, w in planned]

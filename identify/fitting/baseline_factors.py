@@ -144,7 +144,7 @@ def baseline_factors(robot: rx90sym.Robot, windows: Iterable[tuple], spring: boo
     cross-validation's time blocks (an :class:`identify.selection.raw_torque_scores.RawSpan`: its ``start``, ``span``,
     ``blocks`` and, per segment ``key``, the times scored; None: one block, nothing scored). run: how the
     windows' :func:`window_factors` run (``run(task, arguments)`` yielding the results in order, e.g.
-    identify.observation.stream.in_order on Dask; None: here)."""
+    identify.observation.block_rows.in_order on Dask; None: here)."""
     c = len(baseline_names(robot))
     out = BaselineFactors(robot.n, c, 1 if blocks is None else int(blocks.blocks), blocks is not None)
 

@@ -1,12 +1,12 @@
 """One identification, from recordings to a saved fit file (paper sections II-B and III).
 
-:func:`fit` chains the steps block by block for every log length (:mod:`identify.fitting.streamed`:
+:func:`fit` chains the steps block by block for every log length (:mod:`identify.fitting.passes`:
 the processing chosen on the torques, the torque-delay estimate, the observation rows of one
 :class:`~identify.observation.processing.Processing`, eqs. 6-8, folded into per-joint factors; the
 friction columns; (weighted) least squares, eqs. 9-15; optionally the physically consistent fit;
 the two yardsticks and the recorded-torque checks) and returns a :class:`Fit` that predicts and
 validates with its own processing, carries its bootstrap σ, and saves itself
-(:mod:`identify.fitting.record`).
+(:mod:`identify.fitting.fit_result`).
 """
 from __future__ import annotations
 
@@ -21,19 +21,20 @@ from rx90sym.threads import one_blas_thread
 from identify.estimation.consistency.body_prior import DEFAULT_DIVERGENCE, BodyPrior, body_prior
 from identify.fitting.consistent_fit import check_prior_weight
 from identify.estimation.results import METHODS, IdentificationResult
-from identify.fitting.file import FitModel
+from identify.fitting.fit_file import FitModel
 from identify.io.gains import DriveGains
 from identify.observation.matrix import Observation
 from identify.friction.columns import inner_columns
 from identify.observation.offsets import OffsetBase, offset_joints
 from rx90sym.base_parameters import BaseParameters
 from identify.observation.processing import Processing, has_policy, has_smooth_friction
-from identify.fitting.record import BOOTSTRAP_BLOCK_S, BOOTSTRAP_DRAWS, Bootstrap, Fit
+from identify.fitting.fit_result import BOOTSTRAP_BLOCK_S, BOOTSTRAP_DRAWS, Bootstrap, Fit
 from identify.fitting.rank_flags import column_flags, rank_flags
 
 if TYPE_CHECKING:
+    from identify.fitting.passes import Passes
     from identify.fitting.plausibility import Flag
-    from identify.fitting.streamed import ProcessingChoice
+    from identify.selection.candidates import ProcessingChoice
 
 __all__ = ["fit"]
 
@@ -112,11 +113,11 @@ def fit(robot: rx90sym.Robot, recordings: Sequence[Any], processing: Processing 
     prior = model_prior(robot, physical_prior, divergence)
     check_prior_weight(prior_weight)
     options = {"prior": prior, "prior_weight": prior_weight, **bounds}
-    p = processing if processing is not None else Processing()
+    processing = processing if processing is not None else Processing()
     if observation is not None:
-        return _fit_observation(robot, recordings, observation, p, method, base, gains, convention, spring_source,
-                                bootstrap_seed, options)
-    done = _fit_blocks(robot, recordings, p, method, base=base, gains=gains, convention=convention,
+        return _fit_observation(robot, recordings, observation, processing, method, base, gains, convention,
+                                spring_source, bootstrap_seed, options)
+    done = _fit_blocks(robot, recordings, processing, method, base=base, gains=gains, convention=convention,
                        spring_source=spring_source, block=block, client=client, bootstrap_seed=bootstrap_seed,
                        options=options)
     return done.with_flags([*rank_flags(done.base), *done.flags])  # a rank that depends on the threshold
@@ -203,86 +204,87 @@ def _offset_record(base: Any) -> tuple[int, ...] | None:
     return tuple(j + 1 for j in inner.joints) if isinstance(inner, OffsetBase) else None
 
 
-def _fit_blocks(robot: rx90sym.Robot, recordings: Sequence[Any], processing: Any = None, method: str = "wls", *,
+def _fit_blocks(robot: rx90sym.Robot, recordings: Sequence[Any], processing: Processing, method: str = "wls", *,
                 base: Any = None, gains: Any = None, convention: str | None = None, spring_source: str | None = None,
                 block: int | None = None, client: Any = None, bootstrap_seed: int | None = 0,
                 options: dict[str, Any]) -> Fit:
     """:func:`identify.fit` of recordings, block by block: its bootstrap computed on the way."""
-    from identify.fitting.streamed import DEFAULT_BLOCK, BootstrapSpec, fit_streamed  # the block path's modules
-    from identify.observation.spring_fit import BaseWithSpring, spring_summary
-    from identify.io.blocks import block_source, check_block
-    from identify.fitting.yardsticks import streamed_yardsticks
-
     from identify.friction.fitted_columns import FrictionHook
+    from identify.fitting.passes import BootstrapSpec, run_passes
+    from identify.fitting.yardsticks import streamed_yardsticks
+    from identify.io.blocks import DEFAULT_BLOCK, block_source, check_block
+    from identify.observation.spring_fit import BaseWithSpring, spring_summary
 
-    p = processing if processing is not None else Processing()
-    smooth = has_smooth_friction(p.friction_form)
     block = DEFAULT_BLOCK if block is None else check_block(block)
+    recordings = list(recordings) if isinstance(recordings, (list, tuple)) else [recordings]
+    sources = [block_source(r, robot, convention, gains) for r in recordings]
+    if gains is not None and sources and not any(s.holds_current for s in sources):
+        raise ValueError(f"drive gains given, but no recording holds motor currents "
+                         f"({', '.join(s.source for s in sources)}: joint torques): the gains would not be used")
     columns_given = base is not None
     # The form given, or chosen per joint by the cross-validation where left open.
-    choose = p.friction is None and p.cross_validates
-    presliding = p.min_velocity is not None and has_policy(p.rest, "presliding")   # its travels searched too
-    hook = FrictionHook(p.friction_form, choose) if smooth or choose or presliding else None
+    choose = processing.friction is None and processing.cross_validates
+    presliding = processing.min_velocity is not None and has_policy(processing.rest, "presliding")   # its travels searched too
+    smooth = has_smooth_friction(processing.friction_form)
+    hook = FrictionHook(processing.friction_form, choose) if smooth or choose or presliding else None
     base = base if base is not None else rx90sym.base_parameters(robot)
-    recordings = list(recordings) if isinstance(recordings, (list, tuple)) else [recordings]
     spec = BootstrapSpec(BOOTSTRAP_BLOCK_S, BOOTSTRAP_DRAWS, bootstrap_seed) if bootstrap_seed is not None else None
     eligible = (offset_joints(robot, base) if not columns_given
                 and isinstance(base, BaseParameters) else ())  # as the whole-signal fit's torque offsets
-    sf = fit_streamed(robot, recordings, method, base, p.cutoff, p.decimate_to, p.min_velocity, p.rest, p.delay,
-                      p.spring, p.estimate_delay, block, client, spec, convention, gains, p.cross_validates,
-                      offsets=eligible, friction=hook)
-    base = sf.columns  # with the offsets and the friction columns chosen
-    rest = sf.settings.rest  # the policy given, or chosen by the cross-validation
-    sources = [block_source(r, robot, convention, gains) for r in recordings]
-    span = _model_span(sf)
-    identified = _identified(robot, sf.result, base, _model_factors(robot, sources, sf, span, client), options,
-                             given=columns_given, spread=sf.bootstrap_std, moving=sf.moving_fraction)
-    result = identified if method == "consistent" else sf.result
+    passes = run_passes(robot, sources, processing, method, base, block=block, client=client, bootstrap=spec, offsets=eligible,
+                        friction=hook)
+    base = passes.columns  # with the offsets and the friction columns chosen
+    used = passes.processing  # the cut-off, decimation, rest policy per joint and delay given or chosen
+    span = _model_span(passes)
+    identified = _identified(robot, passes.result, base, _model_factors(robot, sources, passes, span, client), options,
+                             given=columns_given, spread=passes.bootstrap_std, moving=passes.moving_fraction)
+    result = identified if method == "consistent" else passes.result
     model = FitModel.of(robot, convention=convention, gains=gains.to_dict() if gains is not None else None,
-                        rest=rest, min_velocity=p.min_velocity, spring=spring_source or _spring_label(robot, base),
-                        cutoff_hz=sf.cutoff, decimate_to_hz=sf.settings.decimate_to, rate_hz=sf.rate,
-                        delay_s=sf.delay, friction=sf.friction, offset_joints=_offset_record(base),
-                        torque_left_out=tuple(j + 1 for j in sf.settings.left_out) or None)
-    angles = [SimpleNamespace(q=sf.q_range)]  # what the spring summary reads: the range visited
+                        rest=used.rest, min_velocity=processing.min_velocity, spring=spring_source or _spring_label(robot, base),
+                        cutoff_hz=passes.cutoff, decimate_to_hz=used.decimate_to, rate_hz=passes.rate,
+                        delay_s=passes.delay, friction=passes.friction, offset_joints=_offset_record(base),
+                        torque_left_out=tuple(j + 1 for j in passes.left_out) or None)
+    angles = [SimpleNamespace(q=passes.q_range)]  # what the spring summary reads: the range visited
     spring = spring_summary(robot, base if isinstance(base, BaseWithSpring) else None, result, angles)[0]
-    boot = (Bootstrap(sf.bootstrap_std, sf.bootstrap_block / sf.rate, spec.draws, spec.seed, tuple(sf.result.names))
-            if spec else None)
-    found = sf.delay_estimate
+    boot = (Bootstrap(passes.bootstrap_std, passes.bootstrap_block / passes.rate, spec.draws, spec.seed,
+                      tuple(passes.result.names)) if spec else None)
+    found = passes.delay_estimate
     # The yardsticks and the recorded-torque checks: a pass each over the logs, block by block, as on whole ones.
-    sticks = streamed_yardsticks(robot, sources, sf.scans, p.spring, block, client, span)
-    return Fit(robot, result, p, model, base, sf.observation, found,
+    sticks = streamed_yardsticks(robot, sources, passes.scans, processing.spring, block, client, span)
+    return Fit(robot, result, processing, model, base, passes.observation, found,
                found.delay if found is not None and found.found else None, spring,
-               boot, block=block, streamed=sf, recordings=sf.recordings,
-               choice=_choice_record(sf.choice, getattr(hook, "choice", None)),
-               flags=_flags(robot, sources, sf, block, base, bool(p.spring)) + tuple(model_flags(identified, sticks.folds, robot)),
+               boot, block=block, passes=passes, recordings=passes.recordings,
+               choice=_choice_record(passes.choice, getattr(hook, "choice", None)),
+               flags=(_flags(robot, sources, passes, block, base, bool(processing.spring))
+                      + tuple(model_flags(identified, sticks.folds, robot))),
                baseline=sticks.plain, user_model=sticks.user, user_model_note=sticks.user_note,
-               identified=identified, ls_result=sf.result if result is not sf.result else None)
+               identified=identified, ls_result=passes.result if result is not passes.result else None)
 
 
-def _model_span(sf: Any) -> Any:
+def _model_span(passes: Passes) -> Any:
     """The time blocks of the identified model's cross-validation and of the yardsticks' held-out errors:
     the fit's own processing (its cut-off's filter edges, its decimation and delay from each segment's
     ends), :data:`identify.selection.cross_validation.DEFAULT_BLOCKS` of them."""
-    from identify.selection.raw_torque_scores import raw_span
     from identify.selection.candidates import Candidate
     from identify.selection.cross_validation import DEFAULT_BLOCKS
+    from identify.selection.raw_torque_scores import raw_span
 
-    return raw_span(sf.scans, [Candidate(sf.cutoff, sf.settings.decimate_to)], DEFAULT_BLOCKS, sf.settings.delay)
+    return raw_span(passes.scans, [Candidate(passes.cutoff, passes.processing.decimate_to)], DEFAULT_BLOCKS,
+                    passes.delay)
 
 
-def _model_factors(robot: rx90sym.Robot, sources: Sequence[Any], sf: Any, span: Any, client: Any) -> Any:
+def _model_factors(robot: rx90sym.Robot, sources: Sequence[Any], passes: Passes, span: Any, client: Any) -> Any:
     """The per-(time block, joint) factors of the fit's own columns and processing, at the rate the fit
     predicts at (identify.fitting.validation.prediction_rate: a held-back block is predicted as
     :meth:`Fit.predict` predicts, not interpolated from the decimated rows), and of the raw samples they
     predict: what the identified model is fitted and its prior weight cross-validated on (one pass)."""
-    from dataclasses import replace
-
-    from identify.selection.processing_choice import column_factors
     from identify.fitting.validation import prediction_rate
+    from identify.selection.processing_choice import column_factors
 
-    rate = min(s.rate for s in sf.scans)
-    settings = replace(sf.settings, cutoff=sf.cutoff, decimate_to=prediction_rate(sf.cutoff, rate))
-    return column_factors(robot, sources, sf.scans, sf.columns, settings, span, client)
+    rate = min(s.rate for s in passes.scans)
+    processing = passes.processing.chosen(decimate_to=prediction_rate(passes.cutoff, rate))
+    return column_factors(robot, sources, passes.scans, passes.columns, processing, span, passes.block,
+                          passes.left_out, client)
 
 
 def model_flags(model: Any, folds: Any, robot: rx90sym.Robot) -> list:
@@ -301,17 +303,17 @@ def model_flags(model: Any, folds: Any, robot: rx90sym.Robot) -> list:
                          per_block, name, judged)
 
 
-def _flags(robot: rx90sym.Robot, sources: Sequence[Any], sf: Any, block: int, base: Any,
+def _flags(robot: rx90sym.Robot, sources: Sequence[Any], passes: Passes, block: int, base: Any,
            spring_added: bool) -> tuple[Flag, ...]:
     """The flags of a fit in blocks: the joints whose torque was left out (constant: not logged), the columns
     left out or merged, the recorded-torque checks and the torques' sign (of the joints fitted)."""
     from identify.fitting.torque_checks import not_logged_flags, streamed_torque_flags, torque_sign_flags
 
-    left = sf.settings.left_out
-    checks = [f for f in (streamed_torque_flags(robot, sources, sf.scans, block)
-                          + torque_sign_flags(robot, sf.result, base, spring_added=spring_added))
+    left = passes.left_out
+    checks = [f for f in (streamed_torque_flags(robot, sources, passes.scans, block)
+                          + torque_sign_flags(robot, passes.result, base, spring_added=spring_added))
               if f.joint is None or f.joint - 1 not in left]
-    return (*not_logged_flags(sf.scans, left), *column_flags(sf.reduction, [j + 1 for j in left]), *checks)
+    return (*not_logged_flags(passes.scans, left), *column_flags(passes.reduction, [j + 1 for j in left]), *checks)
 
 
 def _choice_record(choice: ProcessingChoice | None, friction: Any) -> dict | None:

@@ -13,9 +13,9 @@ import rx90sym
 from rx90sym.threads import one_blas_thread
 
 from identify.fitting.fit import fit
-from identify.fitting.record import Fit
+from identify.fitting.fit_result import Fit
 from identify.observation.processing import Processing
-from identify.observation.stream import DEFAULT_BLOCK
+from identify.io.blocks import DEFAULT_BLOCK
 
 __all__ = ["FleetFit", "fit_fleet"]
 

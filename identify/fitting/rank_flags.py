@@ -2,7 +2,7 @@
 
 - A model whose base-parameter rank depends on the rank threshold is never silent: it is fitted and
   carries an error flag (the terminal, the fit file's ``flags`` and the report's verdict show it),
-  naming the joints, the columns and the gap in singular values (rx90sym.rank_gap). Its cause is the
+  naming the joints, the columns and the gap in singular values (rx90sym.near_dependent_columns). Its cause is the
   model's geometry, not the motion.
 - Columns the fitted rows cannot separate (identify.estimation.dependent_columns: a joint that never
   moves, one that moves one way only, a joint whose torque is left out of the fit) are left out or
@@ -14,7 +14,7 @@ from __future__ import annotations
 import re
 from typing import Any, Sequence
 
-from rx90sym.rank_gap import rank_gap
+from rx90sym.near_dependent_columns import rank_gap
 
 from identify import Flag
 from identify.estimation.dependent_columns import ColumnReduction

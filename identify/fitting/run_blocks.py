@@ -1,14 +1,14 @@
 """Empty and loaded runs read, filtered and turned into decimated motions block by block: the pipeline of
 the section-IV methods (payloads, drive gains) on logs of any length and any number of segments.
 
-:func:`open_runs` makes the first pass over every run (:func:`identify.observation.stream.scan`: the
+:func:`open_runs` makes the first pass over every run (:func:`identify.observation.scan.scan`: the
 blocks checked, the rate, the segments, the spectrum of the automatic cut-off), pairs the segments of
 paired runs (:func:`identify.signal.pairing.pair_runs`: segment k of an empty run with segment k of its
-loaded run) and plans the windows of every segment (:func:`identify.observation.stream.plan_windows`);
-:func:`run_blocks` then yields each window's motion through :func:`identify.observation.stream.piece`,
+loaded run) and plans the windows of every segment (:func:`identify.observation.block_rows.plan_windows`);
+:func:`run_blocks` then yields each window's motion through :func:`identify.observation.block_rows.piece`,
 the rows :func:`identify.fit` makes of one processing (cut-off, decimation, rest policy, delay) — for a
 pair, the loaded run on the empty run's time stamps beside the empty run, filtered alike — here or on
-Dask (:func:`identify.observation.stream.in_order`), in order. Memory: one block of each run; a run held
+Dask (:func:`identify.observation.block_rows.in_order`), in order. Memory: one block of each run; a run held
 in memory is one block when it fits in one.
 """
 from __future__ import annotations
@@ -20,14 +20,16 @@ import numpy as np
 
 import rx90sym
 
-from identify.io.blocks import BlockSource, block_source, check_block
-from identify.io.gains import DriveGains
-from identify.observation.matrix import DECIMATION_PASSBAND, FilteredMotion, column_regressor
-from identify.observation.stream import (Plan, Scan, SegmentScan, StreamSettings, in_order, piece, plan_windows, scan,
-                                         scanned_cutoff)
-from identify.signal.pairing import PairedRuns, on_empty_grid, pair_runs
 from rx90sym.parameters import PAYLOAD_NAMES
 from rx90sym.recording import Recording
+
+from identify.io.blocks import DEFAULT_BLOCK, BlockSource, block_source, check_block
+from identify.io.gains import DriveGains
+from identify.observation.block_rows import Plan, in_order, piece, plan_windows
+from identify.observation.matrix import DECIMATION_PASSBAND, FilteredMotion, column_regressor
+from identify.observation.processing import Processing
+from identify.observation.scan import Scan, SegmentScan, scan, scanned_cutoff
+from identify.signal.pairing import PairedRuns, on_empty_grid, pair_runs
 
 __all__ = ["RunBlock", "RunColumns", "Runs", "open_runs", "run_blocks", "run_sources"]
 
@@ -58,20 +60,25 @@ class _Group:
 
 @dataclass(frozen=True, eq=False)
 class Runs:
-    """Runs opened for the block pipeline: ``scans`` (empty runs', then loaded runs'), the one ``cutoff``
-    [Hz], ``settings`` (the processing and the block), ``pairs`` (one per segment of every pair; () when
-    not paired), ``rate`` [Hz] after decimation, ``samples`` the decimated samples of every motion,
+    """Runs opened for the block pipeline: ``scans`` (empty runs', then loaded runs'), the ``processing``
+    (its one cut-off [Hz] chosen), raw samples per ``block``, ``pairs`` (one per segment of every pair; ()
+    when not paired), ``rate`` [Hz] after decimation, ``samples`` the decimated samples of every motion,
     ``notes`` (decimation; segments too short to filter, left out)."""
 
     empty_scans: tuple[Scan, ...]
     loaded_scans: tuple[Scan, ...]
-    cutoff: float
-    settings: StreamSettings
+    processing: Processing
+    block: int
     pairs: tuple[PairedRuns, ...]
     rate: float
     samples: int
     notes: tuple[str, ...]
     groups: tuple[_Group, ...]
+
+    @property
+    def cutoff(self) -> float:
+        """The cut-off every run is filtered at [Hz]."""
+        return float(self.processing.cutoff)
 
     @property
     def q_range(self) -> np.ndarray:
@@ -144,44 +151,46 @@ def _common_parts(s: Scan, pairs: Sequence[PairedRuns]) -> Scan:
     return Scan(s.source, s.samples, s.rate, segments, s.q_range, s.bridged, s.log)
 
 
-def open_runs(robot: rx90sym.Robot, empty: Sequence[Any], loaded: Sequence[Any], settings: StreamSettings, *,
-              paired: bool = False, position_tol: float = 0.02, instead: str = "--method 4",
-              convention: str | None = None, gains: DriveGains | None = None) -> Runs:
-    """The first pass over the runs (recordings, CSV files or block sources) and their windows.
+def open_runs(robot: rx90sym.Robot, empty: Sequence[Any], loaded: Sequence[Any], processing: Processing,
+              block: int = DEFAULT_BLOCK, *, paired: bool = False, position_tol: float = 0.02,
+              instead: str = "--method 4", convention: str | None = None, gains: DriveGains | None = None) -> Runs:
+    """The first pass over the runs (recordings, CSV files or block sources, read ``block`` raw samples at a
+    time) and their windows.
 
-    settings: the processing (cut-off None: the automatic one, identify's rule on every run: the largest
+    processing: the rows' (cut-off None: the automatic one, identify's rule on every run: the largest
     position-spectrum cut-off over the segments, at least 0.4 x ``decimate_to``; paired runs: on the
     loaded runs with the spectrum's own 2 Hz floor, both runs of a pair filtered alike); paired: run i of
     ``empty`` with run i of ``loaded``, segment by segment (:func:`identify.signal.pairing.pair_runs`,
     ``position_tol`` [rad], ``instead``: the method that needs no pairing); convention, gains: how files
     are read (gains: currents into torques).
     """
-    block = check_block(settings.block)
+    block = check_block(block)
     src_e = run_sources(robot, empty, "empty", convention, gains)
     src_l = run_sources(robot, loaded, "loaded", convention, gains)
     if paired and len(src_e) != len(src_l):
         raise ValueError(f"paired runs: each loaded run is the same motion run empty: got {len(src_e)} empty and "
                          f"{len(src_l)} loaded recordings ({instead} takes any number of each)")
-    need = settings.cutoff is None
-    floor = (2.0 if paired else max(2.0, DECIMATION_PASSBAND * settings.decimate_to) if settings.decimate_to
+    need = processing.cutoff is None
+    floor = (2.0 if paired else max(2.0, DECIMATION_PASSBAND * processing.decimate_to) if processing.decimate_to
              else 2.0) if need else None
     scans_e = [scan(s, block, None if paired else floor) for s in src_e]
     scans_l = [scan(s, block, floor) for s in src_l]
-    cutoff = scanned_cutoff(scans_l if paired else scans_e + scans_l, floor) if need else float(settings.cutoff)
+    if need:
+        processing = processing.chosen(cutoff=scanned_cutoff(scans_l if paired else scans_e + scans_l, floor))
     groups, pairs, notes = [], [], []
     if paired:
         for se, sl, e, l in zip(scans_e, scans_l, src_e, src_l):
             found = pair_runs(e, l, position_tol, instead=instead, block=block,
                               segments=([(g.start, g.samples) for g in se.segments],
                                         [(g.start, g.samples) for g in sl.segments]))
-            plans, skipped = plan_windows(_common_parts(se, found), cutoff, settings)
+            plans, skipped = plan_windows(_common_parts(se, found), processing, block)
             groups.append(_Group(True, e, tuple(plans), l, {p.span[0]: p for p in found}))
             pairs += found
             notes += skipped
     else:
         for loaded_run, srcs, scans in ((False, src_e, scans_e), (True, src_l, scans_l)):
             for src, s in zip(srcs, scans):
-                plans, skipped = plan_windows(s, cutoff, settings)
+                plans, skipped = plan_windows(s, processing, block)
                 groups.append(_Group(loaded_run, src, tuple(plans)))
                 notes += skipped
     rates = [p.rate for g in groups for p in g.plans]
@@ -189,17 +198,17 @@ def open_runs(robot: rx90sym.Robot, empty: Sequence[Any], loaded: Sequence[Any],
         raise ValueError(f"recordings have different rates after decimation: {', '.join(f'{r:g}' for r in rates)} "
                          f"Hz; give decimate_to")
     notes = tuple(dict.fromkeys(p.note for g in groups for p in g.plans if p.note)) + tuple(notes)
-    return Runs(tuple(scans_e), tuple(scans_l), cutoff, settings, tuple(pairs), rates[0],
+    return Runs(tuple(scans_e), tuple(scans_l), processing, block, tuple(pairs), rates[0],
                 sum(p.samples for g in groups for p in g.plans), notes, tuple(groups))
 
 
 def _task(robot: rx90sym.Robot, loaded: bool, rec: Recording, partner: Recording | None, pair: PairedRuns | None,
-          window: Any, plan: Plan, cutoff: float, settings: StreamSettings, columns: dict[str, RunColumns],
+          window: Any, plan: Plan, processing: Processing, columns: dict[str, RunColumns],
           first: int, reduce: Callable[[RunBlock], Any] | None) -> Any:
-    """One window through :func:`identify.observation.stream.piece` (a pair: both runs on the empty run's
+    """One window through :func:`identify.observation.block_rows.piece` (a pair: both runs on the empty run's
     samples), reduced by ``reduce`` where it runs (a Dask worker)."""
     def motion(r: Recording, role: str) -> FilteredMotion:
-        return piece(robot, r, window, plan, cutoff, settings, columns[role], columns[role].names, first).motion
+        return piece(robot, r, window, plan, processing, columns[role], columns[role].names, first).motion
 
     if pair is not None:
         block = RunBlock(True, motion(on_empty_grid(pair, rec, partner), "loaded"), motion(rec, "empty"),
@@ -225,7 +234,7 @@ def _arguments(robot: rx90sym.Robot, runs: Runs, columns: dict[str, RunColumns],
         for k, ((plan, window), rec) in enumerate(zip(items, recs)):
             pair = owner[k] if g.partner is not None else None
             other = next(partner) if g.partner is not None else None
-            yield (robot, g.loaded, rec, other, pair, window, plan, runs.cutoff, runs.settings, columns,
+            yield (robot, g.loaded, rec, other, pair, window, plan, runs.processing, columns,
                    starts[id(plan)], reduce)
         first = at
 

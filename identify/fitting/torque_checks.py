@@ -88,7 +88,7 @@ def streamed_torque_flags(robot: rx90sym.Robot, sources: Sequence[Any], scans: S
 
 def not_logged_flags(scans: Sequence[Any], joints: Sequence[int]) -> list[Flag]:
     """A warning per joint (0-based ``joints``) whose torque is constant over a recording of ``scans``
-    (:func:`identify.observation.stream.torque_left_out`: a channel not logged), left out of the fit."""
+    (:func:`identify.observation.scan.torque_left_out`: a channel not logged), left out of the fit."""
     out = []
     for j in joints:
         where = [f"{s.source} ({s.tau_range[0, j]:.6g} N·m)" for s in scans

@@ -18,18 +18,19 @@ import numpy as np
 import rx90sym
 from rx90sym.threads import one_blas_thread
 
-from identify.observation.defaults import DEFAULT_DECIMATE_TO
-from identify.observation.rest import presliding_base
-from identify.observation.processing import RestPolicy, has_policy, predicted_rest
 from identify.estimation.results import IdentificationResult, json_number
-from identify.io.blocks import block_source, check_block
 from identify.fitting.baseline_blocks import baseline_at, streamed_predictions
+from identify.fitting.filtered_errors import FilteredSums, filtered_rms
 from identify.fitting.raw_scoring import SCORE_TRIM_S, RawScores
-from identify.fitting.streamed_filtered import FilteredSums, streamed_filtered_rms
-from identify.signal.interpolate import onto
+from identify.io.blocks import DEFAULT_BLOCK, block_source, check_block
+from identify.observation.block_rows import piece, plan_windows, windows_in_order
+from identify.observation.defaults import DEFAULT_DECIMATE_TO
 from identify.observation.matrix import column_regressor
 from identify.observation.offsets import offset_base, result_offsets
-from identify.observation.stream import DEFAULT_BLOCK, StreamSettings, piece, plan_windows, scan_all, windows_in_order
+from identify.observation.processing import Processing, RestPolicy, has_policy, predicted_rest
+from identify.observation.rest import presliding_base
+from identify.observation.scan import scan_all
+from identify.signal.interpolate import onto
 
 __all__ = ["PREDICTION_OVERSAMPLING", "YARDSTICK_NAMES", "Validation", "predict", "prediction_rate", "validate"]
 
@@ -301,30 +302,31 @@ def predict(robot: rx90sym.Robot, result: IdentificationResult, recording: Any, 
     src = block_source(recording, robot, convention, gains)
     at_prediction = decimate_to == "prediction"
     # As the fit: every sample predicted (a dropped joint's rest with Coulomb 0).
-    settings = StreamSettings(cutoff, None if at_prediction else (decimate_to or None), min_velocity or None,
-                              predicted_rest(rest), float(delay), spring, block)
-    scans, fc = scan_all([src], settings)
+    processing = Processing(cutoff=cutoff, decimate_to=None if at_prediction else decimate_to,
+                            min_velocity=min_velocity, rest=predicted_rest(rest), delay=float(delay), spring=spring)
+    scans, processing = scan_all([src], processing, block)
+    fc = processing.cutoff
     if at_prediction:  # at 20 x the cut-off (or the recording's own rate), not at the fit's decimated rate
-        settings = replace(settings, decimate_to=prediction_rate(fc, scans[0].rate))
-    filtered_settings = (settings if filtered_at == "prediction"
-                         else replace(settings, decimate_to=filtered_at or None))  # the fit's own rows
-    plans, _ = plan_windows(scans[0], fc, settings)
+        processing = processing.chosen(decimate_to=prediction_rate(fc, scans[0].rate))
+    filtered = (processing if filtered_at == "prediction"
+                else processing.chosen(decimate_to=filtered_at))  # the fit's own rows
+    plans, _ = plan_windows(scans[0], processing, block)
     names, regressor = column_regressor(robot, base)
     sticks = [m for m in (baseline, user_model) if m is not None]
     # The yardsticks' own pass over the log, block by block (their own filter and margins).
     preds = streamed_predictions(robot, sticks, src, scans[0], block) if sticks else []
-    sums = FilteredSums(beta, robot.n) if filtered_settings == settings else None
+    sums = FilteredSums(beta, robot.n) if filtered.decimate_to == processing.decimate_to else None
     length = {g.start: g.samples for g in scans[0].segments}
     groups: dict[int, list] = {}
     for plan, window, rec, _ in windows_in_order([src], [plans]):
-        m = piece(robot, rec, window, plan, fc, settings, regressor, names, 0).motion
+        m = piece(robot, rec, window, plan, processing, regressor, names).motion
         if sums is not None:
             sums.add(m)
         pred = m.Phi @ beta
         if spring and robot.spring is not None:
             pred = pred - robot.spring_torque_batch(m.q)[:, :, 0]
         # The raw samples this core owns: from its first prediction to the next core's (scored on raw torques).
-        t_pred, t = m.t + settings.delay, np.asarray(rec.t, dtype=float)
+        t_pred, t = m.t + processing.delay, np.asarray(rec.t, dtype=float)
         step = float(np.median(np.diff(t)))
         own = ((t >= t_pred[0] - 1e-6 * step) & (t < t_pred[0] + (m.t.size * m.factor - 1e-6) * step)
                & rec.measured_mask)
@@ -351,10 +353,10 @@ def predict(robot: rx90sym.Robot, result: IdentificationResult, recording: Any, 
     base_pred = yard.pop(0) if baseline is not None else None
     user_pred = yard.pop(0) if user_model is not None else None
     # The filtered figures on the fit's rows: from this pass when they are the prediction's, else a pass of their own.
-    filtered = (sums.result() if sums is not None else
-                streamed_filtered_rms(robot, src, scans[0], fc, filtered_settings, regressor, names, beta))
-    val = replace(scored_validation(RawScores(t, Y, pred, mov, base_pred, user_pred), src.source, settings.min_velocity,
-                                    fc, plans[0].rate), **filtered, t0_s=log_clock(recording, src),
+    errors = (sums.result() if sums is not None else
+              filtered_rms(robot, src, scans[0], filtered, block, regressor, names, beta))
+    val = replace(scored_validation(RawScores(t, Y, pred, mov, base_pred, user_pred), src.source,
+                                    processing.min_velocity, fc, plans[0].rate), **errors, t0_s=log_clock(recording, src),
                   user_model_note=user_model_note if user_model is None else "")
     if rollout is None:
         return val

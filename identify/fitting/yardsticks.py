@@ -115,14 +115,14 @@ def fit_yardsticks(robot: rx90sym.Robot, recordings: Sequence[Any], spring: bool
 def streamed_yardsticks(robot: rx90sym.Robot, sources: Sequence[Any], scans: Sequence[Any], spring: bool,
                         block: int, client: Any = None, span: RawSpan | None = None) -> Yardsticks:
     """Both yardsticks of logs read block by block (``scans``: their first pass,
-    :func:`identify.observation.stream.scan`), in one pass; with ``span`` (the cross-validation's time
+    :func:`identify.observation.scan.scan`), in one pass; with ``span`` (the cross-validation's time
     blocks) their held-out errors per block too. Where the baseline cannot be fitted (a rate of 20 Hz or
     less, every segment shorter than 1 s) neither is, said in ``user_note``. client: a
     ``dask.distributed.Client`` running the windows (read here, filtered and compressed on the workers,
     folded here in order)."""
     runner = None
     if client is not None:
-        from identify.observation.stream import in_order
+        from identify.observation.block_rows import in_order
 
         shared = client.scatter(robot, broadcast=True, hash=False)  # sent once to each worker
 

@@ -1,27 +1,22 @@
-"""Friction form chosen per joint by the blocked cross-validation, where the fit leaves it open (issue 21, item 4).
+"""The friction form chosen per joint by the blocked cross-validation, where the fit leaves it open.
 
-After :func:`identify.selection.processing_choice.choose_processing` has fixed the cut-off, the
-decimation and the rest policy, each friction form of :data:`DEFAULT_FORMS` (Coulomb sign(q̇), the
-smooth tanh(q̇/vs); Stribeck on request) is scored the same way, on the same contiguous blocks
-(:func:`~identify.selection.cross_validation.time_blocks`: cut by time over the recordings'
-common span):
-
-The rows are read in passes, from recordings in memory or block by block from a log of any length
-(:mod:`identify.friction.folds`: one implementation, everything from per-(time block,
-joint) triangular factors, so the choice does not depend on the blocks):
+Once the processing is chosen (:mod:`identify.selection.processing_choice`: the cut-off, the decimation
+and the rest policy), each friction form of :data:`DEFAULT_FORMS` (Coulomb sign(q̇), the smooth
+tanh(q̇/vs); Stribeck on request) is scored on the same contiguous time blocks, reading the fit's rows in
+passes block by block (:mod:`identify.friction.folds`: everything from per-(time block, joint) triangular
+factors, so the choice does not depend on the blocks):
 
 1. the probe columns, whose own Coulomb columns hold the filtered, decimated driver speed v
    (:class:`~identify.friction.columns.FrictionBase` form "probe"): the speeds the scale
    search needs, tabulated on grids of scales (:mod:`identify.friction.scale_search`, two passes);
 2. for each held-back block, the velocity scales of a smooth form are searched **on the other
    blocks only** (separable least squares, :func:`identify.friction.folds.fold_scales_of`),
-   the base parameters fitted (WLS, eq. 11's weights, the processing's fold solver) on those rows,
-   the held-back torques predicted;
+   the base parameters fitted (the fit's weighted least squares) on those rows, the held-back torques
+   predicted;
 3. every form is scored with the fit's **exact** columns (one pass for Coulomb, one per smooth form
-   holding every fold's columns at that fold's scales,
-   :class:`~identify.friction.folds.FoldColumns`). Evaluating the forms on the
-   probe's decimated speed (sign(Dv), tanh(Dv/vs)) handicapped Coulomb against the fit's smooth
-   D·sign(v) (TX40: 10.655 % instead of 8.427 %) and chose tanh where the held-out errors got worse.
+   holding every fold's columns at that fold's scales, :class:`~identify.friction.folds.FoldColumns`),
+   not with the forms evaluated on the probe's decimated speed (sign(Dv) handicaps Coulomb against the
+   fit's D·sign(v)).
 
 **Per joint, Coulomb unless clearly beaten on that joint**: a real arm has different drives per
 joint, so each joint takes the form of lowest held-back error on that joint (100 ||Y_j - W_j beta||
@@ -30,9 +25,8 @@ difference over the blocks on that joint (``clearly_better(a, b, joint)``, the r
 the Coulomb column of joint j enters joint j's rows only, so the choice is nearly separable), else
 Coulomb. A form is not taken on a joint whose scale stopped on a bound in a fold: on the upper
 one it is a second viscous term, the scale not identified; on the lower one it is a sign on that
-joint, Coulomb's own column, so Coulomb, the simpler form, is kept (it used to be allowed, and a
-joint took tanh at the 0.006 rad/s floor for a held-back error 0.2 % below Coulomb's). Nor is a
-form taken anywhere when a fold's search did not converge.
+joint, Coulomb's own column, so Coulomb, the simpler form, is kept. Nor is a form taken anywhere when
+a fold's search did not converge.
 
 **One joint-combined check**: the joints share the other parameters, so when the per-joint forms
 mix, they are scored together (the scales of their smooth joints only searched on the fitting
@@ -54,12 +48,12 @@ import numpy as np
 
 import rx90sym
 
-from identify.selection.candidates import joint_cells
-from identify.selection.cross_validation import (Budget, Candidate, DEFAULT_BLOCKS, DEFAULT_ROW_CAP, block_scores,
-                                                 clearly_better, observation_rows)
-from identify.friction.forms import DEFAULT_FRICTION, FRICTION_FORMS
 from identify.friction.columns import friction_probe
+from identify.friction.folds import FoldRows
+from identify.friction.forms import DEFAULT_FRICTION, FRICTION_FORMS
 from identify.observation.processing import FrictionForm, friction_label, has_smooth_friction, uniform
+from identify.selection.candidates import joint_cells
+from identify.selection.cross_validation import DEFAULT_ROW_CAP, Budget, Candidate, block_scores, clearly_better
 
 __all__ = ["DEFAULT_FORMS", "FrictionChoice", "choose_friction"]
 
@@ -184,7 +178,7 @@ def _score_form(rows: Any, robot: rx90sym.Robot, inner: Any, probe: Any, terms: 
         if not found.converged:
             failed.add(b + 1)
     err2, ref2 = held_back_errors(rows, inner, terms, form, None if per_fold is None else [f.scales for f in per_fold], n)
-    cand = Candidate(rows.cutoff, None, rows.rest, *block_scores(err2, ref2), label=label)
+    cand = Candidate(rows.processing.cutoff, None, rows.processing.rest, *block_scores(err2, ref2), label=label)
     return _Scored(cand, frozenset(bound), frozenset(failed), frozenset(floor))
 
 
@@ -205,33 +199,21 @@ def _per_joint_forms(scored: dict[str, _Scored], rows: Sequence[int], n: int) ->
     return tuple(forms)
 
 
-def choose_friction(robot: rx90sym.Robot, recordings: Sequence[Any], base: Any, options: dict[str, Any],
-                    forms: Sequence[str] = DEFAULT_FORMS, blocks: int = DEFAULT_BLOCKS,
-                    row_cap: int | None = DEFAULT_ROW_CAP, time_cap: float | None = None) -> FrictionChoice:
-    """Score the friction ``forms`` (Coulomb first, the default) by blocked cross-validation with the
-    fit's observation ``options`` (cutoff, decimate_to, min_velocity, rest, spring, delay) and choose
-    per joint (module docstring). row_cap: no form is started once the forms scored have processed
-    that many observation rows (one pass of the recordings each; None: no cap); time_cap [s]: the
-    same on the wall clock, on request (None, the default: off)."""
+def choose_friction(robot: rx90sym.Robot, rows: FoldRows, base: Any, total_rows: int,
+                    forms: Sequence[str] = DEFAULT_FORMS, row_cap: int | None = DEFAULT_ROW_CAP,
+                    time_cap: float | None = None) -> FrictionChoice:
+    """Score the friction ``forms`` (Coulomb first, the default) by blocked cross-validation on the fit's
+    ``rows`` (:class:`~identify.friction.folds.FoldRows`: its processing, time blocks and columns ``base``)
+    and choose per joint (module docstring). total_rows: the observation rows of one pass (the row cap's
+    unit); row_cap: no form is started once the forms scored have processed that many observation rows
+    (None: no cap); time_cap [s]: the same on the wall clock, on request (None, the default: off)."""
     unknown = [f for f in forms if f not in FRICTION_FORMS]
     if unknown or DEFAULT_FRICTION not in forms:
         raise ValueError(f"friction choice: forms must include {DEFAULT_FRICTION!r} and be among "
                          f"{FRICTION_FORMS}, got {tuple(forms)!r}")
+    blocks = rows.blocks
     if blocks < 2:
         raise ValueError(f"cross-validation needs at least 2 blocks, got {blocks}")
-    from identify.friction.folds import MemoryRows
-
-    return choose_friction_rows(robot, MemoryRows(robot, recordings, options, blocks), base,
-                                observation_rows(robot, recordings), forms, row_cap, time_cap)
-
-
-def choose_friction_rows(robot: rx90sym.Robot, rows: Any, base: Any, total_rows: int,
-                         forms: Sequence[str] = DEFAULT_FORMS, row_cap: int | None = DEFAULT_ROW_CAP,
-                         time_cap: float | None = None) -> FrictionChoice:
-    """:func:`choose_friction` on the fit's ``rows`` (:class:`~identify.friction.folds.MemoryRows`,
-    or :class:`~identify.friction.folds.StreamRows` for a log read block by block: the same
-    choice); total_rows: the observation rows of one pass (the row cap's unit)."""
-    blocks = rows.blocks
     start = time.perf_counter()
     budget, passes = Budget(total_rows, row_cap, time_cap), 0
     inner, probe, terms, asymmetric = friction_probe(robot, base)
@@ -252,13 +234,13 @@ def choose_friction_rows(robot: rx90sym.Robot, rows: Any, base: Any, total_rows:
         nonlocal passes
         spent = budget.spent(passes, start)
         if label != DEFAULT_FRICTION and spent:
-            return _Scored(Candidate(rows.cutoff, None, rows.rest, label=label)), f"not scored: {spent}"
+            return _Scored(Candidate(rows.processing.cutoff, None, rows.processing.rest, label=label)), f"not scored: {spent}"
         t0 = time.perf_counter()
         passes += 1
         try:
             done = _score_form(rows, robot, inner, probe, terms, form, label)
         except ValueError as exc:  # too few rows in a fold, a form's columns rank deficient on the fitting blocks
-            return _Scored(Candidate(rows.cutoff, None, rows.rest, label=label)), \
+            return _Scored(Candidate(rows.processing.cutoff, None, rows.processing.rest, label=label)), \
                 f"not scored: {str(exc).splitlines()[0]}"
         return _with_rate(done, rows, time.perf_counter() - t0), done.why()
 
@@ -278,8 +260,7 @@ def choose_friction_rows(robot: rx90sym.Robot, rows: Any, base: Any, total_rows:
 
 def _with_rate(done: _Scored, rows: Any, seconds: float) -> _Scored:
     """The scored form's candidate with the rows' decimated rate and the seconds it took."""
-    rate = rows.options.get("decimate_to") if hasattr(rows, "options") else rows.settings.decimate_to
-    return replace(done, candidate=replace(done.candidate, decimate_to=rate, seconds=seconds))
+    return replace(done, candidate=replace(done.candidate, decimate_to=rows.processing.decimate_to, seconds=seconds))
 
 
 def _single_choice(candidates: Sequence[Candidate], notes: dict[str, str]) -> Candidate:

@@ -1,18 +1,16 @@
-"""The friction choice's passes over the rows, in memory or block by block: one implementation.
+"""The friction choice's passes over a fit's rows, block by block, and what it computes of them.
 
-The friction choice (:mod:`identify.friction.choice`) reads the fit's rows in passes, each
-pass a sequence of filtered motions (:class:`~identify.observation.matrix.FilteredMotion`) with the
-time block of each row: :class:`MemoryRows` (recordings in memory: one motion per segment,
-:func:`~identify.observation.matrix.filtered_motions`) or :class:`StreamRows` (a log read block by
-block: one motion per block, :func:`identify.observation.stream.piece`). Everything else is computed
-from per-(time block, joint) triangular factors, so it is the same whatever the blocks:
+The friction choice (:mod:`identify.friction.choice`) reads the fit's rows in passes (:class:`FoldRows`:
+one filtered motion per block, :func:`identify.observation.block_rows.piece`, with the time block of each
+row). Everything else is computed from per-(time block, joint) triangular factors, so it is the same
+whatever the blocks:
 
 - :func:`fold_scales_of`: per held-back block the velocity scales searched on the other blocks
   (:mod:`identify.friction.scale_search`, two passes of the probe columns);
 - :func:`held_back_errors`: the form's exact (parallel-filtered) columns at each fold's scales, all folds
-  in one pass (:class:`FoldColumns`: a column FSj_f per fold f, resting like FSj), the fold fits
-  (eq. 11's weights, :func:`~identify.selection.folds.fold_wls`) and the held-back errors from
-  the factors.
+  in one pass (:class:`FoldColumns`: a column FSj_f per fold f, resting like FSj), the fold fits (the
+  fit's own weighted least squares, :func:`identify.estimation.least_squares.weighted_system`) and the
+  held-back errors from the factors.
 """
 from __future__ import annotations
 
@@ -25,83 +23,59 @@ import numpy as np
 import rx90sym
 
 from identify.estimation.compression import _qr_r
+from identify.friction.forms import friction_columns
 from identify.friction.scale_search import find_scales
 from identify.friction.scales import VelocityScales, as_velocity_scales, smooth_joints
-from identify.selection.folds import fold_wls, time_blocks, time_folds
-from identify.friction.forms import friction_columns
+from identify.observation.block_rows import in_order, piece, plan_windows, windows_in_order
+from identify.observation.processing import FrictionForm, Processing, drops_rest
 from identify.observation.rest import STRIBECK_PREFIX
-from identify.observation.processing import FrictionForm, drops_rest
+from identify.selection.cross_validation import DEFAULT_BLOCKS
+from identify.selection.folds import fold_wls, time_folds
+from identify.selection.processing_choice import time_span
 
-__all__ = ["FoldColumns", "MemoryRows", "StreamRows", "fold_scales_of", "held_back_errors"]
-
-
-class MemoryRows:
-    """The rows of recordings in memory with the fit's observation ``options`` (cutoff, decimate_to,
-    min_velocity, rest, spring, delay), cut into ``blocks`` time blocks; the last pass's motions kept
-    (the probe's two passes filter once)."""
-
-    def __init__(self, robot: rx90sym.Robot, recordings: Sequence[Any], options: dict[str, Any], blocks: int) -> None:
-        from identify.observation.matrix import automatic_cutoff
-
-        self.robot, self.recordings, self.blocks = robot, list(recordings), blocks
-        self.options = dict(options)
-        if self.options.get("cutoff") is None:
-            self.options["cutoff"] = automatic_cutoff(self.recordings, self.options.get("decimate_to"))
-        self.cutoff, self.rest = float(self.options["cutoff"]), self.options.get("rest", "drop")
-        self.drop = self.options.get("min_velocity") is not None and drops_rest(self.rest)
-        # The rest policy that adds presliding magnitudes FPj (as observation_matrix's columns): None without a threshold.
-        self.presliding_rest = self.rest if self.options.get("min_velocity") is not None else None
-        self._last: tuple[Any, list] | None = None
-
-    def motions(self, columns: Any) -> Iterator[tuple[Any, np.ndarray]]:
-        from identify.observation.defaults import DEFAULT_DECIMATE_TO
-        from identify.observation.matrix import filtered_motions
-
-        if self._last is None or self._last[0] is not columns:   # the same columns object: the same motions
-            o = self.options
-            motions = filtered_motions(self.robot, self.recordings, self.cutoff, o.get("decimate_to", DEFAULT_DECIMATE_TO),
-                                       o.get("spring", True), columns.regressor_batch, columns.names,
-                                       o.get("min_velocity"), self.rest, o.get("delay", 0.0))[0]
-            self._last = (columns, motions)
-        motions = self._last[1]
-        yield from zip(motions, time_blocks([m.t for m in motions], self.blocks))
+__all__ = ["FoldColumns", "FoldRows", "fold_scales_of", "held_back_errors"]
 
 
 @dataclass(frozen=True, eq=False)
-class StreamRows:
-    """The rows of a log read block by block (:mod:`identify.observation.stream`): sources, plans (per
-    recording), cut-off [Hz], settings, the time span (start, length [s], blocks) of the time blocks,
-    a Dask client (None: here)."""
+class FoldRows:
+    """The rows of a fit read block by block (:mod:`identify.observation.block_rows`): sources, plans (per
+    recording), the fit's processing (its cut-off and delay chosen), the time span (start, length [s],
+    blocks) of the time blocks, the joints whose torque is left out, a Dask client (None: here)."""
 
     robot: rx90sym.Robot
     sources: Sequence[Any]
     plans: Sequence[Any]
-    cutoff: float
-    settings: Any
+    processing: Processing
     span: tuple[float, float, int]
+    left_out: tuple[int, ...] = ()
     client: Any = None
+
+    @classmethod
+    def of(cls, robot: rx90sym.Robot, sources: Sequence[Any], scans: Sequence[Any], processing: Processing, block: int,
+           left_out: Sequence[int] = (), client: Any = None, blocks: int = DEFAULT_BLOCKS) -> "FoldRows":
+        """The rows of ``sources`` (``scans``: their first pass, each segment's first and last times kept) made
+        with ``processing`` in blocks of ``block`` samples, cut into ``blocks`` time blocks over the rows' span
+        (the processing choice's blocks)."""
+        plans = [plan_windows(s, processing, block)[0] for s in scans]
+        first, last = time_span(scans, plans)
+        return cls(robot, tuple(sources), plans, processing, (first, last - first + 1e-9, blocks), tuple(left_out),
+                   client)
 
     @property
     def blocks(self) -> int:
         return self.span[2]
 
     @property
-    def rest(self) -> Any:
-        return self.settings.rest
-
-    @property
     def presliding_rest(self) -> Any:
-        return self.settings.rest if self.settings.min_velocity is not None else None
+        return self.processing.rest if self.processing.min_velocity is not None else None
 
     @property
     def drop(self) -> bool:
-        return self.settings.min_velocity is not None and drops_rest(self.settings.rest)
+        return self.processing.min_velocity is not None and drops_rest(self.processing.rest)
 
     def motions(self, columns: Any) -> Iterator[tuple[Any, np.ndarray]]:
-        from identify.observation.stream import in_order, piece, windows_in_order
-
-        tasks = ((self.robot, rec, window, plan, self.cutoff, self.settings, columns.regressor_batch, columns.names, 0)
-                 for plan, window, rec, _ in windows_in_order(self.sources, self.plans))
+        tasks = ((self.robot, rec, window, plan, self.processing, columns.regressor_batch, columns.names, 0, (),
+                  tuple(self.left_out)) for plan, window, rec, _ in windows_in_order(self.sources, self.plans))
         for p in in_order(piece, tasks, self.client, 4 if self.client is not None else 1):
             yield p.motion, time_folds(p.motion.t, *self.span)
 

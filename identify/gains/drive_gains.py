@@ -41,8 +41,7 @@ from identify.gains.methods import swapped_runs_error
 from identify.io.blocks import DEFAULT_BLOCK, check_block
 from identify.io.gains import DriveGains
 from identify.observation.defaults import DEFAULT_DECIMATE_TO
-from identify.observation.processing import drops_rest
-from identify.observation.stream import StreamSettings
+from identify.observation.processing import Processing, drops_rest
 from identify.signal.pairing import POSITION_TOLERANCE, PairedRuns
 
 __all__ = ["DriveGainsResult", "drive_gains", "GAIN_METHODS", "DEFAULT_METHOD", "FLAG_PCT"]
@@ -194,14 +193,15 @@ def drive_gains(robot: rx90sym.Robot, empty: Sequence[Any], loaded: Sequence[Any
             raise RecordingError(f"{src.source}: drive gains are identified from motor currents; the recording "
                                  f"holds none")
     # Y is the currents alone: the spring torque is a column of its own (on the right-hand side, Kn).
-    settings = StreamSettings(cutoff, decimate_to or None, min_velocity or None, rest, float(delay), False,
-                              check_block(block) if block is not None else DEFAULT_BLOCK)
+    processing = Processing(cutoff=cutoff, decimate_to=decimate_to, min_velocity=min_velocity, rest=rest,
+                            delay=float(delay), spring=False)
+    block = check_block(block) if block is not None else DEFAULT_BLOCK
     opts = dict(robot=robot, Rt=Rt, mass=mass, free=free, k_fixed=k_fixed, iterations=int(iterations),
                 seed=bootstrap_seed, client=client, spring=spring)
     if method == "same-motion":
-        (fit, boot), pairs, robot_fit, i0 = _same_motion(empty, loaded, position_tol, settings, **opts)
+        (fit, boot), pairs, robot_fit, i0 = _same_motion(empty, loaded, position_tol, processing, block, **opts)
     else:
-        (fit, boot), robot_fit, i0 = _global(empty, loaded, offsets, base, settings, **opts)
+        (fit, boot), robot_fit, i0 = _global(empty, loaded, offsets, base, processing, block, **opts)
         pairs = ()
     k = k_fixed.copy()
     std_ls, std_boot = np.full(robot.n, np.nan), np.full(robot.n, np.nan)
@@ -279,30 +279,30 @@ def _fit(robot: rx90sym.Robot, runs: Runs, columns: dict, rows: Any, names: tupl
     return fit, boot.std(fit.weights)
 
 
-def _same_motion(empty, loaded, position_tol, settings, *, robot, Rt, mass, free, k_fixed, iterations, seed, client,
-                 spring):
-    runs = open_runs(robot, empty, loaded, settings, paired=True, position_tol=position_tol,
+def _same_motion(empty, loaded, position_tol, processing, block, *, robot, Rt, mass, free, k_fixed, iterations, seed,
+                 client, spring):
+    runs = open_runs(robot, empty, loaded, processing, block, paired=True, position_tol=position_tol,
                      instead="--method global")
     columns = {"loaded": RunColumns(robot, spring=spring), "empty": RunColumns(robot, payload=False, spring=spring)}
     names = tuple(f"K{j + 1}" for j in free) + _OTHER_PAYLOAD
-    drop = settings.min_velocity is not None and drops_rest(settings.rest)
+    drop = processing.min_velocity is not None and drops_rest(processing.rest)
     fit = _fit(robot, runs, columns, _same_motion_rows(mass, drop), names, Rt, free, k_fixed, 9, "same-motion",
                iterations, seed, client)
     return fit, runs.pairs, None, None
 
 
-def _global(empty, loaded, offsets, base, settings, *, robot, Rt, mass, free, k_fixed, iterations, seed, client,
-            spring):
+def _global(empty, loaded, offsets, base, processing, block, *, robot, Rt, mass, free, k_fixed, iterations, seed,
+            client, spring):
     if offsets and not robot.offsets:
         robot = robot.with_options(offsets=True)
         if base is not None and "OFF1" not in base.names:
             base = None  # the base parameters of the robot without offsets
     base = base if base is not None else rx90sym.base_parameters(robot)
     nb = base.nb
-    runs = open_runs(robot, empty, loaded, settings)
+    runs = open_runs(robot, empty, loaded, processing, block)
     columns = {"loaded": RunColumns(robot, base, spring=spring), "empty": RunColumns(robot, base, False, spring)}
     names = tuple(f"K{j + 1}" for j in free) + tuple(base.names) + _OTHER_PAYLOAD
-    drop = settings.min_velocity is not None and drops_rest(settings.rest)
+    drop = processing.min_velocity is not None and drops_rest(processing.rest)
     fit, boot = _fit(robot, runs, columns, _global_rows(nb, mass, drop), names, Rt, free, k_fixed, nb + 9, "global",
                      iterations, seed, client)
     idx = [fit.names.index(n) for n in base.names]

@@ -13,7 +13,7 @@ Python, no ROS installation; the ``ros`` extra). Rules:
   previous one is dropped and counted; time 0 is the first stamp (``meta["log"]["t0_ns"]``);
 * ``effort`` holds joint torques (``effort="torque"``) or motor currents (``"current"``, turned
   into torques by drive gains); velocities are used when every kept message has them;
-* then every rule of a controller log (:func:`identify.io.log_stream.rows_to_recording`): stale rows,
+* then every rule of a controller log (:func:`identify.io.log_rules.rows_to_recording`): stale rows,
   lost packets bridged up to ``max_gap``, segments, resampling, the checks. Messages are numbered
   from 1 in the bag's order; error messages call them lines.
 """
@@ -30,7 +30,7 @@ from rx90sym.recording import Recording, RecordingError
 
 from identify.io.columns import parse_columns
 from identify.io.gains import DriveGains
-from identify.io.log_stream import rows_to_recording
+from identify.io.log_rules import rows_to_recording
 from identify.io.torque_signs import parse_torque_signs
 from identify.io.gaps import DEFAULT_MAX_GAP
 

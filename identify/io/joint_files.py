@@ -9,7 +9,7 @@ them side by side as one log (``rx90 convert --positions Q.csv --torques T.csv -
   a header's names are not interpreted, only counted (exactly n);
 * every file has the same number of rows; row k of each is sample k, at ``t = k * period``
   (t = 0 at the first sample);
-* the rows then go through the rules of a one-file log (:func:`identify.io.log_stream.rows_to_recording`):
+* the rows then go through the rules of a one-file log (:func:`identify.io.log_rules.rows_to_recording`):
   degrees, swapped position/velocity columns, positions beyond the limits, jumps, currents
   through drive gains. Two files give exactly the recording of one pasted file whose time column
   is ``k * period`` (no stale rows are dropped: every row is a sample of the period's clock).
@@ -33,7 +33,7 @@ from identify.io.checks import _check_finite, _check_robot_name, check_period
 from identify.io.columns import parse_columns
 from identify.io.csv_tables import _Table, _check_same_rows, _read_table
 from identify.io.gains import DriveGains
-from identify.io.log_stream import rows_to_recording
+from identify.io.log_rules import rows_to_recording
 from identify.io.torque_signs import parse_torque_signs
 
 __all__ = ["read_joint_files", "SIGNALS"]

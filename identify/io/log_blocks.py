@@ -5,7 +5,7 @@ Lines are read and numbered in Python (comments, header), each block's numbers p
 CSV parser (C++, multithreaded; a block it refuses is parsed again by
 :func:`identify.io.log_rows.parse_rows`, whose message names the bad lines), the window asked
 (``rows`` or ``t_from``/``t_to``) selected on the way, then the rows go through the rules of
-:mod:`identify.io.log_stream` (stale rows, checks, gaps and segments, resampling, drive gains).
+:mod:`identify.io.log_rules` (stale rows, checks, gaps and segments, resampling, drive gains).
 ``convert_log`` appends each part to the output through the atomic writer (an error leaves no file
 behind); its output always has a ``segment`` column (and ``measured`` when resampled): the blocks to
 come may need them; the stale-row count and the gaps that split the log go in header fields filled
@@ -34,7 +34,7 @@ from identify.io.gaps import DEFAULT_MAX_GAP
 from identify.io.log_block_report import BlockReport
 from identify.io.log_fields import SPLITS_LISTED, file_fields
 from identify.io.log_rows import ABSURD, LogLines, check_header, header_cells, parse_rows
-from identify.io.log_stream import collected, log_parts, log_report, retimed_rate
+from identify.io.log_rules import collected, log_parts, log_report, retimed_rate
 from identify.io.logs import log_options
 from identify.io.torque_signs import parse_torque_signs
 
@@ -234,7 +234,7 @@ def read_log(path: str | os.PathLike[str], robot: rx90sym.Robot, columns: str | 
             first of ``rows``); every row is a sample, a row equal to the previous one included
             (no stale rows: the clock is the period's).
         block: lines read and checked at a time (the checks' median step is each block's:
-            :mod:`identify.io.log_stream`).
+            :mod:`identify.io.log_rules`).
         torque_signs: one sign per joint, 1 (as logged) or -1: the torque (and current) columns of the
             joints given -1 are negated (identify.io.torque_signs; a text "1,-1,..." or a sequence).
 
@@ -313,7 +313,7 @@ def convert_log(path: str | os.PathLike[str], robot: rx90sym.Robot, columns: str
 
 def _report(report: BlockReport, cmap: ColumnMap, max_gap: float, resample: float | None, drive: DriveGains | None,
             conv: str, period: float | None, signs: tuple[float, ...] | None = None) -> dict[str, Any]:
-    """``meta["log"]``: :func:`identify.io.log_stream.log_report` with the column map read (the clock of
+    """``meta["log"]``: :func:`identify.io.log_rules.log_report` with the column map read (the clock of
     ``period`` left out) and ``period_s``."""
     log = log_report(report, max_gap, resample, drive, conv, signs)
     log["columns"] = ",".join(cmap.names[:-1] if period is not None else cmap.names)

@@ -1,5 +1,5 @@
 """Controller logs: the column map and the checks of their rows (read by :func:`identify.read_log`,
-:mod:`identify.io.log_blocks`, with the rules of :mod:`identify.io.log_stream`).
+:mod:`identify.io.log_blocks`, with the rules of :mod:`identify.io.log_rules`).
 
 A log is what a robot controller writes: no header (or one this reader does not trust), one row
 per sample, time stamps of the controller's own clock, the controller's joint angles, often

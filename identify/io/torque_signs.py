@@ -3,7 +3,7 @@ robot's description, joint by joint.
 
 ``signs`` holds one factor per joint, 1 (as logged) or -1 (negated): the log's columns ``tau_j`` and
 ``i_j`` are multiplied by ``signs[j]`` as they are read, before drive gains (:func:`with_torque_signs`
-on each part of :func:`identify.io.log_stream.log_parts`: every input form, every length). The
+on each part of :func:`identify.io.log_rules.log_parts`: every input form, every length). The
 identification's check (identify.fitting.plausibility.torque_sign_flags) names the signs that make
 the torques agree with the description's inverse dynamics.
 """

@@ -15,7 +15,7 @@ also flag a live sensor at rest between two counts), only on the number of value
 
 ``rx90 convert`` and :func:`identify.read_log` warn of such a column, naming it and its joint; a fit
 leaves the joint's torque out (its rows out of W, not scored in the choices, not predicted:
-:mod:`identify.fitting.streamed`).
+:mod:`identify.fitting.passes`).
 """
 from __future__ import annotations
 

@@ -1,7 +1,7 @@
 """Payload monitoring (the paper's conclusion): method 4 updated after every loaded motion."""
 from __future__ import annotations
 
-from dataclasses import dataclass, replace
+from dataclasses import dataclass
 from typing import Any, Sequence
 
 import numpy as np
@@ -12,7 +12,7 @@ from rx90sym.parameters import PAYLOAD_NAMES
 from identify.estimation.least_squares import solve_joint_systems, solve_system, stack_systems
 from identify.fitting.run_blocks import RunColumns, open_runs
 from identify.payloads.methods import (PayloadResult, check_wrist_motion, estimates_in_tip_frame, payload_estimates,
-                                       processing_settings, recording_list, result_subset)
+                                       processing_of, read_block, recording_list, result_subset)
 from identify.payloads.systems import FoldedRows, drop_rest, fold_rows, method_4_rows
 
 __all__ = ["MonitorStep", "PayloadMonitor"]
@@ -47,8 +47,9 @@ class PayloadMonitor:
         self.base = base if base is not None else rx90sym.base_parameters(robot)
         self.read = dict(convention=convention, gains=gains)
         self.names = tuple(self.base.names) + PAYLOAD_NAMES
-        runs = open_runs(robot, empty, [], processing_settings(options, block), **self.read)
-        self.settings = replace(runs.settings, cutoff=runs.cutoff)  # every loaded motion filtered alike
+        self.block = read_block(block)
+        runs = open_runs(robot, empty, [], processing_of(options), self.block, **self.read)
+        self.processing = runs.processing  # its cut-off chosen: every loaded motion filtered alike
         self._folded = fold_rows(robot, runs, {"empty": RunColumns(robot, self.base, payload=False)}, method_4_rows(drop_rest(runs)),
                                  self.names, None, folded=FoldedRows(robot.n, self.names, 0, 1.0, None))
         nb = self.base.nb
@@ -58,7 +59,7 @@ class PayloadMonitor:
 
     def update(self, loaded: Any) -> PayloadResult:
         """Add one loaded motion (a recording or a file) and return the new payload estimate."""
-        runs = open_runs(self.robot, [], [loaded], self.settings, **self.read)
+        runs = open_runs(self.robot, [], [loaded], self.processing, self.block, **self.read)
         check_wrist_motion(self.robot, runs.q_range, [s.source for s in runs.loaded_scans])
         fold_rows(self.robot, runs, {"loaded": RunColumns(self.robot, self.base)}, method_4_rows(drop_rest(runs)),
                   self.names, None, folded=self._folded)

@@ -28,8 +28,8 @@ import numpy as np
 import rx90sym
 
 from identify.observation.defaults import DEFAULT_DECIMATE_TO
-from identify.observation.processing import (DEFAULT_MIN_VELOCITY, DEFAULT_REST, REST_POLICIES, RestPolicy, drops_rest,
-                                             rest_label, rest_per_joint)
+from identify.observation.processing import (DEFAULT_MIN_VELOCITY, DEFAULT_REST, REST_POLICIES, Processing, RestPolicy,
+                                             drops_rest, rest_label, rest_per_joint)
 from identify.observation.rest import presliding_base, rest_rows, without_empty_presliding
 from identify.signal.filtering import EDGE_PERIODS, choose_cutoff, decimate, decimation_plan, derivatives
 
@@ -156,31 +156,25 @@ def shifted_torques(rec: Any, delay: float) -> np.ndarray:
     return np.column_stack([np.interp(t + delay, t, tau[:, j]) for j in range(tau.shape[1])])
 
 
-def filtered_motion(robot: rx90sym.Robot, rec: Any, cutoff: float | None = None,
-                    decimate_to: float | None = None, spring: bool = True,
-                    regressor_batch: Callable[..., np.ndarray] | None = None,
-                    names: Sequence[str] | None = None, min_velocity: float | None = None,
-                    rest: RestPolicy = "drop", delay: float = 0.0, kept: slice | None = None,
-                    rest_span: slice | None = None) -> FilteredMotion:
-    """Derivatives, regressor and torques of one recording, decimated together.
+def filtered_motion(robot: rx90sym.Robot, rec: Any, processing: Processing,
+                    regressor_batch: Callable[..., np.ndarray] | None = None, names: Sequence[str] | None = None,
+                    kept: slice | None = None, rest_span: slice | None = None) -> FilteredMotion:
+    """Derivatives, regressor and torques of one recording, decimated together, by ``processing``: q
+    filtered at its cut-off (None: :func:`automatic_cutoff` on this recording) and differentiated, the rows
+    decimated to its ``decimate_to``, its rest threshold and policy ("drop": rows kept as they are,
+    ``usable`` tells which to drop; the others: module docstring), its torque delay compensated
+    (:func:`shifted_torques`), its spring torque added to the measured torque.
 
     regressor_batch: (Q, QD, QDD) -> (S, n, c) giving the columns wanted (default: all the
     standard columns, robot.regressor_batch); selecting before filtering saves the work of
     filtering columns nobody uses. names: the c column names (default: the robot's standard
-    parameters), needed to find the Coulomb columns. min_velocity [rad/s]: rest threshold;
-    rest: "drop" (rows kept as they are, ``usable`` tells which to drop), "zero-coulomb", "presliding",
-    "none" (module docstring), or one of them per joint; "zero-coulomb"
-    (Coulomb entries set to 0 where their driver rests, before the parallel filter).
-    delay [s]: torques lag positions by this much (compensated by :func:`shifted_torques`).
+    parameters), needed to find the Coulomb columns.
     kept: the samples kept after differentiation (default: all but the filter's edges; a block of a
-    long recording keeps its core, :mod:`identify.observation.stream`); rest_span: the samples, around
+    long recording keeps its core, :mod:`identify.observation.block_rows`); rest_span: the samples, around
     ``kept``, on which the rest runs of the "crossing" policy are measured (default: ``kept``).
     """
+    rest, min_velocity, delay = processing.rest, processing.min_velocity, float(processing.delay)
     policies = rest_per_joint(rest, robot.n)
-    if any(r not in REST_POLICIES for r in policies):
-        raise ValueError(f"rest must be one of {REST_POLICIES} (or one per joint), got {rest!r}")
-    if min_velocity is not None and not (min_velocity >= 0.0 and np.isfinite(min_velocity)):
-        raise ValueError(f"min_velocity must be a non-negative speed in rad/s, got {min_velocity!r}")
     if rec.q.shape[1] != robot.n:
         raise ValueError(f"{rec.source}: recording has {rec.q.shape[1]} joints, robot "
                          f"{robot.name!r} has {robot.n}")
@@ -189,11 +183,11 @@ def filtered_motion(robot: rx90sym.Robot, rec: Any, cutoff: float | None = None,
     if getattr(rec, "n_segments", 1) > 1:
         raise ValueError(f"{rec.source}: {rec.n_segments} segments: filter each of its pieces() "
                          f"(filtered_motions does)")
-    if cutoff is None:
-        cutoff = automatic_cutoff([rec], decimate_to)
+    decimate_to = processing.decimate_to
+    cutoff = processing.cutoff if processing.cutoff is not None else automatic_cutoff([rec], decimate_to)
     d = derivatives(rec.t, rec.q, cutoff=cutoff, kept=kept)
     tau = shifted_torques(rec, delay)[d.kept]
-    extra = robot.spring_torque_batch(d.q)[:, :, 0] if spring else 0.0
+    extra = robot.spring_torque_batch(d.q)[:, :, 0] if processing.spring else 0.0
     Y = tau + extra
     Phi = (regressor_batch or robot.regressor_batch)(d.q, d.dq, d.ddq)
     n = robot.n
@@ -248,11 +242,13 @@ def _measured_rows(measured: np.ndarray | None, kept: slice, factor: int) -> np.
     return ok
 
 
-def filtered_motions(robot: rx90sym.Robot, recordings: Sequence[Any], cutoff: float,
-                     *args: Any, **options: Any) -> tuple[list[FilteredMotion], tuple[str, ...], list[Any]]:
-    """:func:`filtered_motion` of every segment of every recording (same arguments after
-    ``cutoff``, which must be given): the motions, notes naming each segment left out because it
-    is too short for the filters' edges, and the segments used (one per motion)."""
+def filtered_motions(robot: rx90sym.Robot, recordings: Sequence[Any], processing: Processing,
+                     regressor_batch: Callable[..., np.ndarray] | None = None, names: Sequence[str] | None = None,
+                     ) -> tuple[list[FilteredMotion], tuple[str, ...], list[Any]]:
+    """:func:`filtered_motion` of every segment of every recording (``processing`` with its cut-off given):
+    the motions, notes naming each segment left out because it is too short for the filters' edges, and
+    the segments used (one per motion)."""
+    cutoff = processing.cutoff
     motions, notes, used = [], [], []
     for rec in recordings:
         for piece in rec.pieces():
@@ -262,7 +258,7 @@ def filtered_motions(robot: rx90sym.Robot, recordings: Sequence[Any], cutoff: fl
                 notes.append(f"{piece.source}: segment of {piece.n_samples} samples left out (shorter than "
                              f"the {2 * edge + 5} the filter's edges need at {cutoff:.3g} Hz)")
                 continue
-            motions.append(filtered_motion(robot, piece, cutoff, *args, **options))
+            motions.append(filtered_motion(robot, piece, processing, regressor_batch, names))
             used.append(piece)
     if not motions:
         raise ValueError("no segment is long enough to filter: " + "; ".join(notes))
@@ -337,10 +333,13 @@ def observation_matrix(robot: rx90sym.Robot, recordings: Sequence[Any], cutoff: 
         recordings = [recordings]
     if not recordings:
         raise ValueError("observation_matrix: no recordings given")
+    processing = Processing(cutoff=cutoff, decimate_to=decimate_to, min_velocity=min_velocity, rest=rest, delay=delay,
+                            spring=spring)
+    min_velocity = processing.min_velocity
     names, regressor = column_regressor(robot, base, columns, rest if min_velocity is not None else None)
-    cutoff = cutoff if cutoff is not None else automatic_cutoff(recordings, decimate_to)
-    motions, skipped, _ = filtered_motions(robot, recordings, cutoff, decimate_to, spring, regressor, names,
-                                        min_velocity, rest, delay)  # one filtering for every segment
+    if cutoff is None:
+        processing = processing.chosen(cutoff=automatic_cutoff(recordings, processing.decimate_to))
+    motions, skipped, _ = filtered_motions(robot, recordings, processing, regressor, names)  # one filtering for all
     keep = [m.rows(min_velocity is not None and drops_rest(rest)) for m in motions]
     W, Y, joint, samples = stack_rows([m.Phi for m in motions], [m.Y for m in motions], masks=keep)
     W, names, empty = without_empty_presliding(W, names)

@@ -7,7 +7,7 @@ data gives the same result whichever way it enters. The defaults are those of ``
 from __future__ import annotations
 
 import math
-from dataclasses import asdict, dataclass, fields
+from dataclasses import asdict, dataclass, fields, replace
 from typing import Any
 
 from identify.observation.defaults import (DEFAULT_DECIMATE_TO, DEFAULT_DELAY, DEFAULT_FRICTION, DEFAULT_MIN_VELOCITY,
@@ -154,6 +154,11 @@ class Processing:
         """Keyword arguments of :func:`identify.observation_matrix` (the delay apart: it may be 'auto')."""
         return {"cutoff": self.cutoff, "decimate_to": self.decimate_to, "min_velocity": self.min_velocity,
                 "rest": DEFAULT_REST if self.rest is None else self.rest, "spring": self.spring}
+
+    def chosen(self, **values: Any) -> "Processing":
+        """This processing with what was open now chosen (``cutoff`` [Hz], ``decimate_to`` [Hz], ``rest``,
+        ``delay`` [s], ``friction``: the values a fit's passes use), nothing left to choose again."""
+        return replace(self, cross_validate=False, **values)
 
     @property
     def friction_form(self) -> FrictionForm:

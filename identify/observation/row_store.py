@@ -1,6 +1,6 @@
 """The decimated rows of a fit made block by block, kept as an :class:`Observation` when they are few.
 
-A fit reads, filters and decimates the recordings block by block (:mod:`identify.observation.stream`)
+A fit reads, filters and decimates the recordings block by block (:mod:`identify.observation.block_rows`)
 and folds each block's rows into triangular factors: its memory is the block's. The decimated rows
 themselves (eqs. 6-8) are what the report's residual plots, the essential parameters and a later
 bootstrap read; they are kept, in the order :func:`identify.observation.matrix.observation_matrix`
@@ -31,7 +31,7 @@ def keeps_rows(samples: int, joints: int, columns: int) -> bool:
 class RowStore:
     """The pieces' rows in order (a workspace filled while the blocks stream by).
 
-    add(): one piece (:class:`identify.observation.stream.Piece`), its rows kept as the fit keeps
+    add(): one piece (:class:`identify.observation.block_rows.Piece`), its rows kept as the fit keeps
     them (``drop``: rest rows dropped); observation(): the :class:`Observation` of them all."""
 
     def __init__(self, names: Sequence[str], drop: bool) -> None:

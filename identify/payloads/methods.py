@@ -36,7 +36,6 @@ from identify.fitting.run_blocks import RunColumns, Runs, open_runs
 from identify.io.blocks import DEFAULT_BLOCK, check_block
 from identify.observation.defaults import DEFAULT_DECIMATE_TO
 from identify.observation.processing import Processing
-from identify.observation.stream import StreamSettings
 from identify.payloads.defaults import MASS_TOL
 from identify.payloads.robot_params import known_robot
 from identify.payloads.systems import drop_rest, fold_rows, method_1_rows, method_3_rows, method_4_rows
@@ -89,14 +88,17 @@ def _processing(options: Mapping[str, Any], fit_processing: Mapping[str, Any] | 
     return dict(fit_processing)
 
 
-def _settings(p: Mapping[str, Any], block: int | None) -> StreamSettings:
-    return StreamSettings(p["cutoff"], p["decimate_to"] or None, p["min_velocity"] or None, p["rest"],
-                          float(p["delay"]), bool(p["spring"]), check_block(block) if block is not None else DEFAULT_BLOCK)
+def processing_of(options: Mapping[str, Any]) -> Processing:
+    """The :class:`~identify.observation.processing.Processing` of the processing ``options`` (defaults
+    :data:`PROCESSING`; an unknown option refused)."""
+    p = _processing(options, None)
+    return Processing(cutoff=p["cutoff"], decimate_to=p["decimate_to"], min_velocity=p["min_velocity"], rest=p["rest"],
+                      delay=float(p["delay"]), spring=bool(p["spring"]))
 
 
-def processing_settings(options: Mapping[str, Any], block: int | None = None) -> StreamSettings:
-    """The block pipeline's settings of the processing ``options`` (defaults :data:`PROCESSING`)."""
-    return _settings(_processing(options, None), block)
+def read_block(block: int | None) -> int:
+    """Raw samples read at a time: ``block`` checked, or the default."""
+    return check_block(block) if block is not None else DEFAULT_BLOCK
 
 
 # --------------------------------------------------------------------------------------------
@@ -155,8 +157,8 @@ def payload(robot: rx90sym.Robot, method: int, empty: Sequence[Any] = (), loaded
     if method == 2:
         fit, robot_fit, boot = _method_2(robot, base, empty, loaded, p, bootstrap_seed, **read)
     else:
-        runs = open_runs(robot, empty, loaded, _settings(p, block), paired=method == 3, position_tol=position_tol,
-                         convention=convention, gains=gains)
+        runs = open_runs(robot, empty, loaded, processing_of(p), read_block(block), paired=method == 3,
+                         position_tol=position_tol, convention=convention, gains=gains)
         check_wrist_motion(robot, runs.q_range, [s.source for s in runs.loaded_scans])
         solve = {1: _method_1, 3: _method_3, 4: _method_4}[method]
         fit, robot_fit, boot = solve(robot, base, runs, known, bootstrap_seed, client)
@@ -235,7 +237,7 @@ def _method_2(robot, base, empty, loaded, p, seed, *, convention, gains, block, 
     processing = Processing(**{"estimate_delay": False, "cross_validate": False, **p})
     options = dict(base=base, gains=gains, convention=convention, block=block, client=client)
     loaded_fit = fit(robot, loaded, processing, bootstrap_seed=None if seed is None else seed + 1, **options)
-    check_wrist_motion(robot, loaded_fit.streamed.q_range, loaded_fit.streamed.sources)
+    check_wrist_motion(robot, loaded_fit.passes.q_range, loaded_fit.passes.sources)
     empty_fit = fit(robot, empty, processing, bootstrap_seed=seed, **options)
     fit_v, fit_t = empty_fit.result, loaded_fit.result
     if fit_v.names != fit_t.names:
@@ -266,7 +268,7 @@ def _method_2(robot, base, empty, loaded, p, seed, *, convention, gains, block, 
     if seed is not None:
         # Each run's segment bootstrap (independent draws: two experiments), their difference per draw
         # (eq. 23) through the same whitened relations (eqs. 24-27): the spread of the payload.
-        deltas = (loaded_fit.streamed.bootstrap_draws - empty_fit.streamed.bootstrap_draws)[:, at]
+        deltas = (loaded_fit.passes.bootstrap_draws - empty_fit.passes.bootstrap_draws)[:, at]
         deltas = deltas[~np.isnan(deltas).any(axis=1)]  # rank-deficient draws
         if deltas.shape[0] < 2:
             boot = np.full(len(PAYLOAD_NAMES), np.nan)

@@ -1,6 +1,6 @@
 """The robot's known parameters of payload method 1 (eq. 22): from a fit, a fit file, its result, or values.
 
-A :class:`~identify.fitting.record.Fit` (or its file) brings its identified model (``Fit.model_result``:
+A :class:`~identify.fitting.fit_result.Fit` (or its file) brings its identified model (``Fit.model_result``:
 its columns, the torque offsets and friction columns with it) and its processing (cut-off, decimation, rest threshold and
 policy, torque delay, spring; its drive gains and angle convention for files): method 1 then moves
 exactly the fit's model of the robot to the right-hand side, on the rows that fit was made of. A
@@ -17,7 +17,7 @@ import numpy as np
 
 import rx90sym
 
-from identify.fitting.record import Fit, load_fit
+from identify.fitting.fit_result import Fit, load_fit
 from identify.fitting.validation import base_vector
 from identify.observation.offsets import offset_base
 

@@ -103,4 +103,4 @@ def fold_rows(robot: rx90sym.Robot, runs: Runs, columns: dict[str, RunColumns], 
 
 def drop_rest(runs: Runs) -> bool:
     """Whether the runs' rest rows are dropped (a rest threshold and the "drop" policy on some joint)."""
-    return runs.settings.min_velocity is not None and drops_rest(runs.settings.rest)
+    return runs.processing.min_velocity is not None and drops_rest(runs.processing.rest)

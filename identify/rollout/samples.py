@@ -2,7 +2,7 @@
 samples with their start velocity, the speed that decides rest, and the recorded joint torques (drive
 gains applied, advanced by the fit's delay), cut into windows of a given length that do not overlap.
 
-The blocks are those of the fit's own pipeline (identify.observation.stream: margins from the filter's
+The blocks are those of the fit's own pipeline (identify.observation.block_rows: margins from the filter's
 impulse response, segments filtered one by one, no decimation), so the filtered velocity of a long log
 equals the whole-signal one; a window may span blocks (:class:`WindowCutter` carries the samples over).
 """
@@ -17,7 +17,9 @@ import rx90sym
 
 from identify.io.blocks import DEFAULT_BLOCK, block_source
 from identify.observation.matrix import shifted_torques
-from identify.observation.stream import StreamSettings, plan_windows, scan, windows_in_order
+from identify.observation.processing import Processing
+from identify.observation.block_rows import plan_windows, windows_in_order
+from identify.observation.scan import scan
 from identify.signal.filtering import derivatives
 
 __all__ = ["RolloutSource", "Samples", "WindowCutter"]
@@ -55,9 +57,10 @@ class RolloutSource:
             raise ValueError(f"start velocity must be 'filtered' or 'recorded', got {velocity!r}")
         self.robot, self.cutoff, self.delay, self.velocity = robot, float(cutoff), float(delay), velocity
         self.src = block_source(recording, robot, convention, gains)
-        self.settings = StreamSettings(self.cutoff, None, None, "none", self.delay, False, int(block))
+        processing = Processing(cutoff=self.cutoff, decimate_to=None, min_velocity=None, rest="none", delay=self.delay,
+                                spring=False)
         self.scan = scan(self.src, int(block), None)
-        self.plans, self.notes = plan_windows(self.scan, self.cutoff, self.settings)
+        self.plans, self.notes = plan_windows(self.scan, processing, int(block))
 
     @property
     def source(self) -> str:

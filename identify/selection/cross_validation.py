@@ -106,7 +106,7 @@ SCORED_REST = tuple(r for r in REST_POLICIES if r not in ("drop", "none", "presl
 
 class NoCandidateScored(ValueError):
     """No candidate processing could be scored (each one's reason in the message): the fit falls back on the
-    fixed defaults (:func:`identify.fitting.streamed.fit_streamed`)."""
+    fixed defaults (:func:`identify.fitting.passes.fit_streamed`)."""
 
 
 def grid_around(knee: float, rate: float, default_cutoff: float, default_decimate: float | None) -> list[Candidate]:

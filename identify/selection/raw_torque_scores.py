@@ -17,7 +17,7 @@ processing is scored with offsets without another pass over the recordings.
 The raw samples scored (:class:`RawSpan`) are the same for every candidate: measured (not bridged), at
 least the filters' edges of the grid's lowest cut-off (plus two periods of its coarsest decimation and
 the delay) from each segment's ends; the time blocks cut their span, and a fitted row at time t falls
-in the block of t + delay. A window of the block-wise pipeline (:mod:`identify.observation.stream`)
+in the block of t + delay. A window of the block-wise pipeline (:mod:`identify.observation.block_rows`)
 scores the raw samples between its own first and last rows; those between the last row of one window
 and the first of the next are scored when both rows are known (:class:`RawFactors` joins them), so
 that every raw sample sees the same two rows as on the whole recording.
@@ -36,7 +36,9 @@ from identify.estimation.dependent_columns import reduce_columns
 from identify.estimation.incremental_qr import JointFactors
 from identify.selection.candidates import Candidate
 from identify.selection.folds import block_scores, fold_wls, time_folds
-from identify.observation.stream import Plan, Scan, StreamSettings, piece
+from identify.observation.block_rows import Plan, piece
+from identify.observation.scan import Scan
+from identify.observation.processing import Processing
 from identify.signal.filtering import EDGE_PERIODS
 from identify.signal.interpolate import onto, onto_weights
 
@@ -130,16 +132,16 @@ def _scored_rows(blocks: int, span: RawSpan, t: np.ndarray, tau: np.ndarray, x: 
     return out
 
 
-def window_factors(robot: rx90sym.Robot, rec: Any, window: Any, plan: Plan, settings: StreamSettings, columns: Any,
-                   names: Sequence[str], span: RawSpan, bounds: tuple[float, float] | None,
-                   drop: bool) -> tuple[list, list, _Edge | None, _Edge | None]:
-    """One window of a candidate (the streamed fit's :func:`~identify.observation.stream.piece`, a Dask
+def window_factors(robot: rx90sym.Robot, rec: Any, window: Any, plan: Plan, processing: Processing, columns: Any,
+                   names: Sequence[str], span: RawSpan, bounds: tuple[float, float] | None, drop: bool,
+                   left_out: Sequence[int] = ()) -> tuple[list, list, _Edge | None, _Edge | None]:
+    """One window of a candidate (the streamed fit's :func:`~identify.observation.block_rows.piece`, a Dask
     task when distributed; ``columns``: what gives the regressor, ``regressor_batch``, of the columns
     ``names``): per (time block, joint) the factors of its fitted rows ``[W | 1 | Y]`` and of
     the raw samples it scores (:func:`_scored_rows`), and its first and last rows with the raw samples
     beyond them (None at a segment's end: there the end row is held, scored here)."""
-    m = piece(robot, rec, window, plan, settings.cutoff, settings, columns.regressor_batch, names, 0).motion
-    delay, blocks = settings.delay, span.blocks
+    m = piece(robot, rec, window, plan, processing, columns.regressor_batch, names, 0, (), left_out).motion
+    delay, blocks = processing.delay, span.blocks
     ids = np.clip(time_folds(m.t + delay, span.start, span.span, blocks), 0, blocks - 1)
     keep = m.rows(drop)
     fitted = []
@@ -150,7 +152,7 @@ def window_factors(robot: rx90sym.Robot, rec: Any, window: Any, plan: Plan, sett
             rows = np.column_stack([m.Phi[sel, j, :], np.ones(int(sel.sum())), m.Y[sel, j]])
             fitted.append((int(b), j, JointFactors.block_factor(rows), rows.shape[0]))
     n = m.Phi.shape[1]
-    spring = robot.spring_torque_batch(m.q)[:, :, 0] if settings.spring and robot.spring is not None \
+    spring = robot.spring_torque_batch(m.q)[:, :, 0] if processing.spring and robot.spring is not None \
         else np.zeros((m.t.size, n))
     xp = m.t + delay
     first, last = window.core[0] == 0, window.core[1] == plan.samples

@@ -27,7 +27,10 @@ from identify.selection.processing_choice import grid_of_scans
 from identify.selection.candidates import Candidate, DEFAULT_LABEL
 from identify.selection.cross_validation import MIN_GRID_CUTOFF
 from identify.selection.folds import time_folds
-from identify.observation.stream import Scan, StreamSettings, plan_windows
+from identify.observation.scan import Scan
+from identify.io.blocks import DEFAULT_BLOCK
+from identify.observation.processing import Processing
+from identify.observation.block_rows import plan_windows
 from identify.signal.filtering import EDGE_PERIODS, decimation_plan
 
 __all__ = ["fold_rows", "required_seconds", "too_short"]
@@ -40,11 +43,12 @@ def fold_rows(scans: Sequence[Scan], default: Candidate, grid: Sequence[Candidat
     blocks of ``grid``'s scored span): ValueError when the recordings are too short for the span or the
     filter."""
     span = raw_span(scans, grid, blocks, delay)
-    settings = StreamSettings(default.cutoff, default.decimate_to, None, "zero-coulomb", delay)
+    processing = Processing(cutoff=default.cutoff, decimate_to=default.decimate_to, min_velocity=None,
+                            rest="zero-coulomb", delay=delay)
     counts = np.zeros(blocks, dtype=int)
     for s in scans:
         by_start = {g.start: g for g in s.segments}
-        for p in plan_windows(s, default.cutoff, settings)[0]:
+        for p in plan_windows(s, processing, DEFAULT_BLOCK)[0]:
             g = by_start[p.start]
             t = np.linspace(g.time_at(p.edge), g.time_at(p.edge + (p.samples - 1) * p.factor), p.samples)
             ids = np.clip(time_folds(t + delay, span.start, span.span, blocks), 0, blocks - 1)

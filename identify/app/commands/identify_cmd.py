@@ -24,7 +24,7 @@ from .identify_runs import block_option, fit_recordings, rollout_option
 
 if TYPE_CHECKING:  # the model and the method are imported when the command runs, not for its --help
     import rx90sym
-    from identify.fitting.record import Fit
+    from identify.fitting.fit_result import Fit
     from identify.observation.processing import Processing
 
 

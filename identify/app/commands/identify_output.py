@@ -9,7 +9,7 @@ from ..common import progress
 from ..flags import flag_lines
 
 if TYPE_CHECKING:  # annotations only
-    from identify.fitting.record import Fit
+    from identify.fitting.fit_result import Fit
 
 
 def split_text(lay: dict) -> str:
@@ -42,7 +42,7 @@ def print_fit(f: Fit, recs: list, auto_delay: bool) -> None:
     observation's summary on stderr."""
     from identify.observation.processing import rest_label
 
-    obs, res = f.observation or f.streamed, f.result
+    obs, res = f.observation or f.passes, f.result
     progress(f.delay_estimate.summary() + ("" if auto_delay or not f.delay_estimate.found
                                            else " (not compensated: --delay auto does)"))
     progress(obs.summary().replace("\n", "\n  "))
@@ -106,7 +106,7 @@ def spring_text(f: Fit, recs: list) -> str:
     from identify.observation.spring_fit import BaseWithSpring, spring_summary
 
     # The range each joint visited: from the fit's scan (block by block), else from the recordings.
-    visited = [SimpleNamespace(q=f.streamed.q_range)] if f.streamed is not None else recs
+    visited = [SimpleNamespace(q=f.passes.q_range)] if f.passes is not None else recs
     return spring_summary(f.robot, f.base if isinstance(f.base, BaseWithSpring) else None, f.result, visited)[1]
 
 
@@ -126,7 +126,7 @@ def write_report(path: str, f: Fit, recordings: list, convention: str | None, bl
             for src, n in zip(sources, samples or [getattr(src, "n_samples", None) for src in sources])]
     clocks = [log_clock(r, src) for r, src in zip(recordings, sources)]
 
-    record = {**f.to_json(), "data": data_record(thin, f.observation or f.streamed, f.validation, samples, clocks)}
+    record = {**f.to_json(), "data": data_record(thin, f.observation or f.passes, f.validation, samples, clocks)}
     held = shown(f.validation) if f.validation is not None else None
     write_identify_report(path, f.robot, record, f.result, thin[0], held, shown(f.predict(recordings[0])),
                           spring_text(f, thin))
@@ -143,7 +143,7 @@ def data_record(recs: list, obs: Any, validation: Any = None, samples: list[int]
 
     counts = samples if samples is not None else [len(r.t) for r in recs]
     clocks = clocks if clocks is not None else [log_clock(r) for r in recs]
-    # First and last times on the logs' own clocks (a recording starts at 0 s: identify.io.log_stream).
+    # First and last times on the logs' own clocks (a recording starts at 0 s: identify.io.log_rules).
     rows = [{"source": r.source, "samples": int(k), "t_first_s": float(r.t[0]) + c, "t_last_s": float(r.t[-1]) + c,
              "duration_s": float(r.t[-1] - r.t[0]), "rate_hz": float((k - 1) / (r.t[-1] - r.t[0]))}
             for r, k, c in zip(recs, counts, clocks)]

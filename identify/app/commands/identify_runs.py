@@ -11,7 +11,7 @@ from typing import TYPE_CHECKING, Any
 
 if TYPE_CHECKING:  # for annotations only: the method is imported when a fit runs
     import rx90sym
-    from identify.fitting.record import Fit
+    from identify.fitting.fit_result import Fit
     from identify.observation.processing import Processing
 
 from ..common import progress

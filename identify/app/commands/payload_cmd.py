@@ -116,7 +116,7 @@ def _robot_params(args: argparse.Namespace, robot: Any) -> Any:
     """Method 1's --robot-params: a fit file (a Fit: its columns and processing) or parameter values."""
     import json
 
-    from identify.fitting.record import load_fit
+    from identify.fitting.fit_result import load_fit
 
     if not args.robot_params:
         return None
@@ -140,7 +140,7 @@ def _robot_params(args: argparse.Namespace, robot: Any) -> Any:
 def _filtering(args: argparse.Namespace, robot: Any, known: Any) -> dict:
     """--filtering-from: the fit's achieved cut-off, decimation and delay (not its rest handling); with a
     fit as --robot-params, the same as that fit's or refused."""
-    from identify.fitting.record import Fit, load_fit
+    from identify.fitting.fit_result import Fit, load_fit
 
     if not args.filtering_from:
         return {}

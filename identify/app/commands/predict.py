@@ -51,7 +51,7 @@ def write_prediction(path: str, val: Any) -> None:
 
 def run(args: argparse.Namespace) -> int:
     from rx90sym.files import write_json
-    from identify.fitting.record import load_fit
+    from identify.fitting.fit_result import load_fit
 
     for out in (args.out, args.json, args.report):
         check_output(out)

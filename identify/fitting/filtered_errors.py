@@ -1,11 +1,9 @@
-"""The filtered figures of a prediction block by block: :func:`identify.fitting.validation.filtered_rms` of
-a long log.
+"""The filtered figures of a prediction: its RMS error against the torques filtered like the fit's rows.
 
 A validation gives, beside the errors on the raw torques, the RMS error against the torques filtered
-like the fit's rows (``rms_error_filtered``, all samples and while moving, measured samples only). On a
-long log the rows come block by block (:func:`identify.observation.stream.piece`, the whole-signal rows
-to ~1e-11): the per-joint sums of squared errors and counts are accumulated, so the figures are the
-whole log's without holding its rows.
+like the fit's rows (``rms_error_filtered``, all samples and while moving, measured samples only). The
+rows come block by block (:func:`identify.observation.block_rows.piece`): the per-joint sums of squared
+errors and counts are accumulated, so the figures are the whole log's without holding its rows.
 """
 from __future__ import annotations
 
@@ -15,9 +13,10 @@ import numpy as np
 
 import rx90sym
 
-from identify.observation.stream import StreamSettings, piece, plan_windows, windows_in_order
+from identify.observation.block_rows import piece, plan_windows, windows_in_order
+from identify.observation.processing import Processing
 
-__all__ = ["FilteredSums", "streamed_filtered_rms"]
+__all__ = ["FilteredSums", "filtered_rms"]
 
 
 class FilteredSums:
@@ -46,14 +45,13 @@ class FilteredSums:
         return {"rms_error_filtered": rms["all"], "rms_error_filtered_moving": rms["moving"]}
 
 
-def streamed_filtered_rms(robot: rx90sym.Robot, src: Any, scan: Any, cutoff: float, settings: StreamSettings,
-                          regressor: Callable[..., np.ndarray], names: Sequence[str],
-                          beta: np.ndarray) -> dict[str, np.ndarray]:
+def filtered_rms(robot: rx90sym.Robot, src: Any, scan: Any, processing: Processing, block: int,
+                 regressor: Callable[..., np.ndarray], names: Sequence[str], beta: np.ndarray) -> dict[str, np.ndarray]:
     """:meth:`FilteredSums.result` of the prediction ``beta`` on the rows of one log (``src``, its first pass
-    ``scan``) filtered at ``cutoff`` [Hz] with ``settings`` (their ``decimate_to``: the rows' rate), a pass
-    of its own."""
-    plans, _ = plan_windows(scan, cutoff, settings)
+    ``scan``) made with ``processing`` (its cut-off chosen; its ``decimate_to``: the rows' rate) in blocks of
+    ``block`` samples, a pass of its own."""
+    plans, _ = plan_windows(scan, processing, block)
     sums = FilteredSums(beta, robot.n)
     for plan, window, rec, _ in windows_in_order([src], [plans]):
-        sums.add(piece(robot, rec, window, plan, cutoff, settings, regressor, names, 0).motion)
+        sums.add(piece(robot, rec, window, plan, processing, regressor, names).motion)
     return sums.result()

@@ -17,7 +17,7 @@ from identify.estimation.bootstrap import BLOCK_S, DRAWS, segment_bootstrap_std
 from identify.fitting.consistent_fit import ConsistentResult
 from identify.fitting.plausibility import Flag
 from identify.estimation.results import IdentificationResult, json_number
-from identify.fitting.file import SCHEMA_VERSION, FitModel, gains_of, read_fit_file, robot_of
+from identify.fitting.fit_file import FitModel, SCHEMA_VERSION, gains_of, read_fit_file, robot_of
 from identify.io.gains import DriveGains
 from identify.friction.columns import friction_base
 from identify.observation.matrix import Observation
@@ -117,7 +117,7 @@ class Fit:
     recordings: tuple[dict, ...] = ()
     choice: dict | None = None
     block: int | None = None        # logs read block by block with this many samples (None: whole)
-    streamed: Any = None            # the block-wise fit's record (identify.fitting.streamed.StreamedFit)
+    passes: Any = None              # what the passes over the logs read, chose and fitted (identify.fitting.passes.Passes)
     baseline: Any = None            # the plain OLS baseline (identify.fitting.baseline.PlainBaseline) or None
     user_model: Any = None          # the model the user had (identify.fitting.user_model.UserModel) or None
     user_model_note: str = ""       # why there is no model the user had ("" when there is)
@@ -230,9 +230,9 @@ class Fit:
         obs = self.observation
         done = self.bootstrap
         same = done is not None and (done.seed, done.draws) == (seed, draws)
-        if same and (self.streamed is not None or (obs is not None and
+        if same and (self.passes is not None or (obs is not None and
                                                    done.block_s == max(1, int(round(block_s * obs.rate))) / obs.rate)):
-            return self  # computed already: by fit(), or while the blocks streamed by (fit(..., block=...))
+            return self  # computed already: by fit(), or while the blocks went by (fit(..., block=...))
         if obs is None:
             raise ValueError("bootstrap needs the fit's observation matrix (not a fit loaded from a file; "
                              "a fit in blocks computes it while it reads them: fit(..., bootstrap_seed=...))")
