@@ -57,6 +57,7 @@ def test_an_exact_description_is_kept_at_the_top_of_the_grid(rx90, twin):
         elif share[name] < 1e-6:
             assert value == pytest.approx(described[name], rel=1e-6, abs=1e-8), name
     assert share["FV1"] > 0.999 and min(share.values()) < 1e-6
+    assert model.moved() == [] and "held more than 2σ" not in model.table()  # the drives and all it determines: the data's
 
 
 @pytest.mark.parametrize("seed", [0, 1])

@@ -94,7 +94,24 @@ class ConsistentResult(IdentificationResult):
                      f"{self.cost_increase_pct:+.2f} % of the least squares'; {self.split}")
         if self.residual_rms.size:
             lines.append("residual RMS per joint (N·m): " + "  ".join(f"{v:.4g}" for v in self.residual_rms))
+        moved = self.moved()
+        if moved:
+            lines.append("held more than 2σ from the least squares by the physical constraints or the prior: "
+                         + "; ".join(f"{n} {v:.4g} ({ls:.4g} ± {sd:.2g}, {z:+.1f}σ)" for n, v, ls, sd, z in moved))
         return "\n".join(lines)
+
+    def moved(self, limit: float = 2.0) -> list[tuple[str, float, float, float, float]]:
+        """(name, model value, least-squares estimate, σ, z) of every rotor inertia, friction parameter and base
+        parameter the data determine (relative σ under DETERMINED_PCT %) that the model holds more than ``limit`` σ
+        from the least squares on its columns: where a bound, the physical constraints or the prior override the data."""
+        if self.least_squares is None:
+            return []
+        out = []
+        for n, v, ls, sd, rel in zip(self.names, self.values, self.least_squares, self.std, self.rel_std_pct):
+            z = (v - ls) / sd if sd > 0 else math.nan
+            if np.isfinite(z) and abs(z) > limit and (n.startswith(_DRIVES) or rel < DETERMINED_PCT):
+                out.append((str(n), float(v), float(ls), float(sd), float(z)))
+        return out
 
     @property
     def split(self) -> str:
