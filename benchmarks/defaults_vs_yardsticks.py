@@ -62,6 +62,7 @@ import numpy as np  # noqa: E402
 
 import rx90sym  # noqa: E402
 from identify import Processing, fit, read_log  # noqa: E402
+from identify.estimation.defaults import DEFAULT_DIVERGENCE, DIVERGENCES  # noqa: E402
 
 TARGET = 1.02
 #: Twins: the median over the seeds and any single run, per joint.
@@ -94,14 +95,16 @@ def chosen(f) -> str:
 
 
 def _row(name: str, values, fmt: str = "8.3f") -> str:
-    return f"  {name:<30}" + "".join("       -" if v is None or not np.isfinite(v) else f"{v:{fmt}}" for v in values)
+    # a figure too wide for its column (a yardstick that cannot predict) in 3 significant digits, apart
+    return f"  {name:<30}" + "".join("       -" if v is None or not np.isfinite(v) else
+                                     f"{v:{fmt}}" if abs(v) < 1e4 else f" {v:7.2g}" for v in values)
 
 
 def compare(label: str, robot: rx90sym.Robot, fitted: list, held, moving: bool = True) -> dict:
     """Fit the defaults on ``fitted``, predict ``held``; print the per-joint table (and the comparison inside
     the fitted data). Returns {"all": ratios, "moving": ratios or None} to the better yardstick."""
     start = time.perf_counter()
-    f = fit(robot, fitted, Processing())
+    f = fit(robot, fitted, Processing(), divergence=DIVERGENCE[0])
     seconds = time.perf_counter() - start
     v = f.validate(held)
     sticks = v.yardsticks()
@@ -221,6 +224,8 @@ def ur10e_p4(gains: str) -> list[dict]:
                     f"pose: all samples)", robot, [run], p4, moving=False)]
 
 
+#: The prior's divergence of every fit (--divergence; the library's default unless given).
+DIVERGENCE = [DEFAULT_DIVERGENCE]
 #: The Gen3's description: the URDF as it came with the logs (--gen3-urdf: another one, e.g. with its inertials made
 #: physical while the toolkit refuses those that are not).
 GEN3_URDF = [GEN3 / "gen3.urdf"]
@@ -250,7 +255,7 @@ def gen3_joint2_to_run(_: str) -> list[dict]:
 def gen3_sensors(_: str) -> list[dict]:
     robot, run = _gen3(GEN3_SENSORS, "RunTrajectory1.csv", None)
     start = time.perf_counter()
-    f = fit(robot, [run], Processing())
+    f = fit(robot, [run], Processing(), divergence=DIVERGENCE[0])
     print(f"\nGen3 (joint torque sensors, joint 1 not logged): the 1.9 s run fitted\n  defaults: {chosen(f)}; "
           f"fit {time.perf_counter() - start:.1f} s wall")
     inside_fitted_data(f, [run])
@@ -286,7 +291,8 @@ def twins(seeds: int, names: list[str] | None, short: bool = False) -> bool:
     """Per case the per-joint ratios to the better yardstick over the seeds; True when both twin targets hold.
     short: the short point-to-point twins with the descriptions users hold (tests/twin_logs.py SHORT_CASES)."""
     sys.path.insert(0, str(ROOT / "tests"))
-    from twin_logs import CASES, SHORT_CASES, short_logs, twin_logs
+    from short_twins import SHORT_CASES, short_logs
+    from twin_logs import CASES, twin_logs
 
     cases = [c for c in (SHORT_CASES if short else CASES) if names is None or c.name in names]
     ok_all = True
@@ -300,7 +306,7 @@ def twins(seeds: int, names: list[str] | None, short: bool = False) -> bool:
             lines = []
             for seed in range(seeds):
                 logs = (short_logs if short else twin_logs)(case, seed, Path(work))
-                f = fit(logs.robot, [logs.fitted], Processing())
+                f = fit(logs.robot, [logs.fitted], Processing(), divergence=DIVERGENCE[0])
                 v = f.validate(logs.predicted)
                 for moving in runs:
                     runs[moving].append(v.yardstick_ratio(moving)[0])
@@ -336,6 +342,8 @@ def main() -> int:
     ap.add_argument("--twins", action="store_true", help="the twin cases (tests/twin_logs.py)")
     ap.add_argument("--short-twins", action="store_true", help="the short point-to-point twins with the descriptions "
                     "users hold (tests/twin_logs.py SHORT_CASES)")
+    ap.add_argument("--divergence", choices=DIVERGENCES, default=DEFAULT_DIVERGENCE,
+                    help=f"the prior's divergence D of every fit (default {DEFAULT_DIVERGENCE})")
     ap.add_argument("--seeds", type=int, default=5, help="twins: seeds 0..N-1 (default 5)")
     ap.add_argument("--cases", default=None, help="twins: comma-separated case names (default: all)")
     ap.add_argument("--timing", action="store_true", help="the default identification's time and the yardsticks'")
@@ -343,6 +351,7 @@ def main() -> int:
                     "URDF as it came with the logs)")
     args = ap.parse_args()
     GEN3_URDF[0] = args.gen3_urdf
+    DIVERGENCE[0] = args.divergence
     names = [r for r in args.records.split(",") if r]
     unknown = sorted(set(names) - set(RECORDS))
     if unknown:

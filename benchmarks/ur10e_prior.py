@@ -1,26 +1,23 @@
-"""UR10e: believable bodies from the published prior (issue 18, item 2).
+"""UR10e: believable bodies with the description as the prior (the identified model of the defaults).
 
 Data: ../shared/data/ur10e (no licence: read in place, never copied), read by the loader of
-benchmarks/ur10e_gains.py (uniform 100 Hz grid); currents -> torques with the gains published
-with the data (README: 10.0, 10.70, 8.46, 9.00, 9.48, 10.12 N m/A), as benchmarks/ur10e_heldout.py.
+benchmarks/ur10e_heldout.py (uniform 100 Hz grid); currents -> torques with the controller's own
+constants (its target torque on its target current: 11.76, 11.74, 10.23, 9.611, 10.98, 10.54 N m/A;
+``--gains source`` for the ones published with the data).
 
-Fit on rows 195..2566 of the 14-harmonic empty run (~24 s) with the defaults of ``rx90 identify``;
-predict rows 2567..5375 (motion, then 4.4 s at rest). Three fits of the same system:
+1. Bodies: fit rows 195..4966 of the 14-harmonic empty run with the defaults of ``rx90 identify``: per
+   link the identified mass beside UR's (the UR10e [nominal] table, the prior), the whole arm, the
+   prior weight λ chosen.
+2. Held out: fit rows 195..2566, predict rows 2567..5375 (motion, then 4.4 s at rest): per joint the
+   RMS of the identified model and of the fit's WLS estimates, all samples and while moving, their
+   ratio; ``--sweep``: the same at every λ of the grid.
 
-- WLS (the reference);
-- consistent, no prior (stage 1 alone: the physical chi of least residual; its split of what the
-  data cannot see is arbitrary);
-- consistent with the UR10e's [nominal] table as the prior (identify.estimation.consistency.prior).
-
-Printed: per link mass, CoG and principal inertias at the CoG beside the prior (UR's published
-mass and CoG, derived inertias) for both consistent fits; whole-arm mass; whether each CoG lies in
-its link's bounding ellipsoid; held-out RMS per joint (all samples, while moving) and its ratio to
-WLS's.
-
-Usage: PYTHONPATH=. python benchmarks/ur10e_prior.py [--data DIR]   (~1 min)
+Usage: PYTHONPATH=. python benchmarks/ur10e_prior.py [--data DIR] [--gains controller|source] [--sweep]  (~20 s)
 """
 from __future__ import annotations
 
+import argparse
+import os
 import sys
 import time
 from pathlib import Path
@@ -29,39 +26,11 @@ import numpy as np
 
 import rx90sym
 from identify import fit
-from identify.estimation.consistency.prior import PhysicalPrior
-from identify.estimation.consistency.prior_fit import unseen_distance
-from rx90sym.rigid_body import RigidBody
-from ur10e_heldout import SOURCE_GAINS, data_folder, gains_bench, torques   # this folder (the script's own)
+from identify.estimation.prior_weight import WEIGHT_GRID
+from ur10e_heldout import DATA, EMPTY, SOURCE_GAINS, gains_bench, torques   # this folder (the script's own)
 
-DATA = gains_bench.DATA
-EMPTY = gains_bench.EMPTY
-FIT_ROWS, VAL_ROWS = (195, 2566), (2567, 5375)
-FIELDS = ("XX", "XY", "XZ", "YY", "YZ", "ZZ", "MX", "MY", "MZ", "M")
-
-
-def body(values: dict, j: int) -> RigidBody:
-    return RigidBody.from_vector(np.array([values[f"{p}{j}"] for p in FIELDS]))
-
-
-def figures(data: Path = DATA) -> dict:
-    robot = gains_bench.ur10e_robot()
-    fit_rec, val_rec = (torques(data / EMPTY[0], rows, robot) for rows in (FIT_ROWS, VAL_ROWS))
-    wls = fit(robot, [fit_rec])   # the defaults of rx90 identify
-    prior = PhysicalPrior(rx90sym.nominal_parameters(robot), "UR10e [nominal] (rx90sym/robots/ur10e.toml)")
-    common = dict(method="consistent", base=wls.base, observation=wls.observation)
-    start = time.perf_counter()
-    fits = {"WLS": wls, "consistent, no prior": fit(robot, [fit_rec], **common),
-            "consistent, prior": fit(robot, [fit_rec], physical_prior=prior, **common)}
-    out = {"robot": robot, "prior": prior, "gains": SOURCE_GAINS, "time_s": time.perf_counter() - start, "fits": {}}
-    for name, f in fits.items():
-        standard = getattr(f.result, "standard", None)
-        out["fits"][name] = {"validation": f.predict(val_rec), "cost": wls.result.system.rss(f.result.values),
-                             "chi": None if standard is None else robot.parameter_vector(standard)}
-    K = wls.base.K
-    out["unseen"] = {name: unseen_distance(K, robot.parameter_names, prior, out["fits"][name]["chi"])
-                     for name in ("consistent, no prior", "consistent, prior")}
-    return out
+CONTROLLER_GAINS = (11.76, 11.74, 10.23, 9.611, 10.98, 10.54)
+BODY_ROWS, FIT_ROWS, HELD_ROWS = (195, 4966), (195, 2566), (2567, 5375)
 
 
 def moving_rms(val) -> np.ndarray:
@@ -69,51 +38,60 @@ def moving_rms(val) -> np.ndarray:
     return np.array([np.sqrt(np.mean(err[val.moving[:, j], j] ** 2)) for j in range(err.shape[1])])
 
 
-def body_rows(values: dict, prior: PhysicalPrior, n: int) -> list[str]:
-    lines = [f"  {'link':<5}{'mass kg':>9}{'prior':>8}{'ratio':>7}   {'CoG m (frame j)':<27}{'prior CoG':<27}"
-             f"{'in ellipsoid':<13}principal inertias at CoG kg m^2 (prior)"]
-    for j in range(1, n + 1):
-        b, p = body(values, j), prior.body(str(j))
-        c, I = b.com_inertia()
-        cp_, Ip = p.com_inertia()
-        inside = prior.ellipsoid(str(j)).contains(c)
-        lines.append(f"  {j:<5}{b.m:9.3f}{p.m:8.3f}{b.m / p.m:7.2f}   {_v(c):<27}{_v(cp_):<27}{str(inside):<13}"
-                     f"{_v(np.linalg.eigvalsh(I), '.3g')} ({_v(np.linalg.eigvalsh(Ip), '.3g')})")
-    return lines
+def held_out(f, held) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """(model all, model moving, WLS all, WLS moving) RMS per joint [N m]."""
+    model, wls = f.predict(held), f.predict(held, f.least_squares)
+    return model.rms_error, moving_rms(model), wls.rms_error, moving_rms(wls)
 
 
-def _v(x, fmt: str = "+.3f") -> str:
-    return "[" + " ".join(f"{v:{fmt}}" for v in x) + "]"
+def _row(label: str, values) -> str:
+    return f"  {label:<26}" + "".join(f"{v:8.3f}" for v in values)
 
 
 def main(argv: list[str] | None = None) -> int:
-    data = data_folder(argv, __doc__)
-    if data is None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--data", type=Path, default=DATA)
+    ap.add_argument("--gains", choices=("controller", "source"), default="controller")
+    ap.add_argument("--sweep", action="store_true", help="the held-out figures at every λ of the grid")
+    args = ap.parse_args(argv)
+    if not (args.data / EMPTY[0]).exists():
+        print(f"UR10e logs not found in {args.data}: give --data (../shared/data/ur10e)", file=sys.stderr)
         return 2
     start = time.perf_counter()
-    f = figures(data)
-    robot, prior = f["robot"], f["prior"]
-    print(f"Fit rows {FIT_ROWS[0]}..{FIT_ROWS[1]}, predict rows {VAL_ROWS[0]}..{VAL_ROWS[1]} of {EMPTY[0]}; "
-          f"gains (README) " + " ".join(f"{k:.4g}" for k in f["gains"]))
-    print(f"prior: {prior.source}; the two consistent fits {f['time_s']:.1f} s")
-    maker = sum(prior.values[f"M{j}"] for j in range(1, 7))
-    for name in ("consistent, no prior", "consistent, prior"):
-        values = dict(zip(robot.parameter_names, f["fits"][name]["chi"]))
-        total = sum(values[f"M{j}"] for j in range(1, 7))
-        print(f"\n{name}: whole arm {total:.2f} kg (UR: {maker:.3f} kg, {100 * (total / maker - 1):+.1f} %); "
-              f"unseen directions {100 * f['unseen'][name]:.1f} % from the prior's")
-        print("\n".join(body_rows(values, prior, robot.n)))
-    ref = f["fits"]["WLS"]
-    print("\nheld-out RMS per joint [N m] and ratio to WLS")
-    for name, fit in f["fits"].items():
-        val = fit["validation"]
-        rms_all, rms_mov = val.rms_error, moving_rms(val)
-        print(f"  {name:<22} all    " + " ".join(f"{v:7.3f}" for v in rms_all)
-              + "   ratio max " + f"{np.max(rms_all / ref['validation'].rms_error):.4f}")
-        print(f"  {'':<22} moving " + " ".join(f"{v:7.3f}" for v in rms_mov)
-              + "   ratio max " + f"{np.max(rms_mov / moving_rms(ref['validation'])):.4f}")
-        print(f"  {'':<22} weighted RSS of the fit {fit['cost']:.6g}")
-    print(f"elapsed {time.perf_counter() - start:.0f} s")
+    robot = gains_bench.ur10e_robot()
+    gains = np.array(CONTROLLER_GAINS if args.gains == "controller" else SOURCE_GAINS)
+    print(f"load {os.getloadavg()[0]:.1f} on {os.cpu_count()} cores; gains ({args.gains}) "
+          + " / ".join(f"{k:.4g}" for k in gains) + " N m/A")
+
+    # 1. bodies
+    f = fit(robot, [torques(args.data / EMPTY[0], BODY_ROWS, robot, gains)])
+    maker = rx90sym.nominal_parameters(robot)
+    model = f.identified.standard
+    print(f"\n1. rows {BODY_ROWS[0]}..{BODY_ROWS[1]}: λ {f.identified.prior['weight_label']} chosen")
+    print(f"  {'link':<6}{'identified kg':>14}{'UR kg':>8}{'ratio':>7}")
+    for j in range(1, robot.n + 1):
+        print(f"  {j:<6}{model[f'M{j}']:14.2f}{maker[f'M{j}']:8.2f}{model[f'M{j}'] / maker[f'M{j}']:7.2f}")
+    total, ur = (sum(v[f"M{j}"] for j in range(1, robot.n + 1)) for v in (model, maker))
+    print(f"  {'arm':<6}{total:14.2f}{ur:8.2f}{total / ur:7.3f}")
+
+    # 2. held out
+    fitted, held = (torques(args.data / EMPTY[0], rows, robot, gains) for rows in (FIT_ROWS, HELD_ROWS))
+    weights = (("auto",) + WEIGHT_GRID) if args.sweep else ("auto",)
+    print(f"\n2. rows {FIT_ROWS[0]}..{FIT_ROWS[1]} fitted, {HELD_ROWS[0]}..{HELD_ROWS[1]} predicted: RMS [N m]"
+          + "".join(f"{'j' + str(j + 1):>8}" for j in range(robot.n)))
+    for w in weights:
+        g = fit(robot, [fitted], prior_weight=w)
+        m_all, m_mov, w_all, w_mov = held_out(g, held)
+        label = g.identified.prior["weight_label"] + (" (auto)" if w == "auto" else "")
+        if w == "auto":
+            print(_row("WLS, all samples", w_all))
+            print(_row("WLS, moving", w_mov))
+        print(f"  λ {label}")
+        print(_row("model, all samples", m_all))
+        print(_row("model, moving", m_mov))
+        print(_row("model / WLS, all samples", m_all / w_all))
+        print(_row("model / WLS, moving", m_mov / w_mov))
+    print(f"\nelapsed {time.perf_counter() - start:.0f} s")
     return 0
 
 

@@ -3,7 +3,7 @@
 Data: ../shared/data/ur10e (no licence: read in place, never copied), every log read as a new user
 would (``identify.read_log``, the README's column map) on a 500 Hz grid, currents x the README's gains
 (10.0, 10.70, 8.46, 9.00, 9.48, 10.12 N m/A, joint side). Fits with the defaults of ``rx90 identify``
-and ``method="consistent"`` (the model ``rx90 export --mjcf`` writes). Rollouts with
+(their identified model is what ``rx90 export --mjcf`` writes). Rollouts with
 ``identify.roll_out_fit`` (what ``rx90 predict --rollout`` runs), 0.25 s and 0.5 s windows.
 
 1. first half -> second half: fit rows 195..2566 of the 14-harmonic run, roll out rows 2567..5375
@@ -12,7 +12,7 @@ and ``method="consistent"`` (the model ``rx90 export --mjcf`` writes). Rollouts 
    friction), the share of windows the identified model beats the guess, its ratio to the guess; the
    same started from the recorded q̇ column instead of the filtered derivative.
 2. 14-harmonic run -> loaded run: fit rows 195..4966 of the empty run; the payload by method 1
-   (the fit's parameters, ``constrained``) on the loaded run's rows 308..2689; roll out its rows
+   (the fit itself: its identified model, offsets and processing; ``constrained``) on the loaded run's rows 308..2689; roll out its rows
    2690..5071 with the payload on the exported model's flange (and without it, for contrast).
 3. the torque delay: the rollout of 1. with the torques advanced by -20..+20 ms (2 ms steps, a
    sample): per joint RMS end error at 0.25 s, where it is smallest, beside the fit's delay estimate;
@@ -105,7 +105,7 @@ def main(argv: list[str] | None = None) -> int:
 
     # 1. first half -> second half
     first, second = load(EMPTY, FIT_ROWS, args.data), load(EMPTY, HELD_ROWS, args.data)
-    f = fit(robot, [first], method="consistent")
+    f = fit(robot, [first])
     print(f"fit rows {FIT_ROWS[0]}..{FIT_ROWS[1]}: cut-off {f.cutoff:g} Hz, torque delay compensated {1e3 * f.delay:g} "
           f"ms; {f.delay_estimate.summary()}")
     t0 = time.perf_counter()
@@ -119,9 +119,8 @@ def main(argv: list[str] | None = None) -> int:
     # 2. 14-harmonic run -> loaded run, the identified payload on the flange
     empty = load(EMPTY, EMPTY_ROWS, args.data)
     loaded_fit, loaded_held = load(LOADED, LOADED_FIT, args.data), load(LOADED, LOADED_HELD, args.data)
-    g = fit(robot, [empty], method="consistent")
-    p = payload(robot, 1, loaded=[loaded_fit], robot_params=g.result, constrained=True, cutoff=g.cutoff,
-                decimate_to=g.decimate_to, min_velocity=g.min_velocity, delay=g.delay)
+    g = fit(robot, [empty])
+    p = payload(robot, 1, loaded=[loaded_fit], robot_params=g, constrained=True)
     load_values = p.as_dict()
     print(f"\n2. fit rows {EMPTY_ROWS[0]}..{EMPTY_ROWS[1]} of {EMPTY}; payload (method 1, constrained) on rows "
           f"{LOADED_FIT[0]}..{LOADED_FIT[1]} of {LOADED}: Mc = {load_values['Mc']:.3f} kg (weighed 2.805 kg)")
@@ -135,7 +134,7 @@ def main(argv: list[str] | None = None) -> int:
     print(f"\n3. rollout of 1. (0.25 s windows) with the torques advanced by d [ms]; the fit's estimate: "
           f"{f.delay_estimate.summary()}")
     delay_curve(f, second, 0.0)
-    auto = fit(robot, [first], Processing(delay="auto"), method="consistent")
+    auto = fit(robot, [first], Processing(delay="auto"))
     print(f"\n3b. a fit compensating its estimate ({1e3 * auto.delay:.3g} ms), the torques advanced by its delay + d [ms]")
     delay_curve(auto, second, auto.delay)
     print(f"\nelapsed {time.perf_counter() - start:.0f} s")

@@ -57,6 +57,7 @@ def test_an_exact_description_is_kept_at_the_top_of_the_grid(rx90, twin):
         elif share[name] < 1e-6:
             assert value == pytest.approx(described[name], rel=1e-6, abs=1e-8), name
     assert share["FV1"] > 0.999 and min(share.values()) < 1e-6
+    assert model.moved() == [] and "held more than 2σ" not in model.table()  # the drives and all it determines: the data's
 
 
 @pytest.mark.parametrize("seed", [0, 1])
@@ -156,3 +157,26 @@ def test_the_held_out_check_refuses_only_a_model_worse_than_the_description():
     poor[:, 2] = 50.4  # above RESIDUAL_SHARE (50 %) of the torque, yet no worse than the yardstick's 50.6
     flags = heldout_flags(poor.mean(0), poor, np.r_[reference.mean(0)[:2], 50.6], np.c_[reference[:, :2], [50.6] * 5], "x")
     assert [(f.code, f.severity) for f in flags] == [("model_unexplained", "warning")] and "50.40 %" in flags[0].message
+
+
+def test_a_smaller_weight_is_chosen_only_when_it_beats_the_larger_clearly():
+    """identify.estimation.prior_weight: a smaller λ's held-back error must be below the larger one's beyond
+    the blocks' spread, on every block but one at most, and by WEIGHT_MARGIN (20 %) of it."""
+    from identify.estimation.prior_weight import WEIGHT_MARGIN, _clearly_lower
+    from identify.observation.candidates import Candidate
+
+    rng = np.random.default_rng(0)
+    larger = 10.0 + rng.uniform(0, 1, (5, 3))
+
+    def candidate(per_block: np.ndarray) -> Candidate:
+        return Candidate(math.nan, None, score=float(per_block.mean()), per_block=tuple(map(tuple, per_block)))
+
+    ref = candidate(larger)
+    assert WEIGHT_MARGIN == 0.2
+    assert not _clearly_lower(candidate(larger * 0.85), ref)   # lower on every block, by 15 %
+    assert _clearly_lower(candidate(larger * 0.7), ref)        # by 30 %
+    mixed = larger * 0.5
+    mixed[:2] = larger[:2] * 1.01                               # 30 % lower overall, higher on two blocks
+    assert candidate(mixed).score < 0.75 * ref.score and not _clearly_lower(candidate(mixed), ref)
+    mixed[1] = larger[1] * 0.5                                  # higher on one block only
+    assert _clearly_lower(candidate(mixed), ref)

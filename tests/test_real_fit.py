@@ -208,17 +208,20 @@ def test_asymmetric_coulomb_with_offsets_is_refused(tx40):
 @pytest.mark.skipif(not (TX40 / "pos_read_data.csv").exists(), reason=f"TX40 data absent ({TX40})")
 def test_tx40_heldout_at_figaroh_level():
     """Fit on the first 6 s, bundled robot file with offsets, rx90 identify's defaults (the
-    cross-validated processing, delay 0), validate on the rest. Against the torques filtered like the
-    fit's rows (how FIGAROH's figures are scored): RMS while moving per joint at FIGAROH's WLS level
-    (the margin 10 % is for BLAS/platform differences). Against the raw measured torques: at most the
-    plain OLS baseline's RMS on the same samples, every joint (measured ratios 0.18–0.79 without the
-    offsets, benchmarks/defaults_vs_yardsticks.py)."""
+    cross-validated processing, delay 0), validate on the rest. The paper's WLS estimates against the
+    torques filtered like the fit's rows (how FIGAROH's WLS figures are scored): RMS while moving per
+    joint at FIGAROH's level (the margin 10 % is for BLAS/platform differences). The identified model
+    (what predicts and exports) against the raw measured torques: at most 1.02x the better yardstick,
+    the plain OLS or the model the user had, on the same samples, every joint (measured 0.19-0.71x,
+    docs/identified-model.md)."""
     robot = rx90sym.load_robot("tx40", offsets=True)
     rec = identify.read_motor_recording(TX40 / "pos_read_data.csv", TX40 / "curr_data.csv", robot, 2e-4)
     fit = identify.fit(robot, [rec.select(slice(0, 30000))], identify.Processing(estimate_delay=False))
-    val = fit.validate(rec.select(slice(30000, None)))
-    ratio = val.rms_error_filtered_moving / FIGAROH_WLS
-    print("\nTX40 held-out RMS moving (filtered torques) / FIGAROH WLS:", np.round(ratio, 3))
-    print("TX40 held-out RMS (raw torques) / plain baseline:", np.round(val.rms_error / val.baseline_rms_error, 3))
+    held_out = rec.select(slice(30000, None))
+    ratio = fit.predict(held_out, fit.least_squares).rms_error_filtered_moving / FIGAROH_WLS
+    val = fit.validate(held_out)
+    better = np.minimum(val.baseline_rms_error, val.user_rms_error)
+    print("\nTX40 held-out RMS moving (filtered torques), WLS estimates / FIGAROH WLS:", np.round(ratio, 3))
+    print("TX40 held-out RMS (raw torques), identified model / better yardstick:", np.round(val.rms_error / better, 3))
     assert np.all(ratio < 1.10)
-    assert np.all(val.rms_error <= 1.02 * val.baseline_rms_error), "\n".join(val.verdict())
+    assert np.all(val.rms_error <= 1.02 * better), "\n".join(val.verdict())

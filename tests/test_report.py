@@ -168,6 +168,21 @@ def test_summary_held_out_figures_are_the_jsons(checked, reports, name):
 
 
 @pytest.mark.slow
+def test_the_identify_report_sets_the_papers_estimates_beside_the_model(reports):
+    """Held out, per joint, the (W)LS estimates' RMS beside the identified model's: the fit file's two
+    validations, as the page shows them (rounded for display only)."""
+    record = json.loads((reports["tx40"] / "tx40.json").read_text())
+    model, estimates = record["validation"], record["validation_result"]
+    assert model["rms_error"] != estimates["rms_error"]  # two models, two predictions
+    page = (reports["tx40"] / "tx40.html").read_text()
+    table = page[page.index("id='estimates-model'"):]
+    table = table[:table.index("</table>")]
+    for j in range(6):
+        for v in (estimates["rms_error"][j], model["rms_error"][j], model["rms_error"][j] / estimates["rms_error"][j]):
+            assert fmt(v, 3) in table, (j, v)
+
+
+@pytest.mark.slow
 def test_no_none_nan_or_float_repr_in_any_page(reports):
     for name, folder in reports.items():
         text = re.sub(r"base64,[A-Za-z0-9+/=]+", "", (folder / f"{name}.html").read_text())

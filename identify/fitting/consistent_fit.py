@@ -94,7 +94,24 @@ class ConsistentResult(IdentificationResult):
                      f"{self.cost_increase_pct:+.2f} % of the least squares'; {self.split}")
         if self.residual_rms.size:
             lines.append("residual RMS per joint (N·m): " + "  ".join(f"{v:.4g}" for v in self.residual_rms))
+        moved = self.moved()
+        if moved:
+            lines.append("held more than 2σ from the least squares by the physical constraints or the prior: "
+                         + "; ".join(f"{n} {v:.4g} ({ls:.4g} ± {sd:.2g}, {z:+.1f}σ)" for n, v, ls, sd, z in moved))
         return "\n".join(lines)
+
+    def moved(self, limit: float = 2.0) -> list[tuple[str, float, float, float, float]]:
+        """(name, model value, least-squares estimate, σ, z) of every rotor inertia, friction parameter and base
+        parameter the data determine (relative σ under DETERMINED_PCT %) that the model holds more than ``limit`` σ
+        from the least squares on its columns: where a bound, the physical constraints or the prior override the data."""
+        if self.least_squares is None:
+            return []
+        out = []
+        for n, v, ls, sd, rel in zip(self.names, self.values, self.least_squares, self.std, self.rel_std_pct):
+            z = (v - ls) / sd if sd > 0 else math.nan
+            if np.isfinite(z) and abs(z) > limit and (n.startswith(_DRIVES) or rel < DETERMINED_PCT):
+                out.append((str(n), float(v), float(ls), float(sd), float(z)))
+        return out
 
     @property
     def split(self) -> str:
@@ -167,10 +184,11 @@ def consistent_fit(robot: rx90sym.Robot, wls: IdentificationResult, columns: Any
     the fitted rows: their friction and rotor inertia are held at the description's (``reference``; 0
     without), since no row weighs them (a prediction of their motion then carries no friction fitted to noise).
     The base parameters the data determine (relative σ of the least squares on the same columns under
-    :data:`DETERMINED_PCT` %) are the data's at any λ: a Gaussian prior weighs only the deviations that
-    leave them unchanged (identify.estimation.consistency.weighted_fit), and with "auto" no λ is chosen
-    whose model (held physical) moves one more than :data:`DATA_BUDGET` σ from its estimate, or further
-    than the data alone move it.
+    :data:`DETERMINED_PCT` %, σ the larger of eq. 13's and the block jackknife's) are the data's at any λ:
+    a Gaussian prior weighs only the deviations that leave them unchanged
+    (identify.estimation.consistency.weighted_fit), and with "auto" no λ is chosen whose model (held
+    physical) moves one more than :data:`DATA_BUDGET` σ from its estimate, or further than the data alone
+    move it.
     The result's names are the fit's columns then the offsets added.
     """
     from identify.estimation.consistency.errors import ConsistencyError
@@ -198,8 +216,10 @@ def consistent_fit(robot: rx90sym.Robot, wls: IdentificationResult, columns: Any
     cmap = column_map(robot, offset_base(columns, offsets), names)
     rows = int(sum(system.rows)) if system is not None else wls.rows
     least, least_std = _least_squares(R, z, scale, rows, wls, spread)
+    # What the data determine: by eq. 13's σ and by what leaving a time block out changes.
+    honest_std = least_std if factors is None else np.fmax(least_std, _block_spread(factors, offsets, least.size))
     with np.errstate(divide="ignore", invalid="ignore"):
-        determined = np.flatnonzero((100 * least_std / np.abs(least) < DETERMINED_PCT) & (least_std > 0))
+        determined = np.flatnonzero((100 * honest_std / np.abs(least) < DETERMINED_PCT) & (least_std > 0))
     carried = {body: p10 for body, (p10, _) in carried_bodies(robot).items()} or None
     extra = _bounds(cmap, bounds)
     held = _still_drives(cmap.names, still, reference)
@@ -221,7 +241,7 @@ def consistent_fit(robot: rx90sym.Robot, wls: IdentificationResult, columns: Any
             return cmap.beta((fixed_problem if math.isinf(w) else free).solve(R, z, w, scale))
 
         choice = choose_prior_weight(factors, free, fixed_problem, offsets,
-                                     keeps=_data_budget(names, least, least_std, determined, beta_at))
+                                     keeps=_data_budget(names, least, honest_std, determined, beta_at))
         weight = choice.chosen
     else:
         weight = float(prior_weight)
@@ -301,6 +321,25 @@ def _least_squares(R: np.ndarray, z: np.ndarray, scale: float, rows: int, wls: I
         ratios = ratios[np.isfinite(ratios)]
         std = std * max(1.0, float(np.median(ratios)) if ratios.size else 1.0)
     return beta, std
+
+
+def _block_spread(factors: Any, offsets: Sequence[int], c: int) -> np.ndarray:
+    """(c,) the block jackknife's σ of the least squares on the model's columns: its estimates with each
+    time block left out in turn, √((B − 1)/B Σ (β_b − β̄)²); 0 where a fold cannot be fitted. Where the
+    residual is not white noise (a model that misses some of the torque, a short log of few motions),
+    eq. 13's σ understates what a block changes; this one does not."""
+    from identify.estimation.prior_weight import fold_system
+
+    fits = []
+    for b in range(factors.span.blocks):
+        system = fold_system(factors.fitted, b, factors.n, factors.c, offsets)
+        if system is None or system.R.shape[1] != c:
+            return np.zeros(c)
+        fits.append(np.linalg.lstsq(system.R, system.z, rcond=None)[0])
+    if len(fits) < 2:
+        return np.zeros(c)
+    fits = np.array(fits)
+    return np.sqrt((len(fits) - 1) / len(fits) * np.sum((fits - fits.mean(axis=0)) ** 2, axis=0))
 
 
 def _data_budget(names: Sequence[str], least: np.ndarray, std: np.ndarray, determined: np.ndarray,

@@ -29,6 +29,10 @@ from identify.io.gaps import LOST_STEPS
 __all__ = ["check_rate", "concatenate", "interpolate", "resample", "uniform_grid"]
 
 
+#: A time stamp this many sampling steps from a recorded one is taken as that sample (:func:`interpolate`).
+SNAP = 1e-9
+
+
 def uniform_grid(t0: float, t1: float, rate: float) -> np.ndarray:
     """``t0 + k/rate`` for every k that stays within ``[t0, t1]`` (s; rate in Hz)."""
     count = int(math.floor((t1 - t0) * rate * (1.0 + 1e-12))) + 1
@@ -53,6 +57,12 @@ def interpolate(rec: Recording, t: np.ndarray) -> Recording:
         raise ValueError(f"{rec.source}: {rec.n_segments} segments (gaps too long to bridge): interpolate "
                          f"each segment on its own")
     t = np.asarray(t, dtype=float)
+    # A time stamp within SNAP steps of a recorded one is that sample (its time and values exactly):
+    # a log resampled on its own clock (a counted clock re-timed) is the log itself, to the last digit.
+    near = np.clip(np.searchsorted(rec.t, t), 0, rec.t.size - 1)
+    near = np.where((near > 0) & (np.abs(t - rec.t[near - 1]) < np.abs(t - rec.t[near])), near - 1, near)
+    on = np.abs(t - rec.t[near]) <= SNAP * (float(np.median(np.diff(rec.t))) if rec.t.size > 1 else 1.0)
+    t = np.where(on, rec.t[near], t)
     if rec.dq is not None:
         q = CubicHermiteSpline(rec.t, rec.q, rec.dq, axis=0)(t)
     else:
@@ -63,7 +73,10 @@ def interpolate(rec: Recording, t: np.ndarray) -> Recording:
             return None
         flat = a.reshape(len(rec.t), -1)
         out = np.column_stack([np.interp(t, rec.t, flat[:, j]) for j in range(flat.shape[1])])
+        out[on] = flat[near[on]]
         return out.reshape((len(t),) + a.shape[1:])
+
+    q[on] = rec.q[near[on]]
 
     return replace(rec, t=t, q=q, tau=linear(rec.tau), dq=linear(rec.dq), current=linear(rec.current),
                    aux={k: linear(v) for k, v in rec.aux.items()}, meta=dict(rec.meta),

@@ -78,6 +78,21 @@ def print_fit(f: Fit, recs: list, auto_delay: bool) -> None:
     if f.validation is not None:
         print()
         print(f.validation.table())
+    if f.validation is not None and f.result_validation is not None:
+        print(estimates_lines(f.validation, f.result_validation))
+
+
+def estimates_lines(model: Any, estimates: Any) -> str:
+    """The held-out RMS per joint of the fit's (W)LS estimates beside the identified model's [N m]."""
+    lines = ["held out, the paper's estimates beside the identified model (RMS [N m], all samples | while moving):",
+             "joint  estimates      model  model/est  |  estimates      model  model/est"]
+    moving = [v if v is not None else u for v, u in ((estimates.rms_error_moving, estimates.rms_error),
+                                                      (model.rms_error_moving, model.rms_error))]
+    for j in range(len(model.rms_error)):
+        a, b, c, d = estimates.rms_error[j], model.rms_error[j], moving[0][j], moving[1][j]
+        lines.append(f"{j + 1:5d}  {a:9.3f}  {b:9.3f}  {b / a if a else float('nan'):9.3f}  |  "
+                     f"{c:9.3f}  {d:9.3f}  {d / c if c else float('nan'):9.3f}")
+    return "\n".join(lines)
 
 
 def print_model(f: Fit) -> None:

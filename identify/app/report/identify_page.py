@@ -12,7 +12,7 @@ from .page import Column, Figure, Page, Section, Summary, Table, Text
 from .rollout_page import rollout_blocks
 from .summary import (REST_SHARE_CHECK, as_flag, flag, heldout_flags, heldout_table, next_steps,
                       parameter_flags, yardstick_flags)
-from .tables import bodies_table, gains_table, key_values, parameter_table, validation_table
+from .tables import bodies_table, estimates_table, gains_table, key_values, parameter_table, validation_table
 
 #: Largest gap [s] between the end of a fitted recording and the start of the held-out one for the
 #: two to count as one run split in two (filtering trims a few samples at the edges).
@@ -140,8 +140,9 @@ def identify_page(record: Mapping[str, Any], figures: Mapping[str, Sequence[Figu
     sections = []
     val = record.get("validation") or {}
     if val:
+        beside = (estimates_table(val, record["validation_result"]),) if record.get("validation_result") else ()
         sections.append(Section("validation", "Held-out validation",
-                                (validation_table(val), *figures.get("validation", ()))))
+                                (validation_table(val), *beside, *figures.get("validation", ()))))
     if val.get("rollout"):
         sections.append(Section("rollout", "Rollout in MuJoCo (held-out)",
                                 (*rollout_blocks(val["rollout"]), *figures.get("rollout", ()))))

@@ -131,6 +131,29 @@ def validation_table(validation: Mapping[str, Any], table_id: str = "validation"
     return Table(table_id, f"Held-out validation on {validation.get('source', '')}", cols, rows, note.strip())
 
 
+def estimates_table(validation: Mapping[str, Any], estimates: Mapping[str, Any]) -> Table:
+    """The held-out RMS per joint of the fit's (W)LS estimates (``estimates``: the fit file's
+    ``validation_result``) beside the identified model's (``validation``), all samples and while moving,
+    and their ratio (model / estimates)."""
+    n = len(validation.get("rms_error") or [])
+    cols = (Column("joint", decimals=0), Column("estimates, all", "N·m", digits=3), Column("model, all", "N·m", digits=3),
+            Column("model / estimates, all", digits=3), Column("estimates, moving", "N·m", digits=3),
+            Column("model, moving", "N·m", digits=3), Column("model / estimates, moving", digits=3))
+
+    def ratio(a: Any, b: Any) -> Any:
+        return None if number(a) is None or not number(b) else number(a) / number(b)
+
+    rows = []
+    for j in range(n):
+        pairs = [((estimates.get(k) or [None] * n)[j], (validation.get(k) or [None] * n)[j])
+                 for k in ("rms_error", "rms_error_moving")]
+        rows.append((j + 1, *(v for ls, model in pairs for v in (ls, model, ratio(model, ls)))))
+    return Table("estimates-model", "Held out: the paper's estimates beside the identified model", cols, tuple(rows),
+                 "The fit's (weighted) least-squares estimates (base parameters, eq. 13's σ) and the identified model "
+                 "(physically consistent, the description weighed by the data: what predict, export and the payload "
+                 "methods use), scored on the same raw samples.")
+
+
 def _beats(ratio: Any) -> bool:
     return ratio is not None and ratio <= 1.0
 
