@@ -26,7 +26,7 @@ import numpy as np
 
 import rx90sym
 from identify import fit
-from identify.estimation.prior_weight import WEIGHT_GRID
+from identify.selection.prior_weight import WEIGHT_GRID
 from ur10e_heldout import DATA, EMPTY, SOURCE_GAINS, gains_bench, torques   # this folder (the script's own)
 
 CONTROLLER_GAINS = (11.76, 11.74, 10.23, 9.611, 10.98, 10.54)

@@ -5,7 +5,7 @@
 The blocks of one page run in order in one folder (a page's shell blocks each in a fresh bash with
 `set -e -o pipefail`, its Python blocks in one interpreter session), with `rx90` and `python` of
 this interpreter's environment first on PATH and this checkout first on PYTHONPATH (as
-tests/test_cli.py runs the command). The folders sit side by side under one temporary root beside
+tests/end_to_end/test_cli.py runs the command). The folders sit side by side under one temporary root beside
 a link `shared` to the shared data (../shared of the checkout): a block that reads `../shared` is
 skipped, saying so, when it is absent. Markers (scripts/doc_blocks.py): `<!-- docs: skip (reason)
 -->`, `<!-- docs: slow -->` (run with --all: `make docs`), `<!-- docs: files PATH ... -->`,

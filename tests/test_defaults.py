@@ -17,7 +17,7 @@ import pytest
 import excitation
 import rx90sym
 from excitation.api import DEFAULT_STARTS, NO_ENVELOPE
-from test_cli import run
+from command_line import run
 from test_excitation_envelope import UR5, UR5_ARGS, _pinocchio_frames
 
 

@@ -15,7 +15,7 @@ from excitation import controller_programs as cp
 from excitation.collision import _segment_distance
 from excitation.envelope import pose_violations
 from excitation.robot_geometry import arm_geometry, capsule_set
-from test_cli import run
+from command_line import run
 
 UR5 = str(Path(__file__).parent / "data" / "urdf" / "ur5.urdf")
 UR5_ARGS = ("excite", "--robot", UR5, "--tip", "tool0")

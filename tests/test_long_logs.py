@@ -124,7 +124,7 @@ def test_streamed_fit_equals_the_whole_fit(rx90, rx90_base, twin_empty, whole_fi
 @pytest.mark.slow
 def test_streamed_fit_of_several_recordings_with_rest_dropped(rx90, rx90_base, twin_empty):
     """80 s in four recordings, rest rows dropped and the cut-off chosen: equal to the whole path."""
-    # The processing fixed on both paths (the choice block by block: tests/test_stream_cv.py).
+    # The processing fixed on both paths (the choice block by block: tests/test_cv_blocks.py).
     whole = identify.fit(rx90, twin_empty, Processing(rest="drop", delay="auto", cross_validate=False), base=rx90_base)
     fit = run_passes(rx90, twin_empty, Processing(rest="drop", delay="auto", cross_validate=False), columns=rx90_base,
                      block=2000)

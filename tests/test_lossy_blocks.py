@@ -85,7 +85,7 @@ def test_block_fit_of_a_lossy_log_equals_the_in_memory_fit(panda, lossy, tmp_pat
     base = rx90sym.base_parameters(panda)
     out = tmp_path / "rec.csv"
     convert_log(path, panda, cols, out, resample=1000.0, convention="model", block=LINES)
-    # The delay search in blocks: tests/test_long_logs.py; the choice block by block: tests/test_stream_cv.py.
+    # The delay search in blocks: tests/test_long_logs.py; the choice block by block: tests/test_cv_blocks.py.
     p = identify.Processing(estimate_delay=False, cross_validate=False)
     ref = identify.fit(panda, [whole], p, base=base).bootstrapped(0)
     blocks = identify.fit(panda, [str(out)], p, base=base, block=SAMPLES)

@@ -160,10 +160,10 @@ def test_the_held_out_check_refuses_only_a_model_worse_than_the_description():
 
 
 def test_a_smaller_weight_is_chosen_only_when_it_beats_the_larger_clearly():
-    """identify.estimation.prior_weight: a smaller λ's held-back error must be below the larger one's beyond
+    """identify.selection.prior_weight: a smaller λ's held-back error must be below the larger one's beyond
     the blocks' spread, on every block but one at most, and by WEIGHT_MARGIN (20 %) of it."""
-    from identify.estimation.prior_weight import WEIGHT_MARGIN, _clearly_lower
-    from identify.observation.candidates import Candidate
+    from identify.selection.prior_weight import WEIGHT_MARGIN, _clearly_lower
+    from identify.selection.candidates import Candidate
 
     rng = np.random.default_rng(0)
     larger = 10.0 + rng.uniform(0, 1, (5, 3))

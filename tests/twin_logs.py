@@ -2,7 +2,7 @@
 
 The trial of issue 29 ("a small 6-joint arm with its maker's URDF, positions and joint torques
 logged at 100 Hz, a chirp motion fitted, a second trapezoidal motion predicted") on twins, shared by
-tests/test_defaults_beat_baseline.py and benchmarks/defaults_vs_yardsticks.py (``--twins``):
+tests/end_to_end/test_defaults_beat_baseline.py and benchmarks/defaults_vs_yardsticks.py (``--twins``):
 
 - ``ur5``: the UR5 URDF of example-robot-data (tests/data/urdf/ur5.urdf) rewritten as makers write
   it (pi/2 as 1.5708 and -1.5708, 1e-6 m residues; :func:`maker_urdf`), loaded with the defaults

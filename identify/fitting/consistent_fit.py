@@ -328,7 +328,7 @@ def _block_spread(factors: Any, offsets: Sequence[int], c: int) -> np.ndarray:
     time block left out in turn, √((B − 1)/B Σ (β_b − β̄)²); 0 where a fold cannot be fitted. Where the
     residual is not white noise (a model that misses some of the torque, a short log of few motions),
     eq. 13's σ understates what a block changes; this one does not."""
-    from identify.estimation.prior_weight import fold_system
+    from identify.selection.prior_weight import fold_system
 
     fits = []
     for b in range(factors.span.blocks):

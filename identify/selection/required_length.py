@@ -74,7 +74,7 @@ def too_short(scans: Sequence[Scan], columns: int, default_decimate: float | Non
     grid: Sequence[Candidate] = [default]
     try:
         grid = grid_of_scans(scans, default_decimate)[1]
-        default = next(c for c in grid if c.label == DEFAULT_LABEL)
+        default = next((c for c in grid if c.label == DEFAULT_LABEL), grid[0])  # a grid given without it: its first
         fewest = fold_rows(scans, default, grid, blocks, delay)
     except ValueError:  # shorter than the filters' edges, or than a spectrum's 64 samples
         fewest = 0

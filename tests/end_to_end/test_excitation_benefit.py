@@ -17,7 +17,7 @@ import pytest
 
 import excitation
 
-SCRIPT = Path(__file__).resolve().parents[1] / "benchmarks" / "compare_criteria.py"
+SCRIPT = Path(__file__).resolve().parents[2] / "benchmarks" / "compare_criteria.py"
 
 
 def _module():

@@ -9,7 +9,7 @@ import pytest
 
 from excitation.constraints import TORQUE_UNCHECKED, check_limits
 from conftest import robot_file_without
-from test_cli import RX90, run
+from command_line import RX90, run
 from test_excitation import toy_model
 
 SMALL = ("excite", "--duration", "6", "--harmonics", "2", "--starts", "2")

@@ -23,7 +23,7 @@ from excitation import read_trajectory
 from identify.app.cli import main
 from monitor_twin import pulses, with_external
 from motions import multisine
-from test_cli import write_trajectory
+from command_line import write_trajectory
 
 RTOL = 1e-9
 DURATION = 8.0

@@ -20,7 +20,7 @@ import pytest
 
 import rx90sym
 
-URDF = Path(__file__).parent / "data" / "urdf" / "ur10_robot.urdf"
+URDF = Path(__file__).resolve().parents[1] / "data" / "urdf" / "ur10_robot.urdf"
 RX90 = str(Path(sys.executable).parent / "rx90")
 ROBOT = ["--robot", str(URDF), "--tip", "tool0"]
 

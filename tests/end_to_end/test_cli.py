@@ -3,8 +3,6 @@ from __future__ import annotations
 
 import base64
 import json
-import subprocess
-import sys
 from html.parser import HTMLParser
 from pathlib import Path
 
@@ -13,21 +11,10 @@ import pytest
 
 import rx90sym
 
+from command_line import run, write_trajectory
 from motions import multisine
 
-RX90 = str(Path(sys.executable).parent / "rx90")
 SUBCOMMANDS = ("model", "excite", "simulate", "convert", "identify", "payload", "gains", "export", "demo")
-
-
-def run(*args: str, cwd: Path | None = None) -> subprocess.CompletedProcess:
-    return subprocess.run([RX90, *args], capture_output=True, text=True, cwd=cwd, timeout=900)
-
-
-def write_trajectory(path: Path, robot, seed: int, duration: float = 12.0) -> None:
-    t = np.arange(0, duration, 1 / 250)
-    q, qd, qdd = multisine(robot, seed, duration)(t)
-    header = ",".join(["t"] + [f"{k}{j}" for k in ("q", "dq", "ddq") for j in range(1, 7)])
-    np.savetxt(path, np.c_[t, robot.to_controller(q), qd, qdd], delimiter=",", header=header, comments="")
 
 
 class _Figures(HTMLParser):
