@@ -1,4 +1,4 @@
-"""Self-collision and obstacle boxes: link capsules from the geometry (issue 15).
+"""Self-collision and obstacle boxes: link capsules from the geometry.
 
 Each link is a capsule (a segment and a radius) between consecutive distinct frame origins of the
 forward geometric model, plus two fixed or tool segments:

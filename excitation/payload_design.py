@@ -1,4 +1,4 @@
-"""Excitation for a payload's ten inertial parameters (paper section IV; issue 15).
+"""Excitation for a payload's ten inertial parameters (paper section IV).
 
 The payload (XXc ... Mc) adds to link n's inertial parameters, so its observation matrix Wc is
 link n's ten columns of the standard regressor (eq. 21). A motion for the payload optimises the

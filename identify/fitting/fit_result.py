@@ -243,7 +243,7 @@ class Fit:
 
     # ------------------------------------------------------------ the file
     def to_json(self) -> dict[str, Any]:
-        """The fit file's content (keys of the former identification JSON kept, new ones added)."""
+        """The fit file's content (every schema's keys: identify.fitting.fit_file)."""
         out = {"robot": self.model.robot, "method": self.result.method, **self.result.to_dict(),
                "spring": self.spring}
         if self.bootstrap is not None:  # in the result's order

@@ -71,7 +71,7 @@ class Validation:
     baseline_predicted: (S, n) its prediction. user_rms_error, user_rms_error_moving, user_predicted: the same
     of the second yardstick, the model the user had (identify.fitting.user_model; None: not computed,
     ``user_model_note`` says why). rms_error_filtered, rms_error_filtered_moving: (n,) [N m]
-    the former figures, against the torques filtered and decimated like the fit's rows (what FIGAROH and
+    against the torques filtered and decimated like the fit's rows (what FIGAROH and
     the paper report; they differ between fits of other filters, the raw figures do not).
     """
 

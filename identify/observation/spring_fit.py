@@ -1,4 +1,4 @@
-"""The spring from data: its torque identified with the other parameters (issue 13).
+"""The spring from data: its torque identified with the other parameters.
 
 The spring's torque is linear in its unknowns (rx90sym.spring.SpringBasis: a Fourier series in
 the joint angle; SpringStiffness: k for a known geometry), so it enters the model as extra

@@ -14,11 +14,8 @@ the position filter, with the decimation to about 2.5 fc so that the parallel fi
    samples for every candidate (measured, beyond the edges of the grid's lowest cut-off): no
    candidate is judged on its own filtered torques, the noise of the torques is common to all, the
    noise a cut-off lets into the prediction counts. The score of joint j is 100 ||tau_j - tau^_j|| /
-   ||tau_j|| over every held-back block, the candidate's score the mean over joints. (Before, every
-   candidate's rows were decimated to the grid's highest decimated rate and scored against torques
-   filtered like them. An earlier version low-passed prediction and torque at the lowest cut-off: it
-   hid the prediction noise of the high cut-offs, and on the Panda twin kept 20 Hz where 5 Hz was 5x
-   better.)
+   ||tau_j|| over every held-back block, the candidate's score the mean over joints. (Torques filtered
+   for the scoring would hide the prediction noise of the high cut-offs: docs/real-logs.md.)
 
 The grid is small: the knee times (0.5, 1, 2), within [10 Hz (:data:`MIN_GRID_CUTOFF`, the plain
 baseline's cut-off: a knee is the fitted motion's, and a prediction of another motion filtered below

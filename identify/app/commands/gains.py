@@ -1,4 +1,4 @@
-"""``rx90 gains``: drive gains from current recordings and a payload of known mass (issue 12)."""
+"""``rx90 gains``: drive gains from current recordings and a payload of known mass."""
 from __future__ import annotations
 
 import argparse
