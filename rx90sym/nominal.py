@@ -76,7 +76,8 @@ def read_parameter_file(robot: Robot, path: str | Path) -> dict[str, float]:
 
     Accepted layouts: a flat object ``{name: value}``; ``{"robot": name, "parameters":
     {name: value}}`` (the twin's files); the output of ``rx90 identify --json`` when it holds
-    standard parameters (``"standard": {name: value}``, e.g. ``--method consistent``).
+    standard parameters (``"standard": {name: value}``, ``--method consistent``, or its identified model's,
+    ``"identified": {"standard": ...}``, every fit).
     Torque offsets OFFj may be absent (0). Values in SI units (kg, m, kg m, kg m^2, N m ...).
     """
     path = Path(path)
@@ -96,14 +97,17 @@ def read_parameter_file(robot: Robot, path: str | Path) -> dict[str, float]:
         if (model.get("tip") or None) != (urdf.tip if urdf is not None else None):
             raise ValueError(f"{path}: identified on the {there}, not on the {here}: its parameters are "
                              f"expressed in that description's frames; load the same description")
+    identified = data.get("identified")
     if isinstance(data.get("standard"), dict) and data["standard"]:
         table = data["standard"]
+    elif isinstance(identified, dict) and isinstance(identified.get("standard"), dict) and identified["standard"]:
+        table = identified["standard"]  # a fit file's identified model (every fit, whatever its method)
     elif isinstance(data.get("parameters"), dict):
         table = data["parameters"]
     elif isinstance(data.get("parameters"), list):
         raise ValueError(f"{path}: holds base parameters (an identification's 'parameters' list), "
-                         f"not standard parameters; use the JSON of 'rx90 identify --method "
-                         f"consistent', whose 'standard' table has them")
+                         f"not standard parameters (a fit file written before the identified model); identify "
+                         f"again: the fit file's identified model has them")
     else:
         table = data
     return _complete(robot, table, str(path))

@@ -28,14 +28,15 @@ def _twin_recording(robot, chi, path: Path, seed: int) -> None:
 
 @pytest.fixture(scope="module")
 def fits(tmp_path_factory):
-    """A UR10e twin with its nominal parameters, identified (consistent); wls.json: the same
-    identification as a fit file without the identified model (method "wls", no standard parameters)."""
+    """A UR10e twin with its nominal parameters, identified with the defaults (method "wls": the file's identified
+    model is what exports); wls.json: the same identification as a fit file written before the identified model
+    (no standard parameters)."""
     folder = tmp_path_factory.mktemp("ur10e_fit")
     robot = rx90sym.load_robot("ur10e")
     chi = robot.parameter_vector(rx90sym.nominal_parameters(robot))
     _twin_recording(robot, chi, folder / "run.csv", seed=3)
     common = [str(folder / "run.csv"), "--robot", "ur10e", "--min-velocity", "0"]
-    assert main(["identify", *common, "--method", "consistent", "--json", str(folder / "id.json")]) == 0
+    assert main(["identify", *common, "--json", str(folder / "id.json")]) == 0
     wls = json.loads((folder / "id.json").read_text())
     wls["method"] = "wls"
     for key in ("standard", "extras", "cost", "wls_cost", "cost_increase_pct", "wls_was_consistent", "identified"):
@@ -50,8 +51,8 @@ def test_exported_urdf_and_mjcf_reproduce_the_fits_inverse_dynamics(fits, tmp_pa
     urdf, mjcf = tmp_path / "ur10e.urdf", tmp_path / "ur10e.xml"  # one name: the companions are per format
     assert main(["export", str(folder / "id.json"), "--urdf", str(urdf), "--mjcf", str(mjcf)]) == 0
     assert json.loads((tmp_path / "ur10e.mjcf.actuation.json").read_text())["kind"] == "mjcf"
-    fit = json.loads((folder / "id.json").read_text())["standard"]
-    chi = robot.parameter_vector(fit)
+    fit = json.loads((folder / "id.json").read_text())["identified"]["standard"]  # the model of the defaults
+    chi = robot.parameter_vector({k: v for k, v in fit.items() if k in robot.parameter_names})
     side = json.loads(urdf.with_name("ur10e.actuation.json").read_text())
     # The exported joints carry the robot's ROS names, so a /joint_states message drives them.
     assert list(side["joints"]) == list(robot.ros_joint_names()) == ["shoulder_pan_joint", "shoulder_lift_joint",
@@ -101,7 +102,7 @@ def _payload_json(path: Path, values: dict, flange: dict) -> Path:
 
 
 @pytest.mark.parametrize("case, needle", [
-    ("wls", "--method consistent"),
+    ("wls", "identify again"),
     ("other robot", "has 7 joints"),
     ("no folder", "output folder"),
     ("payload not physical", "--constrained"),
@@ -144,3 +145,17 @@ def test_the_library_writes_the_payload_form_the_command_writes(tmp_path, robot_
             else json.dumps(rx90sym.franka_load(flange), indent=1) + "\n")
     assert out.read_text() == text
     assert abs(flange.mass - load["Mc"]) <= 1e-12 * load["Mc"]  # a rigid move keeps the mass
+
+
+def test_a_default_fit_file_gives_its_identified_model_as_parameters(fits):
+    """rx90 simulate --params and --prior FILE read a fit file made with the defaults: its identified model's
+    standard parameters; a fit file written before the identified model is refused, naming the fix."""
+    from rx90sym.nominal import read_parameter_file
+
+    robot, folder = fits
+    model = json.loads((folder / "id.json").read_text())["identified"]["standard"]
+    got = read_parameter_file(robot, folder / "id.json")
+    shared = [n for n in robot.parameter_names if n in model]
+    assert len(shared) >= 10 * robot.n and all(got[n] == model[n] for n in shared)
+    with pytest.raises(ValueError, match="written before the identified model"):
+        read_parameter_file(robot, folder / "wls.json")

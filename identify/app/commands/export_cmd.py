@@ -1,6 +1,6 @@
 """``rx90 export``: the one command for artefacts made from a JSON.
 
-- a consistent fit (``rx90 identify --method consistent --json ID.json``) -> ``--urdf`` and/or
+- a fit (``rx90 identify --json ID.json``: its identified model) -> ``--urdf`` and/or
   ``--mjcf`` (with ``--payload PAYLOAD.json``: the payload as a body on the flange);
 - a payload (``rx90 payload --json PAYLOAD.json``) -> ``--ur`` (URScript ``set_target_payload``)
   and/or ``--franka`` (libfranka's ``setLoad`` arguments as JSON).
@@ -22,7 +22,7 @@ def register(sub: Any) -> None:
                         description="make the artefacts a user needs from a JSON: a consistent fit -> URDF, "
                                     "MJCF; a payload -> UR's set_target_payload, Franka's load")
     sp.set_defaults(func=run)
-    sp.add_argument("input", help="ID.json (rx90 identify --method consistent --json) or PAYLOAD.json "
+    sp.add_argument("input", help="ID.json (rx90 identify --json: its identified model) or PAYLOAD.json "
                                   "(rx90 payload --json)")
     sp.add_argument("--robot", help="with ID.json: the robot (default: the one the fit records; another "
                                     "robot is refused)")
@@ -99,9 +99,10 @@ def _model(args: argparse.Namespace, data: dict) -> int:
     from identify import load_fit
     from identify.rollout.model import simulator_parameters
 
-    if data.get("method") != "consistent":
-        raise ValueError(f"{args.input}: a {data.get('method') or 'unknown'} fit holds base parameters, not "
-                         f"physical bodies: identify with --method consistent and export its JSON")
+    if data.get("method") != "consistent" and not data.get("identified"):  # every fit made now has its model
+        raise ValueError(f"{args.input}: this {data.get('method') or 'unknown'} fit holds base parameters only, no "
+                         f"physical bodies (a fit file written before the identified model): identify again and "
+                         f"export its JSON")
     fit = load_fit(args.input, args.robot)
     warning = fit.model.check_robot(fit.robot)
     if warning.startswith("the identification is of robot"):

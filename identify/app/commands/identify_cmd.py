@@ -126,7 +126,7 @@ def register(sub: Any) -> None:
                          "(a local cluster, one worker per core)")
     sp.add_argument("--bootstrap-seed", type=int, default=0, help="seed of the segment bootstrap (default 0)")
     sp.add_argument("--validate", help="recording used for cross-validation only")
-    rollout_option(sp, "the --validate recording (a fit with bodies: --method consistent)")
+    rollout_option(sp, "the --validate recording (the fit's identified model, as rx90 export --mjcf writes it)")
     sp.add_argument("--json", help="results as JSON")
     sp.add_argument("--report", help="self-contained HTML report")
     sp.add_argument("--urdf-out", help="the URDF with the identified model's inertials and joint dynamics, and "

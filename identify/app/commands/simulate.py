@@ -16,7 +16,7 @@ def register(sub: Any) -> None:
     sp.add_argument("trajectory", help="trajectory CSV written by rx90 excite")
     robot_option(sp)
     sp.add_argument("--params", help="the twin's true standard parameters: JSON name -> value, or the "
-                    "JSON of 'rx90 identify --method consistent' (default: the bundled RX90's twin "
+                    "JSON of 'rx90 identify': its identified model (default: the bundled RX90's twin "
                     "set, else the robot's nominal parameters: its [nominal] table or URDF inertials)")
     sp.add_argument("--payload", help="bundled payload name (tables_4, tables_5) or JSON file")
     sp.add_argument("--noise", choices=("ideal", "realistic"), default=TWIN_NOISE,
@@ -43,8 +43,8 @@ def run(args: argparse.Namespace) -> int:
     # The description's own bodies as the twin's truth: physical, or every other link named at once.
     refusal = simulation_refusal(robot) if args.params is None and twin_parameter_file(robot) is None else None
     if refusal:
-        raise UsageError(f"{refusal}: pass --params FILE (physical parameters, e.g. the JSON of rx90 identify "
-                         f"--method consistent)")
+        raise UsageError(f"{refusal}: pass --params FILE (physical parameters, e.g. the JSON of rx90 identify: "
+                         f"its identified model)")
     try:  # the twin's truth: the bundled RX90's own set, else the robot's nominal parameters
         params = rx90sym.default_parameters(robot, args.params)
     except ValueError as exc:
