@@ -15,7 +15,10 @@ import rx90sym
 from identify.app.cli import main
 from identify.io.blocks import block_source
 from identify import read_log
-from identify.selection.cross_validation import Candidate, block_factors, fold_wls, time_folds
+from identify.estimation.compression import block_factors
+from identify.estimation.least_squares import fold_wls
+from identify.selection.candidates import Candidate
+from identify.selection.folds import time_folds
 from identify.observation.matrix import column_regressor, filtered_motions, stack_rows
 from identify.observation.offsets import offset_joints
 from identify.observation.processing import Processing

@@ -9,7 +9,9 @@ import rx90sym
 from identify import Processing, fit
 import identify.selection.processing_choice as scv
 from identify.selection.processing_choice import choose_processing
-from identify.selection.cross_validation import Candidate, block_factors, fold_wls
+from identify.estimation.compression import block_factors
+from identify.estimation.least_squares import fold_wls
+from identify.selection.candidates import Candidate
 from identify.observation.matrix import observation_matrix
 from motions import multisine
 from rx90sym.recording import Recording

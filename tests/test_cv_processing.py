@@ -11,7 +11,7 @@ import rx90sym
 from identify import Processing, fit, predict, split
 import identify.selection.processing_choice as scv
 from identify.selection.processing_choice import choose_processing
-from identify.selection.cross_validation import Candidate
+from identify.selection.candidates import Candidate
 from motions import multisine
 
 

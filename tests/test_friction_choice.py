@@ -14,7 +14,7 @@ from identify import Processing, fit, load_fit, split
 from identify.friction.choice import FrictionChoice, _Scored, _check_mix, _per_joint_forms, _single_choice, choose_friction
 from identify.friction.folds import FoldRows
 from identify.io.blocks import DEFAULT_BLOCK, block_source
-from identify.selection.cross_validation import Candidate
+from identify.selection.candidates import Candidate
 from identify.selection.processing_choice import scans_for_choice
 from rx90sym.recording import Recording
 from test_friction_forms import TRUE_SCALE, friction_twin

@@ -14,7 +14,8 @@ import numpy as np
 
 from rx90sym.recording import frozen_array
 
-__all__ = ["DEFAULT_CHUNK_ROWS", "CompressedSystem", "check_system", "compress", "compress_rows", "stack_systems"]
+__all__ = ["DEFAULT_CHUNK_ROWS", "CompressedSystem", "block_factors", "check_system", "compress", "compress_rows",
+           "stack_systems"]
 
 #: Rows per QR chunk in :func:`compress`: bounds the working copy to about 15 MB for c = 54.
 DEFAULT_CHUNK_ROWS = 32_768
@@ -200,3 +201,19 @@ def stack_systems(systems: Sequence[CompressedSystem], weights: Sequence[float] 
 
 
 # --------------------------------------------------------------------------- rank and null space
+
+
+def block_factors(W: np.ndarray, Y: np.ndarray, joint: np.ndarray, ids: np.ndarray, blocks: Sequence[int],
+                  n: int) -> dict[tuple[int, int], tuple[np.ndarray, int]]:
+    """(block, joint) -> (the triangular factor of [W | Y] over the rows of that block (``ids``) and
+    joint, their number), for the ``blocks`` listed: what :func:`identify.estimation.least_squares.fold_wls` solves from."""
+    # The rows grouped by (block, joint) with one stable sort (each group keeps its order), not a mask per group.
+    key = np.asarray(ids) * n + joint
+    order = np.argsort(key, kind="stable")
+    edges = np.searchsorted(key[order], [[b * n + j, b * n + j + 1] for b in blocks for j in range(n)])
+    out = {}
+    for bj, (lo, hi) in zip([(b, j) for b in blocks for j in range(n)], edges):
+        if hi > lo:
+            rows = order[lo:hi]
+            out[bj] = (np.linalg.qr(np.column_stack([W[rows], Y[rows]]), mode="r"), int(hi - lo))
+    return out

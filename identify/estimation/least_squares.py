@@ -26,6 +26,7 @@ from identify.estimation.results import IdentificationResult
 from rx90sym.messages import plain
 
 __all__ = [
+    "fold_wls",
     "RANK_RCOND",
     "NULL_SPACE_SHARE",
     "DEFAULT_CHUNK_ROWS",
@@ -318,3 +319,32 @@ def joint_weights(blocks: Sequence[CompressedSystem], rcond: float = RANK_RCOND)
         i = int(np.flatnonzero(sigma <= 0.0)[0])
         raise ValueError(f"joint {i}: its own least-squares residual is zero, so its weight 1/σ is infinite; use weighted=False")
     return 1.0 / sigma
+
+
+def fold_wls(factors: dict[tuple[int, int], tuple[np.ndarray, int]], held: int, n: int) -> np.ndarray | None:
+    """WLS (each joint weighted by 1 / its residual standard deviation, as the fit does) on every
+    block but ``held``, from the compressed blocks; None when a joint has too few rows. A joint without
+    rows in any block (its torque left out of the fit) is not fitted."""
+    systems = []
+    fitted = {jj for (_, jj) in factors}
+    for j in range(n):
+        if j not in fitted:
+            continue
+        parts = [f for (b, jj), f in factors.items() if jj == j and b != held]
+        if not parts:
+            return None
+        stacked = np.vstack([R for R, _ in parts])  # the same norms as the rows it compresses
+        rows = sum(count for _, count in parts)
+        c = stacked.shape[1] - 1
+        # The joint's own columns only (its rows hold no parameter of the links before it): the same
+        # residual, and rank threshold (rows > columns), from a smaller SVD.
+        live = np.flatnonzero(np.any(stacked[:, :c] != 0.0, axis=0))
+        x, *_ = np.linalg.lstsq(stacked[:, live], stacked[:, c], rcond=None)
+        resid = np.linalg.norm(stacked[:, live] @ x - stacked[:, c])
+        if rows <= c or resid == 0:
+            return None
+        systems.append(stacked / (resid / np.sqrt(rows - c)))  # sigma_j as in eq. 12, per joint
+    R = np.vstack(systems)
+    c = R.shape[1] - 1
+    beta, *_ = np.linalg.lstsq(R[:, :c], R[:, c], rcond=None)
+    return beta

@@ -38,7 +38,8 @@ from identify.observation.rest import presliding_base
 from identify.observation.row_store import RowStore, keeps_rows
 from identify.observation.scan import Scan, scan_all, scanned_cutoff, torque_left_out
 from identify.selection.candidates import DEFAULT_LABEL, Candidate
-from identify.selection.cross_validation import DEFAULT_BLOCKS, RAW, NoCandidateScored, ProcessingChoice
+from identify.selection.candidates import ProcessingChoice
+from identify.selection.cross_validation import DEFAULT_BLOCKS, RAW, NoCandidateScored
 from identify.selection.processing_choice import KEEP_SECONDS, choose_processing, scans_for_choice
 from identify.selection.required_length import too_short
 

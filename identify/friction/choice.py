@@ -53,7 +53,9 @@ from identify.friction.folds import FoldRows
 from identify.friction.forms import DEFAULT_FRICTION, FRICTION_FORMS
 from identify.observation.processing import FrictionForm, friction_label, has_smooth_friction, uniform
 from identify.selection.candidates import joint_cells
-from identify.selection.cross_validation import DEFAULT_ROW_CAP, Budget, Candidate, block_scores, clearly_better
+from identify.selection.candidates import Candidate
+from identify.selection.cross_validation import DEFAULT_ROW_CAP, Budget, clearly_better
+from identify.selection.folds import block_scores
 
 __all__ = ["DEFAULT_FORMS", "FrictionChoice", "choose_friction"]
 

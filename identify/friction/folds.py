@@ -30,7 +30,8 @@ from identify.observation.block_rows import in_order, piece, plan_windows, windo
 from identify.observation.processing import FrictionForm, Processing, drops_rest
 from identify.observation.rest import STRIBECK_PREFIX
 from identify.selection.cross_validation import DEFAULT_BLOCKS
-from identify.selection.folds import fold_wls, time_folds
+from identify.estimation.least_squares import fold_wls
+from identify.selection.folds import time_folds
 from identify.selection.processing_choice import time_span
 
 __all__ = ["FoldColumns", "FoldRows", "fold_scales_of", "held_back_errors"]

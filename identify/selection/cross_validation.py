@@ -61,12 +61,10 @@ import rx90sym
 from identify.observation.matrix import DECIMATION_PASSBAND
 from identify.observation.processing import DEFAULT_REST, REST_POLICIES, RestPolicy
 from identify.selection.candidates import CLEAR_MARGIN, Candidate, DEFAULT_LABEL, ProcessingChoice
-# The fold helpers (other choices import them from here).
-from identify.selection.folds import block_factors, block_scores, fold_wls, time_blocks, time_folds
+from identify.selection.folds import block_scores, time_blocks, time_folds
 
-__all__ = ["Candidate", "ProcessingChoice", "GRID_FACTORS", "DEFAULT_BLOCKS", "SCORED_REST", "RAW", "NO_DECIMATION",
-           "grid_around", "select_processing", "score_candidates", "time_folds",
-           "time_blocks", "fold_wls", "clearly_better", "block_factors", "block_scores", "DEFAULT_ROW_CAP", "Budget",
+__all__ = ["GRID_FACTORS", "DEFAULT_BLOCKS", "SCORED_REST", "RAW", "NO_DECIMATION",
+           "grid_around", "select_processing", "score_candidates", "clearly_better", "DEFAULT_ROW_CAP", "Budget",
            "observation_rows", "NoCandidateScored"]
 
 #: Cut-offs of the grid, as multiples of the position-spectrum knee. (0.5, 0.7, 1, 1.4, 2) until the

@@ -42,9 +42,9 @@ from identify.observation.matrix import DECIMATION_PASSBAND
 from identify.observation.processing import Processing, drops_rest
 from identify.observation.rest import presliding_base
 from identify.observation.scan import Scan, scan, scanned_cutoff, torque_left_out
-from identify.selection.cross_validation import (DEFAULT_BLOCKS, DEFAULT_ROW_CAP, RAW, SCORED_REST, Budget, Candidate,
-                                                 ProcessingChoice, clearly_better, grid_around, score_candidates,
-                                                 select_processing)
+from identify.selection.candidates import Candidate, ProcessingChoice
+from identify.selection.cross_validation import (DEFAULT_BLOCKS, DEFAULT_ROW_CAP, RAW, SCORED_REST, Budget,
+                                                 clearly_better, grid_around, score_candidates, select_processing)
 from identify.selection.raw_torque_scores import RawFactors, RawSpan, raw_span, window_factors
 from identify.signal.filtering import EDGE_PERIODS
 

@@ -1,6 +1,6 @@
 """One candidate processing of the cross-validated choice, scored against the raw measured torques block by block.
 
-For each held-back time block b the fit of the other blocks (:func:`~identify.selection.cross_validation.fold_wls`,
+For each held-back time block b the fit of the other blocks (:func:`~identify.estimation.least_squares.fold_wls`,
 eq. 11's weights) predicts the torques at the candidate's own cut-off and decimation; that prediction,
 ``Phi(t_k) beta - spring(t_k)`` at the decimated rows t_k (shifted by the fit's torque delay), is
 interpolated linearly onto the recording's own time stamps and compared with the unfiltered torques
@@ -35,7 +35,8 @@ import rx90sym
 from identify.estimation.dependent_columns import reduce_columns
 from identify.estimation.incremental_qr import JointFactors
 from identify.selection.candidates import Candidate
-from identify.selection.folds import block_scores, fold_wls, time_folds
+from identify.estimation.least_squares import fold_wls
+from identify.selection.folds import block_scores, time_folds
 from identify.observation.block_rows import Plan, piece
 from identify.observation.scan import Scan
 from identify.observation.processing import Processing
