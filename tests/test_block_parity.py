@@ -15,7 +15,7 @@ from identify.fitting.baseline_factors import fit_baseline, fit_baseline_windows
 from identify.fitting.baseline_blocks import source_windows
 from identify.fitting.plausibility import GravityAtRest
 from identify.fitting.torque_checks import (CODES, _source_blocks, recorded_torque_flags,
-                                           streamed_torque_flags)
+                                           log_torque_flags)
 from identify.io.blocks import MemorySource
 from identify.observation.processing import Processing
 from identify.observation.scan import scan
@@ -174,12 +174,12 @@ def test_the_recorded_torque_checks_block_by_block(rx90):
     for bad, code in ((flipped, "static_gravity"), (scaled, "torque_scale")):  # x 100: gravity's scale too
         ref = [(f.code, f.joint, f.message) for f in recorded_torque_flags(rx90, [bad])]
         assert code in [c for c, _, _ in ref]
-        got = streamed_torque_flags(rx90, [MemorySource(bad, rx90)], [sc], 333)
+        got = log_torque_flags(rx90, [MemorySource(bad, rx90)], [sc], 333)
         assert [(f.code, f.joint, f.message) for f in got] == ref
         for block in (None, 1000):
             fit = identify.fit(rx90, [bad], GIVEN, block=block)
             assert [(f.code, f.joint, f.message) for f in fit.flags if f.code in CODES] == ref, block
-    assert recorded_torque_flags(rx90, [rec]) == [] and streamed_torque_flags(rx90, [src], [sc], 333) == []
+    assert recorded_torque_flags(rx90, [rec]) == [] and log_torque_flags(rx90, [src], [sc], 333) == []
 
 
 def test_rx90_identify_checks_the_recorded_torques_of_a_long_log(rx90, tmp_path, capsys):

@@ -17,7 +17,7 @@ import rx90sym
 
 from identify.fitting.baseline import BaselinePrediction, BaselineSegment, yardstick_predictions
 
-__all__ = ["baseline_at", "source_windows", "streamed_predictions"]
+__all__ = ["baseline_at", "source_windows", "log_predictions"]
 
 
 def _segments(scan: Any, index: int) -> list[tuple[int, BaselineSegment]]:
@@ -43,7 +43,7 @@ def source_windows(sources: Sequence[Any], scans: Sequence[Any], block: int) -> 
             yield segment, w, rec
 
 
-def streamed_predictions(robot: rx90sym.Robot, models: Sequence[Any], source: Any, scan: Any,
+def log_predictions(robot: rx90sym.Robot, models: Sequence[Any], source: Any, scan: Any,
                          block: int) -> list[BaselinePrediction]:
     """The predictions of the yardsticks ``models`` of one log read block by block, in one pass
     (:meth:`identify.fitting.baseline.LinearYardstick.predict` of it held whole, to ~1e-12)."""

@@ -211,7 +211,7 @@ def _fit_blocks(robot: rx90sym.Robot, recordings: Sequence[Any], processing: Pro
     """:func:`identify.fit` of recordings, block by block: its bootstrap computed on the way."""
     from identify.friction.fitted_columns import FrictionHook
     from identify.fitting.passes import BootstrapSpec, run_passes
-    from identify.fitting.yardsticks import streamed_yardsticks
+    from identify.fitting.yardsticks import log_yardsticks
     from identify.io.blocks import DEFAULT_BLOCK, block_source, check_block
     from identify.observation.spring_fit import BaseWithSpring, spring_summary
 
@@ -250,7 +250,7 @@ def _fit_blocks(robot: rx90sym.Robot, recordings: Sequence[Any], processing: Pro
                       tuple(passes.result.names)) if spec else None)
     found = passes.delay_estimate
     # The yardsticks and the recorded-torque checks: a pass each over the logs, block by block, as on whole ones.
-    sticks = streamed_yardsticks(robot, sources, passes.scans, processing.spring, block, client, span)
+    sticks = log_yardsticks(robot, sources, passes.scans, processing.spring, block, client, span)
     return Fit(robot, result, processing, model, base, passes.observation, found,
                found.delay if found is not None and found.found else None, spring,
                boot, block=block, passes=passes, recordings=passes.recordings,
@@ -307,10 +307,10 @@ def _flags(robot: rx90sym.Robot, sources: Sequence[Any], passes: Passes, block: 
            spring_added: bool) -> tuple[Flag, ...]:
     """The flags of a fit in blocks: the joints whose torque was left out (constant: not logged), the columns
     left out or merged, the recorded-torque checks and the torques' sign (of the joints fitted)."""
-    from identify.fitting.torque_checks import not_logged_flags, streamed_torque_flags, torque_sign_flags
+    from identify.fitting.torque_checks import not_logged_flags, log_torque_flags, torque_sign_flags
 
     left = passes.left_out
-    checks = [f for f in (streamed_torque_flags(robot, sources, passes.scans, block)
+    checks = [f for f in (log_torque_flags(robot, sources, passes.scans, block)
                           + torque_sign_flags(robot, passes.result, base, spring_added=spring_added))
               if f.joint is None or f.joint - 1 not in left]
     return (*not_logged_flags(passes.scans, left), *column_flags(passes.reduction, [j + 1 for j in left]), *checks)

@@ -22,7 +22,7 @@ from identify.fitting.plausibility import GravityAtRest, Flag, static_gravity_fl
 from identify.io.unlogged import constant_channels
 
 __all__ = ["CODES", "NOT_LOGGED", "SIGN_CORRELATION", "SIGN_SIGMAS", "not_logged_flags", "recorded_torque_flags",
-           "streamed_torque_flags", "torque_sign_flags"]
+           "log_torque_flags", "torque_sign_flags"]
 
 #: The codes of the recorded-torque checks (``rx90 identify`` exits 2 on their errors, nothing written, and
 #: prints their warnings).
@@ -78,7 +78,7 @@ def _source_blocks(sources: Sequence[Any], scans: Sequence[Any], block: int) -> 
             yield rec.q[core], rec.tau[core], dq[core] if n >= 3 else None
 
 
-def streamed_torque_flags(robot: rx90sym.Robot, sources: Sequence[Any], scans: Sequence[Any], block: int,
+def log_torque_flags(robot: rx90sym.Robot, sources: Sequence[Any], scans: Sequence[Any], block: int,
                           nominal: dict | None | str = "robot") -> list[Flag]:
     """:func:`recorded_torque_flags` of logs read block by block (``scans``: their first pass, for their
     lengths); the same flags and figures as the logs held whole."""

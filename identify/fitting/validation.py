@@ -19,7 +19,7 @@ import rx90sym
 from rx90sym.threads import one_blas_thread
 
 from identify.estimation.results import IdentificationResult, json_number
-from identify.fitting.baseline_blocks import baseline_at, streamed_predictions
+from identify.fitting.baseline_blocks import baseline_at, log_predictions
 from identify.fitting.filtered_errors import FilteredSums, filtered_rms
 from identify.fitting.raw_scoring import SCORE_TRIM_S, RawScores
 from identify.io.blocks import DEFAULT_BLOCK, block_source, check_block
@@ -314,7 +314,7 @@ def predict(robot: rx90sym.Robot, result: IdentificationResult, recording: Any, 
     names, regressor = column_regressor(robot, base)
     sticks = [m for m in (baseline, user_model) if m is not None]
     # The yardsticks' own pass over the log, block by block (their own filter and margins).
-    preds = streamed_predictions(robot, sticks, src, scans[0], block) if sticks else []
+    preds = log_predictions(robot, sticks, src, scans[0], block) if sticks else []
     sums = FilteredSums(beta, robot.n) if filtered.decimate_to == processing.decimate_to else None
     length = {g.start: g.samples for g in scans[0].segments}
     groups: dict[int, list] = {}

@@ -1,6 +1,6 @@
 """Both yardsticks of every validation from one pass over the fitted data, and their held-out errors.
 
-:func:`streamed_yardsticks` reads the logs once, window by window (:mod:`identify.fitting.baseline_blocks`),
+:func:`log_yardsticks` reads the logs once, window by window (:mod:`identify.fitting.baseline_blocks`),
 and folds the baseline's rows into per-(time block, joint) factors
 (:mod:`identify.fitting.baseline_factors`); from them come the plain OLS baseline
 (:mod:`identify.fitting.baseline`), the model the user had (:mod:`identify.fitting.user_model`) and, given
@@ -30,7 +30,7 @@ from identify.fitting.baseline_factors import BaselineFactors, baseline_factors,
 from identify.fitting.user_model import UserModel, described_bodies, user_model, user_values
 from identify.selection.folds import block_scores
 
-__all__ = ["KINDS", "Yardsticks", "YardstickFolds", "fit_yardsticks", "held_out", "streamed_yardsticks",
+__all__ = ["KINDS", "Yardsticks", "YardstickFolds", "fit_yardsticks", "held_out", "log_yardsticks",
            "yardstick_folds"]
 
 #: The yardsticks by name: the plain OLS baseline, the model the user had.
@@ -112,7 +112,7 @@ def fit_yardsticks(robot: rx90sym.Robot, recordings: Sequence[Any], spring: bool
     return _yardsticks(robot, baseline_factors(robot, memory_windows(recordings, block), spring), spring)
 
 
-def streamed_yardsticks(robot: rx90sym.Robot, sources: Sequence[Any], scans: Sequence[Any], spring: bool,
+def log_yardsticks(robot: rx90sym.Robot, sources: Sequence[Any], scans: Sequence[Any], spring: bool,
                         block: int, client: Any = None, span: RawSpan | None = None) -> Yardsticks:
     """Both yardsticks of logs read block by block (``scans``: their first pass,
     :func:`identify.observation.scan.scan`), in one pass; with ``span`` (the cross-validation's time
@@ -140,8 +140,8 @@ def yardstick_folds(robot: rx90sym.Robot, sources: Sequence[Any], scans: Sequenc
                     spring: bool, block: int, client: Any = None) -> YardstickFolds:
     """Both yardsticks' held-out errors per (time block, joint) of the blocked cross-validation whose time
     blocks are ``span`` (:func:`identify.selection.raw_torque_scores.raw_span`), from logs read block by block
-    (:func:`streamed_yardsticks`). ValueError where the baseline cannot be fitted."""
-    done = streamed_yardsticks(robot, sources, scans, spring, block, client, span)
+    (:func:`log_yardsticks`). ValueError where the baseline cannot be fitted."""
+    done = log_yardsticks(robot, sources, scans, spring, block, client, span)
     if done.folds is None:
         raise ValueError(done.user_note)
     return done.folds

@@ -90,7 +90,7 @@ def _joined(a: Recording, b: Recording) -> Recording:
 
 
 
-class _LogStream:
+class _LogRules:
     """The rules of :func:`identify.io.logs.rows_to_recording` on consecutive blocks of rows: stale rows
     (each block's first row compared with the previous block's last), checks, gaps and segments (each
     block after the previous block's last kept row), the grid of each segment. Yields the parts to
@@ -272,7 +272,7 @@ def log_parts(blocks: Iterator[tuple[np.ndarray, list[int]]], cmap: ColumnMap, r
         raise ValueError(f"max_gap must be a positive time in s, got {max_gap!r}")
     if resample is not None:
         check_rate(resample)
-    stream = _LogStream(cmap, robot, conv, source, resample, max_gap, segments, report, window, stale, period)
+    stream = _LogRules(cmap, robot, conv, source, resample, max_gap, segments, report, window, stale, period)
     logged = ColumnRange()  # the torque (or current) columns' values: one value on every row is a channel not logged
     pending = next(blocks, None)
     if pending is None:

@@ -45,7 +45,7 @@ and 4 of 5 in another). ``time_cap`` adds a wall-clock cap on request. The rest 
 first cut-off are always scored. Bridged samples and rest rows follow the fit's rules (the
 same rows as W). :func:`select_processing` is this selection whatever scores the candidates; the
 choice itself, on recordings in memory or read block by block (one implementation), is
-:mod:`identify.selection.processing_choice` (``choose_processing``, ``choose_processing_streamed``).
+:mod:`identify.selection.processing_choice` (``choose_processing``).
 """
 from __future__ import annotations
 
