@@ -7,13 +7,12 @@ import math
 from typing import TYPE_CHECKING, Any
 
 from identify.gains.defaults import DEFAULT_METHOD, FLAG_PCT, GAIN_METHODS
-from identify.io.defaults import DEFAULT_BLOCK
 from identify.observation.defaults import DEFAULT_DECIMATE_TO
 from identify.signal.defaults import POSITION_TOLERANCE
 
 from ..flags import checked_peaks, flag_lines, settle
 from ..common import UsageError, check_output, convention_option, load_robot, progress, robot_option
-from .identify_runs import block_option
+from .identify_runs import add_block_option
 
 if TYPE_CHECKING:  # annotations only: the method is imported when the command runs
     import numpy as np
@@ -52,9 +51,7 @@ def register(sub: Any) -> None:
     sp.add_argument("--cutoff", type=float, help="Butterworth cut-off for q [Hz] (default: chosen from the data)")
     sp.add_argument("--decimate-to", type=float, default=DEFAULT_DECIMATE_TO,
                     help=f"rate after parallel filtering [Hz] (default {DEFAULT_DECIMATE_TO:g})")
-    sp.add_argument("--block", type=block_option, default=DEFAULT_BLOCK,
-                    help=f"raw samples read, filtered and fitted at a time (default {DEFAULT_BLOCK}; memory grows "
-                         f"with it, not with the logs)")
+    add_block_option(sp)
     sp.add_argument("--json", help="the gains as JSON (read by --gains of every command)")
     sp.add_argument("--report", help="self-contained HTML report")
 

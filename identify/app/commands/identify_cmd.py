@@ -28,29 +28,27 @@ if TYPE_CHECKING:  # the model and the method are imported when the command runs
     from identify.observation.processing import Processing
 
 
-def _prior_weight(text: str) -> str | float:
+def _auto_or_number(option: str, text: str, what: str, ok: Any, bound: str) -> str | float:
+    """An option taking 'auto' or a number ``what``, refused with ``bound`` when not ``ok(value)``."""
     if text == "auto":
         return text
     try:
         value = float(text)
     except ValueError:
-        raise argparse.ArgumentTypeError(f"--prior-weight takes 'auto' or a number >= 0 ('inf' allowed), "
-                                         f"got {text!r}") from None
-    if not value >= 0:
-        raise argparse.ArgumentTypeError(f"--prior-weight must be >= 0 ('inf' allowed), got {text!r}")
+        raise argparse.ArgumentTypeError(f"{option} takes 'auto' or {what}, got {text!r}") from None
+    if not ok(value):
+        raise argparse.ArgumentTypeError(f"{option} must be {bound}, got {text!r}")
     return value
+
+
+def _prior_weight(text: str) -> str | float:
+    return _auto_or_number("--prior-weight", text, "a number >= 0 ('inf' allowed)", lambda v: v >= 0,
+                           ">= 0 ('inf' allowed)")
 
 
 def _delay(text: str) -> str | float:
-    if text == "auto":
-        return text
-    try:
-        value = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"--delay takes 'auto' or a number of seconds, got {text!r}") from None
-    if not math.isfinite(value) or abs(value) > 1.0:
-        raise argparse.ArgumentTypeError(f"--delay must be a finite number of seconds within ±1, got {text!r}")
-    return value
+    return _auto_or_number("--delay", text, "a number of seconds", lambda v: math.isfinite(v) and abs(v) <= 1.0,
+                           "a finite number of seconds within ±1")
 
 
 def add_recording_options(sp: argparse.ArgumentParser) -> None:

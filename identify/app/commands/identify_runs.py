@@ -40,6 +40,15 @@ def fit_recordings(args: argparse.Namespace, robot: rx90sym.Robot, processing: P
         return fit(robot, args.recordings, processing, args.method, client=client, **options)
 
 
+def add_block_option(sp: argparse.ArgumentParser) -> None:
+    """``--block`` of the commands that read runs in blocks (gains, payload)."""
+    from identify.io.defaults import DEFAULT_BLOCK
+
+    sp.add_argument("--block", type=block_option, default=DEFAULT_BLOCK,
+                    help=f"raw samples read, filtered and fitted at a time (default {DEFAULT_BLOCK}; memory grows "
+                         f"with it, not with the logs)")
+
+
 def block_option(text: str, unit: str = "samples") -> int:
     """``--block``: a whole number of samples (``unit``: lines, for convert), at least 1000."""
     try:

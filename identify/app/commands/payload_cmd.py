@@ -5,14 +5,13 @@ import argparse
 import dataclasses
 from typing import TYPE_CHECKING, Any
 
-from identify.io.defaults import DEFAULT_BLOCK
 from identify.payloads.defaults import MASS_TOL
 from identify.signal.defaults import POSITION_TOLERANCE
 
 from ..flags import checked_peaks, flag_lines, given_gain_flags, settle
 from ..common import (UsageError, check_output, convention_option, load_robot, progress, robot_option,
                       robot_params, spring_notice)
-from .identify_runs import block_option
+from .identify_runs import add_block_option
 
 if TYPE_CHECKING:  # annotations only: the method is imported when the command runs
     import numpy as np
@@ -50,9 +49,7 @@ def register(sub: Any) -> None:
                                     "or the JSON of rx90 gains")
     sp.add_argument("--position-tol", type=float,
                     help=f"method 3: largest position gap of a paired run [rad] (default {POSITION_TOLERANCE:g})")
-    sp.add_argument("--block", type=block_option, default=DEFAULT_BLOCK,
-                    help=f"raw samples read, filtered and fitted at a time (default {DEFAULT_BLOCK}; memory grows "
-                         f"with it, not with the logs)")
+    add_block_option(sp)
     sp.add_argument("--json", help="results as JSON")
     sp.add_argument("--report", help="self-contained HTML report")
 
