@@ -135,6 +135,17 @@ def test_a_smooth_friction_form_replaces_the_joints_frictionloss():
     np.testing.assert_allclose(force, [-truth["FS1"] * np.tanh(0.02 / 0.05), 0, 0, 0, 0, 0], atol=1e-12)
     assert "joint 1: tanh friction" in " ".join(sm.terms)
     assert 0 < sm.max_step < np.inf   # explicit steps kept below the tanh's slope FS1/vs
+    # Stribeck on joint 2 beside tanh on joint 1: the fit's own columns (friction_columns) times FS and FST.
+    from identify.friction.forms import friction_columns
+
+    record = {"form": ["tanh", "stribeck", "coulomb", "coulomb", "coulomb", "coulomb"],
+              "velocity_scale": [0.05, 0.03, None, None, None, None]}
+    sm = simulator_model(robot, truth, friction=record, extra={"FST2": 1.7 * truth["FS2"]})
+    for v in (-0.3, -0.02, 0.0, 0.01, 0.2):
+        qd = np.array([0.02, v, 0, 0, 0, 0])
+        cols, _ = friction_columns("stribeck", np.array([v]), 0.03)
+        expected = -(truth["FS2"] * cols[0, 0] + 1.7 * truth["FS2"] * cols[0, 1])
+        np.testing.assert_allclose(sm.extra_force(np.zeros(robot.n), qd)[1], expected, rtol=1e-12, atol=1e-12)
 
 
 def test_the_nominal_model_is_the_descriptions_bodies_and_absent_without_them(exact, tmp_path):

@@ -13,7 +13,9 @@ tendon's, 1.3 and 3.4 mrad with this). :attr:`SimulatorModel.terms` names each, 
 """
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
+from functools import cached_property
 from typing import Any, Mapping, Sequence
 
 import numpy as np
@@ -24,7 +26,6 @@ from rx90sym.model_export import parameter_vector
 from rx90sym.parameters import INERTIAL, split_name
 
 from identify.io.bags import MissingExtra
-from identify.friction.forms import friction_columns
 
 __all__ = ["SimulatorModel", "SmoothFriction", "load_mujoco", "nominal_model", "simulator_model",
            "simulator_parameters", "result_parameters"]
@@ -82,10 +83,24 @@ class SmoothFriction:
     fs: float
     fst: float = 0.0
 
-    def torque(self, v: float) -> float:
-        """The friction torque [N m] at joint speed v [rad/s] (opposes the motion: subtract it)."""
-        cols, _ = friction_columns(self.form, np.array([v]), self.scale)
-        return float(self.fs * cols[0, 0] + (self.fst * cols[0, 1] if self.form == "stribeck" else 0.0))
+
+def _smooth_torques(smooth: Sequence[SmoothFriction]) -> Any:
+    """f(qvel) -> [(joint, torque [N m]), ...]: the friction of the joints ``smooth`` at the speeds qvel
+    [rad/s] (opposing the motion: subtract it), the columns of identify.friction.forms.friction_columns
+    times FS (and FST). Plain floats: a few joints at MuJoCo's every step cost less than an array call."""
+    terms = [(f.joint, f.form == "stribeck", f.fs, f.fst, f.scale) for f in smooth]
+
+    def torques(qvel: Any) -> list[tuple[int, float]]:
+        out = []
+        for j, stribeck, fs, fst, vs in terms:
+            v = float(qvel[j])
+            if stribeck:
+                e = math.exp(-(v / vs) ** 2)
+                out.append((j, (fs * (1 - e) + fst * e) * math.copysign(1.0, v) if v != 0 else 0.0))
+            else:
+                out.append((j, fs * math.tanh(v / vs)))
+        return out
+    return torques
 
 
 @dataclass(frozen=True, eq=False)
@@ -106,6 +121,10 @@ class SimulatorModel:
     coupled: tuple[int, int, float] | None = None  # (a, b, FSM) of the "paper" form, applied from the fit
     max_step: float = float("inf")  # [s] longest explicit step the smooth friction's slope allows
 
+    @cached_property
+    def _smooth(self) -> Any:
+        return _smooth_torques(self.smooth)
+
     @property
     def applies_forces(self) -> bool:
         """Terms computed from the state at every step (else the recorded torque alone is applied)."""
@@ -113,11 +132,14 @@ class SimulatorModel:
 
     def extra_force(self, qpos: np.ndarray, qvel: np.ndarray) -> np.ndarray:
         """Generalised force [N m] of the terms applied from the fit at MuJoCo's state (controller angles)."""
-        out = np.zeros(self.robot.n)
+        return self.add_extra_force(qpos, qvel, np.zeros(self.robot.n))
+
+    def add_extra_force(self, qpos: np.ndarray, qvel: np.ndarray, out: np.ndarray) -> np.ndarray:
+        """:meth:`extra_force` added to ``out`` in place (MuJoCo's qfrc_applied at every step: no array made)."""
         if self.spring:  # the spring helps the motor: tau_motor + spring(q) = IDM (rx90sym.twin)
             out += np.asarray(self.robot.spring_torque(self.robot.to_model(qpos))).ravel()
-        for f in self.smooth:
-            out[f.joint] -= f.torque(float(qvel[f.joint]))
+        for j, torque in self._smooth(qvel):
+            out[j] -= torque
         if self.coupled is not None:  # eqs. 17-18, "paper" form: each joint's row takes the other's sign
             a, b, fsm = self.coupled
             out[a] -= fsm * np.sign(qvel[b])

@@ -44,12 +44,14 @@ class Simulator:
         path = np.empty((tau.shape[0] + 1, q0.size)) if keep else None
         if keep:
             path[0] = q0
-        extra = self.sm.applies_forces
+        extra = self.sm.add_extra_force if self.sm.applies_forces else None
+        applied, step = d.qfrc_applied, mj.mj_step
         for k in range(tau.shape[0]):
-            if extra:
+            if extra is not None:
                 for _ in range(self.substeps):
-                    d.qfrc_applied[:] = tau[k] + self.sm.extra_force(d.qpos, d.qvel)
-                    mj.mj_step(m, d)
+                    applied[:] = tau[k]
+                    extra(d.qpos, d.qvel, applied)
+                    step(m, d)
             else:
                 d.qfrc_applied[:] = tau[k]
                 mj.mj_step(m, d, self.substeps)
