@@ -104,6 +104,9 @@ def read_parameter_file(robot: Robot, path: str | Path) -> dict[str, float]:
         table = identified["standard"]  # a fit file's identified model (every fit, whatever its method)
     elif isinstance(data.get("parameters"), dict):
         table = data["parameters"]
+    elif isinstance(data.get("parameters"), list) and "method" not in data and all(
+            isinstance(p, dict) and isinstance(p.get("name"), str) for p in data["parameters"]):
+        table = {p["name"]: p.get("value") for p in data["parameters"]}  # [{"name", "value"}]: checked as any table
     elif isinstance(data.get("parameters"), list):
         raise ValueError(f"{path}: holds base parameters (an identification's 'parameters' list), "
                          f"not standard parameters (a fit file written before the identified model); identify "

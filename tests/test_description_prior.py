@@ -183,3 +183,9 @@ def test_a_prior_file_naming_parameters_the_robot_does_not_have_is_refused(tmp_p
     with pytest.raises(ValueError, match=r"prior.json \(robot 'tx40'\): unknown parameter\(s\) \['M7', 'XX7'\]: "
                                          r"not parameters of this robot"):
         read_parameter_file(robot, path)
+    # The same table as a list of {"name", "value"}: the same check, the same message.
+    path.write_text(json.dumps({"parameters": [{"name": k, "value": v} for k, v in values.items()]}))
+    with pytest.raises(ValueError, match=r"unknown parameter\(s\) \['M7', 'XX7'\]"):
+        read_parameter_file(robot, path)
+    path.write_text(json.dumps({"parameters": [{"name": k, "value": v} for k, v in values.items() if k[-1] != "7"]}))
+    assert read_parameter_file(robot, path)["M1"] == values["M1"]

@@ -276,7 +276,7 @@ def test_non_finite_w_is_refused_with_row_and_column():
     [
         (lambda W, Y, j, n: (W, Y[:-1], j, n), "Y must have shape"),
         (lambda W, Y, j, n: (W, Y, j[:-1], n), "joint must have shape"),
-        (lambda W, Y, j, n: (W, Y, np.where(j == 1, 2, j), n), "joint 1 has no rows"),
+        (lambda W, Y, j, n: (W, Y, np.where(j == 1, 2, j), n), r"joint 2 \(index 1\) has no rows"),
         (lambda W, Y, j, n: (W, Y, j - 1, n), "must be >= 0"),
         (lambda W, Y, j, n: (W, Y, j + 0.5, n), "integer"),
         (lambda W, Y, j, n: (W, Y, j, n[:-1]), "3 names for 4 columns"),

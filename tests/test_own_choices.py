@@ -209,6 +209,15 @@ def test_the_gen3_logs_are_converted_and_fitted(tmp_path, capsys):
     fit = json.loads((tmp_path / "run1.json").read_text())
     assert fit["model"]["torque_left_out"] == [1] and "ZZ1R" not in {p["name"] for p in fit["parameters"]}
     assert "processing not cross-validated: the recording is 1.96 s long" in out
+    # Nor the prior's weight: the description's bodies kept (λ = ∞), said where λ is.
+    prior = fit["identified"]["prior"]
+    assert prior["weight_label"] == "inf" and prior["choice"] is None
+    assert "weight λ = inf (λ inf: not cross-validated, as the processing (the description kept))" in out
+    # Exported, joint 1 (its torque not logged) is said not identified, on stderr and in the companion.
+    assert main(["export", str(tmp_path / "run1.json"), "--mjcf", str(tmp_path / "gen3.xml")]) == 0
+    assert "warning: joint 1: its torque was not in the fit (not logged)" in capsys.readouterr().err
+    side = json.loads((tmp_path / "gen3.mjcf.actuation.json").read_text())
+    assert [note[:8] for note in side["not_identified"]] == ["joint 1:"]
     # Currents of joint 2 alone (before: 'W is rank deficient: rank 56 < 66'): the still joints' columns left out.
     currents = tmp_path / "j2.csv"
     assert main([*convert, str(GEN3 / "joint_2_trapez.csv"), "--columns", GEN3_COLUMNS.format("_*7", "i1..i7"),

@@ -220,7 +220,8 @@ def _check_joint(joint: np.ndarray, rows: int) -> np.ndarray:
     counts = np.bincount(joint)
     empty = np.flatnonzero(counts == 0)
     if empty.size:
-        raise ValueError(f"joint {empty[0]} has no rows (joint indices must cover 0..{counts.size - 1})")
+        raise ValueError(f"joint {empty[0] + 1} (index {empty[0]}) has no rows (joint indices must cover "
+                         f"0..{counts.size - 1})")
     return joint
 
 

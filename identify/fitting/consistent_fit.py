@@ -88,8 +88,13 @@ class ConsistentResult(IdentificationResult):
         """The estimates with the data's share of each (no σ: the model is not the least squares)."""
         width = max([len("Parameter")] + [len(n) for n in self.names])
         share = self.data_share if self.data_share is not None else np.full(len(self.names), np.nan)
-        lines = [f"{'Parameter':<{width}}  {'Estimate':>12}  {'from data':>9}"]
-        lines += [f"{n:<{width}}  {v:12.6g}  {_pct(s):>9}" for n, v, s in zip(self.names, self.values, share)]
+        # Round-off of a value the prior holds at 0 (1e-15 of the largest) printed as the 0 it is.
+        tiny = 1e-12 * max(1.0, float(np.max(np.abs(self.values)))) if len(self.values) else 0.0
+        lines = ["the identified model (what predicts, exports and monitors): its estimates and the share of each "
+                 "the data determined",
+                 f"{'Parameter':<{width}}  {'Estimate':>12}  {'from data':>9}"]
+        lines += [f"{n:<{width}}  {(v if abs(v) > tiny else 0.0):12.6g}  {_pct(s):>9}"
+                  for n, v, s in zip(self.names, self.values, share)]
         lines.append(f"identified model, {len(self.names)} parameters, {self.rows} equations, residual "
                      f"{self.cost_increase_pct:+.2f} % of the least squares'; {self.split}")
         if self.residual_rms.size:
@@ -119,7 +124,9 @@ class ConsistentResult(IdentificationResult):
         if self.prior is None:
             return ("no prior: the standard parameters the data cannot see are one physical choice among many "
                     "(give the robot's description as a prior)")
-        return f"prior {self.prior['source']} ({self.prior['divergence']}), weight λ = {self.prior['weight_label']}"
+        why = self.prior.get("weight_why") if self.prior.get("choice") is None else None
+        return (f"prior {self.prior['source']} ({self.prior['divergence']}), weight λ = {self.prior['weight_label']}"
+                + (f" ({why})" if why else ""))
 
     @classmethod
     def from_dict(cls, d: dict[str, Any]) -> "ConsistentResult":
@@ -167,7 +174,7 @@ def consistent_fit(robot: rx90sym.Robot, wls: IdentificationResult, columns: Any
                    prior_weight: float | str = "auto", factors: Any = None, *, offsets: Sequence[int] = (),
                    margin: float = DEFAULT_MARGIN, solver: str = "CLARABEL", bounds: Mapping[str, Any] | None = None,
                    reference: Mapping[str, float] | None = None, spread: np.ndarray | None = None,
-                   still: Sequence[int] = ()) -> ConsistentResult:
+                   still: Sequence[int] = (), weight_why: str | None = None) -> ConsistentResult:
     """The identified model of a (W)LS fit on ``columns`` (module docstring).
 
     prior: a :class:`~identify.estimation.consistency.body_prior.BodyPrior` (None: the data alone, the
@@ -286,7 +293,8 @@ def consistent_fit(robot: rx90sym.Robot, wls: IdentificationResult, columns: Any
                   "divergence_value": json_number(prior.value(dict(zip(cmap.names, x)))),
                   "prior_term": json_number(problem.prior_term(x)),
                   "determined": [names[k] for k in determined],
-                  "choice": None if choice is None else choice.to_dict()}
+                  "choice": None if choice is None else choice.to_dict(),
+                  "weight_why": choice.reason if choice is not None else weight_why}
     std = least_std
     cost = float(np.sum((R @ beta - z) ** 2))
     wls_cost = float(np.sum((R @ least - z) ** 2))

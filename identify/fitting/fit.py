@@ -10,6 +10,7 @@ validates with its own processing, carries its bootstrap σ, and saves itself
 """
 from __future__ import annotations
 
+import math
 from types import SimpleNamespace
 from typing import TYPE_CHECKING, Any, Sequence
 
@@ -186,7 +187,7 @@ def _identified(robot: rx90sym.Robot, wls: IdentificationResult, columns: Any, f
     still = () if moving is None else tuple(int(j) for j in np.flatnonzero(np.asarray(moving) == 0))
     return consistent_fit(robot, wls, columns, options["prior"], options["prior_weight"], factors, offsets=offsets,
                           solver=options.get("solver", "CLARABEL"), bounds=bounds or None, reference=reference,
-                          spread=spread, still=still)
+                          spread=spread, still=still, weight_why=options.get("weight_why"))
 
 
 def _description_value(robot: rx90sym.Robot, name: str) -> float:
@@ -236,6 +237,10 @@ def _fit_blocks(robot: rx90sym.Robot, recordings: Sequence[Any], processing: Pro
     base = passes.columns  # with the offsets and the friction columns chosen
     used = passes.processing  # the cut-off, decimation, rest policy per joint and delay given or chosen
     span = _model_span(passes)
+    skipped = passes.choice.skipped if passes.choice is not None else None
+    if skipped and options["prior_weight"] == "auto":  # too short for the blocks: the description kept (docs)
+        options = {**options, "prior_weight": math.inf,
+                   "weight_why": "λ inf: not cross-validated, as the processing (the description kept)"}
     identified = _identified(robot, passes.result, base, _model_factors(robot, sources, passes, span, client), options,
                              given=columns_given, spread=passes.bootstrap_std, moving=passes.moving_fraction)
     result = identified if method == "consistent" else passes.result

@@ -51,7 +51,9 @@ class PayloadResult:
             return f"Mc = {self.values[i]:.4g} kg (constrained: no σ of its own)"
         which = ("eq. 13" if self.bootstrap_std is None or not self.bootstrap_std[i] > self.std[i]
                  else "segment bootstrap")
-        return f"Mc = {self.values[i]:.4g} ± {self.std_headline[i]:.2g} kg (±1σ, the larger of eq. 13's and the bootstrap's: {which})"
+        return (f"Mc = {self.values[i]:.4g} ± {self.std_headline[i]:.2g} kg (±1σ, the larger of eq. 13's and the "
+                f"bootstrap's: {which}; the noise of these runs only: a drive gain or robot model off by x % moves the "
+                f"payload by about as much, which no σ here holds)")
 
     def __getitem__(self, name: str) -> float:
         return float(self.values[self.names.index(name)])

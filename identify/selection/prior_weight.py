@@ -65,12 +65,12 @@ class WeightChoice:
                  f"  {'λ':>8}  held-back error [%]" + "".join(f"{'j' + str(j + 1):>7}" for j in range(n))]
         for w, c in zip(self.weights, self.scores):
             score = "-" if math.isnan(c.score) else f"{c.score:.3f}"
-            joints = "".join(f"{v:7.2f}" for v in c.per_joint)
+            joints = "".join(_cell(v) for v in c.per_joint)
             mark = " <- chosen" if w == self.chosen else ""
             lines.append(f"  {weight_label(w):>8}  {score:>19}{joints}{mark}")
         c = self.unconstrained
         if c is not None and not math.isnan(c.score):
-            lines.append(f"  {'(LS)':>8}  {c.score:19.3f}" + "".join(f"{v:7.2f}" for v in c.per_joint)
+            lines.append(f"  {'(LS)':>8}  {_cell(c.score, 19, 3)}" + "".join(_cell(v) for v in c.per_joint)
                          + "  least squares, no physical constraint (for reference)")
         return "\n".join(lines + ["  " + self.reason])
 
@@ -81,6 +81,13 @@ class WeightChoice:
                 "weights": [weight_label(w) for w in self.weights],
                 "scores_pct": [None if math.isnan(c.score) else c.score for c in self.scores],
                 "per_joint_pct": [[json_number(v) for v in c.per_joint] for c in self.scores], "table": self.table()}
+
+
+def _cell(v: float, width: int = 7, digits: int = 2) -> str:
+    """A table cell of ``width`` with a space before it however large the number (3 significant digits
+    from 1e4 on: a least squares without constraints can predict a held-back block at 10⁵ %)."""
+    text = f"{v:.{digits}f}" if abs(v) < 1e4 else f"{v:.3g}"
+    return " " + text.rjust(width - 1)
 
 
 @dataclass(frozen=True, eq=False)

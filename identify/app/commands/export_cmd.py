@@ -93,11 +93,9 @@ def _payload(args: argparse.Namespace, data: dict) -> int:
 
 
 def _model(args: argparse.Namespace, data: dict) -> int:
-    from rx90sym.mjcf_export import mjcf_export
     from rx90sym.model_export import write_model
-    from rx90sym.urdf_export import urdf_export
     from identify import load_fit
-    from identify.rollout.model import simulator_parameters
+    from identify.export.models import model_text, not_identified
 
     if data.get("method") != "consistent" and not data.get("identified"):  # every fit made now has its model
         raise ValueError(f"{args.input}: this {data.get('method') or 'unknown'} fit holds base parameters only, no "
@@ -109,7 +107,6 @@ def _model(args: argparse.Namespace, data: dict) -> int:
         raise ValueError(f"{args.input}: {warning}")
     if warning:
         progress(f"warning: {warning}")
-    robot, params = simulator_parameters(fit)
     payload = None
     if args.payload:
         pdata = _read(args.payload)
@@ -118,9 +115,11 @@ def _model(args: argparse.Namespace, data: dict) -> int:
         payload = {p["name"]: p["value"] for p in pdata["payload"]}
     artefacts = []  # every text first: a refused link or payload writes nothing
     if args.urdf:
-        artefacts.append((args.urdf, *urdf_export(robot, params, args.urdf, payload)))
+        artefacts.append((args.urdf, *model_text(fit, "urdf", args.urdf, payload)))
     if args.mjcf:
-        artefacts.append((args.mjcf, *mjcf_export(robot, params, args.mjcf, payload)))
+        artefacts.append((args.mjcf, *model_text(fit, "mjcf", args.mjcf, payload)))
+    for note in not_identified(fit):
+        progress(f"warning: {note}")
     for path, text, side in artefacts:
         progress("wrote " + " and ".join(str(p) for p in write_model(path, text, side)))
     return 0

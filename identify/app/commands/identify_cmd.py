@@ -272,7 +272,7 @@ def run(args: argparse.Namespace) -> int:
 
 
 #: The identified model's checks against the yardsticks (identify.fitting.plausibility.heldout_flags).
-MODEL_CODES = ("model_unexplained", "model_worse_on_joint")
+MODEL_CODES = ("model_unexplained", "model_worse_on_joint", "torque_poorly_explained")
 
 
 def physical_prior(args: argparse.Namespace, robot: rx90sym.Robot) -> Any:
