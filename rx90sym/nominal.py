@@ -19,6 +19,8 @@ nominal parameters: they are the twin's, reached through :func:`twin_parameter_f
 """
 from __future__ import annotations
 
+import re
+
 from pathlib import Path
 from typing import Any, Mapping
 
@@ -105,8 +107,10 @@ def read_parameter_file(robot: Robot, path: str | Path) -> dict[str, float]:
     elif isinstance(data.get("parameters"), dict):
         table = data["parameters"]
     elif isinstance(data.get("parameters"), list) and "method" not in data and all(
-            isinstance(p, dict) and isinstance(p.get("name"), str) for p in data["parameters"]):
-        table = {p["name"]: p.get("value") for p in data["parameters"]}  # [{"name", "value"}]: checked as any table
+            isinstance(p, dict) and isinstance(p.get("name"), str) and not re.fullmatch(r"[A-Z]+\d+R", p["name"])
+            for p in data["parameters"]):
+        # [{"name", "value"}] of standard names (no regrouped "...R" base name): checked as any table
+        table = {p["name"]: p.get("value") for p in data["parameters"]}
     elif isinstance(data.get("parameters"), list):
         raise ValueError(f"{path}: holds base parameters (an identification's 'parameters' list), "
                          f"not standard parameters (a fit file written before the identified model); identify "

@@ -23,7 +23,7 @@ import numpy as np
 import rx90sym
 from rx90sym.recording import Recording
 
-from twin_logs import COULOMB_SMOOTHING, UR5_DRIVES, URDF_DIR, TwinLogs, maker_urdf, point_to_point
+from twin_logs import COULOMB_SMOOTHING, UR5_DRIVES, URDF_DIR, TwinLogs, logged_pair, maker_urdf, point_to_point
 
 __all__ = ["ShortTwin", "short_twin", "ShortCase", "SHORT_CASES", "SHORT_KINDS", "PANDA_DRIVES", "described_urdf",
            "short_logs"]
@@ -151,14 +151,6 @@ def short_logs(case: ShortCase, seed: int, workdir: Path) -> TwinLogs:
     for key, values in (UR5_DRIVES if case.urdf == "ur5" else PANDA_DRIVES).items():
         truth.update({f"{key}{j + 1}": v for j, v in enumerate(values)})
     profile = replace(rx90sym.twin.profiles()["realistic"], stribeck=0.0, coulomb_smoothing=COULOMB_SMOOTHING)
-    rng = np.random.default_rng([seed, 13])
-    offsets = rng.uniform(0.1, 2.0, plant.n) * rng.choice((-1.0, 1.0), plant.n)
-    out = []
-    for k, duration in enumerate((case.fit_s, case.predict_s)):
-        motion = point_to_point(plant, 1000 * seed + k, duration, rest=(0.3, 0.6))
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore")  # the ripple's assumed gear ratio (the URDF gives none)
-            rec = rx90sym.twin.simulate(plant, motion, params=truth, noise=profile, seed=2 * seed + k,
-                                        rate=case.rate, duration=duration)
-        out.append(replace(rec, tau=rec.tau + offsets, source=f"{case.name}:{'fit' if k == 0 else 'predict'}:{seed}"))
-    return TwinLogs(robot, out[0], out[1], truth, offsets)
+    motions = [(label, point_to_point(plant, 1000 * seed + k, duration, rest=(0.3, 0.6)), duration)
+               for k, (label, duration) in enumerate((("fit", case.fit_s), ("predict", case.predict_s)))]
+    return logged_pair(plant, robot, motions, truth, profile, seed, case.rate, case.name)

@@ -28,6 +28,7 @@ import re
 import warnings
 from dataclasses import dataclass, replace
 from pathlib import Path
+from typing import Any, Sequence
 
 import numpy as np
 
@@ -195,14 +196,23 @@ def twin_logs(case: TwinCase, seed: int, workdir: Path, robot: rx90sym.Robot | N
     loaded, truth = case_robot(case, workdir)
     robot = robot or loaded
     profile = replace(rx90sym.twin.profiles()["realistic"], stribeck=case.stribeck, coulomb_smoothing=COULOMB_SMOOTHING)
+    motions = (("chirp", chirp(robot, seed, case.fit_s), case.fit_s),
+               ("p2p", point_to_point(robot, seed, case.predict_s), case.predict_s))
+    return logged_pair(robot, robot, motions, truth, profile, seed, case.rate, case.name)
+
+
+def logged_pair(plant: rx90sym.Robot, robot: rx90sym.Robot, motions: Sequence[tuple], truth: dict, profile: Any,
+                seed: int, rate: float, name: str) -> TwinLogs:
+    """The fitted and the predicted log of ``plant`` under ``truth``: ``motions`` (label, motion, duration [s])
+    simulated with ``profile`` at ``rate`` [Hz], a torque sensor offset per joint (0.1-2 N m, random sign,
+    the same on both) added; ``robot``: the one the user loads."""
     rng = np.random.default_rng([seed, 13])
-    offsets = rng.uniform(0.1, 2.0, robot.n) * rng.choice((-1.0, 1.0), robot.n)
+    offsets = rng.uniform(0.1, 2.0, plant.n) * rng.choice((-1.0, 1.0), plant.n)
     out = []
-    for k, (motion, duration) in enumerate(((chirp(robot, seed, case.fit_s), case.fit_s),
-                                            (point_to_point(robot, seed, case.predict_s), case.predict_s))):
+    for k, (label, motion, duration) in enumerate(motions):
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")  # the ripple's assumed gear ratio (the URDF gives none)
-            rec = rx90sym.twin.simulate(robot, motion, params=truth, noise=profile, seed=2 * seed + k,
-                                        rate=case.rate, duration=duration)
-        out.append(replace(rec, tau=rec.tau + offsets, source=f"{case.name}:{'chirp' if k == 0 else 'p2p'}:{seed}"))
+            rec = rx90sym.twin.simulate(plant, motion, params=truth, noise=profile, seed=2 * seed + k,
+                                        rate=rate, duration=duration)
+        out.append(replace(rec, tau=rec.tau + offsets, source=f"{name}:{label}:{seed}"))
     return TwinLogs(robot, out[0], out[1], truth, offsets)
