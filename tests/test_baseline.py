@@ -99,6 +99,14 @@ def test_the_validation_scores_raw_torques_beside_the_baseline_on_the_same_sampl
     d = vals[0].to_dict()
     assert d["beats_baseline"] == [bool(a <= b) for a, b in zip(d["rms_error"], d["baseline_rms_error"])]
     assert "beats both yardsticks" in vals[0].table()
+    # the ratio line: each joint's RMS over the smaller of the two yardsticks' on the same samples
+    line = next(x for x in vals[0].table().splitlines() if x.startswith("RMS / the better yardstick's"))
+    v = vals[0]
+    for moving, k in ((False, 0), (True, 1)):
+        own = v.rms_error_moving if moving else v.rms_error
+        better = np.minimum(*(v.yardsticks(moving)[name] for name in v.yardsticks(moving)))
+        printed = [float(cell.split()[1].split("/")[k]) for cell in line.split(": ", 1)[1].split("  ")]
+        np.testing.assert_allclose(printed, own / better, atol=0.005)
     # the fit file keeps the baseline: predict shows it again; an older file (without it) reads None
     fits[0].save(tmp_path / "fit.json")
     back = load_fit(tmp_path / "fit.json", tx40)

@@ -195,6 +195,11 @@ class Validation:
                        + (f"; joints {still} never move" if still else "")
                        + (f"; joints {', '.join(map(str, self.not_predicted))} not predicted" if self.not_predicted
                           else ""))
+        ratios = [self.yardstick_ratio(m) for m in (False, True)]
+        if ratios[0] is not None:  # the figure the verdict is on, every joint: RMS / the better yardstick's
+            cell = lambda v: "-" if not np.isfinite(v) else f"{v:.2f}"  # noqa: E731 (a joint never moving: -)
+            out.append("RMS / the better yardstick's, per joint (all samples / while moving): " + "  ".join(
+                f"j{j + 1} {cell(a)}/{cell(m)}" for j, (a, m) in enumerate(zip(ratios[0][0], ratios[1][0]))))
         if self.user_model_note and self.yardsticks():
             out.append(f"the model the user had: not computed ({self.user_model_note})")
         return out
