@@ -85,22 +85,21 @@ class SmoothFriction:
 
 
 def _smooth_torques(smooth: Sequence[SmoothFriction]) -> Any:
-    """f(qvel) -> [(joint, torque [N m]), ...]: the friction of the joints ``smooth`` at the speeds qvel
-    [rad/s] (opposing the motion: subtract it), the columns of identify.friction.forms.friction_columns
+    """f(qvel, out): the friction of the joints ``smooth`` at the speeds qvel [rad/s] subtracted from
+    ``out`` in place (it opposes the motion): the columns of identify.friction.forms.friction_columns
     times FS (and FST). Plain floats: a few joints at MuJoCo's every step cost less than an array call."""
-    terms = [(f.joint, f.form == "stribeck", f.fs, f.fst, f.scale) for f in smooth]
+    tanh = tuple((f.joint, f.fs, f.scale) for f in smooth if f.form == "tanh")
+    stribeck = tuple((f.joint, f.fs, f.fst, f.scale) for f in smooth if f.form == "stribeck")
 
-    def torques(qvel: Any) -> list[tuple[int, float]]:
-        out = []
-        for j, stribeck, fs, fst, vs in terms:
-            v = float(qvel[j])
-            if stribeck:
+    def subtract(qvel: Any, out: np.ndarray) -> None:
+        for j, fs, vs in tanh:
+            out[j] -= fs * math.tanh(qvel[j] / vs)
+        for j, fs, fst, vs in stribeck:
+            v = qvel[j]
+            if v != 0:
                 e = math.exp(-(v / vs) ** 2)
-                out.append((j, (fs * (1 - e) + fst * e) * math.copysign(1.0, v) if v != 0 else 0.0))
-            else:
-                out.append((j, fs * math.tanh(v / vs)))
-        return out
-    return torques
+                out[j] -= (fs * (1 - e) + fst * e) * math.copysign(1.0, v)
+    return subtract
 
 
 @dataclass(frozen=True, eq=False)
@@ -138,8 +137,7 @@ class SimulatorModel:
         """:meth:`extra_force` added to ``out`` in place (MuJoCo's qfrc_applied at every step: no array made)."""
         if self.spring:  # the spring helps the motor: tau_motor + spring(q) = IDM (rx90sym.twin)
             out += np.asarray(self.robot.spring_torque(self.robot.to_model(qpos))).ravel()
-        for j, torque in self._smooth(qvel):
-            out[j] -= torque
+        self._smooth(qvel, out)
         if self.coupled is not None:  # eqs. 17-18, "paper" form: each joint's row takes the other's sign
             a, b, fsm = self.coupled
             out[a] -= fsm * np.sign(qvel[b])
