@@ -87,21 +87,14 @@ def _columns(robot: rx90sym.Robot, sources: Sequence[Any], plans: Sequence[Any],
 def _travels(robot: rx90sym.Robot, sources: Sequence[Any], plans: Sequence[Any], processing: Processing,
              left_out: Sequence[int], base: Any, client: Any) -> tuple[Any, dict]:
     """(``base`` with the presliding travels chosen per joint, their record): one pass of the
-    :func:`~identify.friction.travels.travel_columns` rows into per-joint factors."""
-    from identify.estimation.incremental_qr import JointFactors, stacked_rows
+    :func:`~identify.friction.travels.travel_columns` rows into per-joint factors (the fit's own pass,
+    :func:`identify.estimation.joint_factors.joint_factors`)."""
+    from identify.estimation.joint_factors import joint_factors
     from identify.friction.travels import travel_columns, travels_of
     from identify.observation.rest import defaulted_travels
 
     columns = travel_columns(robot, base)
-    factors = JointFactors(robot.n, len(columns.names))
-    drop = processing.min_velocity is not None and drops_rest(processing.rest)
-    tasks = ((robot, rec, window, plan, processing, columns.regressor_batch, columns.names, 0, (), tuple(left_out))
-             for plan, window, rec, _ in windows_in_order(sources, plans))
-    for p in in_order(piece, tasks, client, 4 if client is not None else 1):
-        m = p.motion
-        keep = m.rows(drop)
-        for j in range(robot.n):
-            factors.add(j, stacked_rows(m.Phi, [m.Y], j, keep[:, j]))
+    factors = joint_factors(robot, sources, plans, processing, columns, left_out=left_out, client=client)[0]
     found = travels_of(robot, factors.R, factors.rows, columns.names)
     terms = coulomb_terms(robot, friction_probe(robot, base)[0].names)
     return friction_base(base, terms, presliding=True, travels=defaulted_travels(found.travels)), found.to_json()
