@@ -181,8 +181,8 @@ class Validation:
         the better yardstick and the ratio where it does not; the model the user had's absence said."""
         out = []
         both = len(self.yardsticks()) == 2
-        for label, moving in (("all samples", False), ("while moving", True)):
-            done = self.yardstick_ratio(moving)
+        ratios = [self.yardstick_ratio(m) for m in (False, True)]
+        for label, done in (("all samples", ratios[0]), ("while moving", ratios[1])):
             if done is None:
                 continue
             ratio, better = done
@@ -195,7 +195,6 @@ class Validation:
                        + (f"; joints {still} never move" if still else "")
                        + (f"; joints {', '.join(map(str, self.not_predicted))} not predicted" if self.not_predicted
                           else ""))
-        ratios = [self.yardstick_ratio(m) for m in (False, True)]
         if ratios[0] is not None:  # the figure the verdict is on, every joint: RMS / the better yardstick's
             cell = lambda v: "-" if not np.isfinite(v) else f"{v:.2f}"  # noqa: E731 (a joint never moving: -)
             out.append("RMS / the better yardstick's, per joint (all samples / while moving): " + "  ".join(
