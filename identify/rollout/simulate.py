@@ -53,8 +53,8 @@ class Simulator:
                     extra(d.qpos, d.qvel, applied)
                     step(m, d)
             else:
-                d.qfrc_applied[:] = tau[k]
-                mj.mj_step(m, d, self.substeps)
+                applied[:] = tau[k]
+                step(m, d, self.substeps)
             if keep:
                 path[k + 1] = d.qpos
         unstable = d.warning[mj.mjtWarning.mjWARN_BADQACC].number > 0
